@@ -1,0 +1,60 @@
+# Helpers every folder uses, so warnings, tests and fuzzers are set up one way.
+
+# Warnings as errors on the project's own targets (not on third-party code).
+function(sim_target_defaults target)
+  target_compile_features(${target} PUBLIC cxx_std_20)
+  if(SIM_WERROR)
+    target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow -Wconversion
+                                             -Wno-sign-conversion -Werror)
+  else()
+    target_compile_options(${target} PRIVATE -Wall -Wextra)
+  endif()
+endfunction()
+
+# sim_add_test(NAME name SOURCES a.cpp… [LIBS lib…] [LABELS concurrency…] [TIMEOUT s])
+# One GoogleTest executable registered as one ctest test, so ctest -j2 schedules whole suites.
+# Label "concurrency" marks the suites the ThreadSanitizer build also runs.
+function(sim_add_test)
+  cmake_parse_arguments(T "" "NAME;TIMEOUT" "SOURCES;LIBS;LABELS;ARGS" ${ARGN})
+  add_executable(${T_NAME} ${T_SOURCES})
+  sim_target_defaults(${T_NAME})
+  target_link_libraries(${T_NAME} PRIVATE GTest::gtest GTest::gtest_main ${T_LIBS})
+  add_test(NAME ${T_NAME} COMMAND ${T_NAME} ${T_ARGS})
+  if(NOT T_TIMEOUT)
+    set(T_TIMEOUT 300)
+  endif()
+  set_tests_properties(${T_NAME} PROPERTIES TIMEOUT ${T_TIMEOUT} LABELS "${T_LABELS}")
+endfunction()
+
+# sim_add_fuzzer(NAME name SOURCES a.cpp… [LIBS lib…] [CORPUS dir])
+# With SIM_FUZZ (clang): a libFuzzer binary run for SIM_FUZZ_SECONDS as the test fuzz_<name>.
+# Without: the same entry point linked to a small main that replays the seed corpus, so the
+# target always compiles and its seeds always run.
+set(SIM_FUZZ_SECONDS 30 CACHE STRING "Seconds each fuzz target runs under ctest")
+function(sim_add_fuzzer)
+  cmake_parse_arguments(F "" "NAME;CORPUS" "SOURCES;LIBS" ${ARGN})
+  add_executable(${F_NAME} ${F_SOURCES})
+  sim_target_defaults(${F_NAME})
+  target_link_libraries(${F_NAME} PRIVATE ${F_LIBS})
+  if(SIM_FUZZ)
+    target_compile_options(${F_NAME} PRIVATE -fsanitize=fuzzer)
+    target_link_options(${F_NAME} PRIVATE -fsanitize=fuzzer)
+    set(corpus_args)
+    if(F_CORPUS)
+      set(work_corpus ${CMAKE_CURRENT_BINARY_DIR}/${F_NAME}_corpus)
+      file(MAKE_DIRECTORY ${work_corpus})
+      set(corpus_args ${work_corpus} ${F_CORPUS})
+    endif()
+    add_test(NAME fuzz_${F_NAME}
+             COMMAND ${F_NAME} -max_total_time=${SIM_FUZZ_SECONDS} -timeout=10 -rss_limit_mb=4096
+                     -print_final_stats=1 ${corpus_args})
+    set_tests_properties(fuzz_${F_NAME} PROPERTIES LABELS fuzz
+                         TIMEOUT 600)
+  else()
+    target_sources(${F_NAME} PRIVATE ${PROJECT_SOURCE_DIR}/tests/fuzz_seed_main.cpp)
+    if(F_CORPUS)
+      add_test(NAME fuzz_seeds_${F_NAME} COMMAND ${F_NAME} ${F_CORPUS})
+      set_tests_properties(fuzz_seeds_${F_NAME} PROPERTIES LABELS fuzz_seeds)
+    endif()
+  endif()
+endfunction()

@@ -1,0 +1,16 @@
+// SPDX-License-Identifier: Apache-2.0
+// Placement of the calling thread: the knobs behind every tool's --cpu and --rt-priority.
+#pragma once
+
+#include <optional>
+
+#include "sim/result.hpp"
+
+namespace sim {
+
+// Pins the calling thread to one CPU.
+std::optional<Error> pin_current_thread(int cpu);
+// Runs the calling thread under SCHED_FIFO at `priority` (1–99); needs CAP_SYS_NICE or root.
+std::optional<Error> set_realtime_priority(int priority);
+
+}  // namespace sim

@@ -1,0 +1,11 @@
+// SPDX-License-Identifier: Apache-2.0
+// Everything a C++ program needs to write or read SIM streams.
+#pragma once
+
+#include "sim/clock.hpp"
+#include "sim/layout.hpp"
+#include "sim/lidar_point.hpp"
+#include "sim/os.hpp"
+#include "sim/reader.hpp"
+#include "sim/result.hpp"
+#include "sim/writer.hpp"

@@ -1,0 +1,110 @@
+// SPDX-License-Identifier: Apache-2.0
+// The one writer of a stream. It owns the region's writer lock for its whole life, fills the slot
+// readers are not reading, and publishes it with one release store; it never waits for readers.
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <type_traits>
+
+#include "sim/layout.hpp"
+#include "sim/result.hpp"
+
+namespace sim {
+
+struct StreamSpec {
+  std::string name;               // "/lidar_top": a slash, then 1–200 of [A-Za-z0-9_.-]
+  std::uint64_t capacity = 0;     // bytes per slot; 0 takes layout.min_capacity()
+  Layout layout = Layout::raw();
+  bool checksum = false;          // XXH3-64 over each frame, verified by readers
+  std::uint32_t mode = 0600;      // file mode of the region; 0640 lets a group read
+  bool lock_memory = false;       // mlock the region so frames never page-fault
+  // Refresh the heartbeat from a background thread while no frame is written, so readers can
+  // tell an idle writer from a dead one. Zero: the heartbeat moves only with published frames.
+  std::chrono::milliseconds heartbeat_period{0};
+};
+
+enum class WriteStatus {
+  ok,
+  too_large,  // the frame is larger than the stream's capacity: nothing was published
+  closed,     // the writer was moved from
+};
+
+const char* to_string(WriteStatus status) noexcept;
+
+class Writer;
+
+// A writable view of the back slot, so a driver decodes straight into shared memory.
+// Committing publishes it; dropping it uncommitted publishes nothing. Move-only.
+class Loan {
+ public:
+  Loan(Loan&& other) noexcept;
+  Loan& operator=(Loan&& other) noexcept;
+  Loan(const Loan&) = delete;
+  Loan& operator=(const Loan&) = delete;
+  ~Loan() = default;
+
+  std::span<std::byte> bytes() const noexcept { return bytes_; }
+  template <typename T>
+  std::span<T> as() const noexcept {
+    static_assert(std::is_trivially_copyable_v<T>, "only plain data can live in shared memory");
+    return {reinterpret_cast<T*>(bytes_.data()), bytes_.size() / sizeof(T)};
+  }
+  bool valid() const noexcept { return writer_ != nullptr; }
+
+  // Publishes the first `size` bytes with the sensor time of the frame (realtime, ns).
+  WriteStatus commit(std::uint64_t size, std::int64_t stamp_ns) noexcept;
+
+ private:
+  friend class Writer;
+  Loan(Writer* writer, std::span<std::byte> bytes) noexcept : writer_(writer), bytes_(bytes) {}
+  Writer* writer_ = nullptr;
+  std::span<std::byte> bytes_;
+};
+
+class Writer {
+ public:
+  // Creates the stream, or takes over an existing region of the same layout and capacity
+  // (continuing its sequence numbers), or replaces one whose layout changed. Refused while
+  // another live writer holds the stream.
+  static Expected<Writer> create(const StreamSpec& spec);
+
+  Writer(Writer&& other) noexcept;
+  Writer& operator=(Writer&& other) noexcept;
+  Writer(const Writer&) = delete;
+  Writer& operator=(const Writer&) = delete;
+  ~Writer();
+
+  // Copies one frame in and publishes it.
+  WriteStatus write(std::span<const std::byte> frame, std::int64_t stamp_ns) noexcept;
+  template <typename T>
+  WriteStatus write(std::span<const T> items, std::int64_t stamp_ns) noexcept {
+    static_assert(std::is_trivially_copyable_v<T>);
+    return write(std::as_bytes(items), stamp_ns);
+  }
+
+  // The back slot, to fill in place. At most one loan at a time; a new loan discards the last.
+  Loan loan() noexcept;
+
+  // Tells readers the writer is alive without publishing a frame.
+  void heartbeat() noexcept;
+
+  const std::string& name() const noexcept;
+  std::uint64_t capacity() const noexcept;
+  const Layout& layout() const noexcept;
+  std::uint64_t last_seq() const noexcept;  // sequence number of the newest published frame
+
+  struct Impl;
+
+ private:
+  friend class Loan;
+  explicit Writer(std::unique_ptr<Impl> impl) noexcept;
+  WriteStatus publish(std::uint64_t size, std::int64_t stamp_ns) noexcept;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace sim
