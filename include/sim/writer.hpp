@@ -37,6 +37,9 @@ enum class WriteStatus {
 const char* to_string(WriteStatus status) noexcept;
 
 class Writer;
+namespace detail {
+struct WriterState;
+}
 
 // A writable view of the back slot, so a driver decodes straight into shared memory.
 // Committing publishes it; dropping it uncommitted publishes nothing. Move-only.
@@ -57,13 +60,16 @@ class Loan {
   bool valid() const noexcept { return writer_ != nullptr; }
 
   // Publishes the first `size` bytes with the sensor time of the frame (realtime, ns).
+  // A loan overtaken by a later loan or write() publishes nothing and returns closed.
   WriteStatus commit(std::uint64_t size, std::int64_t stamp_ns) noexcept;
 
  private:
   friend class Writer;
-  Loan(Writer* writer, std::span<std::byte> bytes) noexcept : writer_(writer), bytes_(bytes) {}
-  Writer* writer_ = nullptr;
+  Loan(detail::WriterState* writer, std::span<std::byte> bytes, std::uint64_t seq) noexcept
+      : writer_(writer), bytes_(bytes), seq_(seq) {}
+  detail::WriterState* writer_ = nullptr;  // stays put when the Writer handle is moved
   std::span<std::byte> bytes_;
+  std::uint64_t seq_ = 0;  // the frame number this loan will publish
 };
 
 class Writer {
@@ -98,13 +104,9 @@ class Writer {
   const Layout& layout() const noexcept;
   std::uint64_t last_seq() const noexcept;  // sequence number of the newest published frame
 
-  struct Impl;
-
  private:
-  friend class Loan;
-  explicit Writer(std::unique_ptr<Impl> impl) noexcept;
-  WriteStatus publish(std::uint64_t size, std::int64_t stamp_ns) noexcept;
-  std::unique_ptr<Impl> impl_;
+  explicit Writer(std::unique_ptr<detail::WriterState> state) noexcept;
+  std::unique_ptr<detail::WriterState> impl_;
 };
 
 }  // namespace sim

@@ -1,0 +1,154 @@
+// SPDX-License-Identifier: Apache-2.0
+// The shared-memory format of one stream (internal). docs/protocol.md explains the protocol.
+//
+//   page 0   WaitPage      the only bytes readers may write: how many of them sleep on the futex
+//   page 1   RegionHeader  written by the writer only; readers map it read-only
+//   slot 0   payload       page aligned, `capacity` bytes
+//   slot 1   payload
+//
+// Everything in shared memory is an offset or a fixed-width value, never a pointer.
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "sim/layout.hpp"
+#include "sim/result.hpp"
+
+namespace sim::detail {
+
+inline constexpr std::size_t kCacheLine = 64;
+inline constexpr std::size_t kPage = 4096;
+inline constexpr std::uint64_t kMagic = 0x314e474552'4d4953ull;  // "SIMREGN1", little-endian
+inline constexpr std::uint32_t kVersion = 1;
+// A slot's sequence word holds the frame number it contains, with this bit set while the writer
+// is filling it. Frame numbers start at 1 and never reach 2^63.
+inline constexpr std::uint64_t kWritingBit = 1ull << 63;
+inline constexpr std::uint32_t kFlagChecksum = 1u << 0;
+inline constexpr std::uint32_t kKnownFlags = kFlagChecksum;
+inline constexpr std::uint64_t kMaxCapacity = 1ull << 40;  // 1 TiB per slot is beyond any sensor
+
+static_assert(std::atomic<std::uint64_t>::is_always_lock_free);
+static_assert(std::atomic<std::uint32_t>::is_always_lock_free);
+static_assert(sizeof(std::atomic<std::uint64_t>) == 8, "atomics must be plain words in shm");
+
+// The layout as stored in the header: fixed-width fields only.
+struct LayoutRecord {
+  std::uint32_t kind;
+  std::uint32_t pixel_format;
+  std::uint32_t width;
+  std::uint32_t height;
+  std::uint32_t channels;
+  std::uint32_t stride;
+  std::uint32_t bit_depth;
+  std::uint32_t point_type;
+  std::uint32_t point_size;
+  std::uint32_t reserved;
+  std::uint64_t max_points;
+};
+static_assert(sizeof(LayoutRecord) == 48);
+
+LayoutRecord to_record(const Layout& layout) noexcept;
+Layout from_record(const LayoutRecord& record) noexcept;
+
+struct alignas(kPage) WaitPage {
+  std::atomic<std::uint32_t> sleepers;  // readers inside futex_wait, or about to enter it
+};
+static_assert(sizeof(WaitPage) == kPage);
+
+// Fixed when the region is created, before it becomes visible under its name.
+struct alignas(kCacheLine) Identity {
+  std::uint64_t magic;
+  std::uint32_t version;
+  std::uint32_t header_size;  // sizeof(RegionHeader)
+  std::uint64_t file_size;
+  std::uint64_t capacity;     // bytes per slot
+  std::uint64_t slot_offset[2];
+  std::uint32_t flags;
+  std::uint32_t reserved;
+  std::int64_t created_realtime_ns;
+  LayoutRecord layout;
+};
+
+// Who writes now (or wrote last). Diagnostics only: liveness comes from the writer's file lock,
+// which the kernel releases when the process dies, so a reused pid cannot fake a live writer.
+struct alignas(kCacheLine) WriterIdentity {
+  std::atomic<std::int32_t> pid;
+  std::atomic<std::uint32_t> attach_count;   // writers that have owned this region so far
+  std::atomic<std::int64_t> start_realtime_ns;
+  std::atomic<std::uint64_t> command[2];      // process name, 16 bytes, NUL padded
+};
+
+struct alignas(kCacheLine) Publication {
+  std::atomic<std::uint64_t> latest_seq;  // newest published frame; 0 before the first
+  std::atomic<std::uint32_t> futex_word;  // changes on every publish; readers sleep on it
+  std::atomic<std::uint32_t> retired;     // 1: a newer region replaced this one; reopen by name
+};
+
+struct alignas(kCacheLine) Liveness {
+  std::atomic<std::int64_t> heartbeat_ns;       // CLOCK_MONOTONIC
+  std::atomic<std::int64_t> latest_publish_ns;  // CLOCK_MONOTONIC
+  std::atomic<std::uint64_t> frames_published;
+  std::atomic<std::int64_t> max_publish_interval_ns;
+};
+
+// Per-slot metadata, guarded by `seq` as a seqlock: valid only if `seq` reads the same (and
+// without kWritingBit) before and after the metadata and payload are read.
+struct alignas(kCacheLine) SlotMeta {
+  std::atomic<std::uint64_t> seq;
+  std::atomic<std::uint64_t> size;
+  std::atomic<std::int64_t> stamp_ns;
+  std::atomic<std::int64_t> publish_ns;
+  std::atomic<std::uint64_t> checksum;
+};
+
+struct alignas(kPage) RegionHeader {
+  Identity identity;
+  WriterIdentity writer;
+  Publication publication;
+  Liveness liveness;
+  SlotMeta slots[2];
+};
+static_assert(sizeof(RegionHeader) == kPage);
+
+inline constexpr std::uint64_t kHeaderOffset = kPage;
+inline constexpr std::uint64_t kFirstSlotOffset = 2 * kPage;
+
+constexpr std::uint64_t round_up_to_page(std::uint64_t n) { return (n + kPage - 1) / kPage * kPage; }
+
+// Where the slots go and how large the file is for a given capacity.
+struct Geometry {
+  std::uint64_t slot_offset[2];
+  std::uint64_t file_size;
+};
+constexpr Geometry geometry_for(std::uint64_t capacity) {
+  const std::uint64_t slot_bytes = round_up_to_page(capacity);
+  return {{kFirstSlotOffset, kFirstSlotOffset + slot_bytes}, kFirstSlotOffset + 2 * slot_bytes};
+}
+
+// Empty if `name` is a valid stream name ("/" then 1–200 of [A-Za-z0-9_.-], not "." or "..").
+std::string name_problem(std::string_view name);
+// /dev/shm/sim.<name without its slash>
+std::string region_path(std::string_view name);
+inline constexpr std::string_view kRegionDir = "/dev/shm";
+inline constexpr std::string_view kRegionPrefix = "sim.";
+
+// Checks a header the caller must not trust against the file it came from. Empty if valid.
+std::string header_problem(const Identity& identity, std::uint64_t file_size);
+
+// The writer's lock: an open-file-description lock on the first byte of the region file.
+bool try_lock_writer(int fd) noexcept;
+bool writer_lock_held(int fd) noexcept;
+void unlock_writer(int fd) noexcept;
+
+// The process name of the caller, packed for WriterIdentity::command.
+void pack_command(std::atomic<std::uint64_t> (&out)[2]) noexcept;
+std::string unpack_command(const std::atomic<std::uint64_t> (&in)[2]);
+
+Error errno_error(ErrorCode code, std::string what, int err);
+
+}  // namespace sim::detail
