@@ -154,8 +154,12 @@ std::optional<Error> RegionFile::map_read_write() {
   if (base == MAP_FAILED) return errno_error(ErrorCode::system_error, "cannot map region", errno);
   base_ = base;
   wait_page_ = static_cast<WaitPage*>(base);
-  std::memcpy(&identity_, &header()->identity, sizeof(Identity));
+  reload_identity();
   return std::nullopt;
+}
+
+void RegionFile::reload_identity() noexcept {
+  std::memcpy(&identity_, &header()->identity, sizeof(Identity));
 }
 
 Expected<RegionFile> RegionFile::create_unnamed(std::uint64_t file_size, std::uint32_t mode) {

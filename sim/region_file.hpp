@@ -38,6 +38,8 @@ class RegionFile {
   std::optional<Error> publish_as(std::string_view name, bool replace);
   // Maps a region opened with open_for_writing read-write (after its header was validated).
   std::optional<Error> map_read_write();
+  // Takes the identity from the mapped header again (after the writer has initialised it).
+  void reload_identity() noexcept;
 
   int fd() const noexcept { return fd_; }
   std::uint64_t file_size() const noexcept { return file_size_; }

@@ -175,6 +175,7 @@ Expected<Writer> Writer::create(const StreamSpec& spec) {
       return Error{ErrorCode::system_error, "cannot lock the new region of " + spec.name};
     }
     initialise_header(*created->header(), capacity, spec, first_seq);
+    created->reload_identity();
     if (auto error = created->publish_as(spec.name, replace)) {
       if (error->code == ErrorCode::writer_exists) continue;  // lost the race: look again
       return *error;
