@@ -1,0 +1,23 @@
+// SPDX-License-Identifier: Apache-2.0
+// One IMU sample, as published on a LiDAR's IMU stream (one SIM frame per sample, raw layout).
+// Plain data with fixed size so readers in other processes can view a frame as this struct.
+#pragma once
+
+#include <cstdint>
+#include <type_traits>
+
+namespace sim::unitree {
+
+struct ImuSample {
+  std::int64_t stamp_ns = 0;             // sensor clock (L2) or host receive time (L1)
+  float quaternion[4] = {0, 0, 0, 1};    // x, y, z, w
+  float angular_velocity[3] = {0, 0, 0};     // rad/s
+  float linear_acceleration[3] = {0, 0, 0};  // m/s²
+  std::uint32_t seq = 0;                 // L2 packet seq, or L1 packet_id
+  std::uint32_t reserved = 0;
+};
+
+static_assert(std::is_trivially_copyable_v<ImuSample>);
+static_assert(sizeof(ImuSample) == 56, "ImuSample is part of the IMU stream's frame layout");
+
+}  // namespace sim::unitree
