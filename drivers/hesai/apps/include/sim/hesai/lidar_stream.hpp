@@ -1,0 +1,84 @@
+// SPDX-License-Identifier: Apache-2.0
+// LidarStream: the one path from Hesai UDP payloads to a SIM stream, shared by the live driver
+// (sim_lidar_hesai) and the capture replay (sim_replay_pcap), so a consumer cannot tell them
+// apart. It owns the SIM writer and the FrameAssembler, keeps the assembler's output pointed at
+// the writer's loaned slot (points are decoded straight into shared memory), and commits each
+// completed revolution with the sensor time of its first point. No allocation per packet.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+
+#include "sim/hesai/hesai.hpp"
+#include "sim/result.hpp"
+#include "sim/writer.hpp"
+
+namespace sim::hesai {
+
+struct LidarStreamConfig {
+  std::string stream = "/lidar_top";
+  std::filesystem::path calibration;               // the unit's angle-correction CSV (required)
+  std::optional<std::filesystem::path> firetimes;  // optional firing-time CSV
+  AssemblerOptions assembler;                      // assembler.model is the sensor model
+  // Capacity of the stream, from the model: returns × firings per revolution at the lowest rpm.
+  unsigned returns = 2;
+  unsigned min_rpm = 600;
+  bool checksum = false;
+  bool lock_memory = false;
+  std::chrono::milliseconds heartbeat_period{0};
+};
+
+// What the stream published, beside the assembler's own counters.
+struct PublishCounters {
+  std::uint64_t frames = 0;          // frames committed to the SIM stream
+  std::uint64_t points = 0;          // points in those frames
+  std::uint64_t partial_frames = 0;  // of those, frames that did not start at the cut azimuth
+  std::uint64_t failed = 0;          // commits refused by the writer (cannot happen when sized
+                                     // from the model; counted rather than assumed)
+};
+
+class LidarStream {
+ public:
+  // Loads the calibration (and firing times), checks them against the model, and creates the
+  // SIM stream sized for the model. Every failure is one sentence naming the file or stream.
+  static Expected<LidarStream> create(const LidarStreamConfig& config);
+
+  LidarStream(LidarStream&&) noexcept;
+  LidarStream& operator=(LidarStream&&) noexcept;
+  LidarStream(const LidarStream&) = delete;
+  LidarStream& operator=(const LidarStream&) = delete;
+  ~LidarStream();
+
+  // Decodes one UDP payload; publishes the revolution it completes, if any (returned).
+  PushResult push(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns) noexcept;
+  // End of input: publishes the revolution in progress when partial frames are enabled.
+  std::optional<CompletedFrame> finish() noexcept;
+  // Forgets the revolution in progress (a capture loops, a sensor was silent).
+  void reset() noexcept;
+
+  Model model() const noexcept;
+  const AssemblerCounters& counters() const noexcept;
+  const PublishCounters& published() const noexcept;
+  std::uint64_t max_points() const noexcept;
+  Writer& writer() noexcept;
+
+  // "frames 12 packets 3600 lost 0 malformed 0 wrong-model 0 points/frame 93591", for status
+  // lines; `key=value` pairs with `machine` ("frames=12 packets=3600 …") for summaries.
+  std::string describe_counters(bool machine = false) const;
+
+  struct Impl;
+
+ private:
+  explicit LidarStream(std::unique_ptr<Impl> impl) noexcept;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Number of returns announced by a payload of `model` (1–3), or nullopt when it is not one.
+std::optional<unsigned> returns_in(std::span<const std::uint8_t> payload, Model model) noexcept;
+
+}  // namespace sim::hesai

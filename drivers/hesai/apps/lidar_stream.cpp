@@ -1,0 +1,132 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "sim/hesai/lidar_stream.hpp"
+
+#include <sstream>
+#include <utility>
+
+#include "sim/lidar_point.hpp"
+
+namespace sim::hesai {
+
+struct LidarStream::Impl {
+  Impl(Writer w, FrameAssembler a) : writer(std::move(w)), assembler(std::move(a)) {}
+
+  // The loan keeps a pointer to the writer, so the writer must not move: Impl lives on the
+  // heap and is never moved itself.
+  Writer writer;
+  FrameAssembler assembler;
+  Loan loan{writer.loan()};
+  PublishCounters published;
+  std::size_t last_points = 0;
+
+  void attach() noexcept {
+    loan = writer.loan();
+    assembler.set_output(loan.as<LidarPoint>());
+  }
+
+  void publish(const CompletedFrame& frame) noexcept {
+    const WriteStatus status =
+        loan.commit(frame.point_count * sizeof(LidarPoint), frame.stamp_ns);
+    if (status == WriteStatus::ok) {
+      ++published.frames;
+      published.points += frame.point_count;
+      if (!frame.whole_revolution) ++published.partial_frames;
+      last_points = frame.point_count;
+    } else {
+      ++published.failed;
+    }
+    attach();  // the next revolution goes to the new back slot
+  }
+};
+
+Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config) {
+  const Model model = config.assembler.model;
+  if (config.calibration.empty()) {
+    return Error{ErrorCode::invalid_argument,
+                 "no calibration file given; pass the sensor's angle-correction CSV with "
+                 "--calibration (every unit has its own)."};
+  }
+  auto calibration = Calibration::load(config.calibration, model);
+  if (!calibration) return calibration.error();
+  AssemblerOptions options = config.assembler;
+  if (config.firetimes) {
+    auto firetimes = FiretimeCorrection::load(*config.firetimes, model);
+    if (!firetimes) return firetimes.error();
+    options.firetimes = std::move(firetimes.value());
+  }
+  auto assembler = FrameAssembler::create(std::move(calibration.value()), std::move(options));
+  if (!assembler) return assembler.error();
+
+  StreamSpec spec;
+  spec.name = config.stream;
+  spec.layout = Layout::of(PointLayout::of(
+      PointType::lidar_point, frame_capacity(model, config.returns, config.min_rpm)));
+  spec.checksum = config.checksum;
+  spec.lock_memory = config.lock_memory;
+  spec.heartbeat_period = config.heartbeat_period;
+  auto writer = Writer::create(spec);
+  if (!writer) return writer.error();
+
+  auto impl = std::make_unique<Impl>(std::move(writer.value()), std::move(assembler.value()));
+  impl->attach();
+  return LidarStream(std::move(impl));
+}
+
+LidarStream::LidarStream(std::unique_ptr<Impl> impl) noexcept : impl_(std::move(impl)) {}
+LidarStream::LidarStream(LidarStream&&) noexcept = default;
+LidarStream& LidarStream::operator=(LidarStream&&) noexcept = default;
+LidarStream::~LidarStream() = default;
+
+PushResult LidarStream::push(std::span<const std::uint8_t> payload,
+                             std::int64_t host_receive_ns) noexcept {
+  PushResult result = impl_->assembler.push(payload, host_receive_ns);
+  if (result.frame) impl_->publish(*result.frame);
+  return result;
+}
+
+std::optional<CompletedFrame> LidarStream::finish() noexcept {
+  if (!impl_->assembler.options().emit_partial_frames) {
+    impl_->assembler.reset();
+    return std::nullopt;
+  }
+  std::optional<CompletedFrame> frame = impl_->assembler.flush();
+  if (frame) impl_->publish(*frame);
+  return frame;
+}
+
+void LidarStream::reset() noexcept { impl_->assembler.reset(); }
+
+Model LidarStream::model() const noexcept { return impl_->assembler.options().model; }
+const AssemblerCounters& LidarStream::counters() const noexcept { return impl_->assembler.counters(); }
+const PublishCounters& LidarStream::published() const noexcept { return impl_->published; }
+std::uint64_t LidarStream::max_points() const noexcept {
+  return impl_->writer.layout().points.max_points;
+}
+Writer& LidarStream::writer() noexcept { return impl_->writer; }
+
+std::string LidarStream::describe_counters(bool machine) const {
+  const AssemblerCounters& c = impl_->assembler.counters();
+  const PublishCounters& p = impl_->published;
+  std::ostringstream out;
+  const char* sep = machine ? "=" : " ";
+  out << "frames" << sep << p.frames << " packets" << sep << c.packets << " lost" << sep
+      << c.lost_packets << " malformed" << sep << c.malformed << (machine ? " wrong_model" : " wrong-model")
+      << sep << c.wrong_model;
+  if (machine) {
+    out << " out_of_order=" << c.out_of_order << " points=" << p.points
+        << " partial_frames=" << p.partial_frames << " dropped_points=" << c.dropped_points
+        << " publish_failures=" << p.failed;
+  } else {
+    out << " points/frame " << impl_->last_points;
+    if (c.dropped_points != 0) out << " dropped-points " << c.dropped_points;
+  }
+  return out.str();
+}
+
+std::optional<unsigned> returns_in(std::span<const std::uint8_t> payload, Model model) noexcept {
+  Packet packet;
+  if (Packet::parse(payload, model, packet) != PacketError::none) return std::nullopt;
+  return packet.returns();
+}
+
+}  // namespace sim::hesai

@@ -1,0 +1,294 @@
+// SPDX-License-Identifier: Apache-2.0
+// Byte layouts: ../shared/reference/lidar-wire-formats.md §2 (Pandar64), §3 (Pandar40P),
+// §4 (XT32/XT16, protocol 6.1), §5 (QT64, protocol 3.1).
+#include "sim/hesai/packet.hpp"
+
+#include <array>
+
+namespace sim::hesai {
+namespace {
+
+// Channel firing offsets in ns relative to the block (reference §2, §3; nebula's tables).
+constexpr std::array<std::int32_t, 64> pandar64_channel_ns{
+    -23180, -21876, -20572, -19268, -17964, -16660, -11444, -46796, -7532,  -36956, -50732,
+    -54668, -40892, -44828, -31052, -34988, -48764, -52700, -38924, -42860, -29084, -33020,
+    -46796, -25148, -36956, -50732, -27116, -40892, -44828, -31052, -34988, -48764, -25148,
+    -38924, -42860, -29084, -33020, -52700, -6228,  -54668, -15356, -27116, -10140, -23180,
+    -4924,  -21876, -14052, -17964, -8836,  -19268, -3620,  -20572, -12748, -16660, -7532,
+    -11444, -6228,  -15356, -10140, -4924,  -3620,  -14052, -8836,  -12748};
+
+constexpr std::array<std::int32_t, 40> pandar40p_channel_ns{
+    -42220, -28470, -16040, -3620,  -45490, -31740, -47460, -54670, -20620, -33710,
+    -40910, -8190,  -20620, -27160, -50730, -8190,  -14740, -36980, -45490, -52700,
+    -23890, -31740, -38950, -11470, -18650, -25190, -48760, -6230,  -12770, -35010,
+    -21920, -9500,  -43520, -29770, -17350, -4920,  -42220, -28470, -16040, -3620};
+
+// QT64: 10 µs + Hesai's firing-time table. Index 55 is 129600: nebula's 12960 is a typo
+// (reference §5; GenSDK and the SDK 2 file agree on 119.6 + 10 µs).
+constexpr std::array<std::int32_t, 64> pandar_qt64_channel_ns{
+    12310,  14370,  16430,  18490,  20540,  22600,  24660,  26710,  29160,  31220,  33280,
+    35340,  37390,  39450,  41500,  43560,  46610,  48670,  50730,  52780,  54840,  56900,
+    58950,  61010,  63450,  65520,  67580,  69630,  71690,  73740,  75800,  77860,  80900,
+    82970,  85020,  87080,  89140,  91190,  93250,  95300,  97750,  99820,  101870, 103930,
+    105980, 108040, 110100, 112150, 115200, 117260, 119320, 121380, 123430, 125490, 127540,
+    129600, 132050, 134110, 136170, 138220, 140280, 142340, 144390, 146450};
+
+std::uint16_t u16(const std::uint8_t* p) noexcept {
+  return static_cast<std::uint16_t>(p[0] | (p[1] << 8));
+}
+std::uint32_t u32(const std::uint8_t* p) noexcept {
+  return std::uint32_t{p[0]} | (std::uint32_t{p[1]} << 8) | (std::uint32_t{p[2]} << 16) |
+         (std::uint32_t{p[3]} << 24);
+}
+
+// Days since 1970-01-01 of a proleptic Gregorian date (Howard Hinnant's algorithm): no timegm,
+// no time zone, no locale, safe on the hot path.
+std::int64_t days_from_civil(int y, unsigned m, unsigned d) noexcept {
+  y -= m <= 2 ? 1 : 0;
+  const int era = (y >= 0 ? y : y - 399) / 400;
+  const unsigned yoe = static_cast<unsigned>(y - era * 400);
+  const unsigned doy = (153 * (m > 2 ? m - 3 : m + 9) + 2) / 5 + d - 1;
+  const unsigned doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+  return std::int64_t{era} * 146097 + static_cast<std::int64_t>(doe) - 719468;
+}
+
+bool leap(int y) noexcept { return (y % 4 == 0 && y % 100 != 0) || y % 400 == 0; }
+
+// UTC from the six date bytes Y M D h m s plus the µs field. The year byte counts from 1900
+// on Pandar64/XT/QT firmware (120 = 2020) and from 2000 on Pandar40P firmware (17 = 2017);
+// both fit "below 70 means 20xx". An all-zero date is what an unsynchronised sensor sends:
+// it is read as 1970-01-01 so time still advances.
+bool utc_time_ns(const std::uint8_t* t, std::uint32_t micros, std::int64_t& out) noexcept {
+  if (micros >= 1'000'000) return false;
+  const unsigned hour = t[3], minute = t[4], second = t[5];
+  if (hour > 23 || minute > 59 || second > 60) return false;
+  std::int64_t days = 0;
+  if (!(t[1] == 0 && t[2] == 0)) {
+    const int year = t[0] < 70 ? 2000 + t[0] : 1900 + t[0];
+    const unsigned month = t[1], day = t[2];
+    constexpr std::array<unsigned, 12> month_days{31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+    if (month < 1 || month > 12 || day < 1) return false;
+    const unsigned last_day = month_days[month - 1] + (month == 2 && leap(year) ? 1 : 0);
+    if (day > last_day) return false;
+    days = days_from_civil(year, month, day);
+  }
+  const std::int64_t seconds = days * 86400 + hour * 3600 + minute * 60 + second;
+  out = seconds * 1'000'000'000 + std::int64_t{micros} * 1000;
+  return true;
+}
+
+// Protocol 6.1 (XT): a year byte of 0 means bytes 2..5 hold big-endian Unix seconds.
+bool xt_time_ns(const std::uint8_t* t, std::uint32_t micros, std::int64_t& out) noexcept {
+  if (t[0] != 0) return utc_time_ns(t, micros, out);
+  if (micros >= 1'000'000) return false;
+  const std::uint32_t seconds = (std::uint32_t{t[2]} << 24) | (std::uint32_t{t[3]} << 16) |
+                                (std::uint32_t{t[4]} << 8) | std::uint32_t{t[5]};
+  out = std::int64_t{seconds} * 1'000'000'000 + std::int64_t{micros} * 1000;
+  return true;
+}
+
+PacketError size_error(std::span<const std::uint8_t> payload, Model model) noexcept {
+  const auto other = detect_model(payload);
+  if (other && *other != model) return PacketError::wrong_model;
+  return payload.size() < info(model).payload_size ? PacketError::too_short
+                                                   : PacketError::bad_size;
+}
+
+}  // namespace
+
+unsigned returns_of(ReturnMode mode) noexcept {
+  switch (mode) {
+    case ReturnMode::first:
+    case ReturnMode::second:
+    case ReturnMode::strongest:
+    case ReturnMode::last: return 1;
+    case ReturnMode::dual_last_strongest:
+    case ReturnMode::dual_first_second:
+    case ReturnMode::dual_first_last:
+    case ReturnMode::dual_first_strongest:
+    case ReturnMode::dual_strongest_second: return 2;
+    case ReturnMode::triple: return 3;
+  }
+  return 0;
+}
+
+const char* to_string(PacketError error) noexcept {
+  switch (error) {
+    case PacketError::none: return "packet decoded";
+    case PacketError::too_short: return "packet shorter than the model's packet (cut short)";
+    case PacketError::bad_size: return "packet length is not one the model sends";
+    case PacketError::bad_marker: return "packet lacks the Hesai start-of-packet/block bytes";
+    case PacketError::wrong_model: return "packet comes from another Hesai model than configured";
+    case PacketError::bad_header: return "packet header has the wrong laser count, block count or protocol version";
+    case PacketError::bad_return_mode: return "packet has an unknown or impossible return mode";
+    case PacketError::bad_distance_unit: return "packet has a distance unit of 0";
+    case PacketError::bad_azimuth: return "packet has an impossible block azimuth";
+    case PacketError::bad_time: return "packet has an impossible UTC date or time";
+  }
+  return "unknown packet error";
+}
+
+PacketError Packet::parse(std::span<const std::uint8_t> payload, Model model,
+                          Packet& out) noexcept {
+  const ModelInfo& m = info(model);
+  const std::size_t n = payload.size();
+  if (n != m.payload_size && n != m.payload_size_with_sequence) return size_error(payload, model);
+  const std::uint8_t* p = payload.data();
+
+  Packet pk;
+  pk.data_ = p;
+  pk.model_ = model;
+  pk.blocks_ = static_cast<std::uint8_t>(m.blocks_per_packet);
+  pk.channels_ = static_cast<std::uint8_t>(m.channels);
+
+  std::size_t tail = 0;  // offset of the tail
+  std::uint32_t micros = 0;
+  const std::uint8_t* date = nullptr;
+  bool xt_date = false;
+  std::uint8_t mode_byte = 0;
+  std::uint8_t dis_unit_mm = 4;
+
+  switch (model) {
+    case Model::pandar64: {
+      if (p[0] != 0xEE || p[1] != 0xFF) return PacketError::bad_marker;
+      if (p[2] != 64 || p[3] != 6) return PacketError::bad_header;
+      dis_unit_mm = p[5];
+      pk.first_block_ = 8;
+      pk.block_stride_ = 2 + 64 * 3;
+      pk.az_offset_ = 0;
+      pk.units_offset_ = 2;
+      pk.unit_size_ = 3;
+      tail = 8 + 6 * pk.block_stride_;  // 1172
+      pk.rpm_ = u16(p + tail + 8);
+      micros = u32(p + tail + 10);
+      mode_byte = p[tail + 14];
+      date = p + tail + 16;
+      pk.has_sequence_ = n == m.payload_size_with_sequence;
+      if (pk.has_sequence_) pk.sequence_ = u32(p + tail + 22);
+      break;
+    }
+    case Model::pandar40p: {
+      pk.first_block_ = 0;
+      pk.block_stride_ = 4 + 40 * 3;
+      pk.az_offset_ = 2;
+      pk.units_offset_ = 4;
+      pk.unit_size_ = 3;
+      for (unsigned b = 0; b < 10; ++b) {
+        const std::uint8_t* block = p + b * pk.block_stride_;
+        if (block[0] != 0xFF || block[1] != 0xEE) return PacketError::bad_marker;
+      }
+      tail = 10 * pk.block_stride_;  // 1240
+      pk.rpm_ = u16(p + tail + 8);
+      micros = u32(p + tail + 10);
+      mode_byte = p[tail + 14];
+      date = p + tail + 16;
+      pk.has_sequence_ = n == m.payload_size_with_sequence;
+      if (pk.has_sequence_) pk.sequence_ = u32(p + tail + 22);
+      break;
+    }
+    case Model::pandar_xt32:
+    case Model::pandar_xt16: {
+      if (p[0] != 0xEE || p[1] != 0xFF) return PacketError::bad_marker;
+      if (p[2] != 6 || p[3] != 1 || p[6] != m.channels || p[7] != 8) {
+        return PacketError::bad_header;
+      }
+      dis_unit_mm = p[9];
+      pk.first_block_ = 12;
+      pk.block_stride_ = static_cast<std::uint16_t>(2 + m.channels * 4);
+      pk.az_offset_ = 0;
+      pk.units_offset_ = 2;
+      pk.unit_size_ = 4;
+      tail = 12 + 8 * std::size_t{pk.block_stride_};  // 1052 / 540
+      mode_byte = p[tail + 10];
+      pk.rpm_ = u16(p + tail + 11);
+      date = p + tail + 13;
+      xt_date = true;
+      micros = u32(p + tail + 19);
+      pk.has_sequence_ = (p[11] & 0x01) != 0;
+      if (pk.has_sequence_) pk.sequence_ = u32(p + tail + 24);
+      break;
+    }
+    case Model::pandar_qt64: {
+      if (p[0] != 0xEE || p[1] != 0xFF) return PacketError::bad_marker;
+      if (p[2] != 3 || p[3] != 1 || p[6] != 64 || p[7] != 4) return PacketError::bad_header;
+      dis_unit_mm = p[9];
+      pk.first_block_ = 12;
+      pk.block_stride_ = 2 + 64 * 4;
+      pk.az_offset_ = 0;
+      pk.units_offset_ = 2;
+      pk.unit_size_ = 4;
+      tail = 12 + 4 * pk.block_stride_;  // 1044
+      pk.rpm_ = u16(p + tail + 10);
+      micros = u32(p + tail + 12);
+      mode_byte = p[tail + 16];
+      date = p + tail + 18;
+      pk.has_sequence_ = n == m.payload_size_with_sequence;
+      if (pk.has_sequence_) pk.sequence_ = u32(p + tail + 24);
+      break;
+    }
+  }
+
+  if (dis_unit_mm == 0) return PacketError::bad_distance_unit;
+  pk.distance_unit_m_ = static_cast<float>(dis_unit_mm) * 0.001f;
+
+  pk.return_mode_ = static_cast<ReturnMode>(mode_byte);
+  const unsigned returns = returns_of(pk.return_mode_);
+  if (returns == 0 || pk.blocks_ % returns != 0) return PacketError::bad_return_mode;
+  pk.returns_ = static_cast<std::uint8_t>(returns);
+
+  // Azimuths: in range, equal inside a return group, and moving forward by a small step from
+  // group to group (real sensors step 0.18°–0.6°; 10° leaves room for any rpm). This also
+  // guarantees that one packet crosses the cut azimuth at most once.
+  constexpr unsigned max_group_step = 1000;  // 0.01°
+  for (unsigned b = 0; b < pk.blocks_; ++b) {
+    const std::uint16_t az = pk.azimuth(b);
+    if (az >= 36000) return PacketError::bad_azimuth;
+    if (b % returns != 0) {
+      if (az != pk.azimuth(b - b % returns)) return PacketError::bad_azimuth;
+    } else if (b > 0) {
+      const unsigned step = (az + 36000u - pk.azimuth(b - returns)) % 36000u;
+      if (step == 0 || step > max_group_step) return PacketError::bad_azimuth;
+    }
+  }
+
+  const bool time_ok = xt_date ? xt_time_ns(date, micros, pk.time_ns_)
+                               : utc_time_ns(date, micros, pk.time_ns_);
+  if (!time_ok) return PacketError::bad_time;
+
+  out = pk;
+  return PacketError::none;
+}
+
+std::int32_t Packet::block_offset_ns(unsigned block) const noexcept {
+  // Blocks of one return group fire together; k counts groups.
+  const std::int32_t r = returns_;
+  const std::int32_t b = static_cast<std::int32_t>(block);
+  switch (model_) {
+    case Model::pandar64: return -42580 - 55560 * ((6 - b - 1) / r);
+    case Model::pandar40p: return -28580 - 55560 * ((10 - b - 1) / r);
+    case Model::pandar_xt32:
+    case Model::pandar_xt16: return -50000 * ((8 - b - 1) / r);
+    case Model::pandar_qt64: return 25710 + (500000 * (b / r)) / 3;
+  }
+  return 0;
+}
+
+std::int32_t Packet::channel_offset_ns(Model model, unsigned channel) noexcept {
+  const std::int32_t c = static_cast<std::int32_t>(channel);
+  switch (model) {
+    case Model::pandar64: return channel < 64 ? pandar64_channel_ns[channel] : 0;
+    case Model::pandar40p: return channel < 40 ? pandar40p_channel_ns[channel] : 0;
+    // nebula: 5632 (block base) + 368 + 1512·ch; the block base is folded in here so the
+    // channel term equals Hesai's firing-time file (6 µs + 1.512 µs·ch).
+    case Model::pandar_xt32: return 6000 + 1512 * c;
+    case Model::pandar_xt16: return 6000 + 3024 * c;
+    case Model::pandar_qt64: return channel < 64 ? pandar_qt64_channel_ns[channel] : 0;
+  }
+  return 0;
+}
+
+std::int32_t Packet::firing_offset_ns(unsigned block, unsigned channel) const noexcept {
+  return block_offset_ns(block) + channel_offset_ns(model_, channel);
+}
+
+}  // namespace sim::hesai
