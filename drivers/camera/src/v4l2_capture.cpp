@@ -1,0 +1,183 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "sim/camera/v4l2_capture.hpp"
+
+#include <algorithm>
+#include <thread>
+#include <utility>
+
+#include "sim/clock.hpp"
+
+namespace sim::camera {
+
+const char* to_string(StepResult result) noexcept {
+  switch (result) {
+    case StepResult::published: return "published";
+    case StepResult::skipped: return "skipped";
+    case StepResult::no_frame: return "no_frame";
+    case StepResult::device_lost: return "device_lost";
+    case StepResult::reconnected: return "reconnected";
+    case StepResult::disconnected: return "disconnected";
+  }
+  return "?";
+}
+
+V4l2Capture::V4l2Capture(V4l2Io& io, V4l2CaptureConfig config) noexcept
+    : io_(&io), config_(std::move(config)) {}
+
+Expected<V4l2Capture> V4l2Capture::start(V4l2Io& io, V4l2CaptureConfig config) {
+  if (config.buffers < 2 || config.buffers > 32) {
+    return Error{ErrorCode::invalid_argument, "--buffers must be 2 to 32"};
+  }
+  V4l2Capture capture(io, std::move(config));
+  if (auto error = capture.connect(true)) return *error;
+  return capture;
+}
+
+void V4l2Capture::log(const std::string& message) const {
+  if (config_.log) config_.log(message);
+}
+
+std::optional<Error> V4l2Capture::connect(bool first) {
+  auto device = V4l2Device::open(*io_, config_.device);
+  if (!device) return device.error();
+  for (const auto& control : config_.controls) {
+    if (auto error = device->set_control(control.key, control.value)) {
+      if (first) return error;
+      log("warning: " + error->message);  // a control should not keep a camera offline
+    }
+  }
+  auto format = device->negotiate(config_.format);
+  if (!format) return format.error();
+  auto decoder = FrameDecoder::create(format->layout, config_.format.output);
+  if (!decoder) return decoder.error();
+
+  const Layout layout = Layout::of(decoder->output_layout());
+  const std::uint64_t capacity = decoder->output_capacity(format->size_image);
+  if (!writer_ || writer_->layout() != layout || writer_->capacity() != capacity) {
+    if (writer_) log("the camera came back with another format; the stream is recreated");
+    writer_.reset();  // the stream's writer lock must be free before the region is replaced
+    StreamSpec spec;
+    spec.name = config_.stream;
+    spec.capacity = capacity;
+    spec.layout = layout;
+    spec.checksum = config_.checksum;
+    auto writer = Writer::create(spec);
+    if (!writer) return writer.error();
+    writer_.emplace(std::move(writer.value()));
+  }
+  if (auto error = device->start(config_.buffers)) return error;
+
+  device_.emplace(std::move(device.value()));
+  decoder_.emplace(std::move(decoder.value()));
+  format_ = *format;
+  last_sequence_.reset();  // sequence numbers restart with the stream
+  last_frame_ = std::chrono::steady_clock::now();
+  return std::nullopt;
+}
+
+void V4l2Capture::disconnect() noexcept {
+  device_.reset();  // stops streaming, unmaps, closes; the writer (and the region) stays
+}
+
+StepResult V4l2Capture::step(std::chrono::milliseconds timeout) {
+  using Clock = std::chrono::steady_clock;
+  if (!device_) {
+    const auto now = Clock::now();
+    if (now < next_retry_) {
+      const auto wait = std::min<Clock::duration>(next_retry_ - now, timeout);
+      std::this_thread::sleep_for(wait);
+      if (Clock::now() < next_retry_) return StepResult::disconnected;
+    }
+    if (auto error = connect(false)) {
+      next_retry_ = Clock::now() + config_.retry_period;
+      return StepResult::disconnected;
+    }
+    ++stats_.reconnects;
+    log("reconnected to " + config_.device + "; streaming again");
+    return StepResult::reconnected;
+  }
+
+  DeviceFrame frame;
+  const auto wait_ms = static_cast<int>(std::min<std::int64_t>(timeout.count(), 60'000));
+  switch (device_->wait(wait_ms, frame)) {
+    case WaitResult::frame: {
+      const StepResult result = handle(frame);
+      if (device_->requeue(frame) == WaitResult::device_lost) {
+        ++stats_.device_losses;
+        log(config_.device + " was lost; retrying until it comes back");
+        disconnect();
+        next_retry_ = Clock::now() + config_.retry_period;
+      }
+      return result;
+    }
+    case WaitResult::timeout:
+    case WaitResult::again:
+      if (Clock::now() - last_frame_ > config_.frame_timeout) {
+        ++stats_.timeouts;
+        log("no frame from " + config_.device + " for " +
+            std::to_string(config_.frame_timeout.count()) + " ms; restarting the device");
+        disconnect();
+        next_retry_ = Clock::now();
+        return StepResult::device_lost;
+      }
+      return StepResult::no_frame;
+    case WaitResult::device_lost:
+      break;
+  }
+  ++stats_.device_losses;
+  log(config_.device + " was lost (unplugged?); the stream stays and the device is retried");
+  disconnect();
+  next_retry_ = Clock::now() + config_.retry_period;
+  return StepResult::device_lost;
+}
+
+StepResult V4l2Capture::handle(const DeviceFrame& frame) {
+  const std::int64_t received = realtime_ns();
+  last_frame_ = std::chrono::steady_clock::now();
+  if (last_sequence_ && frame.sequence > *last_sequence_ + 1) {
+    stats_.dropped += frame.sequence - *last_sequence_ - 1;
+  }
+  last_sequence_ = frame.sequence;
+  if (frame.error) {
+    ++stats_.device_errors;
+    return StepResult::skipped;
+  }
+
+  std::int64_t stamp = received;
+  if (config_.timestamps == TimestampSource::device && frame.monotonic_timestamp &&
+      frame.timestamp_ns > 0) {
+    clock_.resample();
+    stamp = clock_.to_realtime(frame.timestamp_ns);
+  }
+  stamp += config_.time_offset_ns;
+
+  Loan loan = writer_->loan();
+  const DecodeResult decoded = decoder_->decode(frame.bytes, loan.bytes());
+  switch (decoded.status) {
+    case DecodeStatus::ok:
+      // An uncommitted loan publishes nothing, so every failure below simply returns.
+      if (loan.commit(decoded.size, stamp) != WriteStatus::ok) return StepResult::skipped;
+      ++stats_.published;
+      return StepResult::published;
+    case DecodeStatus::corrupt_input:
+    case DecodeStatus::failed:
+      ++stats_.corrupt;
+      return StepResult::skipped;
+    case DecodeStatus::short_input:
+    case DecodeStatus::wrong_size:
+    case DecodeStatus::output_too_small:
+      ++stats_.bad_size;
+      return StepResult::skipped;
+  }
+  return StepResult::skipped;
+}
+
+void V4l2Capture::run(const std::atomic<bool>& stop,
+                      const std::function<void(StepResult, const V4l2Capture&)>& on_step) {
+  while (!stop.load(std::memory_order_relaxed)) {
+    const StepResult result = step(std::chrono::milliseconds(200));
+    if (on_step) on_step(result, *this);
+  }
+}
+
+}  // namespace sim::camera

@@ -1,0 +1,533 @@
+// SPDX-License-Identifier: Apache-2.0
+// The V4L2 driver above the system-call seam, against the in-memory fake device, writing into
+// real SIM regions that a sim::Reader reads back: negotiation, every decode path, timestamps,
+// drops, unplug and reconnect, corrupt input, and the tool's answer to a missing device.
+#include <gtest/gtest.h>
+#include <linux/videodev2.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cerrno>
+#include <cstdio>
+#include <thread>
+
+#include "fake_v4l2_device.hpp"
+#include "sim/camera/config.hpp"
+#include "sim/camera/v4l2_capture.hpp"
+#include "sim/clock.hpp"
+#include "sim/reader.hpp"
+#include "test_images.hpp"
+
+namespace sim::camera {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::Bytes;
+using testing::FakeControl;
+using testing::FakeFormat;
+using testing::FakeFrame;
+using testing::FakeV4l2Device;
+
+constexpr const char* kPath = "/dev/video-fake";
+const FourCc kYuyv = FourCc::of('Y', 'U', 'Y', 'V');
+const FourCc kUyvy = FourCc::of('U', 'Y', 'V', 'Y');
+const FourCc kMjpg = FourCc::of('M', 'J', 'P', 'G');
+const FourCc kGrey = FourCc::of('G', 'R', 'E', 'Y');
+const FourCc kY16 = FourCc::of('Y', '1', '6', ' ');
+
+std::string unique_stream() {
+  static int counter = 0;
+  return "/test_camera_" + std::to_string(getpid()) + "_" + std::to_string(counter++);
+}
+
+// A UVC-like camera: YUYV only slowly at the large size, MJPEG fast at every size.
+std::vector<FakeFormat> uvc_formats() {
+  return {
+      {kYuyv, "YUYV 4:2:2", {{64, 48}, {160, 120}, {320, 240}}, {30, 15}},
+      {kMjpg, "Motion-JPEG", {{64, 48}, {160, 120}, {320, 240}}, {60, 30}},
+      {kUyvy, "UYVY 4:2:2", {{64, 48}}, {30}},
+      {kGrey, "8-bit Greyscale", {{64, 48}}, {30}},
+      {kY16, "16-bit Greyscale", {{64, 48}}, {30}},
+  };
+}
+
+std::vector<FakeControl> uvc_controls() {
+  FakeControl brightness{V4L2_CID_BRIGHTNESS, "Brightness", V4L2_CTRL_TYPE_INTEGER, 0, 255, 1,
+                         128, 128, {}};
+  FakeControl exposure{V4L2_CID_EXPOSURE_AUTO, "Auto Exposure", V4L2_CTRL_TYPE_MENU, 0, 3, 1, 3,
+                       3, {"Auto Mode", "Manual Mode", "Shutter Priority Mode",
+                           "Aperture Priority Mode"}};
+  FakeControl exposure_time{V4L2_CID_EXPOSURE_ABSOLUTE, "Exposure Time, Absolute",
+                            V4L2_CTRL_TYPE_INTEGER, 3, 2047, 1, 250, 250, {}};
+  return {brightness, exposure, exposure_time};
+}
+
+class V4l2CaptureTest : public ::testing::Test {
+ protected:
+  V4l2CaptureTest() : fake(kPath, uvc_formats(), uvc_controls()) {
+    config.device = kPath;
+    config.stream = unique_stream();
+    config.retry_period = 0ms;
+    config.frame_timeout = 60s;
+  }
+  ~V4l2CaptureTest() override { sim::destroy(config.stream, true); }
+
+  Expected<V4l2Capture> start() { return V4l2Capture::start(fake, config); }
+
+  // Steps until the fake has delivered everything it was given (bounded, never hangs).
+  void drain(V4l2Capture& capture) {
+    for (int i = 0; i < 100 && fake.pending() > 0; ++i) capture.step(10ms);
+  }
+
+  Reader open_reader(ReaderOptions options = {}) {
+    auto reader = Reader::open(config.stream, options);
+    EXPECT_TRUE(reader) << reader.error().message;
+    return std::move(reader.value());
+  }
+
+  FakeV4l2Device fake;
+  V4l2CaptureConfig config;
+};
+
+// --- negotiation ---------------------------------------------------------------------------
+
+TEST_F(V4l2CaptureTest, AutoPrefersYuyvAndKeepsTheRequestedSize) {
+  config.format.width = 160;
+  config.format.height = 120;
+  auto capture = start();
+  ASSERT_TRUE(capture) << capture.error().message;
+  EXPECT_EQ(capture->format().fourcc, kYuyv);
+  EXPECT_EQ(fake.fourcc(), kYuyv);
+  EXPECT_EQ(fake.width(), 160u);
+  EXPECT_EQ(capture->output_layout(), make_layout(160, 120, PixelFormat::bgr8));
+  EXPECT_TRUE(fake.streaming());
+  EXPECT_EQ(fake.buffer_count(), 4u);
+  EXPECT_EQ(fake.queued_buffers(), 4u);
+  auto reader = open_reader();
+  EXPECT_EQ(reader.layout(), Layout::of(make_layout(160, 120, PixelFormat::bgr8)));
+}
+
+TEST_F(V4l2CaptureTest, AutoTakesMjpegWhenOnlyItReachesTheRate) {
+  config.format.width = 320;
+  config.format.height = 240;
+  config.format.fps = 60;
+  auto capture = start();
+  ASSERT_TRUE(capture) << capture.error().message;
+  EXPECT_EQ(capture->format().fourcc, kMjpg);
+  EXPECT_DOUBLE_EQ(capture->format().fps, 60.0);
+  EXPECT_EQ(fake.fps(), 60u);
+}
+
+TEST_F(V4l2CaptureTest, AutoPrefersGreyForMonoOutput) {
+  config.format.output = OutputFormat::mono8;
+  auto capture = start();
+  ASSERT_TRUE(capture) << capture.error().message;
+  EXPECT_EQ(capture->format().fourcc, kGrey);
+}
+
+TEST_F(V4l2CaptureTest, UnsupportedSizeGetsTheClosestOne) {
+  config.format.width = 300;
+  config.format.height = 250;
+  auto capture = start();
+  ASSERT_TRUE(capture) << capture.error().message;
+  EXPECT_EQ(capture->output_layout().width, 320u);
+  EXPECT_EQ(capture->output_layout().height, 240u);
+}
+
+TEST_F(V4l2CaptureTest, AFormatTheDeviceLacksIsAClearError) {
+  config.format.fourcc = FourCc::of('H', '2', '6', '4');
+  auto capture = start();
+  ASSERT_FALSE(capture);
+  EXPECT_NE(capture.error().message.find("does not offer format H264"), std::string::npos)
+      << capture.error().message;
+  EXPECT_EQ(fake.open_handles(), 0);
+}
+
+TEST_F(V4l2CaptureTest, AMissingDeviceIsAClearError) {
+  config.device = "/dev/video-none";
+  auto capture = start();
+  ASSERT_FALSE(capture);
+  EXPECT_EQ(capture.error().code, ErrorCode::not_found);
+  EXPECT_NE(capture.error().message.find("no video device at /dev/video-none"), std::string::npos);
+}
+
+TEST_F(V4l2CaptureTest, ListsFormatsAndControls) {
+  auto device = V4l2Device::open(fake, kPath);
+  ASSERT_TRUE(device);
+  EXPECT_EQ(device->card(), "SIM fake camera");
+  const auto formats = device->formats();
+  ASSERT_EQ(formats.size(), 5u);
+  EXPECT_EQ(formats[1].fourcc.str(), "MJPG");
+  EXPECT_TRUE(formats[1].compressed);
+  ASSERT_EQ(formats[0].sizes.size(), 3u);
+  EXPECT_EQ(formats[0].sizes[2].width, 320u);
+  EXPECT_EQ(formats[0].sizes[2].fps, (std::vector<double>{30, 15}));
+  const auto controls = device->controls();
+  ASSERT_EQ(controls.size(), 3u);
+  EXPECT_EQ(controls[0].key, "brightness");
+  EXPECT_EQ(controls[2].key, "exposure_time_absolute");
+  EXPECT_EQ(controls[1].menu.size(), 4u);
+}
+
+TEST_F(V4l2CaptureTest, ControlsBySpelledNameNumberOrMenuEntry) {
+  config.controls = {{"brightness", "200"}, {"Auto Exposure", "manual_mode"},
+                     {"exposure_time_absolute", "100"}};
+  auto capture = start();
+  ASSERT_TRUE(capture) << capture.error().message;
+  EXPECT_EQ(fake.control(V4L2_CID_BRIGHTNESS), 200);
+  EXPECT_EQ(fake.control(V4L2_CID_EXPOSURE_AUTO), 1);
+  EXPECT_EQ(fake.control(V4L2_CID_EXPOSURE_ABSOLUTE), 100);
+
+  auto device = V4l2Device::open(fake, kPath);
+  ASSERT_TRUE(device);
+  auto unknown = device->set_control("focus", "3");
+  ASSERT_TRUE(unknown);
+  EXPECT_NE(unknown->message.find("--list-controls"), std::string::npos);
+  auto range = device->set_control("brightness", "300");
+  ASSERT_TRUE(range);
+  EXPECT_NE(range->message.find("0 to 255"), std::string::npos);
+  EXPECT_TRUE(device->set_control("brightness", "bright"));
+  EXPECT_EQ(fake.control(V4L2_CID_BRIGHTNESS), 200);
+}
+
+// --- each decode path, through a real region --------------------------------------------
+
+struct PathCase {
+  FourCc fourcc;
+  OutputFormat output;
+  std::uint32_t row_padding;
+};
+
+class V4l2DecodePath : public V4l2CaptureTest,
+                       public ::testing::WithParamInterface<PathCase> {};
+
+TEST_P(V4l2DecodePath, ReaderGetsOpenCvsConversion) {
+  const PathCase c = GetParam();
+  config.format.fourcc = c.fourcc;
+  config.format.width = 64;
+  config.format.height = 48;
+  config.format.output = c.output;
+  fake.set_row_padding(c.row_padding);
+  auto capture = start();
+  ASSERT_TRUE(capture) << capture.error().message;
+  const ImageLayout input = capture->format().layout;
+  EXPECT_EQ(input.stride, row_bytes(64, input.format) + c.row_padding);
+
+  const Bytes frame = c.fourcc == kMjpg
+                          ? testing::encode_jpeg(testing::scene_bgr(64, 48, 4), 64, 48)
+                          : testing::noise(input.frame_bytes(), 11);
+  fake.push_frame({frame});
+  ASSERT_EQ(capture->step(100ms), StepResult::published);
+
+  auto reader = open_reader();
+  Bytes got(reader.capacity());
+  FrameInfo info;
+  ASSERT_EQ(reader.read(got, info), ReadStatus::new_frame);
+  EXPECT_EQ(info.layout.image, capture->output_layout());
+  got.resize(info.size);
+  if (c.output == OutputFormat::raw) {
+    EXPECT_EQ(got, frame);
+    EXPECT_EQ(info.layout.image.format, input.format);
+  } else {
+    const Bytes expected = testing::reference(input, frame, c.output);
+    ASSERT_FALSE(expected.empty());
+    EXPECT_LE(testing::max_difference(got, expected), c.fourcc == kMjpg ? 1 : 0);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    EveryFormat, V4l2DecodePath,
+    ::testing::Values(PathCase{kYuyv, OutputFormat::bgr8, 0}, PathCase{kYuyv, OutputFormat::rgb8, 64},
+                      PathCase{kYuyv, OutputFormat::mono8, 0}, PathCase{kYuyv, OutputFormat::raw, 32},
+                      PathCase{kUyvy, OutputFormat::bgr8, 0}, PathCase{kMjpg, OutputFormat::bgr8, 0},
+                      PathCase{kMjpg, OutputFormat::rgb8, 0}, PathCase{kMjpg, OutputFormat::mono8, 0},
+                      PathCase{kMjpg, OutputFormat::raw, 0}, PathCase{kGrey, OutputFormat::mono8, 16},
+                      PathCase{kGrey, OutputFormat::bgr8, 0}, PathCase{kY16, OutputFormat::mono8, 0}));
+
+// --- timestamps and sequence ----------------------------------------------------------------
+
+TEST_F(V4l2CaptureTest, DeviceTimestampIsMappedToRealtime) {
+  config.format.width = 64;
+  config.format.height = 48;
+  config.time_offset_ns = 1'000;
+  auto capture = start();
+  ASSERT_TRUE(capture);
+  // An exposure that started 250 ms ago on the monotonic clock.
+  const std::int64_t exposure = monotonic_ns() - 250'000'000;
+  const std::int64_t offset = realtime_ns() - monotonic_ns();
+  fake.push_frame({testing::noise(64 * 48 * 2, 1), 0, false, exposure});
+  ASSERT_EQ(capture->step(100ms), StepResult::published);
+  auto reader = open_reader();
+  Bytes got(reader.capacity());
+  FrameInfo info;
+  ASSERT_EQ(reader.read(got, info), ReadStatus::new_frame);
+  // The mapping, not the time of publishing: 250 ms in the past (the clocks' offset can only
+  // move by an NTP slew between two reads a few microseconds apart).
+  EXPECT_NEAR(static_cast<double>(info.stamp_ns),
+              static_cast<double>(exposure + offset + 1'000), 5e6);
+  EXPECT_LT(info.stamp_ns, realtime_ns() - 200'000'000);
+}
+
+TEST_F(V4l2CaptureTest, ReceiveTimestampsIgnoreTheDeviceClock) {
+  config.format.width = 64;
+  config.format.height = 48;
+  config.timestamps = TimestampSource::receive;
+  auto capture = start();
+  ASSERT_TRUE(capture);
+  const std::int64_t before = realtime_ns();
+  fake.push_frame({testing::noise(64 * 48 * 2, 1), 0, false, 12345});
+  ASSERT_EQ(capture->step(100ms), StepResult::published);
+  auto reader = open_reader();
+  Bytes got(reader.capacity());
+  FrameInfo info;
+  ASSERT_EQ(reader.read(got, info), ReadStatus::new_frame);
+  EXPECT_GE(info.stamp_ns, before);
+  EXPECT_LE(info.stamp_ns, realtime_ns());
+}
+
+TEST_F(V4l2CaptureTest, SequenceGapsCountDroppedFrames) {
+  config.format.width = 64;
+  config.format.height = 48;
+  auto capture = start();
+  ASSERT_TRUE(capture);
+  const Bytes frame = testing::noise(64 * 48 * 2, 1);
+  fake.push_frame({frame});
+  fake.push_frame({frame, 3});  // three frames lost in the device
+  fake.push_frame({frame});
+  fake.push_frame({frame, 1});
+  drain(*capture);
+  EXPECT_EQ(capture->stats().published, 4u);
+  EXPECT_EQ(capture->stats().dropped, 4u);
+}
+
+// --- bad input -------------------------------------------------------------------------------
+
+TEST_F(V4l2CaptureTest, CorruptAndMisfitFramesAreCountedAndNeverPublished) {
+  config.format.fourcc = kMjpg;
+  config.format.width = 64;
+  config.format.height = 48;
+  auto capture = start();
+  ASSERT_TRUE(capture);
+  auto reader = open_reader();
+  Bytes got(reader.capacity());
+  FrameInfo info;
+
+  const Bytes good = testing::encode_jpeg(testing::scene_bgr(64, 48, 1), 64, 48);
+  const Bytes truncated(good.begin(), good.begin() + static_cast<std::ptrdiff_t>(good.size() / 2));
+  fake.push_frame({truncated});
+  EXPECT_EQ(capture->step(100ms), StepResult::skipped);
+  fake.push_frame({testing::noise(3000, 4)});
+  EXPECT_EQ(capture->step(100ms), StepResult::skipped);
+  fake.push_frame({testing::encode_jpeg(testing::scene_bgr(160, 120, 1), 160, 120)});
+  EXPECT_EQ(capture->step(100ms), StepResult::skipped);
+  fake.push_frame({good, 0, true});  // the device flagged the buffer as bad
+  EXPECT_EQ(capture->step(100ms), StepResult::skipped);
+  fake.push_frame({{}});  // bytesused 0
+  EXPECT_EQ(capture->step(100ms), StepResult::skipped);
+  EXPECT_EQ(reader.read(got, info), ReadStatus::no_new_frame);
+
+  fake.push_frame({good});
+  EXPECT_EQ(capture->step(100ms), StepResult::published);
+  ASSERT_EQ(reader.read(got, info), ReadStatus::new_frame);
+  EXPECT_EQ(info.seq, 1u);
+  EXPECT_EQ(capture->stats().corrupt, 3u);
+  EXPECT_EQ(capture->stats().bad_size, 1u);
+  EXPECT_EQ(capture->stats().device_errors, 1u);
+  EXPECT_EQ(capture->stats().published, 1u);
+}
+
+TEST_F(V4l2CaptureTest, ShortUncompressedFramesAreSkipped) {
+  config.format.width = 64;
+  config.format.height = 48;
+  auto capture = start();
+  ASSERT_TRUE(capture);
+  fake.push_frame({testing::noise(64 * 48 * 2 - 2, 1)});
+  EXPECT_EQ(capture->step(100ms), StepResult::skipped);
+  EXPECT_EQ(capture->stats().bad_size, 1u);
+  EXPECT_EQ(capture->stats().published, 0u);
+}
+
+TEST_F(V4l2CaptureTest, EagainAndStallsAreNotErrors) {
+  config.format.width = 64;
+  config.format.height = 48;
+  auto capture = start();
+  ASSERT_TRUE(capture);
+  fake.push_error(EAGAIN);
+  EXPECT_EQ(capture->step(100ms), StepResult::no_frame);
+  fake.push_stall();
+  EXPECT_EQ(capture->step(100ms), StepResult::no_frame);
+  fake.push_frame({testing::noise(64 * 48 * 2, 1)});
+  EXPECT_EQ(capture->step(100ms), StepResult::published);
+  EXPECT_EQ(capture->stats().device_losses, 0u);
+}
+
+TEST_F(V4l2CaptureTest, AStalledStreamIsRestarted) {
+  config.format.width = 64;
+  config.format.height = 48;
+  config.frame_timeout = 0ms;
+  auto capture = start();
+  ASSERT_TRUE(capture);
+  fake.push_stall();
+  EXPECT_EQ(capture->step(100ms), StepResult::device_lost);
+  EXPECT_EQ(capture->stats().timeouts, 1u);
+  EXPECT_EQ(capture->step(100ms), StepResult::reconnected);
+  EXPECT_EQ(fake.opens(), 2);
+  EXPECT_TRUE(fake.streaming());
+}
+
+// --- unplug and reconnect --------------------------------------------------------------------
+
+TEST_F(V4l2CaptureTest, UnplugKeepsTheStreamAndResumesOnReplug) {
+  config.format.width = 64;
+  config.format.height = 48;
+  auto capture = start();
+  ASSERT_TRUE(capture);
+  const Bytes frame = testing::noise(64 * 48 * 2, 1);
+  fake.push_frame({frame});
+  ASSERT_EQ(capture->step(100ms), StepResult::published);
+
+  ReaderOptions options;
+  options.stale_after = 1ms;
+  auto reader = open_reader(options);
+  Bytes got(reader.capacity());
+  FrameInfo info;
+  ASSERT_EQ(reader.read(got, info), ReadStatus::new_frame);
+  EXPECT_EQ(info.seq, 1u);
+
+  fake.push_error(ENODEV);  // DQBUF: the camera is gone
+  EXPECT_EQ(capture->step(100ms), StepResult::device_lost);
+  EXPECT_FALSE(capture->connected());
+  EXPECT_EQ(fake.open_handles(), 0);  // the dead handle was closed…
+  EXPECT_EQ(fake.mapped_buffers(), 0);  // …and its buffers unmapped
+  EXPECT_EQ(capture->step(10ms), StepResult::disconnected);
+
+  // The region is still there; readers see it go stale, not vanish.
+  std::this_thread::sleep_for(5ms);
+  EXPECT_EQ(reader.read(got, info), ReadStatus::stale);
+  auto late_reader = Reader::open(config.stream);
+  EXPECT_TRUE(late_reader);
+
+  fake.plug();
+  EXPECT_EQ(capture->step(100ms), StepResult::reconnected);
+  fake.push_frame({frame});
+  EXPECT_EQ(capture->step(100ms), StepResult::published);
+  ASSERT_EQ(reader.read(got, info), ReadStatus::new_frame);
+  EXPECT_EQ(info.seq, 2u);  // same stream, same sequence
+  EXPECT_EQ(capture->stats().device_losses, 1u);
+  EXPECT_EQ(capture->stats().reconnects, 1u);
+}
+
+TEST_F(V4l2CaptureTest, PollErrorAndEioAreUnplugsToo) {
+  config.format.width = 64;
+  config.format.height = 48;
+  auto capture = start();
+  ASSERT_TRUE(capture);
+  fake.unplug();  // poll reports POLLERR
+  EXPECT_EQ(capture->step(100ms), StepResult::device_lost);
+  fake.plug();
+  EXPECT_EQ(capture->step(100ms), StepResult::reconnected);
+  fake.push_error(EIO);
+  EXPECT_EQ(capture->step(100ms), StepResult::device_lost);
+  EXPECT_EQ(capture->step(100ms), StepResult::reconnected);
+  fake.push_frame({testing::noise(64 * 48 * 2, 2)});
+  EXPECT_EQ(capture->step(100ms), StepResult::published);
+  EXPECT_EQ(capture->stats().device_losses, 2u);
+}
+
+TEST_F(V4l2CaptureTest, StoppingReleasesEverything) {
+  config.format.width = 64;
+  config.format.height = 48;
+  {
+    auto capture = start();
+    ASSERT_TRUE(capture);
+    EXPECT_EQ(fake.mapped_buffers(), 4);
+  }
+  EXPECT_EQ(fake.open_handles(), 0);
+  EXPECT_EQ(fake.mapped_buffers(), 0);
+  EXPECT_FALSE(fake.streaming());
+}
+
+// --- configuration file and tool --------------------------------------------------------------
+
+TEST(V4l2Config, YamlFillsTheConfigAndReportsBadKeys) {
+  const std::string path = "/tmp/test_camera_config_" + std::to_string(getpid()) + ".yaml";
+  {
+    FILE* file = std::fopen(path.c_str(), "w");
+    ASSERT_NE(file, nullptr);
+    std::fputs("device: /dev/video3\nstream: /cam_left\nformat: MJPG\nwidth: 1280\nheight: 720\n"
+               "fps: 30\noutput: rgb8\ncontrols:\n  brightness: 100\n  exposure_auto: 1\n"
+               "cpu: 1\ntimestamps: receive\n",
+               file);
+    std::fclose(file);
+  }
+  V4l2CaptureConfig config;
+  Placement placement;
+  EXPECT_FALSE(load_v4l2_config(path, config, placement));
+  EXPECT_EQ(config.device, "/dev/video3");
+  EXPECT_EQ(config.stream, "/cam_left");
+  EXPECT_EQ(config.format.fourcc, FourCc::of('M', 'J', 'P', 'G'));
+  EXPECT_EQ(config.format.width, 1280u);
+  EXPECT_EQ(config.format.output, OutputFormat::rgb8);
+  ASSERT_EQ(config.controls.size(), 2u);
+  EXPECT_EQ(config.controls[1].key, "exposure_auto");
+  EXPECT_EQ(placement.cpu, 1);
+  EXPECT_EQ(config.timestamps, TimestampSource::receive);
+
+  {
+    FILE* file = std::fopen(path.c_str(), "w");
+    std::fputs("widht: 640\n", file);
+    std::fclose(file);
+  }
+  auto error = load_v4l2_config(path, config, placement);
+  ASSERT_TRUE(error);
+  EXPECT_NE(error->message.find("unknown key 'widht'"), std::string::npos);
+  {
+    FILE* file = std::fopen(path.c_str(), "w");
+    std::fputs("width: wide\n", file);
+    std::fclose(file);
+  }
+  error = load_v4l2_config(path, config, placement);
+  ASSERT_TRUE(error);
+  EXPECT_NE(error->message.find("'width'"), std::string::npos);
+  std::remove(path.c_str());
+  EXPECT_TRUE(load_v4l2_config(path, config, placement));
+}
+
+struct ToolRun {
+  int exit_code = -1;
+  std::string output;
+};
+
+ToolRun run_tool(const std::string& arguments) {
+  ToolRun run;
+  const std::string command = std::string(SIM_CAMERA_V4L2_TOOL) + " " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return run;
+  std::array<char, 512> chunk{};
+  while (std::fgets(chunk.data(), chunk.size(), pipe) != nullptr) run.output += chunk.data();
+  const int status = pclose(pipe);
+  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return run;
+}
+
+TEST(V4l2Tool, MissingDeviceFailsWithOneSentence) {
+  const ToolRun run = run_tool("/dev/video-sim-missing --stream " + unique_stream());
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.output.find("no video device at /dev/video-sim-missing"), std::string::npos)
+      << run.output;
+  const ToolRun list = run_tool("/dev/video-sim-missing --list-formats");
+  EXPECT_EQ(list.exit_code, 1);
+}
+
+TEST(V4l2Tool, UsageErrorsExitWithTwo) {
+  EXPECT_EQ(run_tool("--output bgr").exit_code, 2);
+  EXPECT_EQ(run_tool("--ctrl brightness").exit_code, 2);
+  EXPECT_EQ(run_tool("--format TOOLONG").exit_code, 2);
+  const ToolRun help = run_tool("--help");
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.output.find("--list-controls"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace sim::camera
