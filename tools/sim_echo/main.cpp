@@ -1,6 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
 // sim_echo: prints the frames of a stream as JSON lines, or their rate and latency (--stats).
-#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -12,6 +11,7 @@
 
 #include "sim/clock.hpp"
 #include "sim/reader.hpp"
+#include "sim_tools/cli.hpp"
 
 namespace {
 
@@ -82,7 +82,7 @@ int main(int argc, char** argv) {
   app.add_option("--duration", duration_s, "stop after this many seconds");
   app.add_flag("--wait-for-stream", wait_for_stream, "wait until the stream exists");
   app.add_flag("--poll", poll, "busy-poll instead of sleeping until each frame (uses a core)");
-  CLI11_PARSE(app, argc, argv);
+  if (auto code = sim::tools::parse(app, argc, argv)) return *code;
 
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);

@@ -1,11 +1,11 @@
 // SPDX-License-Identifier: Apache-2.0
 // sim_ls: every SIM stream on this machine, with its layout, rate, age and writer.
-#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <string>
 
 #include "sim/clock.hpp"
 #include "sim/reader.hpp"
+#include "sim_tools/cli.hpp"
 
 namespace {
 
@@ -34,7 +34,7 @@ int main(int argc, char** argv) {
                "newest frame, writer and checksum."};
   bool json = false;
   app.add_flag("--json", json, "one JSON object per stream instead of a table");
-  CLI11_PARSE(app, argc, argv);
+  if (auto code = sim::tools::parse(app, argc, argv)) return *code;
 
   const auto names = sim::list_streams();
   if (!json) {

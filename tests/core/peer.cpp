@@ -1,0 +1,146 @@
+// SPDX-License-Identifier: Apache-2.0
+// sim_test_peer: the other process in multi-process tests. Prints key=value lines on stdout.
+//
+//   writer NAME FRAMES RATE_HZ MIN_BYTES MAX_BYTES LINGER_MS   publish pattern frames
+//   reader NAME UNTIL_SEQ TIMEOUT_MS MODE                       MODE: wait | poll | borrow
+//   hold NAME                                                   own the stream until killed
+#include <time.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "sim/clock.hpp"
+#include "sim/reader.hpp"
+#include "sim/writer.hpp"
+#include "support.hpp"
+
+using namespace sim;
+using namespace std::chrono_literals;
+
+namespace {
+
+int run_writer(const std::string& name, std::uint64_t frames, double rate_hz, std::size_t min_bytes,
+               std::size_t max_bytes, long linger_ms) {
+  auto writer = Writer::create({.name = name, .capacity = max_bytes});
+  if (!writer) {
+    std::printf("error=%s\n", writer.error().message.c_str());
+    return 1;
+  }
+  std::printf("ready first=%llu pid=%d\n", static_cast<unsigned long long>(writer->last_seq() + 1),
+              getpid());
+  std::fflush(stdout);
+  const std::int64_t period_ns = rate_hz > 0 ? static_cast<std::int64_t>(1e9 / rate_hz) : 0;
+  std::int64_t next = monotonic_ns();
+  for (std::uint64_t i = 0; i < frames; ++i) {
+    const std::uint64_t seq = writer->last_seq() + 1;
+    Loan loan = writer->loan();
+    const std::size_t size = test::frame_size(seq, min_bytes, max_bytes);
+    test::fill_frame(loan.bytes().first(size), seq);
+    loan.commit(size, realtime_ns());
+    if (period_ns > 0) {
+      next += period_ns;  // absolute schedule: no drift
+      timespec ts{next / 1'000'000'000, next % 1'000'000'000};
+      clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+    }
+  }
+  std::printf("done last=%llu\n", static_cast<unsigned long long>(writer->last_seq()));
+  std::fflush(stdout);
+  std::this_thread::sleep_for(std::chrono::milliseconds(linger_ms));
+  return 0;
+}
+
+int run_reader(const std::string& name, std::uint64_t until_seq, long timeout_ms,
+               const std::string& mode) {
+  const std::int64_t deadline = monotonic_ns() + timeout_ms * 1'000'000;
+  auto reader = Reader::open(name);
+  while (!reader && monotonic_ns() < deadline) {
+    std::this_thread::sleep_for(5ms);
+    reader = Reader::open(name);
+  }
+  if (!reader) {
+    std::printf("error=%s\n", reader.error().message.c_str());
+    return 1;
+  }
+  std::printf("ready\n");
+  std::fflush(stdout);
+  std::vector<std::byte> buffer(reader->capacity());
+  std::uint64_t received = 0, torn = 0, disorder = 0, first = 0, last = 0;
+  bool gone_reported = false;
+  while (last < until_seq && monotonic_ns() < deadline) {
+    FrameInfo info;
+    ReadStatus status;
+    bool whole = false;
+    if (mode == "borrow") {
+      status = reader->wait(50ms);
+      if (status == ReadStatus::new_frame) {
+        const Borrow b = reader->borrow();
+        status = b.status();
+        if (status == ReadStatus::new_frame) {
+          info = b.info();
+          whole = test::check_frame(b.bytes(), info.seq);
+          if (!b.still_valid()) continue;  // overwritten while checked: not delivered
+        }
+      }
+    } else {
+      status = mode == "poll" ? reader->read(buffer, info) : reader->read_next(buffer, info, 50ms);
+      if (status == ReadStatus::new_frame) {
+        whole = test::check_frame(std::span(buffer).first(info.size), info.seq);
+      }
+    }
+    if (status == ReadStatus::new_frame) {
+      if (gone_reported) {
+        std::printf("event=resumed seq=%llu\n", static_cast<unsigned long long>(info.seq));
+        std::fflush(stdout);
+        gone_reported = false;
+      }
+      ++received;
+      if (!whole) ++torn;
+      if (info.seq <= last) ++disorder;
+      if (first == 0) first = info.seq;
+      last = info.seq;
+    } else if (status == ReadStatus::writer_gone && !gone_reported) {
+      gone_reported = true;
+      std::printf("event=writer_gone seq=%llu\n", static_cast<unsigned long long>(last));
+      std::fflush(stdout);
+    }
+  }
+  const ReaderStats stats = reader->stats();
+  std::printf("received=%llu torn=%llu disorder=%llu skipped=%llu first=%llu last=%llu overruns=%llu\n",
+              static_cast<unsigned long long>(received), static_cast<unsigned long long>(torn),
+              static_cast<unsigned long long>(disorder),
+              static_cast<unsigned long long>(stats.skipped), static_cast<unsigned long long>(first),
+              static_cast<unsigned long long>(last), static_cast<unsigned long long>(stats.overruns));
+  return last >= until_seq ? 0 : 1;
+}
+
+int run_hold(const std::string& name) {
+  auto writer = Writer::create({.name = name, .capacity = 4096});
+  if (!writer) {
+    std::printf("error=%s\n", writer.error().message.c_str());
+    return 1;
+  }
+  std::printf("ready pid=%d\n", getpid());
+  std::fflush(stdout);
+  for (;;) pause();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::vector<std::string> args(argv + 1, argv + argc);
+  if (args.size() == 7 && args[0] == "writer") {
+    return run_writer(args[1], std::stoull(args[2]), std::stod(args[3]), std::stoul(args[4]),
+                      std::stoul(args[5]), std::stol(args[6]));
+  }
+  if (args.size() == 5 && args[0] == "reader") {
+    return run_reader(args[1], std::stoull(args[2]), std::stol(args[3]), args[4]);
+  }
+  if (args.size() == 2 && args[0] == "hold") return run_hold(args[1]);
+  std::fprintf(stderr, "usage: see the comment at the top of tests/core/peer.cpp\n");
+  return 2;
+}

@@ -1,0 +1,151 @@
+// SPDX-License-Identifier: Apache-2.0
+// What the core tests share: unique stream names, frames whose content proves they are whole,
+// and child processes.
+#pragma once
+
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "sim/reader.hpp"
+
+extern char** environ;
+
+namespace sim::test {
+
+// A stream name no other test (or test process) uses at the same time.
+inline std::string unique_name(const std::string& what) {
+  static std::atomic<int> counter{0};
+  return "/test_" + what + "_" + std::to_string(getpid()) + "_" + std::to_string(counter++);
+}
+
+// Removes the stream when the test ends, however it ends.
+struct StreamGuard {
+  std::string name;
+  ~StreamGuard() { sim::destroy(name, /*force=*/true); }
+};
+
+// Frame content derived from the sequence number: any mix of two frames fails check_frame.
+inline std::uint64_t pattern_word(std::uint64_t seq, std::uint64_t index) {
+  std::uint64_t z = seq * 0x9E3779B97F4A7C15ull + index * 0xBF58476D1CE4E5B9ull + 1;
+  z = (z ^ (z >> 31)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 29);
+}
+inline void fill_frame(std::span<std::byte> out, std::uint64_t seq) {
+  const std::size_t words = out.size() / 8;
+  for (std::size_t i = 0; i < words; ++i) {
+    const std::uint64_t w = i == 0 ? seq : pattern_word(seq, i);
+    std::memcpy(out.data() + i * 8, &w, 8);
+  }
+}
+// Whole means: the first word names the frame and every word matches that frame's pattern.
+inline bool check_frame(std::span<const std::byte> in, std::uint64_t expected_seq) {
+  const std::size_t words = in.size() / 8;
+  if (words == 0) return false;
+  for (std::size_t i = 0; i < words; ++i) {
+    std::uint64_t w;
+    std::memcpy(&w, in.data() + i * 8, 8);
+    if (w != (i == 0 ? expected_seq : pattern_word(expected_seq, i))) return false;
+  }
+  return true;
+}
+// Reads a word of a borrowed frame the writer may be overwriting at this moment. The race is the
+// point of the test (still_valid() decides afterwards), so ThreadSanitizer must not flag it.
+#if defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+__attribute__((no_sanitize("thread")))
+#endif
+#endif
+#if defined(__SANITIZE_THREAD__)
+__attribute__((no_sanitize("thread")))
+#endif
+inline std::uint64_t racy_word(std::span<const std::byte> in, std::size_t index) {
+  const volatile std::uint64_t* p = reinterpret_cast<const volatile std::uint64_t*>(in.data());
+  return p[index];
+}
+
+// Frame sizes vary with the sequence number so a torn length would show too.
+inline std::size_t frame_size(std::uint64_t seq, std::size_t min_bytes, std::size_t max_bytes) {
+  const std::size_t span = (max_bytes - min_bytes) / 8;
+  return min_bytes + (span == 0 ? 0 : (pattern_word(seq, 0) % (span + 1)) * 8);
+}
+
+// A child process running a program, with its stdout readable line by line.
+class Child {
+ public:
+  explicit Child(std::vector<std::string> argv) {
+    int pipe_fds[2];
+    if (pipe(pipe_fds) != 0) return;
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], STDOUT_FILENO);
+    posix_spawn_file_actions_addclose(&actions, pipe_fds[0]);
+    std::vector<char*> args;
+    for (auto& a : argv) args.push_back(a.data());
+    args.push_back(nullptr);
+    if (posix_spawn(&pid_, args[0], &actions, nullptr, args.data(), environ) != 0) pid_ = -1;
+    posix_spawn_file_actions_destroy(&actions);
+    close(pipe_fds[1]);
+    out_ = fdopen(pipe_fds[0], "r");
+  }
+  Child(const Child&) = delete;
+  Child& operator=(const Child&) = delete;
+  ~Child() {
+    if (pid_ > 0 && !reaped_) {
+      kill(pid_, SIGKILL);
+      wait();
+    }
+    if (out_ != nullptr) fclose(out_);
+  }
+  pid_t pid() const { return pid_; }
+  bool started() const { return pid_ > 0; }
+  // The next line of output, or "" at end of output.
+  std::string line() {
+    char buf[4096];
+    if (out_ == nullptr || fgets(buf, sizeof(buf), out_) == nullptr) return {};
+    std::string s(buf);
+    if (!s.empty() && s.back() == '\n') s.pop_back();
+    return s;
+  }
+  // All remaining output.
+  std::string rest() {
+    std::string all, l;
+    while (!(l = line()).empty()) all += l + "\n";
+    return all;
+  }
+  void signal(int sig) { kill(pid_, sig); }
+  // Exit code, or 128 + signal number.
+  int wait() {
+    if (reaped_) return status_;
+    int status = 0;
+    waitpid(pid_, &status, 0);
+    reaped_ = true;
+    status_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    return status_;
+  }
+
+ private:
+  pid_t pid_ = -1;
+  FILE* out_ = nullptr;
+  bool reaped_ = false;
+  int status_ = -1;
+};
+
+// Reads "key=value" out of a line of the peer's output.
+inline std::uint64_t field(const std::string& line, const std::string& key) {
+  const auto at = line.find(key + "=");
+  if (at == std::string::npos) return ~0ull;
+  return std::stoull(line.substr(at + key.size() + 1));
+}
+
+}  // namespace sim::test

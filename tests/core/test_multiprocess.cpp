@@ -1,0 +1,138 @@
+// SPDX-License-Identifier: Apache-2.0
+// Writers and readers in separate processes (sim_test_peer), including killed ones.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <memory>
+#include <thread>
+
+#include "sim/sim.hpp"
+#include "support.hpp"
+
+using namespace sim;
+using namespace std::chrono_literals;
+using test::Child;
+using test::field;
+using test::StreamGuard;
+using test::unique_name;
+
+namespace {
+
+const std::string kPeer = SIM_TEST_PEER;
+
+std::unique_ptr<Child> spawn_writer(const std::string& name, int frames, double rate,
+                                    std::size_t min_bytes, std::size_t max_bytes, int linger_ms) {
+  auto child = std::make_unique<Child>(std::vector<std::string>{
+      kPeer, "writer", name, std::to_string(frames), std::to_string(rate),
+      std::to_string(min_bytes), std::to_string(max_bytes), std::to_string(linger_ms)});
+  EXPECT_EQ(child->line().rfind("ready", 0), 0u);
+  return child;
+}
+
+std::unique_ptr<Child> spawn_reader(const std::string& name, std::uint64_t until, int timeout_ms,
+                                    const std::string& mode) {
+  auto child = std::make_unique<Child>(std::vector<std::string>{
+      kPeer, "reader", name, std::to_string(until), std::to_string(timeout_ms), mode});
+  EXPECT_EQ(child->line(), "ready");
+  return child;
+}
+
+struct ReaderResult {
+  std::uint64_t received, torn, disorder, skipped, first, last;
+};
+ReaderResult finish(Child& reader) {
+  const std::string summary = reader.rest();
+  EXPECT_EQ(reader.wait(), 0) << summary;
+  return {field(summary, "received"), field(summary, "torn"), field(summary, "disorder"),
+          field(summary, "skipped"), field(summary, "first"), field(summary, "last")};
+}
+
+void fan_out(int readers, const std::string& mode) {
+  StreamGuard g{unique_name("fanout")};
+  constexpr int kFrames = 300;
+  {
+    // Create the stream first so readers can open it before the peer writer takes it over.
+    auto created = Writer::create({.name = g.name, .capacity = 64 * 1024});
+    ASSERT_TRUE(created);
+  }
+  std::vector<std::unique_ptr<Child>> children;
+  for (int i = 0; i < readers; ++i) children.push_back(spawn_reader(g.name, kFrames, 60000, mode));
+  auto writer = spawn_writer(g.name, kFrames, 200, 4096, 64 * 1024, 3000);
+  for (auto& child : children) {
+    const ReaderResult r = finish(*child);
+    EXPECT_EQ(r.torn, 0u);
+    EXPECT_EQ(r.disorder, 0u);
+    EXPECT_EQ(r.last, static_cast<std::uint64_t>(kFrames));
+    EXPECT_GE(r.received, 1u);
+    // Every published frame was either delivered or counted as skipped.
+    EXPECT_EQ(r.received + r.skipped, r.last - r.first + 1);
+  }
+  EXPECT_EQ(writer->wait(), 0);
+}
+
+}  // namespace
+
+TEST(MultiProcess, OneWriterOneReader) { fan_out(1, "wait"); }
+TEST(MultiProcess, OneWriterTenBlockingReaders) { fan_out(10, "wait"); }
+TEST(MultiProcess, OneWriterTenBorrowingReaders) { fan_out(10, "borrow"); }
+
+TEST(MultiProcess, AKilledWriterIsSeenGoneAndItsSuccessorResumesTheSequence) {
+  StreamGuard g{unique_name("killwriter")};
+  auto first = spawn_writer(g.name, 1000000, 500, 64, 4096, 0);
+  auto reader = spawn_reader(g.name, 1000000000, 60000, "wait");
+  std::this_thread::sleep_for(200ms);
+  first->signal(SIGKILL);
+  EXPECT_EQ(first->wait(), 128 + SIGKILL);
+
+  const std::string gone = reader->line();
+  ASSERT_EQ(gone.rfind("event=writer_gone", 0), 0u) << gone;
+  const std::uint64_t seen_before = field(gone, "seq");
+  EXPECT_GT(seen_before, 0u);
+
+  auto second = spawn_writer(g.name, 20, 200, 64, 4096, 60000);
+  const std::string resumed = reader->line();
+  ASSERT_EQ(resumed.rfind("event=resumed", 0), 0u) << resumed;
+  EXPECT_GT(field(resumed, "seq"), seen_before);  // numbers keep rising across the restart
+  reader->signal(SIGKILL);
+}
+
+TEST(MultiProcess, AReaderKilledMidCopyAffectsNobody) {
+  StreamGuard g{unique_name("killreader")};
+  constexpr int kFrames = 400;
+  {
+    auto created = Writer::create({.name = g.name, .capacity = 4 << 20});
+    ASSERT_TRUE(created);
+  }
+  auto survivor = spawn_reader(g.name, kFrames, 60000, "wait");
+  std::vector<std::unique_ptr<Child>> victims;
+  for (int i = 0; i < 4; ++i) victims.push_back(spawn_reader(g.name, kFrames, 60000, i % 2 ? "poll" : "borrow"));
+  // Large frames make each copy long, so the kills land inside copies.
+  auto writer = spawn_writer(g.name, kFrames, 200, 1 << 20, 4 << 20, 3000);
+  for (auto& victim : victims) {
+    std::this_thread::sleep_for(50ms);
+    victim->signal(SIGKILL);
+    EXPECT_EQ(victim->wait(), 128 + SIGKILL);
+  }
+  const ReaderResult r = finish(*survivor);
+  EXPECT_EQ(r.torn, 0u);
+  EXPECT_EQ(r.last, static_cast<std::uint64_t>(kFrames));
+  EXPECT_EQ(writer->wait(), 0);
+}
+
+TEST(MultiProcess, ASecondWriterProcessIsRefused) {
+  StreamGuard g{unique_name("second")};
+  Child holder({kPeer, "hold", g.name});
+  const std::string ready = holder.line();
+  ASSERT_EQ(ready.rfind("ready", 0), 0u);
+  auto refused = Writer::create({.name = g.name, .capacity = 4096});
+  ASSERT_FALSE(refused);
+  EXPECT_EQ(refused.error().code, ErrorCode::writer_exists);
+  EXPECT_NE(refused.error().message.find("pid " + std::to_string(holder.pid())), std::string::npos)
+      << refused.error().message;
+  Child other({kPeer, "hold", g.name});
+  EXPECT_NE(other.line().find("already has a live writer"), std::string::npos);
+  EXPECT_EQ(other.wait(), 1);
+  holder.signal(SIGKILL);
+  holder.wait();
+  EXPECT_TRUE(Writer::create({.name = g.name, .capacity = 4096}));  // free once it died
+}

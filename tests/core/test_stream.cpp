@@ -1,0 +1,413 @@
+// SPDX-License-Identifier: Apache-2.0
+// One writer and its readers in one process: the API contract, error paths and recovery.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <fstream>
+#include <thread>
+#include <vector>
+
+#include "sim/sim.hpp"
+#include "support.hpp"
+
+using namespace sim;
+using namespace std::chrono_literals;
+using test::StreamGuard;
+using test::unique_name;
+
+namespace {
+
+std::vector<std::byte> bytes_of(std::string_view text) {
+  const auto* p = reinterpret_cast<const std::byte*>(text.data());
+  return {p, p + text.size()};
+}
+
+Writer make_writer(const std::string& name, std::uint64_t capacity = 1024, bool checksum = false) {
+  auto w = Writer::create({.name = name, .capacity = capacity, .checksum = checksum});
+  EXPECT_TRUE(w.has_value()) << (w ? "" : w.error().message);
+  return std::move(*w);
+}
+
+Reader make_reader(const std::string& name, ReaderOptions options = {}) {
+  auto r = Reader::open(name, options);
+  EXPECT_TRUE(r.has_value()) << (r ? "" : r.error().message);
+  return std::move(*r);
+}
+
+}  // namespace
+
+TEST(Names, AcceptsPlainNamesAndRejectsEverythingElse) {
+  for (const char* bad : {"", "/", "lidar", "/a/b", "/..", "/.", "/with space", "/ü", "//x"}) {
+    auto w = Writer::create({.name = bad, .capacity = 16});
+    ASSERT_FALSE(w) << bad;
+    EXPECT_EQ(w.error().code, ErrorCode::invalid_name) << bad;
+    EXPECT_FALSE(w.error().message.empty());
+    auto r = Reader::open(bad);
+    ASSERT_FALSE(r) << bad;
+    EXPECT_EQ(r.error().code, ErrorCode::invalid_name);
+  }
+  EXPECT_EQ(Writer::create({.name = "/" + std::string(201, 'a'), .capacity = 16}).error().code,
+            ErrorCode::invalid_name);
+  StreamGuard g{unique_name("Name.ok-1")};
+  EXPECT_TRUE(Writer::create({.name = g.name, .capacity = 16}));
+}
+
+TEST(Layouts, CapacityFollowsLayoutAndBadLayoutsAreRefused) {
+  const auto image = ImageLayout::packed(640, 480, PixelFormat::bgr8);
+  EXPECT_EQ(image.stride, 1920u);
+  EXPECT_EQ(Layout::of(image).min_capacity(), 921600u);
+  EXPECT_EQ(Layout::of(PointLayout::of(PointType::lidar_point, 1000)).min_capacity(), 24000u);
+  EXPECT_EQ(Layout::of(PointLayout::of(PointType::xyz32, 10)).min_capacity(), 120u);
+
+  StreamGuard g{unique_name("layout")};
+  auto w = Writer::create({.name = g.name, .layout = Layout::of(image)});
+  ASSERT_TRUE(w) << w.error().message;
+  EXPECT_EQ(w->capacity(), 921600u);
+  auto r = Reader::open(g.name);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->layout(), Layout::of(image));
+  EXPECT_EQ(r->layout().describe(), "image 640x480 bgr8 stride 1920");
+
+  ImageLayout short_stride = image;
+  short_stride.stride = 100;
+  EXPECT_EQ(Writer::create({.name = unique_name("bad"), .layout = Layout::of(short_stride)})
+                .error()
+                .code,
+            ErrorCode::invalid_argument);
+  EXPECT_EQ(Writer::create({.name = unique_name("bad"), .capacity = 100, .layout = Layout::of(image)})
+                .error()
+                .code,
+            ErrorCode::invalid_argument);
+  EXPECT_EQ(Writer::create({.name = unique_name("bad")}).error().code, ErrorCode::invalid_argument);
+}
+
+TEST(Stream, DeliversEachNewFrameOnceWithItsMetadata) {
+  StreamGuard g{unique_name("roundtrip")};
+  Writer w = make_writer(g.name);
+  Reader r = make_reader(g.name);
+  std::vector<std::byte> buf(1024);
+  FrameInfo info;
+  EXPECT_EQ(r.read(buf, info), ReadStatus::no_new_frame);
+
+  const auto frame = bytes_of("first frame");
+  const std::int64_t before = monotonic_ns();
+  ASSERT_EQ(w.write(std::span<const std::byte>(frame), 1234), WriteStatus::ok);
+  ASSERT_EQ(r.read(buf, info), ReadStatus::new_frame);
+  EXPECT_EQ(info.seq, 1u);
+  EXPECT_EQ(info.stamp_ns, 1234);
+  EXPECT_GE(info.publish_ns, before);
+  EXPECT_EQ(info.size, frame.size());
+  EXPECT_EQ(std::string(reinterpret_cast<char*>(buf.data()), info.size), "first frame");
+  EXPECT_EQ(r.read(buf, info), ReadStatus::no_new_frame);  // not twice
+
+  // A reader that falls behind gets the newest frame and counts what it skipped.
+  for (int i = 0; i < 5; ++i) w.write(std::span<const std::byte>(bytes_of("x" + std::to_string(i))), i);
+  ASSERT_EQ(r.read(buf, info), ReadStatus::new_frame);
+  EXPECT_EQ(info.seq, 6u);
+  EXPECT_EQ(std::string(reinterpret_cast<char*>(buf.data()), info.size), "x4");
+  EXPECT_EQ(r.stats().skipped, 4u);
+  EXPECT_EQ(r.stats().frames, 2u);
+}
+
+TEST(Stream, FramesLargerThanCapacityOrBufferAreRefusedWithoutLoss) {
+  StreamGuard g{unique_name("sizes")};
+  Writer w = make_writer(g.name, 64);
+  Reader r = make_reader(g.name);
+  std::vector<std::byte> big(65);
+  EXPECT_EQ(w.write(std::span<const std::byte>(big), 0), WriteStatus::too_large);
+  EXPECT_EQ(w.last_seq(), 0u);
+
+  std::vector<std::byte> frame(64, std::byte{7});
+  ASSERT_EQ(w.write(std::span<const std::byte>(frame), 0), WriteStatus::ok);
+  std::vector<std::byte> small(10);
+  FrameInfo info;
+  EXPECT_EQ(r.read(small, info), ReadStatus::buffer_too_small);
+  std::vector<std::byte> enough(64);
+  ASSERT_EQ(r.read(enough, info), ReadStatus::new_frame);  // the frame was not consumed
+  EXPECT_EQ(enough, frame);
+}
+
+TEST(Stream, LoanPublishesOnlyOnCommitAndAnOvertakenLoanPublishesNothing) {
+  StreamGuard g{unique_name("loan")};
+  Writer w = make_writer(g.name, 4096);
+  Reader r = make_reader(g.name);
+  std::vector<std::byte> buf(4096);
+  FrameInfo info;
+  {
+    Loan dropped = w.loan();
+    std::fill(dropped.bytes().begin(), dropped.bytes().end(), std::byte{1});
+  }
+  EXPECT_EQ(r.read(buf, info), ReadStatus::no_new_frame);
+
+  Loan loan = w.loan();
+  ASSERT_EQ(loan.bytes().size(), 4096u);
+  auto words = loan.as<std::uint32_t>();
+  for (std::size_t i = 0; i < 10; ++i) words[i] = static_cast<std::uint32_t>(i * i);
+  EXPECT_EQ(loan.commit(40, 99), WriteStatus::ok);
+  EXPECT_EQ(loan.commit(40, 99), WriteStatus::closed);  // once only
+  ASSERT_EQ(r.read(buf, info), ReadStatus::new_frame);
+  EXPECT_EQ(info.size, 40u);
+  EXPECT_EQ(info.stamp_ns, 99);
+  std::uint32_t ninth;
+  std::memcpy(&ninth, buf.data() + 36, 4);
+  EXPECT_EQ(ninth, 81u);
+
+  Loan stale = w.loan();
+  Loan fresh = w.loan();
+  EXPECT_EQ(stale.commit(4, 0), WriteStatus::closed);
+  EXPECT_EQ(fresh.commit(4, 0), WriteStatus::ok);
+  EXPECT_EQ(w.last_seq(), 2u);
+  EXPECT_EQ(fresh.commit(4096 + 1, 0), WriteStatus::closed);
+
+  Loan too_big = w.loan();
+  EXPECT_EQ(too_big.commit(4097, 0), WriteStatus::too_large);
+}
+
+TEST(Stream, BorrowIsValidUntilTheWriterReusesTheSlot) {
+  StreamGuard g{unique_name("borrow")};
+  Writer w = make_writer(g.name, 64);
+  Reader r = make_reader(g.name);
+  w.write(std::span<const std::byte>(bytes_of("one")), 1);
+  const Borrow b = r.borrow();
+  ASSERT_EQ(b.status(), ReadStatus::new_frame);
+  EXPECT_EQ(std::string(reinterpret_cast<const char*>(b.bytes().data()), b.bytes().size()), "one");
+  EXPECT_TRUE(b.still_valid());
+  w.write(std::span<const std::byte>(bytes_of("two")), 2);  // the other slot
+  EXPECT_TRUE(b.still_valid());
+  w.write(std::span<const std::byte>(bytes_of("three")), 3);  // reuses the borrowed slot
+  EXPECT_FALSE(b.still_valid());
+  EXPECT_EQ(r.borrow().info().seq, 3u);
+  EXPECT_EQ(r.borrow().status(), ReadStatus::no_new_frame);
+}
+
+TEST(Stream, ChecksumMismatchIsReportedAndTheFrameNotDelivered) {
+  StreamGuard g{unique_name("checksum")};
+  Writer w = make_writer(g.name, 4096, /*checksum=*/true);
+  Reader r = make_reader(g.name);
+  EXPECT_TRUE(r.checksum());
+  std::vector<std::byte> frame(4096, std::byte{0x5a});
+  w.write(std::span<const std::byte>(frame), 0);
+  std::vector<std::byte> buf(4096);
+  FrameInfo info;
+  ASSERT_EQ(r.read(buf, info), ReadStatus::new_frame);
+
+  // Corrupt the payload of the next frame behind the writer's back, as a stray write would.
+  w.write(std::span<const std::byte>(frame), 0);
+  {
+    std::fstream region("/dev/shm/sim." + g.name.substr(1),
+                        std::ios::in | std::ios::out | std::ios::binary);
+    region.seekp(2 * 4096 + 100);  // frame 2 is in slot 0, after the wait page and the header
+    region.put('X');
+  }
+  EXPECT_EQ(r.read(buf, info), ReadStatus::checksum_mismatch);
+  EXPECT_EQ(r.stats().checksum_failures, 1u);
+  EXPECT_EQ(r.read(buf, info), ReadStatus::no_new_frame);  // the bad frame is not offered again
+  w.write(std::span<const std::byte>(frame), 0);
+  EXPECT_EQ(r.read(buf, info), ReadStatus::new_frame);
+
+  // The same corruption through borrow.
+  w.write(std::span<const std::byte>(frame), 0);  // frame 4, slot 0
+  {
+    std::fstream region("/dev/shm/sim." + g.name.substr(1),
+                        std::ios::in | std::ios::out | std::ios::binary);
+    region.seekp(2 * 4096 + 7);
+    region.put('Y');
+  }
+  EXPECT_EQ(r.borrow().status(), ReadStatus::checksum_mismatch);
+}
+
+TEST(Stream, WaitSleepsUntilAPublishOrTheTimeout) {
+  StreamGuard g{unique_name("wait")};
+  Writer w = make_writer(g.name);
+  Reader r = make_reader(g.name);
+  EXPECT_EQ(r.wait(10ms), ReadStatus::no_new_frame);
+
+  std::thread publisher([&] {
+    std::this_thread::sleep_for(50ms);
+    w.write(std::span<const std::byte>(bytes_of("wake")), 0);
+  });
+  EXPECT_EQ(r.wait(30s), ReadStatus::new_frame);
+  publisher.join();
+  std::vector<std::byte> buf(64);
+  FrameInfo info;
+  EXPECT_EQ(r.read(buf, info), ReadStatus::new_frame);
+  EXPECT_EQ(r.read_next(buf, info, 1ms), ReadStatus::no_new_frame);
+}
+
+TEST(Liveness, ReadersSeeTheWriterGoAndAStaleStream) {
+  StreamGuard g{unique_name("liveness")};
+  std::optional<Writer> w = make_writer(g.name);
+  Reader r = make_reader(g.name, {.stale_after = 30ms});
+  EXPECT_TRUE(r.writer_alive());
+  std::vector<std::byte> buf(64);
+  FrameInfo info;
+  w->write(std::span<const std::byte>(bytes_of("a")), 0);
+  EXPECT_EQ(r.read(buf, info), ReadStatus::new_frame);
+  std::this_thread::sleep_for(40ms);
+  EXPECT_EQ(r.read(buf, info), ReadStatus::stale);
+  EXPECT_GE(r.newest_age(), 30ms);
+
+  w.reset();
+  EXPECT_FALSE(r.writer_alive());
+  std::this_thread::sleep_for(25ms);  // past the reader's liveness cache
+  EXPECT_EQ(r.read(buf, info), ReadStatus::writer_gone);
+  EXPECT_EQ(r.wait(5ms), ReadStatus::writer_gone);
+}
+
+TEST(Liveness, HeartbeatThreadKeepsTheHeartbeatMovingWhileIdle) {
+  StreamGuard g{unique_name("heartbeat")};
+  auto w = Writer::create({.name = g.name, .capacity = 64, .heartbeat_period = 5ms});
+  ASSERT_TRUE(w);
+  Reader r = make_reader(g.name);
+  const std::int64_t first = r.status().heartbeat_ns;
+  std::this_thread::sleep_for(50ms);
+  EXPECT_GT(r.status().heartbeat_ns, first);
+  EXPECT_EQ(r.status().latest_publish_ns, 0);
+}
+
+TEST(Ownership, ASecondWriterIsRefusedAndATakeoverContinuesTheSequence) {
+  StreamGuard g{unique_name("owner")};
+  std::optional<Writer> first = make_writer(g.name);
+  auto second = Writer::create({.name = g.name, .capacity = 1024});
+  ASSERT_FALSE(second);
+  EXPECT_EQ(second.error().code, ErrorCode::writer_exists);
+  EXPECT_NE(second.error().message.find("pid " + std::to_string(getpid())), std::string::npos)
+      << second.error().message;
+
+  Reader r = make_reader(g.name);
+  for (int i = 0; i < 3; ++i) first->write(std::span<const std::byte>(bytes_of("f")), 0);
+  first.reset();
+  Writer next = make_writer(g.name);
+  EXPECT_EQ(next.last_seq(), 3u);
+  next.write(std::span<const std::byte>(bytes_of("after restart")), 0);
+  std::vector<std::byte> buf(1024);
+  FrameInfo info;
+  ASSERT_EQ(r.read(buf, info), ReadStatus::new_frame);
+  EXPECT_EQ(info.seq, 4u);
+  EXPECT_EQ(r.stats().reopens, 0u);  // same region, reused
+}
+
+TEST(Recovery, ALayoutChangeReplacesTheRegionAndReadersReopenIt) {
+  StreamGuard g{unique_name("relayout")};
+  std::optional<Writer> w = make_writer(g.name, 64);
+  Reader r = make_reader(g.name);
+  w->write(std::span<const std::byte>(bytes_of("small")), 0);
+  std::vector<std::byte> buf(1 << 20);
+  FrameInfo info;
+  ASSERT_EQ(r.read(buf, info), ReadStatus::new_frame);
+  w.reset();
+
+  const auto image = Layout::of(ImageLayout::packed(32, 16, PixelFormat::mono8));
+  auto bigger = Writer::create({.name = g.name, .layout = image});
+  ASSERT_TRUE(bigger) << bigger.error().message;
+  EXPECT_EQ(bigger->last_seq(), 1u);  // numbering carries over
+  std::vector<std::byte> pixels(512, std::byte{3});
+  bigger->write(std::span<const std::byte>(pixels), 0);
+  ASSERT_EQ(r.read(buf, info), ReadStatus::new_frame);
+  EXPECT_EQ(info.seq, 2u);
+  EXPECT_EQ(info.layout, image);
+  EXPECT_EQ(r.layout(), image);
+  EXPECT_EQ(r.capacity(), 512u);
+  EXPECT_EQ(r.stats().reopens, 1u);
+}
+
+TEST(Recovery, ADestroyedAndRecreatedStreamIsPickedUpByWaitingReaders) {
+  StreamGuard g{unique_name("recreate")};
+  std::optional<Writer> w = make_writer(g.name, 64);
+  Reader r = make_reader(g.name);
+  for (int i = 0; i < 5; ++i) w->write(std::span<const std::byte>(bytes_of("old")), 0);
+  std::vector<std::byte> buf(64);
+  FrameInfo info;
+  ASSERT_EQ(r.read(buf, info), ReadStatus::new_frame);
+  w.reset();
+  ASSERT_EQ(destroy(g.name), std::nullopt);
+  Writer fresh = make_writer(g.name, 64);
+  EXPECT_EQ(fresh.last_seq(), 0u);
+  fresh.write(std::span<const std::byte>(bytes_of("new")), 0);
+  ASSERT_EQ(r.read_next(buf, info, 10s), ReadStatus::new_frame);
+  EXPECT_EQ(info.seq, 1u);
+  EXPECT_EQ(std::string(reinterpret_cast<char*>(buf.data()), info.size), "new");
+}
+
+TEST(Diagnostics, StatusReportsWhatTheWriterDid) {
+  StreamGuard g{unique_name("status")};
+  Writer w = make_writer(g.name, 64, true);
+  for (int i = 0; i < 3; ++i) {
+    w.write(std::span<const std::byte>(bytes_of("s")), 0);
+    std::this_thread::sleep_for(2ms);
+  }
+  auto s = inspect(g.name);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->frames_published, 3u);
+  EXPECT_EQ(s->latest_seq, 3u);
+  EXPECT_TRUE(s->checksum);
+  EXPECT_TRUE(s->writer_alive);
+  EXPECT_EQ(s->writer_pid, getpid());
+  EXPECT_FALSE(s->writer_command.empty());
+  EXPECT_GE(s->max_publish_interval_ns, 2'000'000);
+  EXPECT_GT(s->writer_start_realtime_ns, 0);
+  const auto names = list_streams();
+  EXPECT_NE(std::find(names.begin(), names.end(), g.name), names.end());
+}
+
+TEST(Destroy, RefusesALiveWriterUnlessForced) {
+  StreamGuard g{unique_name("destroy")};
+  std::optional<Writer> w = make_writer(g.name);
+  auto refused = destroy(g.name);
+  ASSERT_TRUE(refused);
+  EXPECT_EQ(refused->code, ErrorCode::writer_exists);
+  w.reset();
+  EXPECT_EQ(destroy(g.name), std::nullopt);
+  EXPECT_EQ(destroy(g.name)->code, ErrorCode::not_found);
+  Writer again = make_writer(g.name);
+  EXPECT_EQ(destroy(g.name, /*force=*/true), std::nullopt);
+  EXPECT_EQ(Reader::open(g.name).error().code, ErrorCode::not_found);
+}
+
+TEST(Security, RegionsAreOwnerOnlyByDefaultAndGroupModeIsKept) {
+  StreamGuard g{unique_name("mode")};
+  std::optional<Writer> w = make_writer(g.name);
+  struct stat st {};
+  ASSERT_EQ(stat(("/dev/shm/sim." + g.name.substr(1)).c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0600u);
+  w.reset();
+  StreamGuard g2{unique_name("groupmode")};
+  auto grouped = Writer::create({.name = g2.name, .capacity = 64, .mode = 0640});
+  ASSERT_TRUE(grouped);
+  ASSERT_EQ(stat(("/dev/shm/sim." + g2.name.substr(1)).c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0640u);
+  EXPECT_EQ(Writer::create({.name = unique_name("x"), .capacity = 64, .mode = 0777}).error().code,
+            ErrorCode::invalid_argument);
+}
+
+TEST(Security, SymlinksAndOtherUsersRegionsAreRefused) {
+  StreamGuard target{unique_name("target")};
+  Writer w = make_writer(target.name);
+  StreamGuard link{unique_name("link")};
+  ASSERT_EQ(symlink(("/dev/shm/sim." + target.name.substr(1)).c_str(),
+                    ("/dev/shm/sim." + link.name.substr(1)).c_str()),
+            0);
+  auto r = Reader::open(link.name);
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().code, ErrorCode::permission_denied);
+  EXPECT_NE(r.error().message.find("symbolic link"), std::string::npos);
+  EXPECT_EQ(Writer::create({.name = link.name, .capacity = 64}).error().code,
+            ErrorCode::permission_denied);
+  EXPECT_EQ(destroy(link.name), std::nullopt);  // sim_rm can clear it
+  EXPECT_TRUE(Reader::open(target.name));       // and the target is untouched
+
+  if (geteuid() == 0) {
+    StreamGuard other{unique_name("other")};
+    std::optional<Writer> ow = make_writer(other.name);
+    ASSERT_EQ(chown(("/dev/shm/sim." + other.name.substr(1)).c_str(), 65534, 65534), 0);
+    auto refused = Reader::open(other.name);
+    ASSERT_FALSE(refused);
+    EXPECT_EQ(refused.error().code, ErrorCode::permission_denied);
+    EXPECT_TRUE(Reader::open(other.name, {.accept_other_owner = true}));
+    ow.reset();
+    EXPECT_EQ(Writer::create({.name = other.name, .capacity = 1024}).error().code,
+              ErrorCode::permission_denied);
+  }
+}
