@@ -1,0 +1,90 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "sim/unitree/sim_sink.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+
+#include "sim/layout.hpp"
+
+namespace sim::unitree {
+
+std::string default_imu_stream(std::string_view points_stream) {
+  return std::string(points_stream) + ".imu";
+}
+
+Expected<std::unique_ptr<SimScanSink>> SimScanSink::create(const SimSinkOptions& options) {
+  StreamSpec points_spec;
+  points_spec.name = options.points_stream;
+  points_spec.layout = Layout::of(PointLayout::of(PointType::lidar_point, options.max_points));
+  points_spec.checksum = options.checksum;
+  // Readers can tell an idle driver (no data from the sensor) from a dead one.
+  points_spec.heartbeat_period = std::chrono::milliseconds(500);
+  Expected<Writer> points = Writer::create(points_spec);
+  if (!points) return points.error();
+
+  std::optional<Writer> imu;
+  if (!options.imu_stream.empty()) {
+    StreamSpec imu_spec;
+    imu_spec.name = options.imu_stream;
+    imu_spec.capacity = sizeof(ImuSample);
+    imu_spec.layout = Layout::raw();
+    imu_spec.checksum = options.checksum;
+    imu_spec.heartbeat_period = std::chrono::milliseconds(500);
+    Expected<Writer> imu_writer = Writer::create(imu_spec);
+    if (!imu_writer) return imu_writer.error();
+    imu.emplace(std::move(imu_writer.value()));
+  }
+  return std::unique_ptr<SimScanSink>(
+      new SimScanSink(std::move(points.value()), std::move(imu), options.max_points));
+}
+
+SimScanSink::SimScanSink(Writer points, std::optional<Writer> imu,
+                         std::uint64_t max_points) noexcept
+    : points_(std::move(points)), imu_(std::move(imu)), max_points_(max_points) {}
+
+std::span<LidarPoint> SimScanSink::begin_scan() {
+  loan_.emplace(points_.loan());
+  const std::span<LidarPoint> slot = loan_->as<LidarPoint>();
+  return slot.first(std::min<std::size_t>(slot.size(), max_points_));
+}
+
+void SimScanSink::end_scan(std::size_t points, std::int64_t stamp_ns) {
+  if (!loan_) return;
+  const WriteStatus status = loan_->commit(points * sizeof(LidarPoint), stamp_ns);
+  loan_.reset();
+  if (status == WriteStatus::ok) {
+    ++counters_.scans_published;
+  } else {
+    ++counters_.publish_failures;
+  }
+}
+
+void SimScanSink::imu(const ImuSample& sample) {
+  if (!imu_) return;
+  if (imu_->write(std::span<const ImuSample>(&sample, 1), sample.stamp_ns) == WriteStatus::ok) {
+    ++counters_.imu_published;
+  } else {
+    ++counters_.publish_failures;
+  }
+}
+
+std::string format_status(const DecoderCounters& d, const SimSinkCounters& s) {
+  char line[400];
+  std::snprintf(line, sizeof line,
+                "scans %llu  points %llu  imu %llu  packets %llu | bad_crc %llu  truncated %llu  "
+                "resyncs %llu  bad_header %llu  lost %llu  dropped_points %llu",
+                static_cast<unsigned long long>(s.scans_published),
+                static_cast<unsigned long long>(d.points),
+                static_cast<unsigned long long>(s.imu_published),
+                static_cast<unsigned long long>(d.framing.packets),
+                static_cast<unsigned long long>(d.framing.bad_crc),
+                static_cast<unsigned long long>(d.framing.truncated),
+                static_cast<unsigned long long>(d.framing.resyncs),
+                static_cast<unsigned long long>(d.framing.wrong_header),
+                static_cast<unsigned long long>(d.lost_packets),
+                static_cast<unsigned long long>(d.dropped_points));
+  return line;
+}
+
+}  // namespace sim::unitree

@@ -1,0 +1,311 @@
+// SPDX-License-Identifier: Apache-2.0
+// sim_lidar_unitree: a Unitree L1 or L2 LiDAR into SIM. Bytes come from UDP (L2's default, or
+// an L1 behind its serial-to-UDP board) or a serial port (L1 always, L2 in serial work mode);
+// whatever arrives goes through the same Decoder as the replay tools, straight into the
+// stream's loaned slot.
+#include <unistd.h>
+
+#include <array>
+#include <functional>
+#include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange
+
+#include <boost/asio.hpp>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <optional>
+#include <string>
+
+#include <sim_tools/cli.hpp>
+
+#include "sim/clock.hpp"
+#include "sim/unitree/decoder.hpp"
+#include "sim/unitree/sim_sink.hpp"
+
+namespace asio = boost::asio;
+using sim::unitree::Decoder;
+
+namespace {
+
+struct Options {
+  std::string model_text;
+  std::uint16_t udp_port = 6201;
+  std::string bind_address = "0.0.0.0";
+  std::string lidar_ip;
+  std::string serial_device;
+  unsigned baud = 0;
+  std::string stream;
+  std::string imu_stream;
+  bool no_imu = false;
+  std::uint32_t scan_packets = 18;
+  bool sensor_time = false;
+  float range_min = 0.0F;
+  float range_max = 1.0e9F;
+  std::string record_path;
+  bool checksum = false;
+  bool quiet = false;
+};
+
+// Everything read off the wire goes to the decoder, and to the recording when there is one.
+class Pipeline {
+ public:
+  Pipeline(Decoder& decoder, std::ofstream* record) : decoder_(decoder), record_(record) {}
+  void on_bytes(std::span<const std::byte> bytes) {
+    if (record_ != nullptr) {
+      record_->write(reinterpret_cast<const char*>(bytes.data()),
+                     static_cast<std::streamsize>(bytes.size()));
+    }
+    decoder_.push(bytes, sim::realtime_ns());
+  }
+
+ private:
+  Decoder& decoder_;
+  std::ofstream* record_;
+};
+
+class UdpSource {
+ public:
+  UdpSource(asio::io_context& io, Pipeline& pipeline, std::optional<asio::ip::address> lidar)
+      : socket_(io), pipeline_(pipeline), lidar_(lidar) {}
+
+  void open(const asio::ip::udp::endpoint& local) {
+    socket_.open(local.protocol());
+    socket_.set_option(asio::socket_base::reuse_address(true));
+    // Bursts of 1044-B packets at ~64,000 points/s: a large kernel buffer rides out scheduling.
+    boost::system::error_code ignored;
+    socket_.set_option(asio::socket_base::receive_buffer_size(4 << 20), ignored);
+    socket_.bind(local);
+  }
+  std::uint16_t port() const { return socket_.local_endpoint().port(); }
+  std::uint64_t ignored_datagrams() const { return ignored_; }
+
+  void start() {
+    socket_.async_receive_from(asio::buffer(buffer_), sender_,
+                               [this](const boost::system::error_code& ec, std::size_t n) {
+                                 if (ec == asio::error::operation_aborted) return;
+                                 if (!ec) {
+                                   if (lidar_ && sender_.address() != *lidar_) {
+                                     ++ignored_;
+                                   } else {
+                                     pipeline_.on_bytes(std::span(buffer_).first(n));
+                                   }
+                                 }
+                                 start();
+                               });
+  }
+
+ private:
+  asio::ip::udp::socket socket_;
+  Pipeline& pipeline_;
+  std::optional<asio::ip::address> lidar_;
+  asio::ip::udp::endpoint sender_;
+  std::array<std::byte, 65536> buffer_{};
+  std::uint64_t ignored_ = 0;
+};
+
+class SerialSource {
+ public:
+  SerialSource(asio::io_context& io, Pipeline& pipeline) : port_(io), pipeline_(pipeline) {}
+
+  void open(const std::string& device, unsigned baud) {
+    port_.open(device);
+    port_.set_option(asio::serial_port_base::baud_rate(baud));
+    port_.set_option(asio::serial_port_base::character_size(8));
+    port_.set_option(asio::serial_port_base::parity(asio::serial_port_base::parity::none));
+    port_.set_option(asio::serial_port_base::stop_bits(asio::serial_port_base::stop_bits::one));
+    port_.set_option(
+        asio::serial_port_base::flow_control(asio::serial_port_base::flow_control::none));
+  }
+
+  // `on_error` runs once when the device fails (unplugged, closed by the other side).
+  template <typename OnError>
+  void start(OnError on_error) {
+    port_.async_read_some(asio::buffer(buffer_),
+                          [this, on_error](const boost::system::error_code& ec, std::size_t n) {
+                            if (ec == asio::error::operation_aborted) return;
+                            if (n > 0) pipeline_.on_bytes(std::span(buffer_).first(n));
+                            if (ec) {
+                              on_error(ec);
+                              return;
+                            }
+                            start(on_error);
+                          });
+  }
+
+ private:
+  asio::serial_port port_;
+  Pipeline& pipeline_;
+  std::array<std::byte, 16384> buffer_{};
+};
+
+int run(const Options& opt) {
+  const std::optional<sim::unitree::Model> model = sim::unitree::parse_model(opt.model_text);
+  if (!model) {
+    std::cerr << "sim_lidar_unitree: unknown model '" << opt.model_text
+              << "'; use --model L1 or --model L2.\n";
+    return sim::tools::kExitUsage;
+  }
+  std::optional<asio::ip::address> lidar;
+  if (!opt.lidar_ip.empty()) {
+    boost::system::error_code ec;
+    lidar = asio::ip::make_address(opt.lidar_ip, ec);
+    if (ec) {
+      std::cerr << "sim_lidar_unitree: --lidar-ip '" << opt.lidar_ip
+                << "' is not an IP address; give one like 192.168.1.62.\n";
+      return sim::tools::kExitUsage;
+    }
+  }
+  boost::system::error_code addr_ec;
+  const asio::ip::address bind_address = asio::ip::make_address(opt.bind_address, addr_ec);
+  if (addr_ec) {
+    std::cerr << "sim_lidar_unitree: --bind-address '" << opt.bind_address
+              << "' is not an IP address; give one like 0.0.0.0.\n";
+    return sim::tools::kExitUsage;
+  }
+
+  sim::unitree::DecoderOptions decoder_options;
+  decoder_options.model = *model;
+  decoder_options.packets_per_scan = opt.scan_packets;
+  decoder_options.time_source =
+      opt.sensor_time ? sim::unitree::TimeSource::sensor : sim::unitree::TimeSource::host;
+  decoder_options.range_min_m = opt.range_min;
+  decoder_options.range_max_m = opt.range_max;
+
+  sim::unitree::SimSinkOptions sink_options;
+  sink_options.points_stream = opt.stream;
+  sink_options.imu_stream =
+      opt.no_imu ? std::string()
+                 : (opt.imu_stream.empty() ? sim::unitree::default_imu_stream(opt.stream)
+                                           : opt.imu_stream);
+  sink_options.max_points = Decoder::max_points_per_scan(decoder_options);
+  sink_options.checksum = opt.checksum;
+  auto sink = sim::unitree::SimScanSink::create(sink_options);
+  if (!sink) {
+    std::cerr << "sim_lidar_unitree: " << sink.error().message << "\n";
+    return sink.error().code == sim::ErrorCode::invalid_name ? sim::tools::kExitUsage
+                                                             : sim::tools::kExitFailure;
+  }
+  Decoder decoder(decoder_options, **sink);
+
+  std::ofstream record;
+  if (!opt.record_path.empty()) {
+    record.open(opt.record_path, std::ios::binary | std::ios::trunc);
+    if (!record) {
+      std::cerr << "sim_lidar_unitree: cannot write the recording '" << opt.record_path
+                << "'; check the folder exists and is writable.\n";
+      return sim::tools::kExitFailure;
+    }
+  }
+  Pipeline pipeline(decoder, record.is_open() ? &record : nullptr);
+
+  asio::io_context io;
+  int exit_code = sim::tools::kExitOk;
+  std::optional<UdpSource> udp;
+  std::optional<SerialSource> serial;
+  if (!opt.serial_device.empty()) {
+    const unsigned baud =
+        opt.baud != 0 ? opt.baud : (*model == sim::unitree::Model::l1 ? 2'000'000U : 4'000'000U);
+    serial.emplace(io, pipeline);
+    try {
+      serial->open(opt.serial_device, baud);
+    } catch (const boost::system::system_error& e) {
+      std::cerr << "sim_lidar_unitree: cannot open serial port " << opt.serial_device << " at "
+                << baud << " baud (" << e.code().message()
+                << "); check the device path and that you may use it (group dialout).\n";
+      return sim::tools::kExitFailure;
+    }
+    std::cout << "reading " << opt.serial_device << " at " << baud << " baud" << std::endl;
+    serial->start([&](const boost::system::error_code& ec) {
+      std::cerr << "\nsim_lidar_unitree: serial port " << opt.serial_device
+                << " failed (" << ec.message() << "); check the cable and restart.\n";
+      exit_code = sim::tools::kExitFailure;
+      io.stop();
+    });
+  } else {
+    udp.emplace(io, pipeline, lidar);
+    try {
+      udp->open(asio::ip::udp::endpoint(bind_address, opt.udp_port));
+    } catch (const boost::system::system_error& e) {
+      std::cerr << "sim_lidar_unitree: cannot listen on UDP " << opt.bind_address << ":"
+                << opt.udp_port << " (" << e.code().message()
+                << "); pick a free port with --udp-port or stop the other listener.\n";
+      return sim::tools::kExitFailure;
+    }
+    // Printed on stdout so scripts (and tests binding port 0) learn the port.
+    std::cout << "listening on udp port " << udp->port() << std::endl;
+    udp->start();
+  }
+
+  asio::signal_set signals(io, SIGINT, SIGTERM);
+  signals.async_wait([&](const boost::system::error_code& ec, int) {
+    if (!ec) io.stop();
+  });
+
+  const bool show_status = !opt.quiet && ::isatty(STDERR_FILENO) != 0;
+  asio::steady_timer status_timer(io);
+  std::function<void()> tick = [&] {
+    status_timer.expires_after(std::chrono::seconds(1));
+    status_timer.async_wait([&](const boost::system::error_code& ec) {
+      if (ec) return;
+      std::cerr << "\r" << sim::unitree::format_status(decoder.counters(), (*sink)->counters())
+                << "\x1b[K" << std::flush;
+      if (record.is_open()) record.flush();
+      tick();
+    });
+  };
+  if (show_status) tick();
+
+  io.run();
+  decoder.finish();
+  if (record.is_open()) record.flush();
+  if (!opt.quiet) {
+    std::cerr << (show_status ? "\r" : "") << sim::unitree::format_status(decoder.counters(),
+                                                                            (*sink)->counters())
+              << "\x1b[K\n";
+  }
+  return exit_code;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options opt;
+  CLI::App app{
+      "Decode a Unitree L1 or L2 LiDAR into a SIM point stream (and its IMU into a second "
+      "stream).\nL2: UDP (default port 6201) or --serial /dev/ttyACM0 (4,000,000 baud). "
+      "L1: --serial /dev/ttyUSB0 (2,000,000 baud)."};
+  app.add_option("--model", opt.model_text, "L1 or L2")->required();
+  app.add_option("--udp-port,--bind-port", opt.udp_port,
+                 "local UDP port the lidar sends to (0: any free port, printed on stdout)")
+      ->capture_default_str();
+  app.add_option("--bind-address", opt.bind_address, "local address to listen on")
+      ->capture_default_str();
+  app.add_option("--lidar-ip", opt.lidar_ip,
+                 "accept datagrams only from this address (L2 factory default 192.168.1.62)");
+  app.add_option("--serial", opt.serial_device, "serial device instead of UDP");
+  app.add_option("--baud", opt.baud, "serial baud rate (default 2000000 for L1, 4000000 for L2)");
+  app.add_option("--stream", opt.stream, "SIM point stream, e.g. /lidar_top")->required();
+  app.add_option("--imu-stream", opt.imu_stream, "SIM IMU stream (default: <stream>.imu)");
+  app.add_flag("--no-imu", opt.no_imu, "do not publish IMU samples");
+  app.add_option("--scan-packets", opt.scan_packets,
+                 "packets per published scan (the SDKs' cloud_scan_num)")
+      ->capture_default_str()
+      ->check(CLI::Range(1U, 1000U));
+  app.add_flag("--sensor-time", opt.sensor_time,
+               "stamp frames with the L2's own clock instead of host receive time");
+  app.add_option("--range-min", opt.range_min, "drop points nearer than this (m)");
+  app.add_option("--range-max", opt.range_max, "drop points farther than this (m)");
+  app.add_option("--record", opt.record_path,
+                 "also write every byte received, as received, to FILE (replay it with "
+                 "sim_replay_serial)");
+  app.add_flag("--checksum", opt.checksum, "publish frames with an XXH3 checksum");
+  app.add_flag("-q,--quiet", opt.quiet, "no status line");
+  if (auto code = sim::tools::parse(app, argc, argv)) return *code;
+  try {
+    return run(opt);
+  } catch (const std::exception& e) {
+    std::cerr << "sim_lidar_unitree: " << e.what() << "\n";
+    return sim::tools::kExitFailure;
+  }
+}

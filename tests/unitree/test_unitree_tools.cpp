@@ -1,0 +1,383 @@
+// SPDX-License-Identifier: Apache-2.0
+// The real tools in real processes: the live driver fed over loopback UDP and over a
+// pseudo-terminal standing in for the serial port, and the serial replay; a sim::Reader checks
+// that the published frames are exactly what the decoder makes of the same bytes.
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <pty.h>
+#include <sys/socket.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+#include "child_process.hpp"
+#include "sim/reader.hpp"
+#include "sim/unitree/decoder.hpp"
+#include "unitree_encoder.hpp"
+#include "vector_sink.hpp"
+
+namespace {
+
+using namespace unitree_test;
+using namespace std::chrono_literals;
+
+constexpr auto kTimeout = 20s;  // generous: only a hang makes a test wait this long
+
+std::string unique_name(const char* what) {
+  static std::atomic<int> counter{0};
+  return "/test_unitree_" + std::to_string(getpid()) + "_" + what + "_" +
+         std::to_string(counter++);
+}
+
+std::string temp_path(const char* what) {
+  return (std::filesystem::temp_directory_path() /
+          ("unitree_" + std::to_string(getpid()) + "_" + what + ".bin"))
+      .string();
+}
+
+Bytes read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::vector<char> c((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  Bytes b(c.size());
+  std::memcpy(b.data(), c.data(), c.size());
+  return b;
+}
+
+void write_file(const std::string& path, std::span<const std::byte> bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+}
+
+// Removes the streams a test created, whatever happens to the test.
+struct StreamGuard {
+  std::vector<std::string> names;
+  ~StreamGuard() {
+    for (const auto& n : names) sim::destroy(n, true);
+  }
+};
+
+L2PointSpec l2_packet_spec(std::uint32_t seq) {
+  L2PointSpec s;
+  s.seq = seq;
+  s.stamp_sec = 1000;
+  s.stamp_nsec = seq * 4'000'000;
+  s.a_axis_dist = 0.03F;
+  s.b_axis_dist = 0.007F;
+  s.beta_angle = 0.02F;
+  s.xi_angle = -0.01F;
+  s.angle_min = -0.2F;
+  s.angle_increment = 0.01F;
+  s.com_horizontal_angle_start = 0.1F * static_cast<float>(seq);
+  s.com_horizontal_angle_step = 0.0005F;
+  s.time_increment = 1.5e-5F;
+  for (std::size_t j = 0; j < 300; ++j) {
+    s.ranges[j] = static_cast<std::uint16_t>((j % 7 == 0) ? 0 : 800 + 13 * j + seq);
+    s.intensities[j] = static_cast<std::uint8_t>(j + seq);
+  }
+  return s;
+}
+
+L2ImuSpec imu_spec() {
+  L2ImuSpec s;
+  s.seq = 5;
+  s.quaternion = {0.0F, 0.0F, 0.38268343F, 0.9238795F};
+  s.angular_velocity = {0.1F, -0.2F, 0.3F};
+  s.linear_acceleration = {0.05F, 0.0F, 9.81F};
+  return s;
+}
+
+// What the library makes of `bytes`: the reference the published frames must equal.
+std::vector<Scan> expected_scans(sim::unitree::Model model, std::uint32_t scan_packets,
+                                 std::span<const std::byte> bytes) {
+  sim::unitree::DecoderOptions options;
+  options.model = model;
+  options.packets_per_scan = scan_packets;
+  VectorSink sink(sim::unitree::Decoder::max_points_per_scan(options));
+  sim::unitree::Decoder decoder(options, sink);
+  decoder.push(bytes, 0);
+  return sink.scans;
+}
+
+// Reads the next frame of `reader` and checks it holds exactly `scan`'s points.
+void expect_frame(sim::Reader& reader, const Scan& scan, std::uint64_t seq) {
+  std::vector<std::byte> buffer(reader.capacity());
+  sim::FrameInfo info;
+  ASSERT_EQ(reader.read_next(buffer, info, kTimeout), sim::ReadStatus::new_frame);
+  EXPECT_EQ(info.seq, seq);
+  ASSERT_EQ(info.size, scan.points.size() * sizeof(sim::LidarPoint));
+  EXPECT_EQ(0, std::memcmp(buffer.data(), scan.points.data(), info.size));
+  EXPECT_GT(info.stamp_ns, 0);  // host receive time
+}
+
+std::optional<sim::Reader> open_reader(const std::string& name) {
+  auto reader = sim::Reader::open(name);
+  if (!reader) {
+    ADD_FAILURE() << "cannot open " << name << ": " << reader.error().message;
+    return std::nullopt;
+  }
+  return std::move(reader.value());
+}
+
+class UdpSender {
+ public:
+  explicit UdpSender(std::uint16_t port) : fd_(socket(AF_INET, SOCK_DGRAM, 0)) {
+    to_.sin_family = AF_INET;
+    to_.sin_port = htons(port);
+    to_.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  }
+  ~UdpSender() { close(fd_); }
+  void send(std::span<const std::byte> datagram) {
+    sent.insert(sent.end(), datagram.begin(), datagram.end());
+    ASSERT_EQ(sendto(fd_, datagram.data(), datagram.size(), 0, reinterpret_cast<sockaddr*>(&to_),
+                     sizeof to_),
+              static_cast<ssize_t>(datagram.size()));
+  }
+  Bytes sent;
+
+ private:
+  int fd_;
+  sockaddr_in to_{};
+};
+
+TEST(UnitreeDriver, L2OverLoopbackUdp) {
+  StreamGuard guard;
+  const std::string stream = unique_name("udp");
+  const std::string record = temp_path("udp_record");
+  guard.names = {stream, stream + ".imu"};
+  ChildProcess driver({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", "0",
+                       "--bind-address", "127.0.0.1", "--lidar-ip", "127.0.0.1", "--stream",
+                       stream, "--scan-packets", "3", "--record", record, "-q"});
+  ASSERT_TRUE(driver.started());
+  const auto line = driver.read_line(kTimeout);
+  ASSERT_TRUE(line.has_value());
+  unsigned port = 0;
+  ASSERT_EQ(std::sscanf(line->c_str(), "listening on udp port %u", &port), 1) << *line;
+
+  auto points = open_reader(stream);
+  auto imu = open_reader(stream + ".imu");
+  ASSERT_TRUE(points && imu);
+  ASSERT_EQ(points->layout().points.max_points, 3U * 300U);
+
+  UdpSender sender(static_cast<std::uint16_t>(port));
+  std::vector<Bytes> packets;
+  for (std::uint32_t i = 0; i < 6; ++i) packets.push_back(l2_point_packet(l2_packet_spec(i)));
+  Bytes bad = l2_point_packet(l2_packet_spec(99));
+  bad[200] ^= std::byte{0xFF};
+
+  // Scan 1: a packet and a half in one datagram, the rest with an IMU packet in the next,
+  // then a RoboSense packet, a packet with a bad CRC, and the scan's last packet.
+  const std::span<const std::byte> p1(packets[1]);
+  sender.send(concat({packets[0], p1.first(500)}));
+  sender.send(concat({p1.subspan(500), l2_imu_packet(imu_spec())}));
+  sender.send(robosense_packet());
+  sender.send(bad);
+  sender.send(packets[2]);
+  const auto expected = expected_scans(
+      sim::unitree::Model::l2, 3,
+      concat({packets[0], packets[1], packets[2], packets[3], packets[4], packets[5]}));
+  ASSERT_EQ(expected.size(), 2U);
+  expect_frame(*points, expected[0], 1);
+
+  std::vector<std::byte> imu_buffer(imu->capacity());
+  sim::FrameInfo imu_info;
+  ASSERT_EQ(imu->read_next(imu_buffer, imu_info, kTimeout), sim::ReadStatus::new_frame);
+  ASSERT_EQ(imu_info.size, sizeof(sim::unitree::ImuSample));
+  sim::unitree::ImuSample sample;
+  std::memcpy(&sample, imu_buffer.data(), sizeof sample);
+  EXPECT_EQ(sample.seq, 5U);
+  EXPECT_EQ(sample.quaternion[2], 0.38268343F);
+  EXPECT_EQ(sample.linear_acceleration[2], 9.81F);
+
+  // Scan 2: three packets merged into one datagram.
+  sender.send(concat({packets[3], packets[4], packets[5]}));
+  expect_frame(*points, expected[1], 2);
+
+  driver.signal(SIGTERM);
+  EXPECT_EQ(driver.wait(kTimeout), 0);
+  EXPECT_EQ(read_file(record), sender.sent);  // exactly what came off the wire
+  std::filesystem::remove(record);
+}
+
+// A pseudo-terminal pair stands in for the serial port: the driver opens the slave side by name.
+struct Pty {
+  int master = -1;
+  int slave = -1;
+  std::string path;
+  Pty() {
+    if (openpty(&master, &slave, nullptr, nullptr, nullptr) != 0) return;
+    termios t{};
+    tcgetattr(slave, &t);
+    cfmakeraw(&t);
+    tcsetattr(slave, TCSANOW, &t);
+    path = ttyname(slave);
+  }
+  ~Pty() {
+    if (master >= 0) close(master);
+    if (slave >= 0) close(slave);
+  }
+  // Writes in small pieces, so frames arrive cut at arbitrary places.
+  void write_in_pieces(std::span<const std::byte> bytes, std::size_t piece) {
+    for (std::size_t off = 0; off < bytes.size(); off += piece) {
+      const std::size_t n = std::min(piece, bytes.size() - off);
+      ASSERT_EQ(::write(master, bytes.data() + off, n), static_cast<ssize_t>(n));
+    }
+  }
+};
+
+void run_serial_driver(sim::unitree::Model model, const Bytes& wire, std::size_t expected_scans_n,
+                       const char* baud_text) {
+  Pty pty;
+  ASSERT_FALSE(pty.path.empty());
+  StreamGuard guard;
+  const std::string stream = unique_name("serial");
+  const std::string record = temp_path(model == sim::unitree::Model::l1 ? "l1_rec" : "l2_rec");
+  guard.names = {stream, stream + ".imu"};
+  ChildProcess driver({SIM_LIDAR_UNITREE_PATH, "--model", sim::unitree::to_string(model),
+                       "--serial", pty.path, "--stream", stream, "--scan-packets", "2",
+                       "--record", record, "-q"});
+  ASSERT_TRUE(driver.started());
+  const auto line = driver.read_line(kTimeout);
+  ASSERT_TRUE(line.has_value());
+  EXPECT_NE(line->find(baud_text), std::string::npos) << *line;
+  auto points = open_reader(stream);
+  ASSERT_TRUE(points);
+
+  const auto expected = expected_scans(model, 2, wire);
+  ASSERT_EQ(expected.size(), expected_scans_n);
+  pty.write_in_pieces(wire, 7);
+  // Frames may replace each other before the reader looks; the newest must be the last scan.
+  std::vector<std::byte> buffer(points->capacity());
+  sim::FrameInfo info;
+  std::uint64_t seen = 0;
+  while (seen < expected.size()) {
+    ASSERT_EQ(points->read_next(buffer, info, kTimeout), sim::ReadStatus::new_frame);
+    seen = info.seq;
+  }
+  const Scan& last = expected.back();
+  ASSERT_EQ(info.size, last.points.size() * sizeof(sim::LidarPoint));
+  EXPECT_EQ(0, std::memcmp(buffer.data(), last.points.data(), info.size));
+
+  driver.signal(SIGINT);
+  EXPECT_EQ(driver.wait(kTimeout), 0);
+  EXPECT_EQ(read_file(record), wire);
+  std::filesystem::remove(record);
+}
+
+Bytes l1_wire() {
+  Bytes wire;
+  for (std::uint16_t id = 1; id <= 4; ++id) {
+    std::array<std::uint16_t, 120> ranges{};
+    for (std::size_t j = 0; j < 100; ++j) ranges[j] = static_cast<std::uint16_t>(900 + 11 * j + id);
+    L1AuxSpec aux;
+    aux.packet_id = id;
+    aux.com_horizontal_angle_start = 3.0F * id;
+    aux.com_horizontal_angle_step = 3.0F;
+    aux.sys_vertical_angle_start = -10.0F;
+    aux.sys_vertical_angle_span = 0.5F;
+    aux.b_axis_dist = 12.0F;
+    aux.theta_angle = 0.01F;
+    aux.ksi_angle = 0.02F;
+    for (std::size_t j = 0; j < 120; ++j) aux.reflect[j] = static_cast<std::uint8_t>(j * 2);
+    wire = concat({wire, l1_distance_frame(id, ranges, static_cast<std::uint8_t>(2 * id)),
+                   l1_auxiliary_frame(aux, static_cast<std::uint8_t>(2 * id + 1)),
+                   l1_imu_frame({0, 0, 0, 1}, {0.01F, 0, 0}, {0, 0, 9.8F}, id)});
+  }
+  return wire;
+}
+
+TEST(UnitreeDriver, L1OverPseudoTerminal) {
+  run_serial_driver(sim::unitree::Model::l1, l1_wire(), 2, "2000000 baud");
+}
+
+TEST(UnitreeDriver, L2OverPseudoTerminal) {
+  Bytes wire;
+  for (std::uint32_t i = 0; i < 4; ++i) {
+    wire = concat({wire, l2_point_packet(l2_packet_spec(i)), l2_imu_packet(imu_spec())});
+  }
+  run_serial_driver(sim::unitree::Model::l2, wire, 2, "4000000 baud");
+}
+
+TEST(UnitreeDriver, BadOptionsExitWithUsageOrFailure) {
+  {
+    ChildProcess p({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--stream", "/a/b", "--udp-port", "0", "-q"});
+    EXPECT_EQ(p.wait(kTimeout), 2);
+  }
+  {
+    ChildProcess p({SIM_LIDAR_UNITREE_PATH, "--model", "L3", "--stream", unique_name("x"), "-q"});
+    EXPECT_EQ(p.wait(kTimeout), 2);
+  }
+  {
+    StreamGuard guard;
+    const std::string stream = unique_name("nodev");
+    guard.names = {stream, stream + ".imu"};
+    ChildProcess p({SIM_LIDAR_UNITREE_PATH, "--model", "L1", "--serial", "/dev/does-not-exist-unitree",
+                    "--stream", stream, "-q"});
+    EXPECT_EQ(p.wait(kTimeout), 1);
+  }
+  {
+    ChildProcess p({SIM_LIDAR_UNITREE_PATH, "--help"});
+    EXPECT_EQ(p.wait(kTimeout), 0);
+  }
+}
+
+TEST(UnitreeReplaySerial, ReplaysARecordingThroughTheSameDecoder) {
+  StreamGuard guard;
+  const std::string stream = unique_name("replay");
+  guard.names = {stream, stream + ".imu"};
+  const std::string file = temp_path("replay_input");
+  // Two scans of 3 packets with line noise before, between and after.
+  const Bytes noise = {std::byte{0x55}, std::byte{0xAA}, std::byte{0x01}, std::byte{0x7E}};
+  Bytes wire = noise;
+  for (std::uint32_t i = 0; i < 6; ++i) {
+    wire = concat({wire, l2_point_packet(l2_packet_spec(i)), (i == 2 ? noise : Bytes{})});
+  }
+  wire = concat({wire, l2_imu_packet(imu_spec()), noise});
+  write_file(file, wire);
+  ChildProcess replay({SIM_REPLAY_SERIAL_PATH, file, "--model", "L2", "--stream", stream,
+                       "--scan-packets", "3", "--rate-hz", "0", "-q"});
+  ASSERT_EQ(replay.wait(kTimeout), 0);
+
+  const auto expected = expected_scans(sim::unitree::Model::l2, 3, wire);
+  ASSERT_EQ(expected.size(), 2U);
+  auto status = sim::inspect(stream);
+  ASSERT_TRUE(status.has_value());
+  EXPECT_EQ(status->frames_published, 2U);
+  auto points = open_reader(stream);
+  ASSERT_TRUE(points);
+  expect_frame(*points, expected[1], 2);  // the newest frame is the second scan
+  auto imu_status = sim::inspect(stream + ".imu");
+  ASSERT_TRUE(imu_status.has_value());
+  EXPECT_EQ(imu_status->frames_published, 1U);
+  std::filesystem::remove(file);
+}
+
+TEST(UnitreeReplaySerial, BadInputIsReportedWithExitCodes) {
+  const std::string garbage = temp_path("garbage");
+  write_file(garbage, Bytes(5000, std::byte{0x42}));
+  StreamGuard guard;
+  const std::string stream = unique_name("bad");
+  guard.names = {stream, stream + ".imu"};
+  {
+    ChildProcess p({SIM_REPLAY_SERIAL_PATH, garbage, "--model", "L2", "--stream", stream, "-q"});
+    EXPECT_EQ(p.wait(kTimeout), 1);
+  }
+  {
+    ChildProcess p({SIM_REPLAY_SERIAL_PATH, "/nonexistent/unitree.bin", "--model", "L1",
+                    "--stream", stream, "-q"});
+    EXPECT_EQ(p.wait(kTimeout), 1);
+  }
+  {
+    ChildProcess p({SIM_REPLAY_SERIAL_PATH, garbage, "--model", "X9", "--stream", stream, "-q"});
+    EXPECT_EQ(p.wait(kTimeout), 2);
+  }
+  std::filesystem::remove(garbage);
+}
+
+}  // namespace
