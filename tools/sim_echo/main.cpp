@@ -82,7 +82,10 @@ int main(int argc, char** argv) {
   app.add_option("--duration", duration_s, "stop after this many seconds");
   app.add_flag("--wait-for-stream", wait_for_stream, "wait until the stream exists");
   app.add_flag("--poll", poll, "busy-poll instead of sleeping until each frame (uses a core)");
+  sim::tools::Placement placement;
+  sim::tools::add_placement_options(app, placement);
   if (auto code = sim::tools::parse(app, argc, argv)) return *code;
+  if (auto code = sim::tools::apply_placement(placement, "sim_echo")) return *code;
 
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);

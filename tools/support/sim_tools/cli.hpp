@@ -4,7 +4,10 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <cstdio>
 #include <optional>
+
+#include "sim/os.hpp"
 
 namespace sim::tools {
 
@@ -19,6 +22,35 @@ inline std::optional<int> parse(CLI::App& app, int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);  // prints help or the error
     return code == 0 ? kExitOk : kExitUsage;
+  }
+  return std::nullopt;
+}
+
+// Where the tool's main thread runs: --cpu and --rt-priority, shared by every tool and driver.
+struct Placement {
+  std::optional<int> cpu;
+  std::optional<int> rt_priority;
+};
+
+inline void add_placement_options(CLI::App& app, Placement& placement) {
+  app.add_option("--cpu", placement.cpu, "pin the main thread to this CPU");
+  app.add_option("--rt-priority", placement.rt_priority,
+                 "run under SCHED_FIFO at this priority (1-99; needs root or CAP_SYS_NICE)");
+}
+
+// Applies the placement; returns an exit code when it cannot be applied.
+inline std::optional<int> apply_placement(const Placement& placement, const char* tool) {
+  if (placement.cpu) {
+    if (auto error = sim::pin_current_thread(*placement.cpu)) {
+      std::fprintf(stderr, "%s: %s\n", tool, error->message.c_str());
+      return kExitUsage;
+    }
+  }
+  if (placement.rt_priority) {
+    if (auto error = sim::set_realtime_priority(*placement.rt_priority)) {
+      std::fprintf(stderr, "%s: %s\n", tool, error->message.c_str());
+      return kExitFailure;
+    }
   }
   return std::nullopt;
 }

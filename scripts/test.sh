@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# Installs what is missing, builds, and runs every test: the release suite, the whole suite under
+# AddressSanitizer + UndefinedBehaviorSanitizer with every fuzz target run for a bounded time,
+# and the concurrency suites under ThreadSanitizer.
+#
+#   scripts/test.sh                  everything (what CI runs)
+#   SIM_STRESS_FRAMES=10000000 SIM_FUZZ_SECONDS=600 scripts/test.sh   longer stress and fuzzing
+#   SIM_TEST_STAGES="release" scripts/test.sh                        one stage only
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+cd "$root"
+jobs=${SIM_JOBS:-2}
+stages=${SIM_TEST_STAGES:-"release asan tsan"}
+stress=${SIM_STRESS_FRAMES:-1000000}
+sanitizer_stress=${SIM_SANITIZER_STRESS_FRAMES:-200000}
+fuzz_seconds=${SIM_FUZZ_SECONDS:-30}
+
+"$root/scripts/install-deps.sh"
+
+stage() { printf '\n=== %s ===\n' "$*"; }
+configure() {  # configure BUILD_DIR [cmake options…]
+  local dir=$1
+  shift
+  cmake -S "$root" -B "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo "$@" >"$dir.configure.log" 2>&1 ||
+    { cat "$dir.configure.log"; return 1; }
+}
+
+# Sanitizer reports end the test that triggered them, with a stack.
+export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:strict_string_checks=1}
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+export TSAN_OPTIONS=${TSAN_OPTIONS:-halt_on_error=1:second_deadlock_stack=1}
+mkdir -p "$root/build"
+
+for s in $stages; do
+  case $s in
+    release)
+      stage "release build and full suite"
+      configure build/release
+      cmake --build build/release -j"$jobs"
+      SIM_STRESS_FRAMES=$stress ctest --test-dir build/release -j"$jobs" --output-on-failure
+      ;;
+    asan)
+      stage "AddressSanitizer + UndefinedBehaviorSanitizer, with libFuzzer targets (${fuzz_seconds} s each)"
+      configure build/asan -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
+        -DSIM_SANITIZE=address,undefined -DSIM_FUZZ=ON -DSIM_FUZZ_SECONDS="$fuzz_seconds" \
+        -DSIM_BUILD_BENCH=OFF
+      cmake --build build/asan -j"$jobs"
+      SIM_STRESS_FRAMES=$sanitizer_stress ctest --test-dir build/asan -j"$jobs" --output-on-failure
+      ;;
+    tsan)
+      stage "ThreadSanitizer, concurrency suites"
+      configure build/tsan -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
+        -DSIM_SANITIZE=thread -DSIM_BUILD_DRIVERS=OFF -DSIM_BUILD_BENCH=OFF
+      cmake --build build/tsan -j"$jobs"
+      SIM_STRESS_FRAMES=$sanitizer_stress ctest --test-dir build/tsan -j"$jobs" -L concurrency \
+        --output-on-failure
+      ;;
+    *) echo "test.sh: unknown stage '$s' (release, asan, tsan)" >&2; exit 2 ;;
+  esac
+done
+stage "all stages passed: $stages"
