@@ -1,0 +1,245 @@
+// SPDX-License-Identifier: Apache-2.0
+// sim_replay_video in its own process, read back here: fixtures are written by this test with
+// cv::VideoWriter (FFV1 for lossless content checks, MJPG in AVI) and cv::imwrite (PNG folder).
+#include <gtest/gtest.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+#include <optional>
+#include <sstream>
+#include <thread>
+#include <vector>
+
+#include "sim/sim.hpp"
+
+namespace {
+
+using namespace std::chrono_literals;
+namespace fs = std::filesystem;
+
+constexpr int kWidth = 96;
+constexpr int kHeight = 64;
+
+// Frame k: a gradient plus a bright bar whose position encodes k, so frames can be told apart.
+cv::Mat make_frame(int k) {
+  cv::Mat frame(kHeight, kWidth, CV_8UC3);
+  for (int y = 0; y < kHeight; ++y) {
+    for (int x = 0; x < kWidth; ++x) {
+      frame.at<cv::Vec3b>(y, x) = {static_cast<uchar>(x * 2), static_cast<uchar>(y * 3),
+                                   static_cast<uchar>((k * 10) % 256)};
+    }
+  }
+  frame.colRange(k * 4 % kWidth, k * 4 % kWidth + 4).setTo(cv::Scalar(255, 255, 255));
+  return frame;
+}
+
+class ReplayVideo : public ::testing::Test {
+ protected:
+  ReplayVideo() {
+    static int counter = 0;
+    const std::string id = std::to_string(getpid()) + "_" + std::to_string(counter++);
+    dir = fs::temp_directory_path() / ("test_replay_video_" + id);
+    fs::create_directories(dir);
+    stream = "/test_replay_video_" + id;
+  }
+  ~ReplayVideo() override {
+    if (pid > 0) {
+      kill(pid, SIGKILL);
+      waitpid(pid, nullptr, 0);
+    }
+    sim::destroy(stream, true);
+    fs::remove_all(dir);
+  }
+
+  std::string write_video(const std::string& name, int fourcc, int frames) {
+    const std::string path = (dir / name).string();
+    cv::VideoWriter writer(path, cv::CAP_FFMPEG, fourcc, 25.0, cv::Size(kWidth, kHeight));
+    EXPECT_TRUE(writer.isOpened()) << path;
+    for (int k = 0; k < frames; ++k) writer.write(make_frame(k));
+    writer.release();
+    return path;
+  }
+
+  void spawn(std::vector<std::string> args) {
+    args.insert(args.begin(), SIM_REPLAY_VIDEO_TOOL);
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    log = (dir / "stderr.txt").string();
+    posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, log.c_str(),
+                                     O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_adddup2(&actions, STDERR_FILENO, STDOUT_FILENO);
+    ASSERT_EQ(posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ), 0);
+    posix_spawn_file_actions_destroy(&actions);
+  }
+
+  // Exit code of the tool, or -1 if it had to be killed after `limit`.
+  int wait_exit(std::chrono::seconds limit = 30s) {
+    const auto deadline = std::chrono::steady_clock::now() + limit;
+    int status = 0;
+    while (waitpid(pid, &status, WNOHANG) == 0) {
+      if (std::chrono::steady_clock::now() > deadline) {
+        kill(pid, SIGKILL);
+        waitpid(pid, &status, 0);
+        pid = -1;
+        return -1;
+      }
+      std::this_thread::sleep_for(10ms);
+    }
+    pid = -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+
+  int run(std::vector<std::string> args) {
+    spawn(std::move(args));
+    return wait_exit();
+  }
+
+  std::string output() const {
+    std::ifstream file(log);
+    std::stringstream text;
+    text << file.rdbuf();
+    return text.str();
+  }
+
+  std::optional<sim::Reader> open_reader() {
+    const auto deadline = std::chrono::steady_clock::now() + 20s;
+    while (std::chrono::steady_clock::now() < deadline) {
+      auto reader = sim::Reader::open(stream);
+      if (reader) return std::move(reader.value());
+      std::this_thread::sleep_for(5ms);
+    }
+    return std::nullopt;
+  }
+
+  // Reads frames until the tool is gone; returns them as BGR/grey matrices.
+  std::vector<cv::Mat> collect(sim::Reader& reader, std::size_t at_most = 1000) {
+    std::vector<cv::Mat> frames;
+    std::vector<std::byte> buffer(reader.capacity());
+    sim::FrameInfo info;
+    std::uint64_t last_seq = 0;
+    while (frames.size() < at_most) {
+      const auto status = reader.read_next(buffer, info, 200ms);
+      if (status == sim::ReadStatus::writer_gone) break;
+      if (status != sim::ReadStatus::new_frame) continue;
+      EXPECT_GT(info.seq, last_seq);
+      last_seq = info.seq;
+      const auto& image = info.layout.image;
+      const int type = image.channels == 3 ? CV_8UC3 : CV_8UC1;
+      frames.push_back(
+          cv::Mat(static_cast<int>(image.height), static_cast<int>(image.width), type,
+                  buffer.data(), image.stride).clone());
+    }
+    return frames;
+  }
+
+  fs::path dir;
+  std::string stream;
+  std::string log;
+  pid_t pid = -1;
+};
+
+// Which generated frame this is, or -1 if it is none of them exactly.
+int identify(const cv::Mat& frame, int count) {
+  for (int k = 0; k < count; ++k) {
+    if (cv::norm(frame, make_frame(k), cv::NORM_INF) == 0) return k;
+  }
+  return -1;
+}
+
+TEST_F(ReplayVideo, LosslessFileArrivesPixelExactInOrder) {
+  const std::string path = write_video("clip.mkv", cv::VideoWriter::fourcc('F', 'F', 'V', '1'), 20);
+  spawn({path, "--stream", stream, "--fps", "40"});
+  auto reader = open_reader();
+  ASSERT_TRUE(reader) << output();
+  EXPECT_EQ(reader->layout().image.width, static_cast<std::uint32_t>(kWidth));
+  EXPECT_EQ(reader->layout().image.format, sim::PixelFormat::bgr8);
+  const auto frames = collect(*reader);
+  EXPECT_EQ(wait_exit(), 0) << output();
+  ASSERT_GE(frames.size(), 5u) << output();
+  int last = -1;
+  for (const auto& frame : frames) {
+    const int k = identify(frame, 20);
+    ASSERT_GE(k, 0) << "a published frame is not one of the file's frames";
+    EXPECT_GT(k, last);
+    last = k;
+  }
+  EXPECT_NE(output().find("published 20 frames"), std::string::npos) << output();
+}
+
+TEST_F(ReplayVideo, MjpegAviLoopsInMonoUntilStopped) {
+  const std::string path = write_video("clip.avi", cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 6);
+  spawn({path, "--stream", stream, "--fps", "30", "--rate", "4", "--loop", "--output", "mono8"});
+  auto reader = open_reader();
+  ASSERT_TRUE(reader) << output();
+  EXPECT_EQ(reader->layout().image.format, sim::PixelFormat::mono8);
+  EXPECT_EQ(reader->layout().image.stride, static_cast<std::uint32_t>(kWidth));
+  // More frames than the file holds: it looped.
+  std::vector<std::byte> buffer(reader->capacity());
+  sim::FrameInfo info;
+  const auto deadline = std::chrono::steady_clock::now() + 30s;
+  while (info.seq <= 14 && std::chrono::steady_clock::now() < deadline) {
+    (void)reader->read_next(buffer, info, 200ms);
+  }
+  EXPECT_GT(info.seq, 14u);
+  // MJPEG is lossy: the grey frame is near OpenCV's grey of one of the sources.
+  const cv::Mat grey(kHeight, kWidth, CV_8UC1, buffer.data());
+  EXPECT_GT(cv::mean(grey)[0], 40.0);
+  kill(pid, SIGTERM);
+  EXPECT_EQ(wait_exit(), 0) << output();
+}
+
+TEST_F(ReplayVideo, FolderOfImagesInNameOrder) {
+  fs::create_directories(dir / "frames");
+  for (int k = 0; k < 4; ++k) {
+    cv::imwrite((dir / "frames" / ("frame_" + std::to_string(k) + ".png")).string(), make_frame(k));
+  }
+  std::ofstream(dir / "frames" / "notes.txt") << "not an image";
+  spawn({(dir / "frames").string(), "--stream", stream, "--fps", "10"});
+  auto reader = open_reader();
+  ASSERT_TRUE(reader) << output();
+  const auto frames = collect(*reader);
+  EXPECT_EQ(wait_exit(), 0) << output();
+  ASSERT_GE(frames.size(), 2u);
+  int last = -1;
+  for (const auto& frame : frames) {
+    const int k = identify(frame, 4);
+    ASSERT_GE(k, 0);
+    EXPECT_GT(k, last);
+    last = k;
+  }
+  EXPECT_EQ(last, 3);
+}
+
+TEST_F(ReplayVideo, BadInputFailsWithOneSentence) {
+  EXPECT_EQ(run({(dir / "missing.avi").string(), "--stream", stream}), 1);
+  EXPECT_NE(output().find("no file or folder at"), std::string::npos) << output();
+
+  std::ofstream(dir / "fake.avi") << "this is not a video at all";
+  EXPECT_EQ(run({(dir / "fake.avi").string(), "--stream", stream}), 1);
+  EXPECT_NE(output().find("sim_replay_video: "), std::string::npos) << output();
+
+  fs::create_directories(dir / "empty");
+  EXPECT_EQ(run({(dir / "empty").string(), "--stream", stream}), 1);
+  EXPECT_NE(output().find("holds no images"), std::string::npos) << output();
+
+  const std::string path = write_video("ok.avi", cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 2);
+  EXPECT_EQ(run({path, "--stream", stream, "--rate", "0"}), 2);
+  EXPECT_EQ(run({path, "--stream", "no-slash"}), 1);
+  EXPECT_NE(output().find("sim_replay_video: "), std::string::npos);
+  EXPECT_EQ(run({"--help"}), 0);
+  EXPECT_FALSE(sim::Reader::open(stream));  // nothing was published by any failed run
+}
+
+}  // namespace
