@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // Point formula (reference §1.1): x = d·cos(el)·sin(az), y = d·cos(el)·cos(az), z = d·sin(el),
-// az = block azimuth + channel azimuth offset. The multi-return filters follow nebula's
-// decoder so its reference clouds are reproduced exactly (../shared/data/lidar/SOURCES.md).
+// az = block azimuth + channel azimuth offset. The multi-return filters and the per-point cut
+// follow nebula's decoder so its reference clouds are reproduced exactly
+// (../shared/data/lidar/SOURCES.md).
 #include "sim/hesai/frame_assembler.hpp"
 
 #include <algorithm>
@@ -19,6 +20,8 @@ constexpr unsigned full_turn = 36000;  // 0.01°
 constexpr unsigned reorder_window = 1000;
 // Sequence jumps larger than this are a sensor restart, not loss.
 constexpr std::uint32_t max_counted_loss = 100000;
+// Channel azimuth offsets are a few degrees; a spread this large is not a calibration.
+constexpr double max_offset_spread_deg = 90.0;
 
 Error invalid(std::string message) { return Error{ErrorCode::invalid_argument, std::move(message)}; }
 
@@ -37,6 +40,18 @@ Expected<FrameAssembler> FrameAssembler::create(Calibration calibration,
     return invalid("the firing-time file has " + std::to_string(options.firetimes->channels()) +
                    " channels but a " + model_name + " has " + std::to_string(m.channels) +
                    "; use Hesai's firing-time file for this model");
+  }
+  float lowest = 0, highest = 0;
+  for (const auto& a : calibration.angles()) {
+    if (!std::isfinite(a.azimuth_offset_deg) || !std::isfinite(a.elevation_deg)) {
+      return invalid("the calibration holds a non-finite angle; use the sensor's own file");
+    }
+    lowest = std::min(lowest, a.azimuth_offset_deg);
+    highest = std::max(highest, a.azimuth_offset_deg);
+  }
+  if (highest - lowest > max_offset_spread_deg) {
+    return invalid("the calibration's azimuth offsets spread over more than 90 degrees, which "
+                   "no Hesai sensor has; check that the columns are channel,elevation,azimuth");
   }
   const float min_range = options.min_range_m.value_or(m.min_range_m);
   const float max_range = options.max_range_m.value_or(m.max_range_m);
@@ -82,27 +97,32 @@ FrameAssembler::FrameAssembler(Calibration calibration, AssemblerOptions options
     earliest_channel_offset_ns_ = std::min(earliest_channel_offset_ns_, offset);
   }
   update_azimuth_offsets(0);
+
+  // The carry-over holds the next frame's points from the first firing whose points cross the
+  // cut until the driver's next set_output(): the offset spread in firing groups (at half the
+  // 10 Hz step, for 5 Hz operation) plus two packets, at up to three returns.
+  const double spread = max_cut_offset_centi_ - min_cut_offset_centi_;
+  const auto overlap_groups =
+      static_cast<std::size_t>(std::ceil(spread / (m.azimuth_step_10hz / 2.0))) + 1;
+  carry_.resize((overlap_groups + 2 * std::size_t{m.blocks_per_packet}) * m.channels * 3);
 }
 
 void FrameAssembler::update_azimuth_offsets(std::uint16_t rpm) noexcept {
   constexpr double deg = std::numbers::pi / 180.0;
   const bool compensate = options_.firetimes && options_.firetime_azimuth_compensation;
+  min_cut_offset_centi_ = 0;
+  max_cut_offset_centi_ = 0;
   for (unsigned ch = 0; ch < channels_; ++ch) {
     double offset = calibration_[ch].azimuth_offset_deg;
     // The laser fires firetime µs after the block time, while the head turns rpm·6e-6 °/µs.
     if (compensate) offset += (*options_.firetimes)[ch] * rpm * 6e-6;
     cos_azimuth_offset_[ch] = static_cast<float>(std::cos(offset * deg));
     sin_azimuth_offset_[ch] = static_cast<float>(std::sin(offset * deg));
+    cut_offset_centi_[ch] = options_.cut_by == CutBy::point_azimuth ? offset * 100.0 : 0.0;
+    min_cut_offset_centi_ = std::min(min_cut_offset_centi_, cut_offset_centi_[ch]);
+    max_cut_offset_centi_ = std::max(max_cut_offset_centi_, cut_offset_centi_[ch]);
   }
   compensated_rpm_ = rpm;
-}
-
-std::span<LidarPoint> FrameAssembler::destination() noexcept {
-  return output_attached_ ? output_ : std::span<LidarPoint>(carry_);
-}
-
-std::size_t& FrameAssembler::destination_count() noexcept {
-  return output_attached_ ? output_count_ : carry_count_;
 }
 
 std::size_t FrameAssembler::pending_points() const noexcept {
@@ -110,12 +130,18 @@ std::size_t FrameAssembler::pending_points() const noexcept {
 }
 
 void FrameAssembler::set_output(std::span<LidarPoint> output) noexcept {
-  if (output_attached_ && output_count_ > 0) {
+  if (output_attached_) {
     // Replaced in the middle of a frame: its points so far stay in the old span.
-    current_.whole = false;
-    current_.dropped += static_cast<std::uint32_t>(output_count_);
-    counters_.dropped_points += output_count_;
+    if (output_count_ > 0) {
+      current_.whole = false;
+      current_.dropped += static_cast<std::uint32_t>(output_count_);
+      counters_.dropped_points += output_count_;
+    }
+    output_ = output;
+    output_count_ = 0;
+    return;
   }
+  // The carry-over holds the current frame's points: they go to the front of the new span.
   output_ = output;
   output_attached_ = true;
   const std::size_t copied = std::min(carry_count_, output.size());
@@ -130,76 +156,81 @@ void FrameAssembler::set_output(std::span<LidarPoint> output) noexcept {
 
 void FrameAssembler::reset() noexcept {
   current_ = FrameState{};
-  output_count_ = 0;
+  next_ = FrameState{};
+  if (output_attached_) {
+    output_count_ = 0;
+  }
   carry_count_ = 0;
-  packet_counted_ = false;
   have_last_ = false;
   azimuth_step_ = 0;
   have_sequence_ = false;
 }
 
-CompletedFrame FrameAssembler::finish(std::size_t count, bool ended_at_cut) noexcept {
-  CompletedFrame frame;
-  frame.point_count = count;
-  frame.stamp_ns = current_.stamp_ns;
-  frame.host_receive_ns = current_.host_ns;
-  frame.index = frame_index_++;
-  frame.packets = current_.packets;
-  frame.lost_packets = current_.lost;
-  frame.dropped_points = current_.dropped;
-  frame.whole_revolution = current_.whole && ended_at_cut;
-  ++counters_.frames;
-  // The span now belongs to the caller; points go to the carry-over buffer until set_output.
-  output_attached_ = false;
-  output_ = {};
-  output_count_ = 0;
-  carry_count_ = 0;
-  return frame;
-}
-
-std::optional<CompletedFrame> FrameAssembler::flush() noexcept {
-  std::optional<CompletedFrame> frame;
+void FrameAssembler::close_current(PushResult& result, bool ended_at_cut) noexcept {
   if (current_.started) {
-    if (output_attached_) {
-      frame = finish(output_count_, false);
+    if (!current_.whole && !options_.emit_partial_frames && ended_at_cut) {
+      ++counters_.partial_frames_dropped;
+      if (output_attached_) output_count_ = 0;
+    } else if (output_attached_) {
+      CompletedFrame& frame = result.frame.emplace();
+      frame.point_count = output_count_;
+      frame.stamp_ns = current_.stamp_ns;
+      frame.host_receive_ns = current_.host_ns;
+      frame.index = frame_index_++;
+      frame.packets = current_.packets;
+      frame.lost_packets = current_.lost;
+      frame.dropped_points = current_.dropped;
+      frame.whole_revolution = current_.whole && ended_at_cut;
+      ++counters_.frames;
+      // The span now belongs to the caller; the next frame's points are in the carry-over.
+      output_attached_ = false;
+      output_ = {};
+      output_count_ = 0;
+      current_ = next_;
+      next_ = FrameState{};
+      return;
     } else {
-      counters_.dropped_points += carry_count_;
+      // Completed while the caller still holds the previous frame: nowhere to put it.
       ++counters_.frames_without_output;
+      counters_.dropped_points += carry_count_;
       carry_count_ = 0;
     }
   }
-  current_ = FrameState{};
-  packet_counted_ = false;
-  have_last_ = false;
-  return frame;
-}
-
-void FrameAssembler::start_frame(const Packet& packet, unsigned block, std::int64_t host_ns,
-                                 bool whole) noexcept {
-  current_ = FrameState{};
-  current_.started = true;
-  current_.whole = whole;
-  // The frame's stamp is its earliest firing, so every point's offset is ≥ 0.
-  current_.stamp_ns =
-      packet.time_ns() + packet.block_offset_ns(block) + earliest_channel_offset_ns_;
-  current_.host_ns = host_ns;
-  packet_counted_ = false;
-}
-
-void FrameAssembler::on_cut(PushResult& result) noexcept {
-  if (!current_.started) return;
-  if (current_.whole || options_.emit_partial_frames) {
-    if (output_attached_) {
-      result.frame = finish(output_count_, true);
-      return;
-    }
-    // Completed while the caller still holds the previous frame: nowhere to put it.
-    counters_.dropped_points += carry_count_;
-    ++counters_.frames_without_output;
-  } else {
-    ++counters_.partial_frames_dropped;
+  // No frame handed out: the next frame takes over the storage the current one had. When the
+  // output is attached the carry-over holds next_'s points, which move to the span's front.
+  current_ = next_;
+  next_ = FrameState{};
+  if (output_attached_) {
+    const std::size_t moved = std::min(carry_count_, output_.size());
+    std::copy_n(carry_.begin(), moved, output_.begin());
+    output_count_ = moved;
+    carry_count_ = 0;
   }
-  destination_count() = 0;
+}
+
+std::optional<CompletedFrame> FrameAssembler::flush() noexcept {
+  PushResult result;
+  if (next_.started) {
+    // The next frame's few points cannot be kept apart from the flushed one.
+    counters_.dropped_points += output_attached_ ? carry_count_ : 0;
+    if (output_attached_) carry_count_ = 0;
+    next_ = FrameState{};
+  }
+  close_current(result, false);
+  current_ = FrameState{};
+  have_last_ = false;
+  return result.frame;
+}
+
+void FrameAssembler::begin(FrameState& frame, const Packet& packet, unsigned block,
+                           std::int64_t host_ns, bool whole) noexcept {
+  frame = FrameState{};
+  frame.started = true;
+  frame.whole = whole;
+  // The frame's stamp is the earliest firing of its first group, so point offsets are ≥ 0.
+  frame.stamp_ns = packet.time_ns() + packet.block_offset_ns(block) + earliest_channel_offset_ns_;
+  frame.host_ns = host_ns;
+  frame.last_packet = 0;
 }
 
 void FrameAssembler::count_loss(const Packet& packet) noexcept {
@@ -225,14 +256,16 @@ void FrameAssembler::count_loss(const Packet& packet) noexcept {
     const unsigned gap = (packet.azimuth(0) + full_turn - last_azimuth_) % full_turn;
     if (gap < full_turn / 2 && gap * 2 > azimuth_step_ * 3u) {
       const double per_packet = static_cast<double>(azimuth_step_) * groups;
-      const auto missing = static_cast<std::uint32_t>(std::lround((gap - azimuth_step_) / per_packet));
+      const auto missing =
+          static_cast<std::uint32_t>(std::lround((gap - azimuth_step_) / per_packet));
       counters_.lost_packets += missing;
       current_.lost += missing;
     }
   }
   if (groups > 1) {
     const unsigned span =
-        (packet.azimuth((groups - 1) * packet.returns()) + full_turn - packet.azimuth(0)) % full_turn;
+        (packet.azimuth((groups - 1) * packet.returns()) + full_turn - packet.azimuth(0)) %
+        full_turn;
     azimuth_step_ = static_cast<std::uint16_t>(span / (groups - 1));
   }
 }
@@ -252,6 +285,7 @@ PushResult FrameAssembler::push(std::span<const std::uint8_t> payload,
     return result;
   }
   ++counters_.packets;
+  ++packet_counter_;
   count_loss(packet);
   if (options_.firetimes && options_.firetime_azimuth_compensation &&
       packet.motor_rpm() != compensated_rpm_) {
@@ -261,53 +295,112 @@ PushResult FrameAssembler::push(std::span<const std::uint8_t> payload,
   const unsigned returns = packet.returns();
   for (unsigned block = 0; block < packet.blocks(); block += returns) {
     const std::uint16_t azimuth = packet.azimuth(block);
-    const auto phase = static_cast<std::uint16_t>((azimuth + full_turn - cut_centi_deg_) % full_turn);
-    bool advance = true;
+    const auto phase =
+        static_cast<std::uint16_t>((azimuth + full_turn - cut_centi_deg_) % full_turn);
+    std::int64_t group_revolution = block_revolution_;
     if (!have_last_) {
-      // Joining mid-revolution (start, reset, flush): this frame is partial.
-      start_frame(packet, block, host_receive_ns, false);
+      // Joining mid-revolution (start, reset, flush): the frame in progress is partial.
+      block_revolution_ = 0;
+      group_revolution = 0;
+      current_revolution_ = 0;
+      current_ = FrameState{};
+      next_ = FrameState{};
+      have_last_ = true;
+      last_phase_ = phase;
+      last_azimuth_ = azimuth;
     } else {
       const unsigned forward = (phase + full_turn - last_phase_) % full_turn;
       if (forward > full_turn - reorder_window) {
-        advance = false;  // a late packet: its points belong to this frame, no cut
-      } else if (phase < last_phase_) {
-        on_cut(result);
-        start_frame(packet, block, host_receive_ns, true);
+        // A late packet: decode it where it belongs without moving the cut state.
+        if (phase > last_phase_) group_revolution = block_revolution_ - 1;
+      } else {
+        if (phase < last_phase_) ++block_revolution_;
+        group_revolution = block_revolution_;
+        last_phase_ = phase;
+        last_azimuth_ = azimuth;
       }
     }
-    if (!current_.started) start_frame(packet, block, host_receive_ns, false);
-    if (!packet_counted_) {
-      ++current_.packets;
-      packet_counted_ = true;
+    // The current frame is complete once no channel of this group can still fall in it.
+    const double position = static_cast<double>(group_revolution) * full_turn + phase;
+    const double current_end = static_cast<double>(current_revolution_ + 1) * full_turn;
+    if (position + min_cut_offset_centi_ >= current_end) {
+      if (result.frame) {
+        // A second completion in one packet can only come from a corrupt stream: drop it.
+        ++counters_.frames_without_output;
+      }
+      PushResult closed;
+      close_current(closed, true);
+      if (closed.frame && !result.frame) result.frame = closed.frame;
+      ++current_revolution_;
+      if (position + min_cut_offset_centi_ >= current_end + full_turn) {
+        // A gap of more than a revolution: restart from this group.
+        current_revolution_ = group_revolution;
+        current_ = FrameState{};
+        next_ = FrameState{};
+        if (output_attached_) output_count_ = 0;
+        carry_count_ = 0;
+      }
     }
-    decode_group(packet, block);
-    if (advance) {
-      last_phase_ = phase;
-      last_azimuth_ = azimuth;
-      have_last_ = true;
-    }
+    decode_group(packet, block, group_revolution, phase, host_receive_ns);
   }
-  packet_counted_ = false;
   return result;
 }
 
-void FrameAssembler::decode_group(const Packet& packet, unsigned first_block) noexcept {
+void FrameAssembler::decode_group(const Packet& packet, unsigned first_block,
+                                  std::int64_t group_revolution, std::uint16_t phase,
+                                  std::int64_t host_ns) noexcept {
   const unsigned returns = packet.returns();
   const float unit = packet.distance_unit_m();
   const double azimuth_rad = packet.azimuth(first_block) * (std::numbers::pi / 18000.0);
   const auto sin_block = static_cast<float>(std::sin(azimuth_rad));
   const auto cos_block = static_cast<float>(std::cos(azimuth_rad));
-  // Blocks of a group fire together, so one time for the group; offsets are ≥ 0 by the stamp's
-  // choice, clamped only against a sensor clock that jumps.
-  const std::int64_t group_time =
-      packet.time_ns() + packet.block_offset_ns(first_block) - current_.stamp_ns;
+  const std::int64_t packet_group_time = packet.time_ns() + packet.block_offset_ns(first_block);
   const float threshold = options_.multi_return_distance_threshold_m;
   const bool multi = returns > 1;
-
-  std::span<LidarPoint> out = destination();
-  std::size_t& count = destination_count();
+  // Common case: every channel of the group falls in the same revolution.
+  const bool straddles =
+      phase + min_cut_offset_centi_ < 0 || phase + max_cut_offset_centi_ >= full_turn;
 
   for (unsigned ch = 0; ch < channels_; ++ch) {
+    std::int64_t revolution = group_revolution;
+    if (straddles) {
+      const double point_phase = phase + cut_offset_centi_[ch];
+      if (point_phase < 0) --revolution;
+      if (point_phase >= full_turn) ++revolution;
+    }
+    // Which frame, and where its points go.
+    FrameState* frame = nullptr;
+    std::span<LidarPoint> out;
+    std::size_t* count = nullptr;
+    if (revolution == current_revolution_) {
+      frame = &current_;
+      if (!frame->started) begin(*frame, packet, first_block, host_ns, false);
+      if (output_attached_) {
+        out = output_;
+        count = &output_count_;
+      } else {
+        out = carry_;
+        count = &carry_count_;
+      }
+    } else if (revolution == current_revolution_ + 1) {
+      frame = &next_;
+      if (!frame->started) begin(*frame, packet, first_block, host_ns, true);
+      if (output_attached_) {
+        out = carry_;
+        count = &carry_count_;
+      } else {
+        // The carry-over still holds the current frame (no span yet): the next one loses
+        // these points and is not a whole revolution.
+        frame->whole = false;
+      }
+    } else {
+      continue;  // a late point of a frame already handed out
+    }
+    if (frame->last_packet != packet_counter_) {
+      frame->last_packet = packet_counter_;
+      ++frame->packets;
+    }
+
     std::array<std::uint16_t, 3> raw{};
     std::array<std::uint8_t, 3> reflectivity{};
     for (unsigned r = 0; r < returns; ++r) {
@@ -334,17 +427,21 @@ void FrameAssembler::decode_group(const Packet& packet, unsigned first_block) no
         }
         if (duplicate) continue;
       }
-      if (count >= out.size()) {
-        ++current_.dropped;
+      if (count == nullptr || *count >= out.size()) {
+        ++frame->dropped;
         ++counters_.dropped_points;
         continue;
       }
-      const float sin_az = sin_block * cos_azimuth_offset_[ch] + cos_block * sin_azimuth_offset_[ch];
-      const float cos_az = cos_block * cos_azimuth_offset_[ch] - sin_block * sin_azimuth_offset_[ch];
+      const float sin_az =
+          sin_block * cos_azimuth_offset_[ch] + cos_block * sin_azimuth_offset_[ch];
+      const float cos_az =
+          cos_block * cos_azimuth_offset_[ch] - sin_block * sin_azimuth_offset_[ch];
       const float horizontal = distance * cos_elevation_[ch];
+      // Offsets are ≥ 0 by the stamp's choice; clamped only against a clock that jumps.
       const std::int64_t offset = std::clamp<std::int64_t>(
-          group_time + channel_offset_ns_[ch], 0, std::numeric_limits<std::uint32_t>::max());
-      LidarPoint& p = out[count++];
+          packet_group_time + channel_offset_ns_[ch] - frame->stamp_ns, 0,
+          std::numeric_limits<std::uint32_t>::max());
+      LidarPoint& p = out[(*count)++];
       p.x = horizontal * sin_az;
       p.y = horizontal * cos_az;
       p.z = distance * sin_elevation_[ch];

@@ -14,10 +14,12 @@
 //       assembler.set_output(loan.as<sim::LidarPoint>());  // before the next push
 //     }
 //
-// The packet that straddles the cut azimuth is decoded in two parts: the blocks before the cut
-// go to the completed frame, the blocks after it into a small fixed carry-over buffer (one
-// packet at most) that set_output() copies to the front of the next span. Nothing is allocated
-// after create().
+// Near the cut two frames are open at once: with per-point cutting (the default) a point
+// belongs to the revolution its own azimuth (block azimuth + channel offset) falls in, so the
+// firings just before the cut already hold points of the next frame and those just after it
+// still hold points of the previous one. Points of the frame that has no span yet go to a small
+// carry-over buffer, sized at create() for the calibration's offset spread plus two packets,
+// which set_output() copies to the front of the next span. Nothing is allocated after create().
 #pragma once
 
 #include <array>
@@ -25,6 +27,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <vector>
 
 #include "sim/hesai/calibration.hpp"
 #include "sim/hesai/model.hpp"
@@ -36,10 +39,21 @@ namespace sim::hesai {
 
 // Every choice the decoder makes is an option; the defaults reproduce nebula's reference
 // clouds (see docs/hesai.md and ../shared/data/lidar/SOURCES.md).
+// Where a revolution ends.
+enum class CutBy : std::uint8_t {
+  // Each point by its own azimuth (block azimuth + channel offset): a frame holds exactly the
+  // points with azimuth in [cut, cut + 360°). This is what nebula's reference clouds do.
+  point_azimuth,
+  // Whole firings by block azimuth: simpler, but points of channels with an azimuth offset
+  // spill a few tenths of a degree (Pandar64: up to 5°) across the cut.
+  block_azimuth,
+};
+
 struct AssemblerOptions {
   Model model = Model::pandar64;
-  // A new frame starts at the first firing whose block azimuth reaches this angle.
+  // A new frame starts where the azimuth reaches this angle (degrees, Hesai frame).
   double cut_azimuth_deg = 0.0;
+  CutBy cut_by = CutBy::point_azimuth;
   // Points closer or farther than this are dropped; nullopt = the model's own limits.
   std::optional<float> min_range_m;
   std::optional<float> max_range_m;
@@ -85,7 +99,7 @@ struct AssemblerCounters {
   std::uint64_t frames = 0;           // completed and returned
   std::uint64_t partial_frames_dropped = 0;  // before the first cut (emit_partial_frames off)
   std::uint64_t frames_without_output = 0;   // completed while set_output() had not been called
-  std::uint64_t dropped_points = 0;   // output span full, or no output set
+  std::uint64_t dropped_points = 0;   // output span or carry-over full, no output set, late
   std::array<std::uint64_t, packet_error_count> rejected{};  // by PacketError value
 };
 
@@ -104,8 +118,8 @@ class FrameAssembler {
   // of the span last given to set_output, which the assembler no longer touches afterwards.
   PushResult push(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns) noexcept;
 
-  // Returns the frame in progress as a (partial) frame and starts over, e.g. at the end of a
-  // recording. nullopt when it holds no firing.
+  // Returns the frame in progress as a (partial, whole_revolution = false) frame and starts
+  // over, e.g. at the end of a recording. nullopt when it holds no firing or has no span.
   std::optional<CompletedFrame> flush() noexcept;
 
   // Forget the frame in progress and the loss-detection state (a new recording, a loop).
@@ -122,22 +136,22 @@ class FrameAssembler {
 
   struct FrameState {
     bool started = false;
-    bool whole = false;         // began at the cut azimuth
+    bool whole = false;             // began at the cut
     std::int64_t stamp_ns = 0;
     std::int64_t host_ns = 0;
+    std::uint64_t last_packet = 0;  // packet counter value that last contributed
     std::uint32_t packets = 0;
     std::uint32_t lost = 0;
     std::uint32_t dropped = 0;
   };
 
-  void start_frame(const Packet& packet, unsigned block, std::int64_t host_ns, bool whole) noexcept;
-  void on_cut(PushResult& result) noexcept;
-  void decode_group(const Packet& packet, unsigned first_block) noexcept;
+  void begin(FrameState& frame, const Packet& packet, unsigned block, std::int64_t host_ns,
+             bool whole) noexcept;
+  void close_current(PushResult& result, bool ended_at_cut) noexcept;
+  void decode_group(const Packet& packet, unsigned first_block, std::int64_t group_revolution,
+                    std::uint16_t phase, std::int64_t host_ns) noexcept;
   void count_loss(const Packet& packet) noexcept;
   void update_azimuth_offsets(std::uint16_t rpm) noexcept;
-  CompletedFrame finish(std::size_t count, bool ended_at_cut) noexcept;
-  std::span<LidarPoint> destination() noexcept;
-  std::size_t& destination_count() noexcept;
 
   static constexpr std::size_t max_channels = 128;
 
@@ -154,27 +168,33 @@ class FrameAssembler {
   std::array<float, max_channels> sin_elevation_{};
   std::array<float, max_channels> cos_azimuth_offset_{};
   std::array<float, max_channels> sin_azimuth_offset_{};
+  // Offset used to decide which revolution a point belongs to, 0.01° (0 when cutting by block).
+  std::array<double, max_channels> cut_offset_centi_{};
+  double min_cut_offset_centi_ = 0;
+  double max_cut_offset_centi_ = 0;
   std::array<std::int32_t, max_channels> channel_offset_ns_{};
   std::int32_t earliest_channel_offset_ns_ = 0;
   std::uint16_t compensated_rpm_ = 0;
 
-  std::span<LidarPoint> output_;
+  // The frame in progress (revolution current_revolution_) and, near the cut, the next one.
+  FrameState current_;
+  FrameState next_;
+  std::int64_t current_revolution_ = 0;
+  std::span<LidarPoint> output_;  // current_'s points, when attached
   bool output_attached_ = false;
   std::size_t output_count_ = 0;
-  FrameState current_;
-  bool packet_counted_ = false;
-
-  // Points of the frame in progress while no output is attached: the part of the straddling
-  // packet after the cut, until set_output() copies it to the front of the new span.
-  std::array<LidarPoint, max_points_per_packet> carry_{};
+  // next_'s points while current_ is attached, current_'s points while it is not.
+  std::vector<LidarPoint> carry_;
   std::size_t carry_count_ = 0;
 
   bool have_last_ = false;           // a previous firing group exists (cut and gap detection)
-  std::uint16_t last_phase_ = 0;     // its azimuth relative to the cut, 0.01°
-  std::uint16_t last_azimuth_ = 0;   // its block azimuth, 0.01°
+  std::int64_t block_revolution_ = 0;  // revolutions the block azimuth has wrapped at the cut
+  std::uint16_t last_phase_ = 0;     // last group's block azimuth relative to the cut, 0.01°
+  std::uint16_t last_azimuth_ = 0;   // last group's block azimuth, 0.01°
   std::uint16_t azimuth_step_ = 0;   // between firing groups, learned inside packets
   bool have_sequence_ = false;
   std::uint32_t last_sequence_ = 0;
+  std::uint64_t packet_counter_ = 0;
   std::uint64_t frame_index_ = 0;
   AssemblerCounters counters_;
 };

@@ -1,0 +1,154 @@
+// SPDX-License-Identifier: Apache-2.0
+// A child process for the tool tests: spawned with its stdout and stderr on pipes, so a test
+// can wait for a line ("listening on …"), signal it, and check its exit code and messages.
+#pragma once
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+extern char** environ;
+
+namespace sim::testing {
+
+class Process {
+ public:
+  explicit Process(const std::vector<std::string>& argv) {
+    int out[2], err[2];
+    if (pipe2(out, O_CLOEXEC) != 0 || pipe2(err, O_CLOEXEC) != 0) throw std::runtime_error("pipe");
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, out[1], STDOUT_FILENO);
+    posix_spawn_file_actions_adddup2(&actions, err[1], STDERR_FILENO);
+    std::vector<char*> args;
+    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    const int rc = posix_spawn(&pid_, args[0], &actions, nullptr, args.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    ::close(out[1]);
+    ::close(err[1]);
+    out_ = out[0];
+    err_ = err[0];
+    if (rc != 0) throw std::runtime_error("posix_spawn " + argv[0] + " failed");
+  }
+  Process(const Process&) = delete;
+  Process& operator=(const Process&) = delete;
+  ~Process() {
+    if (!exit_code_) {
+      ::kill(pid_, SIGKILL);
+      int status = 0;
+      ::waitpid(pid_, &status, 0);
+    }
+    ::close(out_);
+    ::close(err_);
+  }
+
+  // Reads stdout until a line containing `needle` arrives; returns that line, or nullopt at
+  // end of output or after `timeout` (a generous limit against hangs, not a timing check).
+  std::optional<std::string> wait_for_line(const std::string& needle,
+                                           std::chrono::seconds timeout = std::chrono::seconds(30)) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    for (;;) {
+      std::size_t newline;
+      while ((newline = out_buffer_.find('\n')) != std::string::npos) {
+        std::string line = out_buffer_.substr(0, newline);
+        out_text_ += line + "\n";
+        out_buffer_.erase(0, newline + 1);
+        if (line.find(needle) != std::string::npos) return line;
+      }
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+          deadline - std::chrono::steady_clock::now());
+      if (left.count() <= 0) return std::nullopt;
+      pollfd p{out_, POLLIN, 0};
+      if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) return std::nullopt;
+      char chunk[4096];
+      const ssize_t n = ::read(out_, chunk, sizeof chunk);
+      if (n <= 0) return std::nullopt;
+      out_buffer_.append(chunk, static_cast<std::size_t>(n));
+    }
+  }
+
+  void signal(int sig) { ::kill(pid_, sig); }
+
+  // Waits for the exit (killing the child after `timeout`) and collects all output.
+  int wait(std::chrono::seconds timeout = std::chrono::seconds(60)) {
+    if (exit_code_) return *exit_code_;
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    bool out_open = true, err_open = true;
+    while (out_open || err_open) {
+      pollfd p[2] = {{out_open ? out_ : -1, POLLIN, 0}, {err_open ? err_ : -1, POLLIN, 0}};
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+          deadline - std::chrono::steady_clock::now());
+      if (left.count() <= 0) {
+        ::kill(pid_, SIGKILL);
+        deadline_passed_ = true;
+        break;
+      }
+      if (::poll(p, 2, static_cast<int>(left.count())) <= 0) continue;
+      char chunk[4096];
+      for (int i = 0; i < 2; ++i) {
+        if (p[i].fd < 0 || (p[i].revents & (POLLIN | POLLHUP)) == 0) continue;
+        const ssize_t n = ::read(p[i].fd, chunk, sizeof chunk);
+        if (n <= 0) {
+          (i == 0 ? out_open : err_open) = false;
+        } else {
+          (i == 0 ? out_buffer_ : err_text_).append(chunk, static_cast<std::size_t>(n));
+        }
+      }
+    }
+    int status = 0;
+    ::waitpid(pid_, &status, 0);
+    out_text_ += out_buffer_;
+    out_buffer_.clear();
+    exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    return *exit_code_;
+  }
+
+  const std::string& out() const { return out_text_; }
+  const std::string& err() const { return err_text_; }
+  bool deadline_passed() const { return deadline_passed_; }
+  pid_t pid() const { return pid_; }
+
+ private:
+  pid_t pid_ = -1;
+  int out_ = -1;
+  int err_ = -1;
+  std::string out_buffer_;
+  std::string out_text_;
+  std::string err_text_;
+  std::optional<int> exit_code_;
+  bool deadline_passed_ = false;
+};
+
+// Runs a command to its end.
+struct Run {
+  int code;
+  std::string out;
+  std::string err;
+};
+inline Run run(const std::vector<std::string>& argv) {
+  Process p(argv);
+  const int code = p.wait();
+  return {code, p.out(), p.err()};
+}
+
+// The value of `key=` in a "summary key=value …" line, or -1.
+inline long long summary_value(const std::string& text, const std::string& key) {
+  const auto line = text.find("summary ");
+  if (line == std::string::npos) return -1;
+  const auto at = text.find(" " + key + "=", line);
+  if (at == std::string::npos) return -1;
+  return std::stoll(text.substr(at + key.size() + 2));
+}
+
+}  // namespace sim::testing

@@ -1,0 +1,467 @@
+// SPDX-License-Identifier: Apache-2.0
+// sim_replay_pcap and sim_lidar_hesai as real processes: a reader in this process must receive
+// every revolution, in order, byte for byte what the decoder gives for the capture; the live
+// driver fed the capture's payloads over UDP on loopback must publish the same frames; bad
+// input must end in one clear sentence and the documented exit code.
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "frames.hpp"
+#include "process.hpp"
+#include "sim/hesai/hesai.hpp"
+#include "sim/pcap/capture.hpp"
+#include "sim/sim.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using sim::testing::Process;
+using sim::testing::run;
+using sim::testing::summary_value;
+
+const fs::path data_dir = SIM_HESAI_TEST_DATA;
+const std::string replay_tool = SIM_REPLAY_PCAP;
+const std::string live_tool = SIM_LIDAR_HESAI;
+const std::string p64_capture = (data_dir / "pandar64_dual.pcap").string();
+const std::string p64_calibration = (data_dir / "pandar64.calibration.csv").string();
+
+std::string unique_stream() {
+  static int counter = 0;
+  return "/test_hesai_drv_" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
+}
+
+// Removes the stream when the test ends, however it ends.
+struct StreamGuard {
+  std::string name = unique_stream();
+  ~StreamGuard() { sim::destroy(name, true); }
+};
+
+struct Frame {
+  std::vector<sim::LidarPoint> points;
+  std::int64_t stamp_ns = 0;
+  std::uint64_t seq = 0;
+};
+
+bool same_points(const std::vector<sim::LidarPoint>& a, const std::vector<sim::LidarPoint>& b) {
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(sim::LidarPoint)) == 0);
+}
+
+struct Payload {
+  std::vector<std::uint8_t> bytes;
+  std::int64_t timestamp_ns;
+};
+
+std::vector<Payload> payloads_of(const std::string& path) {
+  auto reader = sim::pcap::CaptureReader::open(path);
+  EXPECT_TRUE(reader) << reader.error().message;
+  std::vector<Payload> out;
+  sim::pcap::Datagram d;
+  while (reader && reader->next(d) == sim::pcap::NextStatus::datagram) {
+    const auto* p = reinterpret_cast<const std::uint8_t*>(d.payload.data());
+    out.push_back({{p, p + d.payload.size()}, d.timestamp_ns});
+  }
+  return out;
+}
+
+// What the decoder library itself makes of the payloads, with the tools' default settings.
+std::vector<Frame> decode_directly(const std::vector<Payload>& payloads, sim::hesai::Model model,
+                                   const std::string& calibration_path) {
+  auto calibration = sim::hesai::Calibration::load(calibration_path, model);
+  EXPECT_TRUE(calibration);
+  sim::hesai::AssemblerOptions options;
+  options.model = model;
+  auto assembler = sim::hesai::FrameAssembler::create(std::move(calibration.value()), options);
+  EXPECT_TRUE(assembler);
+  std::vector<sim::LidarPoint> out(sim::hesai::frame_capacity(model));
+  assembler->set_output(out);
+  std::vector<Frame> frames;
+  for (const Payload& p : payloads) {
+    const auto result = assembler->push(p.bytes, 0);
+    if (result.frame) {
+      frames.push_back({{out.begin(), out.begin() + static_cast<std::ptrdiff_t>(result.frame->point_count)},
+                        result.frame->stamp_ns, 0});
+      assembler->set_output(out);
+    }
+  }
+  return frames;
+}
+
+sim::Expected<sim::Reader> open_when_created(const std::string& name) {
+  const auto deadline = std::chrono::steady_clock::now() + 30s;
+  for (;;) {
+    auto reader = sim::Reader::open(name);
+    if (reader || std::chrono::steady_clock::now() > deadline) return reader;
+    std::this_thread::sleep_for(1ms);
+  }
+}
+
+// Reads frames until `count` arrived (or a generous limit against hangs passed).
+std::vector<Frame> receive(sim::Reader& reader, std::size_t count) {
+  std::vector<std::byte> buffer(reader.capacity());
+  std::vector<Frame> frames;
+  const auto deadline = std::chrono::steady_clock::now() + 60s;
+  while (frames.size() < count && std::chrono::steady_clock::now() < deadline) {
+    sim::FrameInfo info;
+    if (reader.read_next(buffer, info, 100ms) != sim::ReadStatus::new_frame) continue;
+    Frame f;
+    f.points.resize(info.size / sizeof(sim::LidarPoint));
+    std::memcpy(f.points.data(), buffer.data(), f.points.size() * sizeof(sim::LidarPoint));
+    f.stamp_ns = info.stamp_ns;
+    f.seq = info.seq;
+    frames.push_back(std::move(f));
+  }
+  return frames;
+}
+
+void expect_same_frames(const std::vector<Frame>& got, const std::vector<Frame>& expected,
+                        std::uint64_t first_seq) {
+  ASSERT_EQ(got.size(), expected.size());
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    EXPECT_EQ(got[i].seq, first_seq + i) << "frame " << i << " missing or out of order";
+    EXPECT_EQ(got[i].stamp_ns, expected[i].stamp_ns) << "frame " << i;
+    EXPECT_EQ(got[i].points.size(), expected[i].points.size()) << "frame " << i;
+    EXPECT_TRUE(same_points(got[i].points, expected[i].points)) << "frame " << i;
+  }
+}
+
+// ---- replay -----------------------------------------------------------------------------------
+
+TEST(ReplayTool, ReaderInAnotherProcessGetsEveryRevolutionInOrder) {
+  const auto payloads = payloads_of(p64_capture);
+  const auto expected = decode_directly(payloads, sim::hesai::Model::pandar64, p64_calibration);
+  ASSERT_EQ(expected.size(), 3u);  // 4 revolutions of packets, cut into partial + 3 whole + partial
+
+  StreamGuard stream;
+  // Paced at half speed: one revolution every 200 ms leaves the reader ample time per frame, so
+  // "every frame" tests the replay, not the scheduler.
+  Process replay({replay_tool, p64_capture, "--stream", stream.name, "--calibration",
+                  p64_calibration, "--rate", "0.5", "--summary"});
+  auto reader = open_when_created(stream.name);
+  ASSERT_TRUE(reader) << reader.error().message;
+  EXPECT_EQ(reader->layout().points.type, sim::PointType::lidar_point);
+  const auto frames = receive(*reader, expected.size());
+  ASSERT_EQ(replay.wait(), 0) << replay.err();
+  expect_same_frames(frames, expected, 1);
+  EXPECT_EQ(summary_value(replay.out(), "frames"), 3);
+  EXPECT_EQ(summary_value(replay.out(), "packets"), 2400);
+  EXPECT_EQ(summary_value(replay.out(), "lost"), 0);
+  EXPECT_EQ(summary_value(replay.out(), "malformed"), 0);
+}
+
+TEST(ReplayTool, MaxRateAndRawEthernetPandar40P) {
+  const std::string capture = (data_dir / "pandar40p_last_20hz_raw.pcapng").string();
+  const std::string calibration = (data_dir / "pandar40p.example-calibration.csv").string();
+  const auto expected =
+      decode_directly(payloads_of(capture), sim::hesai::Model::pandar40p, calibration);
+  ASSERT_FALSE(expected.empty());
+  StreamGuard stream;
+  const auto result = run({replay_tool, capture, "--stream", stream.name, "--calibration",
+                           calibration, "--max-rate", "--summary", "--port", "2369"});
+  ASSERT_EQ(result.code, 0) << result.err;
+  EXPECT_EQ(summary_value(result.out, "frames"), static_cast<long long>(expected.size()));
+  EXPECT_EQ(summary_value(result.out, "packets"), 200);
+  EXPECT_EQ(summary_value(result.out, "lost"), 0);
+  // The newest frame stays in the region after the replay ends.
+  auto reader = sim::Reader::open(stream.name);
+  ASSERT_TRUE(reader) << reader.error().message;
+  std::vector<std::byte> buffer(reader->capacity());
+  sim::FrameInfo info;
+  ASSERT_EQ(reader->read(buffer, info), sim::ReadStatus::new_frame);
+  EXPECT_EQ(info.seq, expected.size());
+  EXPECT_EQ(info.size, expected.back().points.size() * sizeof(sim::LidarPoint));
+  EXPECT_EQ(info.stamp_ns, expected.back().stamp_ns);
+}
+
+TEST(ReplayTool, LoopStartAndDuration) {
+  StreamGuard stream;
+  // Two passes of the whole capture at full speed: each pass publishes the same 3 revolutions.
+  Process looping({replay_tool, p64_capture, "--stream", stream.name, "--calibration",
+                   p64_calibration, "--max-rate", "--loop", "--summary"});
+  auto reader = open_when_created(stream.name);
+  ASSERT_TRUE(reader);
+  // Wait until frames of a later pass exist, then stop the replay with SIGINT.
+  const auto deadline = std::chrono::steady_clock::now() + 30s;
+  while (reader->status().latest_seq < 7 && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(5ms);
+  }
+  looping.signal(SIGINT);
+  ASSERT_EQ(looping.wait(), 0) << looping.err();
+  EXPECT_GE(summary_value(looping.out(), "passes"), 3);
+  EXPECT_EQ(summary_value(looping.out(), "malformed"), 0);
+  // Loops restart the revolution: no packet loss is counted at the wrap.
+  EXPECT_EQ(summary_value(looping.out(), "lost"), 0);
+
+  // A window of the capture: skipping 0.2 s of 0.4 s leaves fewer whole revolutions.
+  StreamGuard windowed;
+  const auto result = run({replay_tool, p64_capture, "--stream", windowed.name, "--calibration",
+                           p64_calibration, "--max-rate", "--start", "0.2", "--duration", "0.1",
+                           "--summary"});
+  ASSERT_EQ(result.code, 0) << result.err;
+  EXPECT_LT(summary_value(result.out, "packets"), 2400);
+  EXPECT_GT(summary_value(result.out, "packets"), 0);
+  EXPECT_LE(summary_value(result.out, "frames"), 1);
+}
+
+TEST(ReplayTool, BadInputGetsOneSentenceAndExitCode) {
+  const fs::path dir = fs::temp_directory_path() / ("sim_replay_bad_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  StreamGuard stream;
+  auto replay = [&](std::vector<std::string> extra) {
+    std::vector<std::string> argv = {replay_tool};
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    argv.insert(argv.end(), {"--stream", stream.name, "--max-rate"});
+    return run(argv);
+  };
+
+  {  // cut in the middle of a record: the whole records are replayed, then exit 1
+    std::ifstream in(p64_capture, std::ios::binary);
+    std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    bytes.resize(bytes.size() / 2 + 100);
+    std::ofstream((dir / "cut.pcap").string(), std::ios::binary)
+        .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    const auto r = replay({(dir / "cut.pcap").string(), "--calibration", p64_calibration, "--summary"});
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("cut short"), std::string::npos) << r.err;
+    EXPECT_GE(summary_value(r.out, "frames"), 1);
+  }
+  {  // a capture of another protocol
+    using namespace sim::pcap::testing;
+    std::vector<Record> records;
+    for (int i = 0; i < 4; ++i) {
+      records.push_back({ethernet(0x0800, ipv4({10, 0, 0, 1}, {10, 0, 0, 2}, Bytes(60, 0), 6)), i});
+    }
+    write_capture((dir / "tcp.pcap").string(), DLT_EN10MB, records);
+    const auto r = replay({(dir / "tcp.pcap").string(), "--calibration", p64_calibration});
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("no UDP datagram"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("not a LiDAR capture"), std::string::npos) << r.err;
+  }
+  {  // UDP, but not Hesai
+    using namespace sim::pcap::testing;
+    write_capture((dir / "dns.pcap").string(), DLT_EN10MB,
+                  {{ethernet(0x0800, ipv4({10, 0, 0, 1}, {10, 0, 0, 2}, udp(53, 2368, Bytes(40, 1)))), 1}});
+    const auto r = replay({(dir / "dns.pcap").string(), "--calibration", p64_calibration});
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("is a Hesai point-cloud packet"), std::string::npos) << r.err;
+  }
+  {  // a link type the reader does not parse
+    using namespace sim::pcap::testing;
+    write_capture((dir / "wifi.pcap").string(), DLT_IEEE802_11, {{Bytes(100, 0), 1}});
+    const auto r = replay({(dir / "wifi.pcap").string(), "--calibration", p64_calibration});
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("link type"), std::string::npos) << r.err;
+  }
+  {  // the wrong model forced
+    const auto r = replay({p64_capture, "--calibration", p64_calibration, "--model", "Pandar40P"});
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("holds Pandar64 packets, not Pandar40P"), std::string::npos) << r.err;
+  }
+  {  // a calibration file for another channel count
+    const auto r = replay({p64_capture, "--calibration", (data_dir / "pandarxt32.calibration.csv").string()});
+    EXPECT_EQ(r.code, 1);
+    EXPECT_FALSE(r.err.empty());
+    EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << "one line: " << r.err;
+  }
+  {  // missing file, missing calibration, bad options
+    const auto missing = replay({(dir / "nope.pcap").string(), "--calibration", p64_calibration});
+    EXPECT_EQ(missing.code, 1);
+    EXPECT_NE(missing.err.find("nope.pcap"), std::string::npos);
+    EXPECT_EQ(replay({p64_capture}).code, 2);
+    EXPECT_EQ(replay({p64_capture, "--calibration", p64_calibration, "--rate", "-1"}).code, 2);
+    EXPECT_EQ(replay({p64_capture, "--calibration", p64_calibration, "--model", "Velodyne"}).code, 2);
+    EXPECT_EQ(run({replay_tool, "--help"}).code, 0);
+  }
+  fs::remove_all(dir);
+}
+
+// ---- live driver ------------------------------------------------------------------------------
+
+class UdpSender {
+ public:
+  explicit UdpSender(int port) : fd_(::socket(AF_INET, SOCK_DGRAM, 0)) {
+    to_.sin_family = AF_INET;
+    to_.sin_port = htons(static_cast<std::uint16_t>(port));
+    to_.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  }
+  ~UdpSender() { ::close(fd_); }
+  void send(const std::vector<std::uint8_t>& bytes) {
+    ::sendto(fd_, bytes.data(), bytes.size(), 0, reinterpret_cast<const sockaddr*>(&to_), sizeof to_);
+  }
+  // Sends payloads spaced as they were captured (slowed by `slowdown`), like a sensor.
+  void send_paced(const std::vector<Payload>& payloads, double slowdown = 1.0) {
+    const auto start = std::chrono::steady_clock::now();
+    for (const Payload& p : payloads) {
+      const auto offset = std::chrono::nanoseconds(static_cast<std::int64_t>(
+          static_cast<double>(p.timestamp_ns - payloads.front().timestamp_ns) * slowdown));
+      std::this_thread::sleep_until(start + offset);
+      send(p.bytes);
+    }
+  }
+
+ private:
+  int fd_;
+  sockaddr_in to_{};
+};
+
+int listening_port(Process& driver) {
+  const auto line = driver.wait_for_line("listening on");
+  if (!line) return -1;
+  return std::stoi(line->substr(line->rfind(':') + 1));
+}
+
+TEST(LiveDriver, SameFramesAsReplayOverUdpLoopback) {
+  const auto payloads = payloads_of(p64_capture);
+  const auto expected = decode_directly(payloads, sim::hesai::Model::pandar64, p64_calibration);
+  StreamGuard stream;
+  Process driver({live_tool, "--model", "Pandar64", "--port", "0", "--bind", "127.0.0.1",
+                  "--stream", stream.name, "--calibration", p64_calibration,
+                  "--status-interval", "0", "--summary"});
+  const int port = listening_port(driver);
+  ASSERT_GT(port, 0) << driver.err();
+  auto reader = open_when_created(stream.name);
+  ASSERT_TRUE(reader) << reader.error().message;
+
+  UdpSender sender(port);
+  std::thread feed([&] { sender.send_paced(payloads, 2.0); });
+  const auto frames = receive(*reader, expected.size());
+  feed.join();
+  driver.signal(SIGTERM);
+  ASSERT_EQ(driver.wait(), 0) << driver.err();
+  expect_same_frames(frames, expected, 1);
+  EXPECT_EQ(summary_value(driver.out(), "frames"), static_cast<long long>(expected.size()));
+  EXPECT_EQ(summary_value(driver.out(), "lost"), 0);
+  EXPECT_EQ(summary_value(driver.out(), "malformed"), 0);
+}
+
+TEST(LiveDriver, CountsBadPacketsAndResumesAfterSilence) {
+  const auto payloads = payloads_of(p64_capture);
+  const std::vector<Payload> first_half(payloads.begin(), payloads.begin() + 1200);
+  const auto expected_first = decode_directly(first_half, sim::hesai::Model::pandar64, p64_calibration);
+  const auto expected_all = decode_directly(payloads, sim::hesai::Model::pandar64, p64_calibration);
+  ASSERT_GE(expected_first.size(), 1u);
+
+  StreamGuard stream;
+  Process driver({live_tool, "--model", "Pandar64", "--port", "0", "--bind", "127.0.0.1",
+                  "--stream", stream.name, "--calibration", p64_calibration,
+                  "--status-interval", "0", "--silence-timeout", "0.2", "--summary"});
+  const int port = listening_port(driver);
+  ASSERT_GT(port, 0) << driver.err();
+  sim::ReaderOptions options;
+  options.stale_after = 150ms;
+  auto reader = open_when_created(stream.name);
+  ASSERT_TRUE(reader);
+  UdpSender sender(port);
+
+  // Junk first: a cut-short packet, garbage, and an XT32 packet on the Pandar64's port.
+  const auto xt32 = payloads_of((data_dir / "pandarxt32_dual.pcap").string());
+  sender.send(std::vector<std::uint8_t>(payloads[0].bytes.begin(), payloads[0].bytes.begin() + 500));
+  sender.send(std::vector<std::uint8_t>(1198, 0x5a));
+  sender.send(xt32.at(0).bytes);
+
+  std::thread feed([&] { sender.send_paced(first_half, 2.0); });
+  const auto frames = receive(*reader, expected_first.size());
+  feed.join();
+  expect_same_frames(frames, expected_first, 1);
+
+  // The sensor goes quiet: the region stays, with its newest frame, and turns stale.
+  auto stale_reader = sim::Reader::open(stream.name, options);
+  ASSERT_TRUE(stale_reader);
+  std::vector<std::byte> buffer(stale_reader->capacity());
+  sim::FrameInfo info;
+  ASSERT_EQ(stale_reader->read(buffer, info), sim::ReadStatus::new_frame);
+  EXPECT_EQ(info.seq, expected_first.size());
+  std::this_thread::sleep_for(400ms);
+  EXPECT_EQ(stale_reader->read(buffer, info), sim::ReadStatus::stale);
+  EXPECT_TRUE(stale_reader->writer_alive());
+
+  // Packets come back (the sensor restarts its revolution): frames resume, numbered on.
+  std::thread again([&] { sender.send_paced(payloads, 2.0); });
+  const auto resumed = receive(*reader, expected_all.size());
+  again.join();
+  driver.signal(SIGINT);
+  ASSERT_EQ(driver.wait(), 0) << driver.err();
+  expect_same_frames(resumed, expected_all, expected_first.size() + 1);
+  EXPECT_EQ(summary_value(driver.out(), "resumes"), 1);
+  EXPECT_GE(summary_value(driver.out(), "malformed"), 2);
+  EXPECT_EQ(summary_value(driver.out(), "wrong_model"), 1);
+  EXPECT_EQ(summary_value(driver.out(), "frames"),
+            static_cast<long long>(expected_first.size() + expected_all.size()));
+}
+
+TEST(LiveDriver, ConfigFileAndAutoDetectedModel) {
+  const fs::path dir = fs::temp_directory_path() / ("sim_live_cfg_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  fs::copy_file(p64_calibration, dir / "unit.csv", fs::copy_options::overwrite_existing);
+  StreamGuard stream;
+  std::ofstream(dir / "lidar.yaml") << "# test config\nmodel: auto\nport: 0\nbind: 127.0.0.1\n"
+                                    << "stream: " << stream.name << "\ncalibration: unit.csv\n"
+                                    << "status_interval: 0\n";
+  Process driver({live_tool, "--config", (dir / "lidar.yaml").string(), "--summary"});
+  const int port = listening_port(driver);
+  ASSERT_GT(port, 0) << driver.err();
+  const auto payloads = payloads_of(p64_capture);
+  UdpSender sender(port);
+  sender.send(std::vector<std::uint8_t>(64, 1));  // not Hesai: ignored before detection
+  std::thread feed([&] { sender.send_paced(payloads, 2.0); });
+  auto reader = open_when_created(stream.name);
+  ASSERT_TRUE(reader);
+  const auto frames = receive(*reader, 1);
+  feed.join();
+  driver.signal(SIGTERM);
+  ASSERT_EQ(driver.wait(), 0) << driver.err();
+  EXPECT_EQ(frames.size(), 1u);
+  EXPECT_NE(driver.err().find("detected a Pandar64"), std::string::npos) << driver.err();
+  EXPECT_EQ(summary_value(driver.out(), "unrecognised"), 1);
+
+  // An unknown key is refused with its line number.
+  std::ofstream(dir / "typo.yaml") << "model: Pandar64\ncalibraton: unit.csv\n";
+  const auto typo = run({live_tool, "--config", (dir / "typo.yaml").string()});
+  EXPECT_EQ(typo.code, 2);
+  EXPECT_NE(typo.err.find("unknown setting 'calibraton' at line 2"), std::string::npos) << typo.err;
+  fs::remove_all(dir);
+}
+
+TEST(LiveDriver, PortInUseIsAClearErrorAndExitOne) {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
+  socklen_t length = sizeof address;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length);
+  const int port = ntohs(address.sin_port);
+  StreamGuard stream;
+  const auto result = run({live_tool, "--model", "Pandar64", "--bind", "127.0.0.1", "--port",
+                           std::to_string(port), "--stream", stream.name, "--calibration",
+                           p64_calibration});
+  ::close(fd);
+  EXPECT_EQ(result.code, 1);
+  EXPECT_NE(result.err.find("UDP port " + std::to_string(port) + " on 127.0.0.1 is already in use"),
+            std::string::npos)
+      << result.err;
+  // Nothing was created for a driver that could not start.
+  EXPECT_FALSE(sim::Reader::open(stream.name));
+}
+
+TEST(LiveDriver, UsageErrors) {
+  EXPECT_EQ(run({live_tool, "--help"}).code, 0);
+  EXPECT_EQ(run({live_tool, "--model", "Pandar64"}).code, 2);  // no calibration
+  EXPECT_EQ(run({live_tool, "--calibration", p64_calibration, "--bind", "not-an-ip"}).code, 2);
+  EXPECT_EQ(run({live_tool, "--calibration", p64_calibration, "--port", "70000"}).code, 2);
+}
+
+}  // namespace

@@ -1,0 +1,342 @@
+// SPDX-License-Identifier: Apache-2.0
+// Packet validation and field decoding: real packets checked against values worked out by
+// hand from the reference notes, synthetic XT16/QT64 packets built from the layout tables,
+// and every way a packet can be cut short or carry impossible values.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "packet_builder.hpp"
+#include "pcap_payloads.hpp"
+#include "sim/hesai/hesai.hpp"
+
+using namespace sim::hesai;
+using hesai_test::data_path;
+
+namespace {
+
+std::vector<std::uint8_t> first_payload(const char* file) {
+  auto packets = hesai_test::read_udp_payloads(data_path(file));
+  EXPECT_FALSE(packets.empty());
+  return packets.empty() ? std::vector<std::uint8_t>{} : packets.front().bytes;
+}
+
+PacketError parse(const std::vector<std::uint8_t>& bytes, Model model) {
+  Packet packet;
+  return Packet::parse(bytes, model, packet);
+}
+
+constexpr std::int64_t s_to_ns = 1'000'000'000;
+
+}  // namespace
+
+TEST(HesaiModel, NamesParseAndCapacityCoversARevolution) {
+  for (Model m : all_models) EXPECT_EQ(parse_model(to_string(m)), m);
+  EXPECT_EQ(parse_model("pandar64"), Model::pandar64);
+  EXPECT_EQ(parse_model("XT32"), Model::pandar_xt32);
+  EXPECT_EQ(parse_model("qt64"), Model::pandar_qt64);
+  EXPECT_FALSE(parse_model("Pandar128"));
+  EXPECT_FALSE(parse_model(""));
+  // Pandar64 dual at 10 Hz: 1800 firings × 64 channels × 2 returns, plus margin.
+  EXPECT_GE(frame_capacity(Model::pandar64, 2, 600), 1800u * 64 * 2);
+  EXPECT_LT(frame_capacity(Model::pandar64, 2, 600), 1800u * 64 * 2 * 12 / 10 + 400);
+  // Lower rpm means more firings per revolution.
+  EXPECT_GT(frame_capacity(Model::pandar40p, 1, 300), frame_capacity(Model::pandar40p, 1, 600));
+  EXPECT_EQ(frame_capacity(Model::pandar40p, 1, 1200, 0.0), 900u * 40 + 400);
+}
+
+TEST(HesaiPacket, Pandar64FirstPacketOfTheCaptureByHand) {
+  const auto bytes = first_payload("pandar64_dual.pcap");
+  ASSERT_EQ(bytes.size(), 1198u);
+  EXPECT_EQ(detect_model(bytes), Model::pandar64);
+  Packet p;
+  ASSERT_EQ(Packet::parse(bytes, Model::pandar64, p), PacketError::none);
+  EXPECT_EQ(p.channels(), 64u);
+  EXPECT_EQ(p.blocks(), 6u);
+  EXPECT_EQ(p.return_mode(), ReturnMode::dual_last_strongest);
+  EXPECT_EQ(p.returns(), 2u);
+  EXPECT_FLOAT_EQ(p.distance_unit_m(), 0.004f);
+  EXPECT_EQ(p.motor_rpm(), 599);
+  EXPECT_EQ(p.sequence(), 2339721u);
+  // UTC bytes 78 06 19 0c 02 09: 1900+120 = 2020-06-25 12:02:09, plus 977341 µs.
+  EXPECT_EQ(p.time_ns(), 1593086529 * s_to_ns + 977341000);
+  EXPECT_EQ(p.azimuth(0), 71);
+  EXPECT_EQ(p.azimuth(1), 71);  // a dual-return pair shares its azimuth
+  EXPECT_EQ(p.raw_distance(0, 0), 173);
+  EXPECT_EQ(p.raw_distance(0, 19), 539);
+  EXPECT_EQ(p.raw_distance(1, 19), 112);
+  // Firing times (reference §2): block 0 of a dual packet is group k = (6-0-1)/2 = 2:
+  // -42580 - 2·55560 = -153700 ns, channel 0 adds -23180 ns.
+  EXPECT_EQ(p.block_offset_ns(0), -153700);
+  EXPECT_EQ(p.firing_offset_ns(0, 0), -176880);
+  EXPECT_EQ(p.firing_offset_ns(5, 50), -42580 - 3620);
+}
+
+TEST(HesaiPacket, Pandar64PointsOfTheFirstFiringByHand) {
+  const auto bytes = first_payload("pandar64_dual.pcap");
+  auto cal = Calibration::load(data_path("pandar64.calibration.csv"), Model::pandar64);
+  ASSERT_TRUE(cal);
+  AssemblerOptions options;
+  options.model = Model::pandar64;
+  options.cut_by = CutBy::block_azimuth;  // keep every channel of the packet in one frame
+  options.emit_partial_frames = true;
+  auto assembler = FrameAssembler::create(*cal, options);
+  ASSERT_TRUE(assembler);
+  std::vector<sim::LidarPoint> points(2000);
+  assembler->set_output(points);
+  ASSERT_EQ(assembler->push(bytes, 0).error, PacketError::none);
+  const auto frame = assembler->flush();
+  ASSERT_TRUE(frame);
+  EXPECT_FALSE(frame->whole_revolution);
+  ASSERT_GT(frame->point_count, 20u);
+  // Channel 1 (ring 0): both returns are raw 173, reflectivity 0, so only the last (the
+  // Strongest block, return_index 1) is kept. d = 0.692 m, az = 0.71 - 1.042°, el = 14.9°:
+  // x = d·cos(el)·sin(az) = -0.003875, y = 0.668721, z = d·sin(el) = 0.177936.
+  EXPECT_EQ(points[0].ring, 0);
+  EXPECT_EQ(points[0].return_index, 1);
+  EXPECT_NEAR(points[0].x, -0.003875, 1e-6);
+  EXPECT_NEAR(points[0].y, 0.668721, 1e-6);
+  EXPECT_NEAR(points[0].z, 0.177936, 1e-6);
+  EXPECT_EQ(points[0].intensity, 0.0f);
+  // Channel 20 (ring 19): Last 539 (2.156 m) and Strongest 112 (0.448 m) are far apart: both.
+  std::vector<sim::LidarPoint> ring19;
+  for (std::size_t i = 0; i < frame->point_count; ++i) {
+    if (points[i].ring == 19 && std::abs(points[i].y) < 3) ring19.push_back(points[i]);
+    if (ring19.size() == 2) break;
+  }
+  ASSERT_EQ(ring19.size(), 2u);
+  EXPECT_EQ(ring19[0].return_index, 0);
+  EXPECT_NEAR(ring19[0].x, 0.144198, 1e-6);
+  EXPECT_NEAR(ring19[0].y, 2.151139, 1e-6);
+  EXPECT_NEAR(ring19[0].z, -0.012004, 1e-6);
+  EXPECT_EQ(ring19[1].return_index, 1);
+  EXPECT_NEAR(ring19[1].y, 0.446990, 1e-6);
+  // The frame's stamp is the earliest firing of its first group: packet time + block 0's
+  // offset + the earliest channel (-54668 ns, channels 12 and 40).
+  EXPECT_EQ(frame->stamp_ns, 1593086529 * s_to_ns + 977341000 - 153700 - 54668);
+  // Ring 0 fired 54668 - 23180 ns after the earliest channel.
+  EXPECT_EQ(points[0].time_offset_ns, 54668u - 23180u);
+}
+
+TEST(HesaiPacket, PandarXT32AndPandar40PHeadersByHand) {
+  const auto xt = first_payload("pandarxt32_dual.pcap");
+  ASSERT_EQ(xt.size(), 1080u);
+  EXPECT_EQ(detect_model(xt), Model::pandar_xt32);
+  Packet p;
+  ASSERT_EQ(Packet::parse(xt, Model::pandar_xt32, p), PacketError::none);
+  EXPECT_EQ(p.channels(), 32u);
+  EXPECT_EQ(p.blocks(), 8u);
+  EXPECT_EQ(p.returns(), 2u);
+  EXPECT_TRUE(p.sequence().has_value());
+  EXPECT_GE(p.motor_rpm(), 599);
+  EXPECT_LE(p.motor_rpm(), 600);
+  // Year byte 119 counts from 1900 (reference §4): 2019.
+  EXPECT_GE(p.time_ns(), 1546300800 * s_to_ns);  // 2019-01-01
+  EXPECT_LT(p.time_ns(), 1577836800 * s_to_ns);  // 2020-01-01
+  // XT32 timing: 5632 - 50000·((8-b-1)/2) + 368 + 1512·ch ns.
+  EXPECT_EQ(p.firing_offset_ns(0, 0), 5632 - 150000 + 368);
+  EXPECT_EQ(p.firing_offset_ns(7, 31), 5632 + 368 + 1512 * 31);
+
+  const auto p40 = first_payload("pandar40p_single_packet_raw.pcapng");
+  ASSERT_EQ(p40.size(), 1266u);
+  EXPECT_EQ(detect_model(p40), Model::pandar40p);
+  ASSERT_EQ(Packet::parse(p40, Model::pandar40p, p), PacketError::none);
+  EXPECT_EQ(p.return_mode(), ReturnMode::last);
+  EXPECT_EQ(p.returns(), 1u);
+  EXPECT_EQ(p.motor_rpm(), 599);
+  EXPECT_EQ(p.sequence(), 270964u);
+  EXPECT_EQ(p.azimuth(0), 11666);
+  // Year byte 17 counts from 2000 on the Pandar40P (reference §3): 2017.
+  EXPECT_GE(p.time_ns(), 1483228800 * s_to_ns);  // 2017-01-01
+  EXPECT_LT(p.time_ns(), 1514764800 * s_to_ns);  // 2018-01-01
+  // 40P timing, single return: -28580 - 55560·(10-0-1) + channel 0's -42220 ns.
+  EXPECT_EQ(p.firing_offset_ns(0, 0), -28580 - 55560 * 9 - 42220);
+}
+
+TEST(HesaiPacket, SyntheticXT16AndQT64FromTheLayoutTables) {
+  hesai_test::SyntheticPacket s;
+  s.channels = 16;
+  const auto xt16 = hesai_test::build_xt(s);
+  ASSERT_EQ(xt16.size(), 568u);
+  EXPECT_EQ(detect_model(xt16), Model::pandar_xt16);
+  Packet p;
+  ASSERT_EQ(Packet::parse(xt16, Model::pandar_xt16, p), PacketError::none);
+  EXPECT_EQ(p.time_ns(), 1551675967 * s_to_ns + 250000000);  // 2019-03-04 05:06:07.25
+  EXPECT_EQ(p.raw_distance(3, 15), 16 * 250);
+  EXPECT_EQ(p.reflectivity(3, 15), 15);
+  EXPECT_EQ(p.firing_offset_ns(0, 3), -350000 + 6000 + 3024 * 3);  // XT16: 3.024 µs per channel
+  // Year byte 0: bytes 2..5 are big-endian Unix seconds (SDK 2, reference §4).
+  s.utc = {0, 0, 0x5C, 0x7C, 0xB1, 0x3F};
+  ASSERT_EQ(Packet::parse(hesai_test::build_xt(s), Model::pandar_xt16, p), PacketError::none);
+  EXPECT_EQ(p.time_ns(), std::int64_t{0x5C7CB13F} * s_to_ns + 250000000);
+
+  hesai_test::SyntheticPacket q;
+  q.returns = 1;
+  q.first_azimuth = 1000;
+  q.azimuth_step = 60;
+  q.utc = {124, 2, 29, 0, 0, 0};  // a leap day: 2024-02-29
+  q.distance = [](unsigned, unsigned ch) { return static_cast<std::uint16_t>(ch == 5 ? 2500 : 0); };
+  const auto qt = hesai_test::build_qt64(q);
+  ASSERT_EQ(qt.size(), 1072u);
+  EXPECT_EQ(detect_model(qt), Model::pandar_qt64);
+  ASSERT_EQ(Packet::parse(qt, Model::pandar_qt64, p), PacketError::none);
+  EXPECT_EQ(p.time_ns(), 1709164800 * s_to_ns + 250000000);
+  // QT64 fires after the timestamp: 25710 + 500000·1/3 ns for block 1, channel 56 = 129.6 µs
+  // (not nebula's 12.96 µs typo).
+  EXPECT_EQ(p.firing_offset_ns(1, 55), 25710 + 166666 + 129600);
+
+  // One point by hand: el 10°, azimuth offset 2°, block azimuth 10°, 2500 × 4 mm = 10 m:
+  // x = 10·cos10°·sin12° = 2.047530, y = 9.632873, z = 10·sin10° = 1.736482.
+  std::vector<ChannelAngles> angles(64, ChannelAngles{0.0f, 0.0f});
+  angles[5] = {10.0f, 2.0f};
+  auto cal = Calibration::from_angles(angles);
+  ASSERT_TRUE(cal);
+  AssemblerOptions options;
+  options.model = Model::pandar_qt64;
+  options.emit_partial_frames = true;
+  auto assembler = FrameAssembler::create(*cal, options);
+  ASSERT_TRUE(assembler) << assembler.error().message;
+  std::vector<sim::LidarPoint> points(300);
+  assembler->set_output(points);
+  ASSERT_EQ(assembler->push(qt, 7).error, PacketError::none);
+  const auto frame = assembler->flush();
+  ASSERT_TRUE(frame);
+  ASSERT_EQ(frame->point_count, 4u);  // one point per block
+  EXPECT_EQ(frame->host_receive_ns, 7);
+  EXPECT_NEAR(points[0].x, 2.047530, 1e-5);
+  EXPECT_NEAR(points[0].y, 9.632873, 1e-5);
+  EXPECT_NEAR(points[0].z, 1.736482, 1e-5);
+  EXPECT_EQ(points[0].ring, 5);
+  // Point times: block b fires 166666·b ns after block 0 (same channel).
+  EXPECT_EQ(points[1].time_offset_ns - points[0].time_offset_ns, 166666u);
+}
+
+TEST(HesaiPacket, EveryTruncationIsRejectedWithoutReadingPastTheEnd) {
+  hesai_test::SyntheticPacket s16;
+  s16.channels = 16;
+  hesai_test::SyntheticPacket s32;
+  s32.channels = 32;
+  const std::vector<std::pair<Model, std::vector<std::uint8_t>>> packets{
+      {Model::pandar64, first_payload("pandar64_dual.pcap")},
+      {Model::pandar_xt32, first_payload("pandarxt32_dual.pcap")},
+      {Model::pandar40p, first_payload("pandar40p_last_20hz_raw.pcapng")},
+      {Model::pandar_xt16, hesai_test::build_xt(s16)},
+      {Model::pandar_qt64, hesai_test::build_qt64(hesai_test::SyntheticPacket{})},
+  };
+  for (const auto& [model, full] : packets) {
+    ASSERT_EQ(parse(full, model), PacketError::none) << to_string(model);
+    for (std::size_t n = 0; n < full.size(); ++n) {
+      // An exact-size heap copy, so a read past the end is caught by AddressSanitizer.
+      const std::vector<std::uint8_t> cut(full.begin(), full.begin() + static_cast<std::ptrdiff_t>(n));
+      const PacketError e = parse(cut, model);
+      if (n == info(model).payload_size && info(model).sequence_optional) {
+        // Without its 4-byte UDP sequence the packet is the model's other valid size.
+        EXPECT_EQ(e, PacketError::none) << to_string(model);
+        continue;
+      }
+      EXPECT_NE(e, PacketError::none) << to_string(model) << " cut to " << n << " bytes";
+      if (detect_model(cut) != model) {
+        EXPECT_TRUE(e == PacketError::too_short || e == PacketError::bad_size ||
+                    e == PacketError::wrong_model)
+            << to_string(model) << " cut to " << n << ": " << to_string(e);
+      }
+    }
+    // One byte too many is no packet of the model either.
+    auto longer = full;
+    longer.push_back(0);
+    EXPECT_NE(parse(longer, model), PacketError::none);
+  }
+}
+
+TEST(HesaiPacket, ImpossibleFieldValuesAreRejectedWithTheirReason) {
+  const auto good = first_payload("pandar64_dual.pcap");
+  auto with = [&](std::size_t at, std::uint8_t value) {
+    auto p = good;
+    p[at] = value;
+    return parse(p, Model::pandar64);
+  };
+  constexpr std::size_t tail = 1172;
+  EXPECT_EQ(with(0, 0x00), PacketError::bad_marker);
+  EXPECT_EQ(with(2, 40), PacketError::bad_header);           // laser count
+  EXPECT_EQ(with(3, 7), PacketError::bad_header);            // block count
+  EXPECT_EQ(with(5, 0), PacketError::bad_distance_unit);
+  EXPECT_EQ(with(tail + 14, 0x00), PacketError::bad_return_mode);
+  // Triple return would make blocks 0-2 one group, but block 2 has the next azimuth.
+  EXPECT_EQ(with(tail + 14, 0x3d), PacketError::bad_azimuth);
+  EXPECT_EQ(with(tail + 17, 13), PacketError::bad_time);     // month 13
+  EXPECT_EQ(with(tail + 18, 0), PacketError::bad_time);      // day 0
+  EXPECT_EQ(with(tail + 19, 24), PacketError::bad_time);     // hour 24
+  EXPECT_EQ(with(tail + 13, 0xFF), PacketError::bad_time);   // µs field ≥ 1 000 000
+  {
+    auto p = good;  // 2020-02-30
+    p[tail + 17] = 2;
+    p[tail + 18] = 30;
+    EXPECT_EQ(parse(p, Model::pandar64), PacketError::bad_time);
+  }
+  {
+    auto p = good;  // azimuth 360.00°
+    hesai_test::put16(p, 8, 36000);
+    hesai_test::put16(p, 8 + 194, 36000);
+    EXPECT_EQ(parse(p, Model::pandar64), PacketError::bad_azimuth);
+  }
+  {
+    auto p = good;  // the two blocks of a dual-return pair disagree
+    hesai_test::put16(p, 8 + 194, 500);
+    EXPECT_EQ(parse(p, Model::pandar64), PacketError::bad_azimuth);
+  }
+  {
+    auto p = good;  // the third group goes backwards
+    hesai_test::put16(p, 8 + 4 * 194, 10);
+    hesai_test::put16(p, 8 + 5 * 194, 10);
+    EXPECT_EQ(parse(p, Model::pandar64), PacketError::bad_azimuth);
+  }
+  // Another model's well-formed packet is "wrong model", not "malformed".
+  EXPECT_EQ(parse(first_payload("pandarxt32_dual.pcap"), Model::pandar64),
+            PacketError::wrong_model);
+  EXPECT_EQ(parse(good, Model::pandar40p), PacketError::wrong_model);
+  // Pandar40P: every block carries its own start marker; triple return cannot divide 10 blocks.
+  auto p40 = first_payload("pandar40p_last_20hz_raw.pcapng");
+  p40[124 * 7 + 1] = 0x00;
+  EXPECT_EQ(parse(p40, Model::pandar40p), PacketError::bad_marker);
+  p40 = first_payload("pandar40p_last_20hz_raw.pcapng");
+  p40[1254] = 0x3d;
+  EXPECT_EQ(parse(p40, Model::pandar40p), PacketError::bad_return_mode);
+  // XT: another protocol version.
+  auto xt = first_payload("pandarxt32_dual.pcap");
+  xt[2] = 5;
+  EXPECT_EQ(parse(xt, Model::pandar_xt32), PacketError::bad_header);
+  // Detection refuses what is no Hesai packet.
+  EXPECT_FALSE(detect_model(std::vector<std::uint8_t>(1198, 0)));
+  EXPECT_FALSE(detect_model(std::vector<std::uint8_t>(3, 0xEE)));
+  EXPECT_FALSE(detect_model({}));
+}
+
+TEST(HesaiPacket, RejectedPacketsAreCountedByReasonAndMakeNoFrame) {
+  auto cal = Calibration::load(data_path("pandar64.calibration.csv"), Model::pandar64);
+  ASSERT_TRUE(cal);
+  AssemblerOptions options;
+  options.emit_partial_frames = true;
+  auto assembler = FrameAssembler::create(*cal, options);
+  ASSERT_TRUE(assembler);
+  std::vector<sim::LidarPoint> points(1000);
+  assembler->set_output(points);
+  const auto good = first_payload("pandar64_dual.pcap");
+  for (std::size_t n = 0; n < good.size(); n += 7) {
+    const std::vector<std::uint8_t> cut(good.begin(), good.begin() + static_cast<std::ptrdiff_t>(n));
+    const PushResult r = assembler->push(cut, 0);
+    EXPECT_NE(r.error, PacketError::none);
+    EXPECT_FALSE(r.frame);
+  }
+  EXPECT_EQ(assembler->push(first_payload("pandarxt32_dual.pcap"), 0).error,
+            PacketError::wrong_model);
+  const auto& c = assembler->counters();
+  EXPECT_EQ(c.packets, 0u);
+  EXPECT_EQ(c.wrong_model, 1u);
+  EXPECT_EQ(c.malformed, (good.size() + 6) / 7);
+  // Every cut is too short, except 1197 bytes: longer than the sequence-less 1194.
+  EXPECT_EQ(c.rejected[static_cast<std::size_t>(PacketError::too_short)], c.malformed - 1);
+  EXPECT_EQ(c.rejected[static_cast<std::size_t>(PacketError::bad_size)], 1u);
+  EXPECT_EQ(assembler->pending_points(), 0u);
+  EXPECT_FALSE(assembler->flush());
+}
