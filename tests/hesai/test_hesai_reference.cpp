@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <set>
 #include <vector>
 
@@ -13,8 +14,6 @@
 
 using namespace sim::hesai;
 using hesai_test::data_path;
-
-namespace {
 
 struct DecodedFrame {
   CompletedFrame info;
@@ -102,8 +101,6 @@ void expect_matches_reference(Model model, const char* pcap, const char* calibra
   ::testing::Test::RecordProperty("largest_difference_m", std::to_string(worst));
 }
 
-}  // namespace
-
 TEST(HesaiReference, Pandar64DualMatchesNebulaReferenceCloud) {
   expect_matches_reference(Model::pandar64, "pandar64_dual.pcap", "pandar64.calibration.csv",
                            "pandar64_dual.reference.pcd", 0.3f, 200.0f);
@@ -113,4 +110,89 @@ TEST(HesaiReference, PandarXT32DualMatchesNebulaReferenceCloud) {
   expect_matches_reference(Model::pandar_xt32, "pandarxt32_dual.pcap",
                            "pandarxt32.calibration.csv", "pandarxt32_dual.reference.pcd", 0.05f,
                            120.0f);
+}
+
+// Reference §3 layout, read here straight from the bytes: the points one revolution must hold.
+// A point belongs to the revolution its own azimuth (block azimuth + channel offset) is in.
+std::map<long, std::size_t> expected_pandar40p_points(
+    const std::vector<hesai_test::UdpPayload>& packets, const Calibration& cal) {
+  std::map<long, std::size_t> per_revolution;
+  long unwrapped_base = 0;
+  int last_azimuth = -1;
+  for (const auto& p : packets) {
+    for (unsigned b = 0; b < 10; ++b) {
+      const std::uint8_t* block = p.bytes.data() + 124 * b;
+      const int azimuth = block[2] | (block[3] << 8);
+      if (last_azimuth >= 0 && azimuth < last_azimuth) unwrapped_base += 36000;
+      last_azimuth = azimuth;
+      for (unsigned c = 0; c < 40; ++c) {
+        const int raw = block[4 + 3 * c] | (block[5 + 3 * c] << 8);
+        const double metres = raw * 0.004;
+        if (raw == 0 || metres < 0.3 || metres > 200.0) continue;
+        const double point_azimuth = static_cast<double>(unwrapped_base) + azimuth + cal[c].azimuth_offset_deg * 100.0;
+        ++per_revolution[static_cast<long>(std::floor(point_azimuth / 36000.0))];
+      }
+    }
+  }
+  return per_revolution;
+}
+
+TEST(HesaiReference, RawEthernetPandar40PGivesWholeRevolutionsAt20Hz) {
+  // Read through the Ethernet/IPv4/UDP headers of a real pcapng capture.
+  const auto packets = hesai_test::read_udp_payloads(data_path("pandar40p_last_20hz_raw.pcapng"));
+  ASSERT_EQ(packets.size(), 200u);
+  for (const auto& p : packets) {
+    ASSERT_EQ(p.dst_port, 2369);
+    ASSERT_EQ(detect_model(p.bytes), Model::pandar40p);
+  }
+  auto cal = Calibration::load(data_path("pandar40p.example-calibration.csv"), Model::pandar40p);
+  ASSERT_TRUE(cal) << cal.error().message;
+  AssemblerOptions options;
+  options.model = Model::pandar40p;
+  auto assembler = FrameAssembler::create(*cal, options);
+  ASSERT_TRUE(assembler);
+  const auto frames = decode_all(*assembler, packets, frame_capacity(Model::pandar40p, 1, 1200),
+                                 /*flush_at_end=*/true);
+  const auto& c = assembler->counters();
+  EXPECT_EQ(c.packets, 200u);
+  EXPECT_EQ(c.lost_packets, 0u);
+  EXPECT_EQ(c.out_of_order, 0u);
+  EXPECT_EQ(c.malformed, 0u);
+  EXPECT_EQ(c.dropped_points, 0u);
+
+  // 200 packets × 10 firings × 0.4° = 2.2 turns starting at 129.8°: one whole revolution
+  // between two partial ones (the first is not published, the last comes from flush()).
+  ASSERT_EQ(frames.size(), 2u);
+  const auto& whole = frames[0];
+  EXPECT_TRUE(whole.info.whole_revolution);
+  EXPECT_FALSE(frames[1].info.whole_revolution);
+  EXPECT_EQ(whole.info.lost_packets, 0u);
+  // 20 Hz at 0.4° per firing: 900 firings in 90 packets, plus those whose points straddle a
+  // cut: the calibration's azimuth offsets spread over 8.3°, about 2 packets of 4°.
+  EXPECT_GE(whole.info.packets, 90u);
+  EXPECT_LE(whole.info.packets, 94u);
+  const auto expected = expected_pandar40p_points(packets, *cal);
+  ASSERT_EQ(expected.count(1), 1u);
+  EXPECT_EQ(whole.info.point_count, expected.at(1));
+  EXPECT_LE(whole.info.point_count, 40u * 900u);  // channels × firings × 1 return
+  EXPECT_EQ(frames[1].info.point_count, expected.at(2));
+
+  // One revolution at 20 Hz lasts 50 ms of sensor time: the last firing is ~50 ms after the
+  // stamp, and the next frame's stamp is 50 ms later.
+  std::uint32_t last_offset = 0;
+  for (const auto& p : whole.points) last_offset = std::max(last_offset, p.time_offset_ns);
+  EXPECT_GT(last_offset, 48'000'000u);
+  EXPECT_LT(last_offset, 52'000'000u);
+  const std::int64_t period = frames[1].info.stamp_ns - whole.info.stamp_ns;
+  EXPECT_GT(period, 49'000'000);
+  EXPECT_LT(period, 51'000'000);
+  // Sensor time: 2017-09-06 16:09:43 UTC (year byte 17, counted from 2000).
+  EXPECT_EQ(whole.info.stamp_ns / 1'000'000'000, 1504714183);
+  // The frame starts at azimuth 0° and ends just before 360°.
+  const auto azimuth = [](const sim::LidarPoint& p) {
+    const double a = std::atan2(p.x, p.y) * 180.0 / M_PI;
+    return a < 0 ? a + 360.0 : a;
+  };
+  EXPECT_LT(azimuth(whole.points.front()), 1.0);
+  EXPECT_GT(azimuth(whole.points.back()), 359.0);
 }

@@ -332,6 +332,8 @@ PushResult FrameAssembler::push(std::span<const std::uint8_t> payload,
       close_current(closed, true);
       if (closed.frame && !result.frame) result.frame = closed.frame;
       ++current_revolution_;
+      // With no point across the cut yet (cutting by block), the new frame starts here.
+      if (!current_.started) begin(current_, packet, block, host_receive_ns, true);
       if (position + min_cut_offset_centi_ >= current_end + full_turn) {
         // A gap of more than a revolution: restart from this group.
         current_revolution_ = group_revolution;
