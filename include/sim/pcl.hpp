@@ -1,0 +1,108 @@
+// SPDX-License-Identifier: Apache-2.0
+// Header-only adapter from a SIM LiDAR frame to a PCL cloud, for consumers that use PCL:
+//
+//   sim::Reader reader = *sim::Reader::open("/lidar_top");
+//   std::vector<std::byte> buffer(reader.capacity());
+//   sim::FrameInfo info;
+//   pcl::PointCloud<pcl::PointXYZI> cloud;
+//   if (reader.read_next(buffer, info, 1s) == sim::ReadStatus::new_frame)
+//     sim::to_pcl(std::span(buffer).first(info.size), info, cloud);
+//
+// Points keep the sensor frame of the driver (for Hesai: y forward at azimuth 0, x right, z up;
+// see sim/lidar_point.hpp). The cloud is resized in place, so reusing one cloud per stream
+// allocates only when a frame is larger than any before it. Only this header needs PCL: the
+// SIM library itself does not link it. Include it in as few translation units as possible, as
+// PCL headers compile slowly.
+#pragma once
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <cmath>
+#include <cstddef>
+#include <cstring>
+#include <span>
+#include <string>
+
+#include "sim/layout.hpp"
+#include "sim/lidar_point.hpp"
+#include "sim/reader.hpp"
+
+namespace sim {
+namespace pcl_detail {
+
+template <typename PointT>
+void set_point(PointT& out, float x, float y, float z, float intensity) noexcept {
+  out.x = x;
+  out.y = y;
+  out.z = z;
+  if constexpr (requires { out.intensity; }) out.intensity = intensity;
+}
+
+template <typename PointT>
+void finish(pcl::PointCloud<PointT>& cloud, const FrameInfo* info) {
+  bool dense = true;
+  for (const PointT& p : cloud.points) {
+    dense = dense && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+  }
+  cloud.is_dense = dense;
+  if (info != nullptr) {
+    cloud.header.stamp = static_cast<std::uint64_t>(info->stamp_ns / 1000);  // PCL stamps are µs
+    cloud.header.seq = static_cast<std::uint32_t>(info->seq);
+  }
+}
+
+}  // namespace pcl_detail
+
+// The points of a lidar_point frame into a PointXYZI or PointXYZ cloud (an unorganised cloud:
+// height 1, width = number of points).
+template <typename PointT>
+void to_pcl(std::span<const LidarPoint> points, pcl::PointCloud<PointT>& cloud,
+            const FrameInfo* info = nullptr) {
+  cloud.resize(points.size());  // sets width = size, height = 1
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const LidarPoint& p = points[i];
+    pcl_detail::set_point(cloud.points[i], p.x, p.y, p.z, p.intensity);
+  }
+  pcl_detail::finish(cloud, info);
+}
+
+// Any SIM point frame (lidar_point, xyz32 or xyzi32) into a cloud, reading its type from the
+// frame's layout. Returns false, leaving the cloud empty, for a frame that holds no points of a
+// known type (an image stream, a raw-bytes stream), or whose size is not whole points.
+template <typename PointT>
+bool to_pcl(std::span<const std::byte> frame, const FrameInfo& info,
+            pcl::PointCloud<PointT>& cloud) {
+  cloud.clear();
+  if (info.layout.kind != LayoutKind::points) return false;
+  const std::uint32_t size = point_size(info.layout.points.type);
+  if (size == 0 || frame.size() % size != 0) return false;
+  const std::size_t count = frame.size() / size;
+  switch (info.layout.points.type) {
+    case PointType::lidar_point: {
+      // The frame may not be aligned for LidarPoint (a caller's byte buffer): copy point-wise.
+      cloud.resize(count);
+      for (std::size_t i = 0; i < count; ++i) {
+        LidarPoint p;
+        std::memcpy(&p, frame.data() + i * size, sizeof p);
+        pcl_detail::set_point(cloud.points[i], p.x, p.y, p.z, p.intensity);
+      }
+      break;
+    }
+    case PointType::xyz32:
+    case PointType::xyzi32: {
+      cloud.resize(count);
+      for (std::size_t i = 0; i < count; ++i) {
+        float v[4] = {0, 0, 0, 0};
+        std::memcpy(v, frame.data() + i * size, size);
+        pcl_detail::set_point(cloud.points[i], v[0], v[1], v[2], v[3]);
+      }
+      break;
+    }
+    default: return false;
+  }
+  pcl_detail::finish(cloud, &info);
+  return true;
+}
+
+}  // namespace sim
