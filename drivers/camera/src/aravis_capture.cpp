@@ -1,0 +1,358 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "sim/camera/aravis_capture.hpp"
+
+#include <arv.h>
+
+#include <optional>
+#include <thread>
+
+#include "sim/camera/decoder.hpp"
+#include "sim/clock.hpp"
+#include "sim/writer.hpp"
+
+namespace sim::camera {
+
+namespace {
+
+std::string take_message(GError*& error, const std::string& fallback) {
+  std::string text = error != nullptr && error->message != nullptr ? error->message : fallback;
+  g_clear_error(&error);
+  return text;
+}
+
+PixelFormat pixel_format_of_arv(ArvPixelFormat format) noexcept {
+  switch (format) {
+    case ARV_PIXEL_FORMAT_MONO_8: return PixelFormat::mono8;
+    case ARV_PIXEL_FORMAT_MONO_16: return PixelFormat::mono16;
+    case ARV_PIXEL_FORMAT_RGB_8_PACKED: return PixelFormat::rgb8;
+    case ARV_PIXEL_FORMAT_BGR_8_PACKED: return PixelFormat::bgr8;
+    case ARV_PIXEL_FORMAT_BAYER_RG_8: return PixelFormat::bayer_rggb8;
+    case ARV_PIXEL_FORMAT_BAYER_BG_8: return PixelFormat::bayer_bggr8;
+    case ARV_PIXEL_FORMAT_BAYER_GB_8: return PixelFormat::bayer_gbrg8;
+    case ARV_PIXEL_FORMAT_BAYER_GR_8: return PixelFormat::bayer_grbg8;
+    case ARV_PIXEL_FORMAT_YUV_422_YUYV_PACKED: return PixelFormat::yuyv;
+    case ARV_PIXEL_FORMAT_YUV_422_PACKED: return PixelFormat::uyvy;  // GigE Vision order: U Y V Y
+    default: return PixelFormat::unknown;
+  }
+}
+
+}  // namespace
+
+PixelFormat pixel_format_of_genicam(std::string_view name) noexcept {
+  struct Entry {
+    std::string_view name;
+    PixelFormat format;
+  };
+  static constexpr Entry table[] = {
+      {"Mono8", PixelFormat::mono8},         {"Mono16", PixelFormat::mono16},
+      {"RGB8", PixelFormat::rgb8},           {"RGB8Packed", PixelFormat::rgb8},
+      {"BGR8", PixelFormat::bgr8},           {"BGR8Packed", PixelFormat::bgr8},
+      {"BayerRG8", PixelFormat::bayer_rggb8}, {"BayerBG8", PixelFormat::bayer_bggr8},
+      {"BayerGB8", PixelFormat::bayer_gbrg8}, {"BayerGR8", PixelFormat::bayer_grbg8},
+      {"YUV422_8", PixelFormat::yuyv},       {"YUV422Packed", PixelFormat::uyvy},
+      {"YUV422_8_UYVY", PixelFormat::uyvy},
+  };
+  for (const auto& entry : table) {
+    if (entry.name == name) return entry.format;
+  }
+  return PixelFormat::unknown;
+}
+
+struct AravisCapture::Impl {
+  AravisCaptureConfig config;
+  ArvCamera* camera = nullptr;
+  ArvStream* stream = nullptr;
+  gulong control_lost_handler = 0;
+  std::optional<FrameDecoder> decoder;
+  std::optional<Writer> writer;
+  ImageLayout input{};
+  std::string name;
+  std::atomic<bool> lost{false};
+  std::optional<std::uint64_t> last_frame_id;  // touched by the stream thread only
+  std::atomic<std::uint64_t> published{0};
+  std::atomic<std::uint64_t> incomplete{0};
+  std::atomic<std::uint64_t> dropped{0};
+  std::atomic<std::uint64_t> bad_size{0};
+  std::uint64_t missing_packets = 0;  // accumulated over sessions (main thread)
+  std::uint64_t resent_packets = 0;
+  std::uint64_t control_losses = 0;
+  std::uint64_t reconnects = 0;
+
+  ~Impl() { disconnect(); }
+
+  void log(const std::string& message) const {
+    if (config.log) config.log(message);
+  }
+
+  // Emitted by Aravis's heartbeat thread: only flag it; the main loop reconnects.
+  static void on_control_lost(ArvDevice*, gpointer data) {
+    static_cast<Impl*>(data)->lost.store(true);
+  }
+
+  // Emitted by Aravis's stream thread for every completed (or failed) buffer.
+  static void on_new_buffer(ArvStream* stream, gpointer data) {
+    auto* self = static_cast<Impl*>(data);
+    ArvBuffer* buffer = arv_stream_try_pop_buffer(stream);
+    if (buffer == nullptr) return;
+    self->handle(buffer);
+    arv_stream_push_buffer(stream, buffer);
+  }
+
+  void handle(ArvBuffer* buffer) {
+    if (arv_buffer_get_status(buffer) != ARV_BUFFER_STATUS_SUCCESS) {
+      incomplete.fetch_add(1, std::memory_order_relaxed);
+      return;
+    }
+    // GigE Vision 1 frame ids are 16-bit and skip 0 when they wrap.
+    const std::uint64_t id = arv_buffer_get_frame_id(buffer);
+    if (last_frame_id) {
+      if (id > *last_frame_id + 1) {
+        dropped.fetch_add(id - *last_frame_id - 1, std::memory_order_relaxed);
+      } else if (id < *last_frame_id && *last_frame_id - id > 32768 && *last_frame_id <= 65535) {
+        dropped.fetch_add(65535 - *last_frame_id + id - 1, std::memory_order_relaxed);
+      }
+    }
+    last_frame_id = id;
+
+    if (pixel_format_of_arv(arv_buffer_get_image_pixel_format(buffer)) != input.format ||
+        static_cast<std::uint32_t>(arv_buffer_get_image_width(buffer)) != input.width ||
+        static_cast<std::uint32_t>(arv_buffer_get_image_height(buffer)) != input.height) {
+      bad_size.fetch_add(1, std::memory_order_relaxed);
+      return;
+    }
+    std::size_t size = 0;
+    const void* data = arv_buffer_get_data(buffer, &size);
+    const std::int64_t stamp = static_cast<std::int64_t>(
+        config.device_timestamps ? arv_buffer_get_timestamp(buffer)
+                                 : arv_buffer_get_system_timestamp(buffer));
+    Loan loan = writer->loan();
+    const DecodeResult decoded =
+        decoder->decode({static_cast<const std::byte*>(data), size}, loan.bytes());
+    if (decoded.status != DecodeStatus::ok) {
+      bad_size.fetch_add(1, std::memory_order_relaxed);
+      return;
+    }
+    if (loan.commit(decoded.size, stamp > 0 ? stamp : realtime_ns()) == WriteStatus::ok) {
+      published.fetch_add(1, std::memory_order_relaxed);
+    }
+  }
+
+  std::optional<Error> fail(const std::string& message) {
+    disconnect();
+    return Error{ErrorCode::system_error, message};
+  }
+
+  std::optional<Error> connect() {
+    GError* error = nullptr;
+    camera = arv_camera_new(config.device_id.empty() ? nullptr : config.device_id.c_str(), &error);
+    if (camera == nullptr) {
+      const std::string why = take_message(error, "not found");
+      return Error{ErrorCode::not_found,
+                   "no camera " + (config.device_id.empty() ? std::string("at all")
+                                                            : "'" + config.device_id + "'") +
+                       " (" + why + "): check the id with --list, the cable and the subnet"};
+    }
+    const char* model = arv_camera_get_model_name(camera, nullptr);
+    const char* vendor = arv_camera_get_vendor_name(camera, nullptr);
+    name = std::string(vendor != nullptr ? vendor : "?") + " " + (model != nullptr ? model : "?");
+
+    auto step = [&](const std::string& what) -> std::optional<Error> {
+      if (error == nullptr) return std::nullopt;
+      return fail("the camera refused " + what + ": " + take_message(error, "unknown error"));
+    };
+    if (!config.pixel_format.empty()) {
+      if (pixel_format_of_genicam(config.pixel_format) == PixelFormat::unknown) {
+        return fail("pixel format " + config.pixel_format +
+                    " cannot be decoded: use Mono8, Mono16, RGB8, BGR8, Bayer??8 or YUV422_8");
+      }
+      arv_camera_set_pixel_format_from_string(camera, config.pixel_format.c_str(), &error);
+      if (auto e = step("pixel format " + config.pixel_format)) return e;
+    }
+    if (config.width > 0 && config.height > 0) {
+      arv_camera_set_region(camera, config.offset_x, config.offset_y, config.width, config.height,
+                            &error);
+      if (auto e = step("the region of interest")) return e;
+    }
+    if (config.fps > 0) {
+      arv_camera_set_frame_rate(camera, config.fps, &error);
+      if (auto e = step("the frame rate")) return e;
+    }
+    if (config.exposure_us > 0) {
+      arv_camera_set_exposure_time(camera, config.exposure_us, &error);
+      if (auto e = step("the exposure time")) return e;
+    }
+    if (config.gain >= 0) {
+      arv_camera_set_gain(camera, config.gain, &error);
+      if (auto e = step("the gain")) return e;
+    }
+    ArvDevice* device = arv_camera_get_device(camera);
+    for (const auto& [feature, value] : config.features) {
+      ArvGcNode* node = arv_device_get_feature(device, feature.c_str());
+      if (node == nullptr || !ARV_IS_GC_FEATURE_NODE(node)) {
+        return fail("the camera has no GenICam feature '" + feature + "'");
+      }
+      arv_gc_feature_node_set_value_from_string(ARV_GC_FEATURE_NODE(node), value.c_str(), &error);
+      if (auto e = step(feature + "=" + value)) return e;
+    }
+    if (arv_camera_is_gv_device(camera)) {
+      if (config.packet_size > 0) {
+        arv_camera_gv_set_packet_size(camera, config.packet_size, &error);
+        if (auto e = step("packet size " + std::to_string(config.packet_size))) return e;
+      }
+      if (!config.packet_socket) {
+        arv_camera_gv_set_stream_options(camera, ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED);
+      }
+    }
+
+    gint x = 0;
+    gint y = 0;
+    gint width = 0;
+    gint height = 0;
+    arv_camera_get_region(camera, &x, &y, &width, &height, &error);
+    if (auto e = step("reading its region")) return e;
+    const ArvPixelFormat arv_format = arv_camera_get_pixel_format(camera, &error);
+    if (auto e = step("reading its pixel format")) return e;
+    const PixelFormat format = pixel_format_of_arv(arv_format);
+    if (format == PixelFormat::unknown) {
+      return fail("the camera's pixel format cannot be decoded: choose one with --pixel-format");
+    }
+    input = make_layout(static_cast<std::uint32_t>(width), static_cast<std::uint32_t>(height),
+                        format);
+    auto created = FrameDecoder::create(input, config.output);
+    if (!created) return fail(created.error().message);
+    decoder.emplace(std::move(created.value()));
+
+    const Layout layout = Layout::of(decoder->output_layout());
+    const std::uint64_t capacity = decoder->output_capacity(0);
+    if (!writer || writer->layout() != layout || writer->capacity() != capacity) {
+      writer.reset();  // release the writer lock before the region is replaced
+      StreamSpec spec;
+      spec.name = config.stream;
+      spec.layout = layout;
+      spec.capacity = capacity;
+      spec.checksum = config.checksum;
+      auto made = Writer::create(spec);
+      if (!made) {
+        disconnect();
+        return made.error();
+      }
+      writer.emplace(std::move(made.value()));
+    }
+
+    const guint payload = arv_camera_get_payload(camera, &error);
+    if (auto e = step("reading its payload size")) return e;
+    stream = arv_camera_create_stream(camera, nullptr, nullptr, &error);
+    if (stream == nullptr) {
+      return fail("cannot open the camera's stream: " + take_message(error, "unknown error"));
+    }
+    for (std::uint32_t i = 0; i < config.buffers; ++i) {
+      arv_stream_push_buffer(stream, arv_buffer_new_allocate(payload));
+    }
+    last_frame_id.reset();
+    lost.store(false);
+    control_lost_handler =
+        g_signal_connect(device, "control-lost", G_CALLBACK(&Impl::on_control_lost), this);
+    g_signal_connect(stream, "new-buffer", G_CALLBACK(&Impl::on_new_buffer), this);
+    arv_stream_set_emit_signals(stream, TRUE);
+    arv_camera_set_acquisition_mode(camera, ARV_ACQUISITION_MODE_CONTINUOUS, &error);
+    if (auto e = step("continuous acquisition")) return e;
+    arv_camera_start_acquisition(camera, &error);
+    if (auto e = step("starting acquisition")) return e;
+    return std::nullopt;
+  }
+
+  // Drops the camera and its stream (joining Aravis's stream thread); the writer stays.
+  void disconnect() noexcept {
+    if (stream != nullptr) {
+      arv_stream_set_emit_signals(stream, FALSE);
+      if (ARV_IS_GV_STREAM(stream)) {
+        guint64 resent = 0;
+        guint64 missing = 0;
+        arv_gv_stream_get_statistics(ARV_GV_STREAM(stream), &resent, &missing);
+        resent_packets += resent;
+        missing_packets += missing;
+      }
+    }
+    if (camera != nullptr && !lost.load()) arv_camera_stop_acquisition(camera, nullptr);
+    if (camera != nullptr && control_lost_handler != 0) {
+      g_signal_handler_disconnect(arv_camera_get_device(camera), control_lost_handler);
+    }
+    control_lost_handler = 0;
+    g_clear_object(&stream);
+    g_clear_object(&camera);
+  }
+};
+
+Expected<AravisCapture> AravisCapture::start(AravisCaptureConfig config) {
+  if (config.buffers < 2 || config.buffers > 64) {
+    return Error{ErrorCode::invalid_argument, "--buffers must be 2 to 64"};
+  }
+  auto impl = std::make_unique<Impl>();
+  impl->config = std::move(config);
+  if (auto error = impl->connect()) return *error;
+  return AravisCapture(std::move(impl));
+}
+
+AravisCapture::AravisCapture(std::unique_ptr<Impl> impl) noexcept : impl_(std::move(impl)) {}
+AravisCapture::AravisCapture(AravisCapture&&) noexcept = default;
+AravisCapture& AravisCapture::operator=(AravisCapture&&) noexcept = default;
+AravisCapture::~AravisCapture() = default;
+
+void AravisCapture::run(const std::atomic<bool>& stop,
+                        const std::function<void(const AravisCapture&)>& on_tick) {
+  using Clock = std::chrono::steady_clock;
+  Impl& s = *impl_;
+  auto next_retry = Clock::now();
+  while (!stop.load()) {
+    if (s.camera != nullptr && s.lost.load()) {
+      ++s.control_losses;
+      s.log("lost control of the camera; the stream stays and the camera is retried");
+      s.disconnect();
+      next_retry = Clock::now();
+    }
+    if (s.camera == nullptr && Clock::now() >= next_retry) {
+      if (auto error = s.connect()) {
+        next_retry = Clock::now() + s.config.retry_period;
+      } else {
+        ++s.reconnects;
+        s.log("reconnected to " + s.name + "; streaming again");
+      }
+    }
+    if (on_tick) on_tick(*this);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+}
+
+AravisStats AravisCapture::stats() const noexcept {
+  const Impl& s = *impl_;
+  AravisStats stats;
+  stats.published = s.published.load();
+  stats.incomplete = s.incomplete.load();
+  stats.dropped = s.dropped.load();
+  stats.bad_size = s.bad_size.load();
+  stats.missing_packets = s.missing_packets;
+  stats.resent_packets = s.resent_packets;
+  stats.control_losses = s.control_losses;
+  stats.reconnects = s.reconnects;
+  return stats;
+}
+
+const ImageLayout& AravisCapture::output_layout() const noexcept {
+  return impl_->decoder->output_layout();
+}
+std::string AravisCapture::camera_name() const { return impl_->name; }
+bool AravisCapture::connected() const noexcept { return impl_->camera != nullptr; }
+
+std::vector<std::string> AravisCapture::list_cameras() {
+  arv_update_device_list();
+  std::vector<std::string> ids;
+  for (unsigned i = 0; i < arv_get_n_devices(); ++i) {
+    const char* id = arv_get_device_id(i);
+    const char* address = arv_get_device_address(i);
+    ids.push_back(std::string(id != nullptr ? id : "?") + " (" + (address != nullptr ? address : "?") +
+                  ")");
+  }
+  return ids;
+}
+
+}  // namespace sim::camera
