@@ -69,6 +69,27 @@ void SimScanSink::imu(const ImuSample& sample) {
   }
 }
 
+Expected<std::unique_ptr<UnitreeStream>> UnitreeStream::create(
+    const UnitreeStreamOptions& options) {
+  SimSinkOptions sink_options;
+  sink_options.points_stream = options.points_stream;
+  if (!options.no_imu) {
+    sink_options.imu_stream = options.imu_stream.empty()
+                                  ? default_imu_stream(options.points_stream)
+                                  : options.imu_stream;
+  }
+  sink_options.max_points = Decoder::max_points_per_scan(options.decoder);
+  sink_options.checksum = options.checksum;
+  auto sink = SimScanSink::create(sink_options);
+  if (!sink) return sink.error();
+  return std::unique_ptr<UnitreeStream>(
+      new UnitreeStream(std::move(sink.value()), options.decoder));
+}
+
+std::string UnitreeStream::status() const {
+  return format_status(decoder_.counters(), sink_->counters());
+}
+
 std::string format_status(const DecoderCounters& d, const SimSinkCounters& s) {
   char line[400];
   std::snprintf(line, sizeof line,

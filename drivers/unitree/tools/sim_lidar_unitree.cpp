@@ -24,7 +24,6 @@
 #include "sim/unitree/sim_sink.hpp"
 
 namespace asio = boost::asio;
-using sim::unitree::Decoder;
 
 namespace {
 
@@ -50,17 +49,18 @@ struct Options {
 // Everything read off the wire goes to the decoder, and to the recording when there is one.
 class Pipeline {
  public:
-  Pipeline(Decoder& decoder, std::ofstream* record) : decoder_(decoder), record_(record) {}
+  Pipeline(sim::unitree::UnitreeStream& stream, std::ofstream* record)
+      : stream_(stream), record_(record) {}
   void on_bytes(std::span<const std::byte> bytes) {
     if (record_ != nullptr) {
       record_->write(reinterpret_cast<const char*>(bytes.data()),
                      static_cast<std::streamsize>(bytes.size()));
     }
-    decoder_.push(bytes, sim::realtime_ns());
+    stream_.push(bytes, sim::realtime_ns());
   }
 
  private:
-  Decoder& decoder_;
+  sim::unitree::UnitreeStream& stream_;
   std::ofstream* record_;
 };
 
@@ -172,21 +172,18 @@ int run(const Options& opt) {
   decoder_options.range_min_m = opt.range_min;
   decoder_options.range_max_m = opt.range_max;
 
-  sim::unitree::SimSinkOptions sink_options;
-  sink_options.points_stream = opt.stream;
-  sink_options.imu_stream =
-      opt.no_imu ? std::string()
-                 : (opt.imu_stream.empty() ? sim::unitree::default_imu_stream(opt.stream)
-                                           : opt.imu_stream);
-  sink_options.max_points = Decoder::max_points_per_scan(decoder_options);
-  sink_options.checksum = opt.checksum;
-  auto sink = sim::unitree::SimScanSink::create(sink_options);
-  if (!sink) {
-    std::cerr << "sim_lidar_unitree: " << sink.error().message << "\n";
-    return sink.error().code == sim::ErrorCode::invalid_name ? sim::tools::kExitUsage
-                                                             : sim::tools::kExitFailure;
+  sim::unitree::UnitreeStreamOptions stream_options;
+  stream_options.decoder = decoder_options;
+  stream_options.points_stream = opt.stream;
+  stream_options.imu_stream = opt.imu_stream;
+  stream_options.no_imu = opt.no_imu;
+  stream_options.checksum = opt.checksum;
+  auto stream = sim::unitree::UnitreeStream::create(stream_options);
+  if (!stream) {
+    std::cerr << "sim_lidar_unitree: " << stream.error().message << "\n";
+    return stream.error().code == sim::ErrorCode::invalid_name ? sim::tools::kExitUsage
+                                                               : sim::tools::kExitFailure;
   }
-  Decoder decoder(decoder_options, **sink);
 
   std::ofstream record;
   if (!opt.record_path.empty()) {
@@ -197,7 +194,7 @@ int run(const Options& opt) {
       return sim::tools::kExitFailure;
     }
   }
-  Pipeline pipeline(decoder, record.is_open() ? &record : nullptr);
+  Pipeline pipeline(**stream, record.is_open() ? &record : nullptr);
 
   asio::io_context io;
   int exit_code = sim::tools::kExitOk;
@@ -248,8 +245,7 @@ int run(const Options& opt) {
     status_timer.expires_after(std::chrono::seconds(1));
     status_timer.async_wait([&](const boost::system::error_code& ec) {
       if (ec) return;
-      std::cerr << "\r" << sim::unitree::format_status(decoder.counters(), (*sink)->counters())
-                << "\x1b[K" << std::flush;
+      std::cerr << "\r" << (*stream)->status() << "\x1b[K" << std::flush;
       if (record.is_open()) record.flush();
       tick();
     });
@@ -257,12 +253,11 @@ int run(const Options& opt) {
   if (show_status) tick();
 
   io.run();
-  decoder.finish();
+  (*stream)->finish();
   if (record.is_open()) record.flush();
   if (!opt.quiet) {
-    std::cerr << (show_status ? "\r" : "") << sim::unitree::format_status(decoder.counters(),
-                                                                            (*sink)->counters())
-              << "\x1b[K\n";
+    std::cerr << (show_status ? "\r" : "") << (*stream)->status()
+              << (show_status ? "\x1b[K\n" : "\n");
   }
   return exit_code;
 }

@@ -3,10 +3,13 @@
 // lends the decoder the point stream's back slot (writer.loan()) for each scan and commits it
 // when the scan is complete, and writes IMU samples to their own small stream.
 //
-// The pcap replay uses it like this:
-//   auto sink = sim::unitree::SimScanSink::create({.points_stream = "/lidar_top", …});
-//   sim::unitree::Decoder decoder(options, **sink);
-//   for each UDP payload: decoder.push(payload, capture_time_ns);
+// UnitreeStream (below) bundles the decoder with this sink; the pcap replay uses it like this:
+//   sim::unitree::UnitreeStreamOptions o;
+//   o.decoder.model = sim::unitree::Model::l2;   // parse_model("unitree-l2")
+//   o.points_stream = "/lidar_top";               // IMU goes to "/lidar_top.imu"
+//   auto stream = sim::unitree::UnitreeStream::create(o);   // Expected<unique_ptr<…>>
+//   for each UDP payload: (*stream)->push(payload, capture_time_ns);
+//   (*stream)->finish(); then (*stream)->status() for the summary line.
 #pragma once
 
 #include <cstdint>
@@ -55,6 +58,37 @@ class SimScanSink final : public ScanSink {
   std::uint64_t max_points_;
   std::optional<Loan> loan_;
   SimSinkCounters counters_;
+};
+
+struct UnitreeStreamOptions {
+  DecoderOptions decoder;
+  std::string points_stream;
+  // Empty: "<points_stream>.imu"; use `no_imu` to publish no IMU stream at all.
+  std::string imu_stream;
+  bool no_imu = false;
+  bool checksum = false;
+};
+
+// The decoder writing into SIM: what the live driver and the pcap replay each run.
+class UnitreeStream {
+ public:
+  static Expected<std::unique_ptr<UnitreeStream>> create(const UnitreeStreamOptions& options);
+
+  // Any chunk of the sensor's byte stream (a UDP payload, a serial read), with its host time.
+  void push(std::span<const std::byte> bytes, std::int64_t host_ns) noexcept {
+    decoder_.push(bytes, host_ns);
+  }
+  void finish() noexcept { decoder_.finish(); }
+
+  DecoderCounters decoder_counters() const noexcept { return decoder_.counters(); }
+  const SimSinkCounters& sink_counters() const noexcept { return sink_->counters(); }
+  std::string status() const;
+
+ private:
+  UnitreeStream(std::unique_ptr<SimScanSink> sink, const DecoderOptions& options)
+      : sink_(std::move(sink)), decoder_(options, *sink_) {}
+  std::unique_ptr<SimScanSink> sink_;
+  Decoder decoder_;
 };
 
 // One status line: "scans 12 points 64800 imu 250 | bad_crc 0 truncated 0 resyncs 0 …".
