@@ -18,5 +18,7 @@ write_basic_package_version_file(${PROJECT_BINARY_DIR}/simConfigVersion.cmake
 install(FILES ${PROJECT_BINARY_DIR}/simConfig.cmake ${PROJECT_BINARY_DIR}/simConfigVersion.cmake
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/sim)
 
+# The .pc file finds its prefix relative to itself, so an installed tree can be moved.
+file(RELATIVE_PATH SIM_PC_TO_PREFIX "/prefix/${CMAKE_INSTALL_LIBDIR}/pkgconfig" "/prefix")
 configure_file(${PROJECT_SOURCE_DIR}/cmake/sim.pc.in ${PROJECT_BINARY_DIR}/sim.pc @ONLY)
 install(FILES ${PROJECT_BINARY_DIR}/sim.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)

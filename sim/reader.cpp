@@ -46,6 +46,9 @@ struct Reader::Impl {
   std::string name;
   ReaderOptions options;
   RegionFile file;
+  // The region before the last replacement stays mapped, so a Borrow taken from it just before
+  // the reader moved on still points at mapped memory (still_valid() tells it is outdated).
+  RegionFile previous_file;
   const RegionHeader* header = nullptr;
   Layout layout;
   bool checksum = false;
@@ -56,6 +59,7 @@ struct Reader::Impl {
   ReaderStats stats;
 
   void adopt(RegionFile&& f) {
+    previous_file = std::move(file);
     file = std::move(f);
     header = file.header();
     layout = from_record(file.identity().layout);
@@ -245,19 +249,24 @@ ReadStatus Reader::wait(std::chrono::nanoseconds timeout) noexcept {
   Impl& r = *impl_;
   const std::int64_t deadline = monotonic_ns() + std::max<std::int64_t>(timeout.count(), 0);
   for (;;) {
-    const Publication& pub = r.header->publication;
-    const std::uint32_t word = pub.futex_word.load(std::memory_order_acquire);
+    const std::uint64_t reopens = r.stats.reopens;
+    if (r.header->publication.retired.load(std::memory_order_acquire) != 0) {
+      r.reopen_if_replaced();
+    }
+    r.writer_alive(false);  // also reopens the name if a new writer replaced the region
+    if (r.stats.reopens != reopens) continue;  // look again, at the new region
+
+    const std::atomic<std::uint32_t>& futex_word = r.header->publication.futex_word;
+    const std::uint32_t word = futex_word.load(std::memory_order_acquire);
     const std::uint64_t seq = r.latest();
     if (seq != 0 && seq != r.last_seq) return ReadStatus::new_frame;
-    if (pub.retired.load(std::memory_order_acquire) != 0 && r.reopen_if_replaced()) continue;
     const std::int64_t now = monotonic_ns();
     if (now >= deadline) return r.idle_status();
-    if (!r.writer_alive(false) && r.reopen_if_replaced()) continue;
     const std::int64_t until = std::min(deadline, now + kWaitSliceNs);
     if (WaitPage* wp = r.file.wait_page()) {
       wp->sleepers.fetch_add(1, std::memory_order_seq_cst);
       std::atomic_thread_fence(std::memory_order_seq_cst);
-      if (r.latest() == r.last_seq) futex_wait_until(&pub.futex_word, word, until);
+      if (r.latest() == r.last_seq) futex_wait_until(&futex_word, word, until);
       wp->sleepers.fetch_sub(1, std::memory_order_relaxed);
     } else {
       const std::int64_t nap = std::min(until - now, kPollSleepNs);
@@ -289,6 +298,7 @@ bool Reader::checksum() const noexcept { return impl_->checksum; }
 ReaderStats Reader::stats() const noexcept { return impl_->stats; }
 
 StreamStatus Reader::status() noexcept {
+  const bool alive = impl_->writer_alive(true);  // first: it may move the reader to a new region
   const Impl& r = *impl_;
   const RegionHeader& h = *r.header;
   StreamStatus s;
@@ -304,7 +314,7 @@ StreamStatus Reader::status() noexcept {
   s.writer_start_realtime_ns = h.writer.start_realtime_ns.load(std::memory_order_relaxed);
   s.writer_pid = h.writer.pid.load(std::memory_order_relaxed);
   s.writer_command = unpack_command(h.writer.command);
-  s.writer_alive = impl_->writer_alive(true);
+  s.writer_alive = alive;
   if (const WaitPage* wp = r.file.wait_page()) {
     s.sleeping_readers = wp->sleepers.load(std::memory_order_relaxed);
   }

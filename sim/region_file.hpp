@@ -45,7 +45,9 @@ class RegionFile {
   std::uint64_t file_size() const noexcept { return file_size_; }
   ino_t inode() const noexcept { return inode_; }
   bool wait_page_writable() const noexcept { return wait_page_ != nullptr; }
+  // Null until the file is mapped.
   RegionHeader* header() const noexcept {
+    if (base_ == nullptr) return nullptr;
     return reinterpret_cast<RegionHeader*>(static_cast<char*>(base_) + kHeaderOffset);
   }
   WaitPage* wait_page() const noexcept { return wait_page_; }

@@ -180,7 +180,7 @@ Expected<Writer> Writer::create(const StreamSpec& spec) {
       if (error->code == ErrorCode::writer_exists) continue;  // lost the race: look again
       return *error;
     }
-    if (old.header() != nullptr && old.base() != nullptr) {
+    if (old.header() != nullptr) {
       // Tell readers of the old region to reopen the name.
       old.header()->publication.retired.store(1, std::memory_order_release);
       old.header()->publication.futex_word.fetch_add(1, std::memory_order_release);

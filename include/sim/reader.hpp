@@ -79,6 +79,7 @@ class Reader;
 
 // A published frame read in place. It can be overwritten at any time once the writer has
 // published two more frames; check still_valid() after using the bytes and discard them if false.
+// A Borrow must not outlive its Reader.
 class Borrow {
  public:
   ReadStatus status() const noexcept { return status_; }
