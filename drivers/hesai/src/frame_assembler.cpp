@@ -351,107 +351,150 @@ PushResult FrameAssembler::push(std::span<const std::uint8_t> payload,
 void FrameAssembler::decode_group(const Packet& packet, unsigned first_block,
                                   std::int64_t group_revolution, std::uint16_t phase,
                                   std::int64_t host_ns) noexcept {
+  // Where a channel's points go: the current frame, the next one, or nowhere (late points of
+  // a frame already handed out). Kept in locals so the hot loop does not re-read members.
+  struct Sink {
+    FrameState* frame = nullptr;
+    LidarPoint* out = nullptr;
+    std::size_t capacity = 0;
+    std::size_t count = 0;
+    std::uint32_t dropped = 0;
+    bool active = false;
+  };
+  std::array<Sink, 3> sinks{};
+  std::array<std::uint8_t, max_channels> target{};
+
+  // Common case: every channel of the group falls in the same revolution.
+  const bool straddles =
+      phase + min_cut_offset_centi_ < 0 || phase + max_cut_offset_centi_ >= full_turn;
+  auto target_of = [&](std::int64_t revolution) -> std::uint8_t {
+    if (revolution == current_revolution_) return 0;
+    if (revolution == current_revolution_ + 1) return 1;
+    return 2;
+  };
+  if (straddles) {
+    for (unsigned ch = 0; ch < channels_; ++ch) {
+      const double point_phase = phase + cut_offset_centi_[ch];
+      std::int64_t revolution = group_revolution;
+      if (point_phase < 0) --revolution;
+      if (point_phase >= full_turn) ++revolution;
+      target[ch] = target_of(revolution);
+    }
+  } else {
+    std::fill_n(target.begin(), channels_, target_of(group_revolution));
+  }
+  bool used[2] = {false, false};
+  for (unsigned ch = 0; ch < channels_; ++ch) {
+    if (target[ch] < 2) used[target[ch]] = true;
+  }
+  if (used[0]) {
+    if (!current_.started) begin(current_, packet, first_block, host_ns, false);
+    Sink& s = sinks[0];
+    s.frame = &current_;
+    s.active = true;
+    if (output_attached_) {
+      s.out = output_.data();
+      s.capacity = output_.size();
+      s.count = output_count_;
+    } else {
+      s.out = carry_.data();
+      s.capacity = carry_.size();
+      s.count = carry_count_;
+    }
+  }
+  if (used[1]) {
+    if (!next_.started) begin(next_, packet, first_block, host_ns, true);
+    Sink& s = sinks[1];
+    s.frame = &next_;
+    s.active = true;
+    if (output_attached_) {
+      s.out = carry_.data();
+      s.capacity = carry_.size();
+      s.count = carry_count_;
+    } else {
+      // The carry-over still holds the current frame (no span yet): the next one loses
+      // these points and is not a whole revolution.
+      next_.whole = false;
+    }
+  }
+  for (unsigned t = 0; t < 2; ++t) {
+    if (sinks[t].active && sinks[t].frame->last_packet != packet_counter_) {
+      sinks[t].frame->last_packet = packet_counter_;
+      ++sinks[t].frame->packets;
+    }
+  }
+
   const unsigned returns = packet.returns();
   const float unit = packet.distance_unit_m();
   const double azimuth_rad = packet.azimuth(first_block) * (std::numbers::pi / 18000.0);
   const auto sin_block = static_cast<float>(std::sin(azimuth_rad));
   const auto cos_block = static_cast<float>(std::cos(azimuth_rad));
-  const std::int64_t packet_group_time = packet.time_ns() + packet.block_offset_ns(first_block);
+  const std::int64_t group_time = packet.time_ns() + packet.block_offset_ns(first_block);
+  const std::int64_t time_base[2] = {group_time - current_.stamp_ns, group_time - next_.stamp_ns};
   const float threshold = options_.multi_return_distance_threshold_m;
-  const bool multi = returns > 1;
-  // Common case: every channel of the group falls in the same revolution.
-  const bool straddles =
-      phase + min_cut_offset_centi_ < 0 || phase + max_cut_offset_centi_ >= full_turn;
+  const bool drop_identical = options_.drop_identical_returns;
+  const bool drop_zero = options_.drop_zero_distance;
+  const float min_range = min_range_m_;
+  const float max_range = max_range_m_;
 
   for (unsigned ch = 0; ch < channels_; ++ch) {
-    std::int64_t revolution = group_revolution;
-    if (straddles) {
-      const double point_phase = phase + cut_offset_centi_[ch];
-      if (point_phase < 0) --revolution;
-      if (point_phase >= full_turn) ++revolution;
-    }
-    // Which frame, and where its points go.
-    FrameState* frame = nullptr;
-    std::span<LidarPoint> out;
-    std::size_t* count = nullptr;
-    if (revolution == current_revolution_) {
-      frame = &current_;
-      if (!frame->started) begin(*frame, packet, first_block, host_ns, false);
-      if (output_attached_) {
-        out = output_;
-        count = &output_count_;
-      } else {
-        out = carry_;
-        count = &carry_count_;
-      }
-    } else if (revolution == current_revolution_ + 1) {
-      frame = &next_;
-      if (!frame->started) begin(*frame, packet, first_block, host_ns, true);
-      if (output_attached_) {
-        out = carry_;
-        count = &carry_count_;
-      } else {
-        // The carry-over still holds the current frame (no span yet): the next one loses
-        // these points and is not a whole revolution.
-        frame->whole = false;
-      }
-    } else {
-      continue;  // a late point of a frame already handed out
-    }
-    if (frame->last_packet != packet_counter_) {
-      frame->last_packet = packet_counter_;
-      ++frame->packets;
-    }
-
+    Sink& sink = sinks[target[ch]];
+    if (!sink.active) continue;
     std::array<std::uint16_t, 3> raw{};
     std::array<std::uint8_t, 3> reflectivity{};
     for (unsigned r = 0; r < returns; ++r) {
       raw[r] = packet.raw_distance(first_block + r, ch);
       reflectivity[r] = packet.reflectivity(first_block + r, ch);
     }
+    const float sin_az = sin_block * cos_azimuth_offset_[ch] + cos_block * sin_azimuth_offset_[ch];
+    const float cos_az = cos_block * cos_azimuth_offset_[ch] - sin_block * sin_azimuth_offset_[ch];
+    const float cos_el = cos_elevation_[ch];
+    const float sin_el = sin_elevation_[ch];
+    // Offsets are ≥ 0 by the stamp's choice; clamped only against a clock that jumps.
+    const auto time_offset = static_cast<std::uint32_t>(
+        std::clamp<std::int64_t>(time_base[target[ch]] + channel_offset_ns_[ch], 0,
+                                 std::numeric_limits<std::uint32_t>::max()));
     for (unsigned r = 0; r < returns; ++r) {
-      if (raw[r] == 0 && options_.drop_zero_distance) continue;
+      if (raw[r] == 0 && drop_zero) continue;
       const float distance = static_cast<float>(raw[r]) * unit;
-      if (distance < min_range_m_ || distance > max_range_m_) continue;
-      if (multi && r + 1 != returns) {
-        // Only a non-last return can be dropped as a duplicate of another return.
+      if (distance < min_range || distance > max_range) continue;
+      if (r + 1 != returns) {
+        // Only a non-last return of a multi-return group can be dropped as a duplicate.
         bool duplicate = false;
-        for (unsigned other = 0; other < returns && !duplicate; ++other) {
+        for (unsigned other = 0; other < returns; ++other) {
           if (other == r) continue;
-          if (options_.drop_identical_returns && raw[other] == raw[r] &&
-              reflectivity[other] == reflectivity[r]) {
+          if (drop_identical && raw[other] == raw[r] && reflectivity[other] == reflectivity[r]) {
             duplicate = true;
           }
-          if (threshold > 0 &&
-              std::fabs(static_cast<float>(raw[other]) * unit - distance) < threshold) {
+          if (std::fabs(static_cast<float>(raw[other]) * unit - distance) < threshold) {
             duplicate = true;
           }
         }
         if (duplicate) continue;
       }
-      if (count == nullptr || *count >= out.size()) {
-        ++frame->dropped;
-        ++counters_.dropped_points;
+      if (sink.count >= sink.capacity) {
+        ++sink.dropped;
         continue;
       }
-      const float sin_az =
-          sin_block * cos_azimuth_offset_[ch] + cos_block * sin_azimuth_offset_[ch];
-      const float cos_az =
-          cos_block * cos_azimuth_offset_[ch] - sin_block * sin_azimuth_offset_[ch];
-      const float horizontal = distance * cos_elevation_[ch];
-      // Offsets are ≥ 0 by the stamp's choice; clamped only against a clock that jumps.
-      const std::int64_t offset = std::clamp<std::int64_t>(
-          packet_group_time + channel_offset_ns_[ch] - frame->stamp_ns, 0,
-          std::numeric_limits<std::uint32_t>::max());
-      LidarPoint& p = out[(*count)++];
-      p.x = horizontal * sin_az;
-      p.y = horizontal * cos_az;
-      p.z = distance * sin_elevation_[ch];
-      p.intensity = reflectivity[r];
-      p.time_offset_ns = static_cast<std::uint32_t>(offset);
-      p.ring = static_cast<std::uint16_t>(ch);
-      p.return_index = static_cast<std::uint8_t>(r);
-      p.reserved = 0;
+      const float horizontal = distance * cos_el;
+      sink.out[sink.count++] = LidarPoint{horizontal * sin_az,
+                                          horizontal * cos_az,
+                                          distance * sin_el,
+                                          static_cast<float>(reflectivity[r]),
+                                          time_offset,
+                                          static_cast<std::uint16_t>(ch),
+                                          static_cast<std::uint8_t>(r),
+                                          0};
+    }
+  }
+
+  // Write the local counts back where they live.
+  if (sinks[0].active) (output_attached_ ? output_count_ : carry_count_) = sinks[0].count;
+  if (sinks[1].active && output_attached_) carry_count_ = sinks[1].count;
+  for (unsigned t = 0; t < 2; ++t) {
+    if (sinks[t].active) {
+      sinks[t].frame->dropped += sinks[t].dropped;
+      counters_.dropped_points += sinks[t].dropped;
     }
   }
 }

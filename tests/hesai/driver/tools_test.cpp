@@ -436,6 +436,25 @@ TEST(LiveDriver, ConfigFileAndAutoDetectedModel) {
   fs::remove_all(dir);
 }
 
+TEST(LiveDriver, ShippedConfigFilesStartTheDriver) {
+  // config/hesai/*.yaml with the test's calibration and a free port: each must parse and start.
+  const std::vector<std::pair<std::string, std::string>> configs = {
+      {"pandar64.yaml", "pandar64.calibration.csv"},
+      {"pandar40p.yaml", "pandar40p.example-calibration.csv"},
+      {"pandarxt32.yaml", "pandarxt32.calibration.csv"}};
+  for (const auto& [config, calibration] : configs) {
+    StreamGuard stream;
+    Process driver({live_tool, "--config", (fs::path(SIM_CONFIG_DIR) / "hesai" / config).string(),
+                    "--port", "0", "--bind", "127.0.0.1", "--stream", stream.name,
+                    "--calibration", (data_dir / calibration).string(), "--status-interval", "0"});
+    EXPECT_GT(listening_port(driver), 0) << config << ": " << driver.err();
+    auto reader = open_when_created(stream.name);
+    EXPECT_TRUE(reader) << config;
+    driver.signal(SIGTERM);
+    EXPECT_EQ(driver.wait(), 0) << config << ": " << driver.err();
+  }
+}
+
 TEST(LiveDriver, PortInUseIsAClearErrorAndExitOne) {
   const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
   sockaddr_in address{};
