@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/unitree/l1_protocol.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -9,6 +10,8 @@
 namespace sim::unitree::l1 {
 namespace {
 constexpr double kDegToRad = std::numbers::pi / 180.0;
+// See l2_protocol.cpp: rejects corrupt geometry and keeps the float conversion in range.
+bool plausible(double v) noexcept { return std::isfinite(v) && std::fabs(v) < 1.0e4; }
 }
 
 std::optional<DistancePacket> parse_distance(std::span<const std::byte> p) noexcept {
@@ -80,13 +83,14 @@ std::size_t decode_points(const DistancePacket& d, const AuxiliaryPacket& a,
     const double x = std::cos(beta) * big_a - std::sin(beta) * big_b;
     const double y = std::sin(beta) * big_a + std::cos(beta) * big_b;
     const double z = (sin_theta * sin_ksi + cos_theta * sin_alpha * cos_ksi) * r + kZBias;
-    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) continue;
+    if (!plausible(x) || !plausible(y) || !plausible(z)) continue;
     LidarPoint& pt = out[written++];
     pt.x = static_cast<float>(x);
     pt.y = static_cast<float>(y);
     pt.z = static_cast<float>(z);
     pt.intensity = static_cast<float>(a.reflect[j]);
-    pt.time_offset_ns = base_offset_ns + static_cast<std::uint32_t>(j) * point_period_ns;
+    const std::uint64_t t = std::uint64_t{base_offset_ns} + j * std::uint64_t{point_period_ns};
+    pt.time_offset_ns = static_cast<std::uint32_t>(std::min<std::uint64_t>(t, 0xFFFFFFFFU));
     pt.ring = 0;
     pt.return_index = 0;
     pt.reserved = 0;

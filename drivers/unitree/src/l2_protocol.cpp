@@ -8,6 +8,11 @@
 #include "sim/unitree/bytes.hpp"
 
 namespace sim::unitree::l2 {
+namespace {
+// A coordinate no LiDAR can measure means corrupt calibration fields (which the CRC does not
+// catch if the sensor sent them); it also keeps the float conversion below in range.
+bool plausible(double v) noexcept { return std::isfinite(v) && std::fabs(v) < 1.0e4; }
+}  // namespace
 
 std::optional<std::size_t> expected_size(std::uint32_t packet_type) noexcept {
   // Data sizes from the field lists (reference §7 "Sizes"), plus 24 B of header and tail.
@@ -82,7 +87,7 @@ std::size_t decode_points(std::span<const std::byte> p, const PointPacketHeader&
     const double x = std::cos(theta) * a - std::sin(theta) * b;
     const double y = std::sin(theta) * a + std::cos(theta) * b;
     const double z = c + h.a_axis_dist;
-    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) continue;
+    if (!plausible(x) || !plausible(y) || !plausible(z)) continue;
     const double t = static_cast<double>(base_offset_ns) + jd * double{h.time_increment} * 1e9;
     LidarPoint& pt = out[written++];
     pt.x = static_cast<float>(x);
