@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# Installs every Debian package the project needs (the lists in scripts/deps/*.txt).
-# Quick when nothing is missing; needs root (or sudo) when something is.
+# Installs every Debian package the project needs (the lists in scripts/deps/*.txt, plus any
+# list files given as arguments). Quick when nothing is missing; needs root (or sudo) otherwise.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 
-mapfile -t wanted < <(cat "$here"/deps/*.txt | sed 's/#.*//' | tr -s ' \t' '\n' | grep -v '^$' | sort -u)
+mapfile -t wanted < <(cat "$here"/deps/*.txt "$@" | sed 's/#.*//' | tr -s ' \t' '\n' | grep -v '^$' | sort -u)
 missing=()
 for pkg in "${wanted[@]}"; do
   status=$(dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null || true)
