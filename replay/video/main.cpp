@@ -109,11 +109,12 @@ int main(int argc, char** argv) {
   spec.name = stream;
   spec.layout = Layout::of(decoder->output_layout());
   spec.checksum = checksum;
+  // Before the stream exists: a reader may see it and stop us at once.
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
   auto writer = Writer::create(spec);
   if (!writer) return fail(writer.error().message), 1;
 
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
   const bool terminal = !quiet && isatty(STDERR_FILENO) != 0;
   std::fprintf(stderr, "sim_replay_video: %s, %ux%u at %.4g fps x %.3g -> %s (%s)%s\n",
                video.describe().c_str(), width, height, fps, rate, stream.c_str(),

@@ -242,6 +242,34 @@ TEST_F(AravisDriver, LosingTheCameraLeadsToAReconnectNotAnExit) {
   EXPECT_NE(output().find("reconnected"), std::string::npos) << output();
 }
 
+TEST_F(AravisDriver, YamlConfigWithGenicamFeatures) {
+  FakeGvCamera camera("SIMYAML");
+  ASSERT_TRUE(camera.running());
+  const std::string config = "/tmp" + stream + ".yaml";
+  {
+    std::ofstream file(config);
+    file << "device: 127.0.0.1\npixel_format: Mono8\noutput: bgr8\nroi: [0, 0, 80, 60]\n"
+            "features:\n  AcquisitionFrameRate: 25\n";
+  }
+  // The command line overrides the file's output.
+  spawn({"--config", config, "--stream", stream, "--output", "mono8", "-q"});
+  auto reader = open_reader();
+  ASSERT_TRUE(reader) << output();
+  EXPECT_EQ(reader->layout().image.width, 80u);
+  EXPECT_EQ(reader->layout().image.format, sim::PixelFormat::mono8);
+  kill(pid, SIGTERM);
+  EXPECT_EQ(wait_exit(), 0) << output();
+
+  {
+    std::ofstream file(config);
+    file << "device: 127.0.0.1\nfeatures:\n  NoSuchFeature: 1\n";
+  }
+  spawn({"--config", config, "--stream", stream, "-q"});
+  EXPECT_EQ(wait_exit(), 1) << output();
+  EXPECT_NE(output().find("no GenICam feature 'NoSuchFeature'"), std::string::npos) << output();
+  std::remove(config.c_str());
+}
+
 TEST_F(AravisDriver, AMissingCameraIsOneSentenceAndExitOne) {
   spawn({"SIM-NO-SUCH-CAMERA", "--stream", stream, "-q"});
   EXPECT_EQ(wait_exit(), 1) << output();

@@ -494,6 +494,26 @@ TEST(V4l2Config, YamlFillsTheConfigAndReportsBadKeys) {
   EXPECT_TRUE(load_v4l2_config(path, config, placement));
 }
 
+TEST(CameraConfig, ShippedExamplesParse) {
+  V4l2CaptureConfig v4l2;
+  Placement placement;
+  const auto v4l2_error =
+      load_v4l2_config(std::string(SIM_CAMERA_CONFIG_DIR) + "/v4l2_usb.yaml", v4l2, placement);
+  EXPECT_FALSE(v4l2_error) << v4l2_error->message;
+  EXPECT_EQ(v4l2.format.width, 1280u);
+  EXPECT_EQ(v4l2.controls.size(), 3u);
+
+  AravisCaptureConfig aravis;
+  const auto aravis_error =
+      load_aravis_config(std::string(SIM_CAMERA_CONFIG_DIR) + "/aravis_gige.yaml", aravis, placement);
+  EXPECT_FALSE(aravis_error) << aravis_error->message;
+  EXPECT_EQ(aravis.pixel_format, "BayerRG8");
+  EXPECT_EQ(aravis.width, 1920);
+  ASSERT_EQ(aravis.features.size(), 2u);
+  EXPECT_EQ(aravis.features[0].first, "ExposureAuto");
+  EXPECT_EQ(aravis.features[0].second, "Off");
+}
+
 struct ToolRun {
   int exit_code = -1;
   std::string output;

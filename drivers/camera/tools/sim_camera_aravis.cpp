@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "sim/camera/aravis_capture.hpp"
+#include "sim/camera/config.hpp"
 #include "sim/os.hpp"
 
 namespace {
@@ -24,7 +25,8 @@ int main(int argc, char** argv) {
                "decoding Mono8/Mono16/Bayer/RGB/YUV422 straight into shared memory.\n"
                "The stream stays while the camera is lost; capture resumes when it returns."};
   AravisCaptureConfig config;
-  std::string output_text = "bgr8";
+  std::string config_file;
+  std::string output_text;
   std::vector<std::string> features;
   std::vector<int> roi;
   bool list = false;
@@ -33,6 +35,8 @@ int main(int argc, char** argv) {
   int cpu = -1;
   int rt_priority = 0;
   app.add_option("device", config.device_id, "Camera id, serial number or IP (default: the first)");
+  app.add_option("--config", config_file, "YAML file with these options and GenICam features")
+      ->check(CLI::ExistingFile);
   app.add_option("--stream", config.stream, "SIM stream name");
   app.add_option("--pixel-format", config.pixel_format, "GenICam pixel format (Mono8, BayerRG8, …)");
   app.add_option("--output", output_text, "Published format: bgr8, rgb8, mono8 or raw")
@@ -61,7 +65,42 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
-  config.output = *parse_output_format(output_text);
+  // The file gives the base; options given on the command line win.
+  if (!config_file.empty()) {
+    AravisCaptureConfig base;
+    sim::camera::Placement placement;
+    if (auto error = load_aravis_config(config_file, base, placement)) {
+      std::fprintf(stderr, "sim_camera_aravis: %s\n", error->message.c_str());
+      return 2;
+    }
+    for (const auto* option : app.get_options()) {
+      if (option->count() > 0) continue;
+      const std::string name = option->get_name();
+      if (name == "device") config.device_id = base.device_id;
+      if (name == "--stream") config.stream = base.stream;
+      if (name == "--pixel-format") config.pixel_format = base.pixel_format;
+      if (name == "--output") output_text = sim::camera::to_string(base.output);
+      if (name == "--fps") config.fps = base.fps;
+      if (name == "--exposure") config.exposure_us = base.exposure_us;
+      if (name == "--gain") config.gain = base.gain;
+      if (name == "--packet-size") config.packet_size = base.packet_size;
+      if (name == "--buffers") config.buffers = base.buffers;
+      if (name == "--roi") {
+        config.offset_x = base.offset_x;
+        config.offset_y = base.offset_y;
+        config.width = base.width;
+        config.height = base.height;
+      }
+    }
+    if (!no_packet_socket) no_packet_socket = !base.packet_socket;
+    config.device_timestamps = config.device_timestamps || base.device_timestamps;
+    config.checksum = config.checksum || base.checksum;
+    config.retry_period = base.retry_period;
+    config.features = base.features;  // command-line --feature entries follow and win
+    if (cpu < 0 && placement.cpu) cpu = *placement.cpu;
+    if (rt_priority == 0 && placement.rt_priority) rt_priority = *placement.rt_priority;
+  }
+  config.output = *parse_output_format(output_text.empty() ? "bgr8" : output_text);
   config.packet_socket = !no_packet_socket;
   if (!roi.empty()) {
     config.offset_x = roi[0];
@@ -100,13 +139,14 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%ssim_camera_aravis: %.*s\n", terminal ? "\r\033[K" : "",
                  static_cast<int>(message.size()), message.data());
   };
+  // Before the stream exists: a reader may see it and stop us while we are still starting.
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
   auto capture = AravisCapture::start(config);
   if (!capture) {
     std::fprintf(stderr, "sim_camera_aravis: %s\n", capture.error().message.c_str());
     return 1;
   }
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
   const auto& layout = capture->output_layout();
   std::fprintf(stderr, "sim_camera_aravis: %s -> %s (%s)\n", capture->camera_name().c_str(),
                config.stream.c_str(), sim::Layout::of(layout).describe().c_str());

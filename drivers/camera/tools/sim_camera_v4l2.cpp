@@ -177,13 +177,14 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%ssim_camera_v4l2: %.*s\n", terminal ? "\r\033[K" : "",
                  static_cast<int>(message.size()), message.data());
   };
+  // Before the stream exists: a reader may see it and stop us while we are still starting.
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
   auto capture = V4l2Capture::start(*io, config);
   if (!capture) {
     std::fprintf(stderr, "sim_camera_v4l2: %s\n", capture.error().message.c_str());
     return 1;
   }
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
   const auto& layout = capture->output_layout();
   std::fprintf(stderr, "sim_camera_v4l2: %s %s %ux%u at %.4g fps -> %s (%s)\n",
                config.device.c_str(), capture->format().fourcc.str().c_str(),
