@@ -214,11 +214,13 @@ int main(int argc, char** argv) {
     const std::uint64_t packets_before = stream->counters().packets;
     std::optional<std::int64_t> first_ts;
     std::int64_t last_ts = 0;
+    std::int64_t last_seen_ts = 0;
     std::uint64_t in_window = 0;
     sim::pcap::Datagram datagram;
     sim::pcap::NextStatus status;
     while ((status = reader->next(datagram)) == sim::pcap::NextStatus::datagram) {
       if (!first_ts) first_ts = datagram.timestamp_ns;
+      last_seen_ts = datagram.timestamp_ns;
       const std::int64_t since_first = datagram.timestamp_ns - *first_ts;
       if (since_first < start_ns) continue;
       if (since_first > end_ns) break;
@@ -236,6 +238,14 @@ int main(int argc, char** argv) {
     if (status == sim::pcap::NextStatus::error) {
       read_error = reader->error().message;
       break;
+    }
+    if (pass == 1 && in_window == 0 && first_ts && (start_ns > 0 || r.duration_s > 0)) {
+      char message[512];
+      std::snprintf(message, sizeof message,
+                    "the window from --start %.3f s of %s holds no packet (the capture lasts "
+                    "%.3f s); choose an earlier --start.",
+                    r.start_s, r.file.c_str(), static_cast<double>(last_seen_ts - *first_ts) / 1e9);
+      return fail(message);
     }
     const bool decoded_any = stream->counters().packets > packets_before;
     if (!r.loop || stop_requested.load() || !decoded_any || !first_ts) break;

@@ -215,6 +215,11 @@ TEST(ReplayTool, LoopStartAndDuration) {
   EXPECT_LT(summary_value(result.out, "packets"), 2400);
   EXPECT_GT(summary_value(result.out, "packets"), 0);
   EXPECT_LE(summary_value(result.out, "frames"), 1);
+
+  const auto beyond = run({replay_tool, p64_capture, "--stream", windowed.name, "--calibration",
+                           p64_calibration, "--max-rate", "--start", "5"});
+  EXPECT_EQ(beyond.code, 1);
+  EXPECT_NE(beyond.err.find("holds no packet"), std::string::npos) << beyond.err;
 }
 
 TEST(ReplayTool, BadInputGetsOneSentenceAndExitCode) {
