@@ -1,0 +1,803 @@
+// SPDX-License-Identifier: Apache-2.0
+// sim_bench: SIM side by side with iceoryx, Fast DDS and Cyclone DDS, and the memcpy floor, on
+// the SIM paper's workloads (issue 5). One program; the writer and every reader are separate
+// processes: sim_bench starts itself again with a hidden --role argument for each of them.
+//
+// One configuration and run goes like this:
+//   1. the writer process sets up its transport and prints "ready";
+//   2. the reader processes subscribe, wait until they are connected, and print "ready";
+//   3. sim_bench sends "go": the writer waits for DDS matching, then publishes `frames` frames
+//      at `rate` Hz, stamping CLOCK_MONOTONIC into each frame immediately before publishing;
+//   4. each reader stamps when it holds the whole payload, and at the end prints its counts,
+//      its CPU time and its latencies; sim_bench pools them per configuration into one CSV row.
+#include <signal.h>
+#include <sys/resource.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <atomic>
+#include <cinttypes>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "process.hpp"
+#include "sim/clock.hpp"
+#include "sim/os.hpp"
+#include "stats.hpp"
+#include "transport.hpp"
+
+using namespace sim::bench;
+using namespace std::chrono_literals;
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Shared by the roles
+
+struct Usage {
+  double cpu_s = 0;
+  long voluntary_switches = 0;
+  long involuntary_switches = 0;
+};
+
+Usage usage_now() {
+  rusage ru{};
+  getrusage(RUSAGE_SELF, &ru);
+  Usage u;
+  u.cpu_s = static_cast<double>(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
+            static_cast<double>(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec) / 1e6;
+  u.voluntary_switches = ru.ru_nvcsw;
+  u.involuntary_switches = ru.ru_nivcsw;
+  return u;
+}
+
+Usage usage_since(const Usage& start) {
+  const Usage now = usage_now();
+  return {now.cpu_s - start.cpu_s, now.voluntary_switches - start.voluntary_switches,
+          now.involuntary_switches - start.involuntary_switches};
+}
+
+// Reads every byte of a frame once, so a zero-copy reader pays for touching the payload like a
+// copying one does. The sum goes to a volatile sink so the compiler cannot drop the loop.
+std::atomic<std::uint64_t> checksum_sink{0};
+std::uint64_t checksum(std::span<const std::byte> bytes) {
+  std::uint64_t sum = 0;
+  const std::size_t words = bytes.size() / 8;
+  for (std::size_t i = 0; i < words; ++i) {
+    std::uint64_t w;
+    std::memcpy(&w, bytes.data() + i * 8, 8);
+    sum += w;
+  }
+  for (std::size_t i = words * 8; i < bytes.size(); ++i) sum += static_cast<std::uint8_t>(bytes[i]);
+  checksum_sink.store(sum, std::memory_order_relaxed);
+  return sum;
+}
+
+void sleep_until_ns(std::int64_t t) {
+  timespec ts{static_cast<time_t>(t / 1'000'000'000), static_cast<long>(t % 1'000'000'000)};
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  }
+}
+
+// Pins and raises the calling process as asked; failures are reported, not fatal.
+void place_self(int cpu, int rt_priority) {
+  if (cpu >= 0) {
+    if (auto err = sim::pin_current_thread(cpu)) {
+      std::fprintf(stderr, "sim_bench: cannot pin to CPU %d: %s\n", cpu, err->message.c_str());
+    }
+  }
+  if (rt_priority > 0) {
+    if (auto err = sim::set_realtime_priority(rt_priority)) {
+      std::fprintf(stderr, "sim_bench: cannot use SCHED_FIFO: %s\n", err->message.c_str());
+    }
+  }
+}
+
+struct RoleOptions {
+  std::string role;
+  std::string transport;
+  std::string topic;
+  std::size_t payload = 0;
+  int readers = 1;
+  int index = 0;
+  int domain = 0;
+  std::uint64_t frames = 0;
+  std::uint64_t warmup = 0;
+  double rate = 0;  // 0: as fast as possible
+  int cpu = -1;
+  int rt_priority = 0;
+};
+
+Endpoint endpoint_of(const RoleOptions& o) {
+  return {o.topic, o.payload, o.readers, o.domain, o.role == "reader" ? o.index : -1};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writer role
+
+int run_writer(const RoleOptions& o, Transport t) {
+  place_self(o.cpu, o.rt_priority);
+  std::string error;
+  auto publisher = make_publisher(t, endpoint_of(o), error);
+  if (!publisher) {
+    std::printf("error=%s\n", error.c_str());
+    return 1;
+  }
+  std::printf("ready\n");
+  std::fflush(stdout);
+  std::string line;
+  if (!std::getline(std::cin, line) || line != "go") return 1;
+  if (!publisher->wait_for_readers(o.readers, 30s)) {
+    std::printf("error=the readers did not connect to the writer within 30 s\n");
+    std::fflush(stdout);
+    return 1;
+  }
+  // The writer's frame: arbitrary content, the header and tail are sealed per frame.
+  std::vector<std::byte> frame(o.payload);
+  for (std::size_t i = 0; i < frame.size(); ++i) frame[i] = static_cast<std::byte>(i * 131 + 7);
+
+  const std::int64_t period_ns = o.rate > 0 ? static_cast<std::int64_t>(1e9 / o.rate) : 0;
+  const Usage start = usage_now();
+  const std::int64_t t0 = sim::monotonic_ns();
+  std::int64_t next = t0;
+  std::uint64_t published = 0;
+  for (std::uint64_t seq = 1; seq <= o.frames; ++seq) {
+    if (publisher->publish(frame, seq)) ++published;
+    if (period_ns > 0) {
+      next += period_ns;  // absolute schedule: no drift
+      sleep_until_ns(next);
+    }
+  }
+  const double duration = static_cast<double>(sim::monotonic_ns() - t0) / 1e9;
+  const Usage used = usage_since(start);
+  std::printf("result published=%" PRIu64 " cpu_s=%.6f nvcsw=%ld nivcsw=%ld duration_s=%.3f path=%s\n",
+              published, used.cpu_s, used.voluntary_switches, used.involuntary_switches, duration,
+              publisher->path_note().empty() ? "-" : publisher->path_note().c_str());
+  std::fflush(stdout);
+  // Stay until the readers are done: a DDS writer that leaves takes its samples with it.
+  std::getline(std::cin, line);
+  return 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reader role
+
+int run_reader(const RoleOptions& o, Transport t) {
+  place_self(o.cpu, o.rt_priority);
+  std::string error;
+  auto subscriber = make_subscriber(t, endpoint_of(o), error);
+  if (!subscriber) {
+    std::printf("error=%s\n", error.c_str());
+    return 1;
+  }
+  if (!subscriber->ready(30s)) {
+    std::printf("error=the reader did not connect to the writer within 30 s\n");
+    return 1;
+  }
+  std::printf("ready\n");
+  std::fflush(stdout);
+
+  std::vector<std::int64_t> latencies;
+  latencies.reserve(o.frames);
+  std::uint64_t last = 0, received = 0, gaps = 0, torn = 0, invalidated = 0;
+  const std::int64_t period_ns = o.rate > 0 ? static_cast<std::int64_t>(1e9 / o.rate) : 0;
+  const std::int64_t idle_limit_ns = std::max<std::int64_t>(3'000'000'000, 50 * period_ns);
+  const std::int64_t first_deadline = sim::monotonic_ns() + 60'000'000'000;
+  std::int64_t last_frame_at = 0;
+  const Usage start = usage_now();
+  const bool zero_copy = subscriber->zero_copy();
+
+  while (last < o.frames) {
+    const Delivery d = subscriber->receive(100ms);
+    if (d.kind == Delivery::Kind::error) {
+      std::printf("error=%s\n", d.error.c_str());
+      return 1;
+    }
+    if (d.kind == Delivery::Kind::none) {
+      const std::int64_t now = sim::monotonic_ns();
+      if (last == 0 ? now > first_deadline : now - last_frame_at > idle_limit_ns) break;
+      continue;
+    }
+    if (zero_copy) checksum(d.bytes);
+    const std::int64_t stamp = sim::monotonic_ns();  // the reader holds the whole payload
+    FrameHeader header{};
+    std::uint64_t tail = ~0ull;
+    if (d.bytes.size() >= kMinPayload) {
+      std::memcpy(&header, d.bytes.data(), sizeof(header));
+      std::memcpy(&tail, d.bytes.data() + d.bytes.size() - sizeof(tail), sizeof(tail));
+    }
+    if (!subscriber->release()) {  // overwritten while we read it: not delivered
+      ++invalidated;
+      continue;
+    }
+    if (header.size != d.bytes.size() || tail != header.seq || header.seq == 0) {
+      ++torn;
+      continue;
+    }
+    if (header.seq <= last) continue;  // an old frame again: not new, not counted
+    // Frames between the last delivered one and this one were replaced before we took them.
+    const std::uint64_t gap_from = std::max(last, o.warmup);
+    if (header.seq > gap_from + 1) gaps += header.seq - gap_from - 1;
+    if (header.seq > o.warmup) {
+      latencies.push_back(stamp - header.stamp_ns);
+      ++received;
+    }
+    last = header.seq;
+    last_frame_at = stamp;
+  }
+  const Usage used = usage_since(start);
+  std::printf("result received=%" PRIu64 " gaps=%" PRIu64 " torn=%" PRIu64 " invalidated=%" PRIu64
+              " last=%" PRIu64 " cpu_s=%.6f nvcsw=%ld nivcsw=%ld\n",
+              received, gaps, torn, invalidated, last, used.cpu_s, used.voluntary_switches,
+              used.involuntary_switches);
+  std::string lat = "lat";
+  for (const auto v : latencies) lat += " " + std::to_string(v);
+  std::printf("%s\n", lat.c_str());
+  std::fflush(stdout);
+  return 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Orchestrator
+
+struct Options {
+  std::vector<std::string> transports{"sim-poll", "sim-block", "sim-zero", "iceoryx", "fastdds",
+                                      "cyclone"};
+  std::vector<std::size_t> payloads{25920, 1382400, 921600, 6912000};
+  std::vector<int> readers{1, 10};
+  double rate = 100;
+  bool max_rate = false;
+  std::uint64_t frames = 1100;
+  std::uint64_t warmup = 100;
+  int runs = 5;
+  std::string csv;
+  bool quick = false;
+  std::vector<int> cpus;
+  int rt_priority = 0;
+  bool no_floor = false;
+  bool skip_missing = false;
+};
+
+struct Row {
+  std::string transport;
+  std::size_t payload = 0;
+  int readers = 0;
+  int run = 0;
+  LatencySummary lat;
+  std::uint64_t received = 0, skipped = 0, lost = 0, torn = 0, published = 0;
+  double writer_cpu_s = 0, reader_cpu_s = 0;
+  long writer_nvcsw = 0, writer_nivcsw = 0, reader_nvcsw = 0, reader_nivcsw = 0;
+  long long udp_datagrams = -1;
+  std::string path;
+  std::string status = "ok";
+};
+
+std::string self_exe() {
+  char buf[4096];
+  const ssize_t n = readlink("/proc/self/exe", buf, sizeof(buf) - 1);
+  return n > 0 ? std::string(buf, static_cast<std::size_t>(n)) : std::string("sim_bench");
+}
+
+// UDP datagrams sent plus received on this machine so far (/proc/net/snmp, IPv4 and IPv6).
+long long udp_datagrams() {
+  long long total = 0;
+  bool found = false;
+  std::ifstream snmp("/proc/net/snmp");
+  std::string header, values;
+  while (std::getline(snmp, header) && std::getline(snmp, values)) {
+    if (header.rfind("Udp:", 0) != 0) continue;
+    std::istringstream hs(header), vs(values);
+    std::string key, value;
+    hs >> key;
+    vs >> value;
+    while (hs >> key && vs >> value) {
+      if (key == "InDatagrams" || key == "OutDatagrams") {
+        total += std::stoll(value);
+        found = true;
+      }
+    }
+  }
+  std::ifstream snmp6("/proc/net/snmp6");
+  std::string key;
+  long long value = 0;
+  while (snmp6 >> key >> value) {
+    if (key == "Udp6InDatagrams" || key == "Udp6OutDatagrams") total += value;
+  }
+  return found ? total : -1;
+}
+
+std::map<std::string, std::string> fields(const std::string& line) {
+  std::map<std::string, std::string> out;
+  std::istringstream in(line);
+  std::string word;
+  while (in >> word) {
+    const auto eq = word.find('=');
+    if (eq != std::string::npos) out[word.substr(0, eq)] = word.substr(eq + 1);
+  }
+  return out;
+}
+
+// Waits for a child's "ready" line; other lines (library chatter) are passed to stderr.
+bool await_ready(ChildProcess& child, const std::string& who, std::string& error) {
+  for (;;) {
+    auto l = child.line(90s);
+    if (!l) {
+      error = who + (child.timed_out() ? " did not get ready within 90 s" : " exited before it was ready");
+      return false;
+    }
+    if (*l == "ready") return true;
+    if (l->rfind("error=", 0) == 0) {
+      error = who + ": " + l->substr(6);
+      return false;
+    }
+    std::fprintf(stderr, "  [%s] %s\n", who.c_str(), l->c_str());
+  }
+}
+
+class Bench {
+ public:
+  explicit Bench(Options o) : o_(std::move(o)), exe_(self_exe()) {}
+
+  std::vector<std::string> role_args(const std::string& role, const std::string& transport,
+                                     const std::string& topic, std::size_t payload, int readers,
+                                     int index) const {
+    std::vector<std::string> a{exe_,
+                               "--role", role,
+                               "--role-transport", transport,
+                               "--role-topic", topic,
+                               "--role-payload", std::to_string(payload),
+                               "--role-readers", std::to_string(readers),
+                               "--role-index", std::to_string(index),
+                               "--role-domain", std::to_string(domain_),
+                               "--frames", std::to_string(o_.frames),
+                               "--warmup", std::to_string(o_.warmup),
+                               "--rate", std::to_string(o_.max_rate ? 0.0 : o_.rate),
+                               "--rt-priority", std::to_string(o_.rt_priority)};
+    const int cpu = cpu_for(role == "writer" ? -1 : index);
+    if (cpu >= 0) {
+      a.push_back("--role-cpu");
+      a.push_back(std::to_string(cpu));
+    }
+    return a;
+  }
+
+  // The writer takes the first CPU of --cpu; readers share the others (all of them if only one).
+  int cpu_for(int reader_index) const {
+    if (o_.cpus.empty()) return -1;
+    if (reader_index < 0 || o_.cpus.size() == 1) return o_.cpus.front();
+    const std::size_t others = o_.cpus.size() - 1;
+    return o_.cpus[1 + static_cast<std::size_t>(reader_index) % others];
+  }
+
+  Row run_one(const std::string& transport, std::size_t payload, int readers, int run) {
+    Row row;
+    row.transport = transport;
+    row.payload = payload;
+    row.readers = readers;
+    row.run = run;
+    const std::string topic =
+        "simbench_" + std::to_string(getpid()) + "_" + std::to_string(counter_++);
+    const long long udp_before = udp_datagrams();
+    std::string error;
+    auto fail = [&](const std::string& why) {
+      row.status = "failed";
+      std::fprintf(stderr, "sim_bench: %s %zu B %dR run %d failed: %s\n", transport.c_str(),
+                   payload, readers, run, why.c_str());
+      return row;
+    };
+
+    ChildProcess writer(role_args("writer", transport, topic, payload, readers, 0));
+    if (!writer.started()) return fail("cannot start the writer process");
+    if (!await_ready(writer, "writer", error)) return fail(error);
+    std::vector<std::unique_ptr<ChildProcess>> reader_procs;
+    for (int i = 0; i < readers; ++i) {
+      reader_procs.push_back(std::make_unique<ChildProcess>(
+          role_args("reader", transport, topic, payload, readers, i)));
+      if (!reader_procs.back()->started()) return fail("cannot start a reader process");
+    }
+    for (int i = 0; i < readers; ++i) {
+      if (!await_ready(*reader_procs[static_cast<std::size_t>(i)], "reader " + std::to_string(i), error)) {
+        return fail(error);
+      }
+    }
+    writer.send("go");
+
+    const double period_s = o_.max_rate ? 0.0 : 1.0 / o_.rate;
+    const auto run_budget = std::chrono::milliseconds(
+        static_cast<long long>(static_cast<double>(o_.frames) * period_s * 1000.0 * 2) + 120'000);
+    // The writer reports when it has published everything.
+    for (;;) {
+      auto l = writer.line(run_budget);
+      if (!l) return fail(writer.timed_out() ? "the writer did not finish in time" : "the writer died");
+      if (l->rfind("error=", 0) == 0) return fail("writer: " + l->substr(6));
+      if (l->rfind("result ", 0) == 0) {
+        auto f = fields(*l);
+        row.published = std::stoull(f["published"]);
+        row.writer_cpu_s = std::stod(f["cpu_s"]);
+        row.writer_nvcsw = std::stol(f["nvcsw"]);
+        row.writer_nivcsw = std::stol(f["nivcsw"]);
+        row.path = f["path"];
+        break;
+      }
+      std::fprintf(stderr, "  [writer] %s\n", l->c_str());
+    }
+    // Each reader stops at the last frame or after an idle timeout, then reports.
+    std::vector<std::int64_t> pooled;
+    const std::uint64_t expected = o_.frames - o_.warmup;
+    for (int i = 0; i < readers; ++i) {
+      auto& r = *reader_procs[static_cast<std::size_t>(i)];
+      bool got_result = false, got_lat = false;
+      while (!(got_result && got_lat)) {
+        auto l = r.line(120s);
+        if (!l) break;
+        if (l->rfind("error=", 0) == 0) return fail("reader: " + l->substr(6));
+        if (l->rfind("result ", 0) == 0) {
+          auto f = fields(*l);
+          const std::uint64_t received = std::stoull(f["received"]);
+          const std::uint64_t gaps = std::stoull(f["gaps"]);
+          const std::uint64_t torn = std::stoull(f["torn"]);
+          row.received += received;
+          // Gaps are frames a newer one replaced (by design). Torn frames show up as gaps too
+          // but count as lost, like frames after the last one delivered, which never arrived.
+          const std::uint64_t skipped = gaps - std::min(gaps, torn);
+          row.skipped += skipped;
+          row.lost += expected - std::min(expected, received + skipped);
+          row.torn += torn;
+          row.reader_cpu_s += std::stod(f["cpu_s"]);
+          row.reader_nvcsw += std::stol(f["nvcsw"]);
+          row.reader_nivcsw += std::stol(f["nivcsw"]);
+          got_result = true;
+        } else if (l->rfind("lat", 0) == 0) {
+          std::istringstream in(l->substr(3));
+          std::int64_t v;
+          while (in >> v) pooled.push_back(v);
+          got_lat = true;
+        } else {
+          std::fprintf(stderr, "  [reader %d] %s\n", i, l->c_str());
+        }
+      }
+      if (!got_result) return fail("reader " + std::to_string(i) + " gave no result");
+    }
+    writer.send("stop");
+    if (writer.wait(30s) < 0) writer.signal(SIGKILL);
+    for (auto& r : reader_procs) {
+      if (r->wait(10s) < 0) r->signal(SIGKILL);
+    }
+    const long long udp_after = udp_datagrams();
+    if (udp_before >= 0 && udp_after >= 0) row.udp_datagrams = udp_after - udp_before;
+    row.lat = summarize(std::move(pooled));
+    if (row.received == 0) row.status = "no_frames";
+    return row;
+  }
+
+  // The floor: copy the payload into "shared memory" and out again, as a writer and a reader at
+  // least must, with cold caches (a ring of slots larger than the last-level cache).
+  Row memcpy_floor(std::size_t payload, int run) {
+    Row row;
+    row.transport = "memcpy";
+    row.payload = payload;
+    row.readers = 1;
+    row.run = run;
+    const std::size_t slots = std::clamp<std::size_t>((64u << 20) / payload, 2, 4096);
+    std::vector<std::byte> src(payload), dst(payload), shm(slots * payload);
+    for (std::size_t i = 0; i < src.size(); ++i) src[i] = static_cast<std::byte>(i);
+    std::memset(shm.data(), 1, shm.size());
+    std::memset(dst.data(), 2, dst.size());
+    std::vector<std::int64_t> samples;
+    samples.reserve(o_.frames);
+    const Usage start = usage_now();
+    for (std::uint64_t i = 0; i < o_.frames; ++i) {
+      std::byte* slot = shm.data() + (i % slots) * payload;
+      const std::int64_t t0 = sim::monotonic_ns();
+      std::memcpy(slot, src.data(), payload);
+      asm volatile("" ::: "memory");
+      std::memcpy(dst.data(), slot, payload);
+      asm volatile("" ::: "memory");
+      const std::int64_t t1 = sim::monotonic_ns();
+      if (i >= o_.warmup) samples.push_back(t1 - t0);
+    }
+    const Usage used = usage_since(start);
+    checksum(dst);
+    row.writer_cpu_s = used.cpu_s;
+    row.received = samples.size();
+    row.published = o_.frames;
+    row.lat = summarize(std::move(samples));
+    return row;
+  }
+
+  int run_all() {
+    std::vector<Transport> transports;
+    for (const auto& name : o_.transports) {
+      Transport t;
+      if (!parse_transport(name, t)) {
+        std::fprintf(stderr, "sim_bench: unknown transport '%s': use sim-poll, sim-block, sim-zero, "
+                             "iceoryx, fastdds or cyclone.\n", name.c_str());
+        return 2;
+      }
+      if (!available(t)) {
+        if (o_.skip_missing) {
+          std::fprintf(stderr, "sim_bench: %s is not in this build; skipped.\n", name.c_str());
+          continue;
+        }
+        std::fprintf(stderr, "sim_bench: %s is not in this build: install its Debian package "
+                             "(scripts/deps/bench.txt), reconfigure, or pass --skip-missing.\n",
+                     name.c_str());
+        return 2;
+      }
+      transports.push_back(t);
+    }
+    for (const auto p : o_.payloads) {
+      if (p < kMinPayload) {
+        std::fprintf(stderr, "sim_bench: payload %zu B is below the %zu B frame header; use a larger one.\n",
+                     p, kMinPayload);
+        return 2;
+      }
+    }
+    domain_ = static_cast<int>(getpid() % 200) + 1;
+
+    std::unique_ptr<ChildProcess> roudi;
+    if (std::any_of(transports.begin(), transports.end(), needs_roudi)) {
+      std::string error;
+      roudi = start_roudi(error);
+      if (!roudi) {
+        std::fprintf(stderr, "sim_bench: %s\n", error.c_str());
+        return 1;
+      }
+    }
+
+    std::FILE* csv = nullptr;
+    std::FILE* extra = nullptr;
+    if (!o_.csv.empty()) {
+      csv = std::fopen(o_.csv.c_str(), "w");
+      std::string extra_path = o_.csv;
+      if (extra_path.size() > 4 && extra_path.ends_with(".csv")) extra_path.resize(extra_path.size() - 4);
+      extra_path += "_extra.csv";
+      extra = std::fopen(extra_path.c_str(), "w");
+      if (csv == nullptr || extra == nullptr) {
+        std::fprintf(stderr, "sim_bench: cannot write %s: check the folder exists and is writable.\n",
+                     o_.csv.c_str());
+        return 1;
+      }
+      std::fprintf(csv, "transport,payload_bytes,readers,run,min_us,mean_us,p50_us,p95_us,p99_us,"
+                        "p999_us,max_us,std_us,received,skipped,lost,writer_cpu_s,reader_cpu_s\n");
+      std::fprintf(extra, "transport,payload_bytes,readers,run,published,torn,writer_nvcsw,"
+                          "writer_nivcsw,reader_nvcsw,reader_nivcsw,udp_datagrams,path,status,"
+                          "rate_hz,frames,warmup,cpus,rt_priority\n");
+    }
+    const std::size_t total = o_.payloads.size() * o_.readers.size() * static_cast<std::size_t>(o_.runs) *
+                              (transports.size() + (o_.no_floor ? 0 : 1));
+    std::size_t done = 0;
+    int failures = 0;
+    std::printf("%-10s %9s %3s %3s %10s %10s %10s %10s %10s %8s %7s %5s\n", "transport", "payload",
+                "R", "run", "min_us", "mean_us", "p99_us", "p999_us", "max_us", "received",
+                "skipped", "lost");
+    auto emit = [&](const Row& r) {
+      ++done;
+      std::printf("%-10s %9zu %3d %3d %10.1f %10.1f %10.1f %10.1f %10.1f %8" PRIu64 " %7" PRIu64
+                  " %5" PRIu64 "%s\n",
+                  r.transport.c_str(), r.payload, r.readers, r.run, r.lat.min_us, r.lat.mean_us,
+                  r.lat.p99_us, r.lat.p999_us, r.lat.max_us, r.received, r.skipped, r.lost,
+                  r.status == "ok" ? "" : ("  " + r.status).c_str());
+      std::fflush(stdout);
+      if (isatty(STDERR_FILENO)) std::fprintf(stderr, "\r[%zu/%zu]   ", done, total);
+      if (r.status == "failed") ++failures;
+      if (csv == nullptr) return;
+      std::fprintf(csv, "%s,%zu,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%" PRIu64 ",%" PRIu64
+                        ",%" PRIu64 ",%.6f,%.6f\n",
+                   r.transport.c_str(), r.payload, r.readers, r.run, r.lat.min_us, r.lat.mean_us,
+                   r.lat.p50_us, r.lat.p95_us, r.lat.p99_us, r.lat.p999_us, r.lat.max_us, r.lat.std_us,
+                   r.received, r.skipped, r.lost, r.writer_cpu_s, r.reader_cpu_s);
+      std::string cpus;
+      for (const int c : o_.cpus) cpus += (cpus.empty() ? "" : " ") + std::to_string(c);
+      std::fprintf(extra, "%s,%zu,%d,%d,%" PRIu64 ",%" PRIu64 ",%ld,%ld,%ld,%ld,%lld,%s,%s,%g,%" PRIu64
+                          ",%" PRIu64 ",%s,%d\n",
+                   r.transport.c_str(), r.payload, r.readers, r.run, r.published, r.torn,
+                   r.writer_nvcsw, r.writer_nivcsw, r.reader_nvcsw, r.reader_nivcsw, r.udp_datagrams,
+                   r.path.empty() ? "-" : r.path.c_str(), r.status.c_str(), o_.max_rate ? 0.0 : o_.rate,
+                   o_.frames, o_.warmup, cpus.empty() ? "-" : cpus.c_str(), o_.rt_priority);
+      std::fflush(csv);
+      std::fflush(extra);
+    };
+
+    // Runs are the outer loop so slow drift of the machine touches every transport alike.
+    for (int run = 1; run <= o_.runs; ++run) {
+      for (const auto payload : o_.payloads) {
+        for (const int readers : o_.readers) {
+          if (!o_.no_floor && readers == o_.readers.front()) emit(memcpy_floor(payload, run));
+          for (const auto t : transports) {
+            emit(run_one(std::string(to_string(t)), payload, readers, run));
+          }
+        }
+      }
+    }
+    if (isatty(STDERR_FILENO)) std::fprintf(stderr, "\n");
+    if (csv != nullptr) std::fclose(csv);
+    if (extra != nullptr) std::fclose(extra);
+    if (roudi) stop_roudi(*roudi);
+    return failures == 0 ? 0 : 1;
+  }
+
+  // RouDi, iceoryx's daemon, with memory pools for every payload and reader count of this run.
+  std::unique_ptr<ChildProcess> start_roudi(std::string& error) {
+    const char* roudi_path = "/usr/bin/iox-roudi";
+    if (access(roudi_path, X_OK) != 0) {
+      error = "iox-roudi is missing: apt-get install iceoryx (see scripts/deps/bench.txt).";
+      return nullptr;
+    }
+    if (access("/dev/shm/iceoryx_mgmt", F_OK) == 0) {
+      error = "another iceoryx RouDi seems to be running (/dev/shm/iceoryx_mgmt exists): stop it, "
+              "or remove the stale file if none runs, then retry.";
+      return nullptr;
+    }
+    roudi_config_ = "/tmp/sim_bench_roudi_" + std::to_string(getpid()) + ".toml";
+    std::ofstream cfg(roudi_config_);
+    const int max_readers = *std::max_element(o_.readers.begin(), o_.readers.end());
+    cfg << "[general]\nversion = 1\n\n[[segment]]\n\n";
+    // Small pools for the peers' own bookkeeping, then one pool per payload with room for every
+    // reader's queue, the samples in use, and Cyclone's extra header.
+    std::map<std::size_t, int> pools{{128, 10000}, {1024, 5000}, {16384, 1000}, {131072, 200}};
+    for (const auto p : o_.payloads) {
+      const std::size_t size = (p + 1024 + 7) / 8 * 8;
+      pools[size] = std::max(pools[size], 4 * max_readers + 16);
+    }
+    for (const auto& [size, count] : pools) {
+      cfg << "[[segment.mempool]]\nsize = " << size << "\ncount = " << count << "\n\n";
+    }
+    cfg.close();
+    // Its output goes to a log file: nobody reads its pipe during the run, and a full pipe
+    // would stall it.
+    roudi_log_ = "/tmp/sim_bench_roudi_" + std::to_string(getpid()) + ".log";
+    auto roudi = std::make_unique<ChildProcess>(std::vector<std::string>{
+        "/bin/sh", "-c",
+        std::string("exec ") + roudi_path + " -c " + roudi_config_ + " -m off -l warning >" +
+            roudi_log_ + " 2>&1"});
+    if (!roudi->started()) {
+      error = "cannot start iox-roudi.";
+      return nullptr;
+    }
+    // RouDi says nothing at log level warning; it is up once its management segment exists.
+    const auto deadline = std::chrono::steady_clock::now() + 20s;
+    // (/tmp/roudi is the socket applications register through.)
+    while (access("/dev/shm/iceoryx_mgmt", F_OK) != 0 || access("/tmp/roudi", F_OK) != 0) {
+      if (roudi->wait(0ms) >= 0 || std::chrono::steady_clock::now() > deadline) {
+        error = "iox-roudi did not start: see " + roudi_log_ + ".";
+        return nullptr;
+      }
+      std::this_thread::sleep_for(20ms);
+    }
+    std::this_thread::sleep_for(300ms);  // the segment exists a moment before RouDi listens
+    return roudi;
+  }
+
+  void stop_roudi(ChildProcess& roudi) {
+    roudi.signal(SIGINT);
+    if (roudi.wait(15s) < 0) roudi.signal(SIGKILL);
+    roudi.wait(5s);
+    std::remove(roudi_config_.c_str());
+    std::remove(roudi_log_.c_str());
+  }
+
+ private:
+  Options o_;
+  std::string exe_;
+  int domain_ = 0;
+  int counter_ = 0;
+  std::string roudi_config_;
+  std::string roudi_log_;
+};
+
+std::vector<std::string> split_list(const std::string& s) {
+  std::vector<std::string> out;
+  std::string item;
+  std::istringstream in(s);
+  while (std::getline(in, item, ',')) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"sim_bench: SIM against iceoryx, Fast DDS, Cyclone DDS and the memcpy floor, one "
+               "writer and N reader processes per configuration (issue 5)."};
+  Options o;
+  RoleOptions role;
+  std::string transports = "sim-poll,sim-block,sim-zero,iceoryx,fastdds,cyclone";
+  std::string payloads = "25920,1382400,921600,6912000";
+  std::string readers = "1,10";
+  std::string cpus;
+  app.add_option("--transports", transports,
+                 "comma list of sim-poll,sim-block,sim-zero,iceoryx,fastdds,cyclone")
+      ->capture_default_str();
+  app.add_option("--payloads", payloads, "comma list of payload sizes in bytes")->capture_default_str();
+  app.add_option("--readers", readers, "comma list of reader counts (one process each)")
+      ->capture_default_str();
+  app.add_option("--rate", o.rate, "frames per second the writer publishes (0: as fast as it can)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  app.add_flag("--max-rate", o.max_rate, "publish as fast as the writer can instead of --rate");
+  app.add_option("--frames", o.frames, "frames per run, warm-up included")->capture_default_str();
+  app.add_option("--warmup", o.warmup, "first frames of each run left out of the statistics")
+      ->capture_default_str();
+  app.add_option("--runs", o.runs, "runs per configuration")->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--csv", o.csv, "write one row per transport x payload x readers x run here "
+                                 "(and the extra columns next to it, as *_extra.csv)");
+  app.add_flag("--quick", o.quick, "smoke test: 60 frames (10 warm-up), 1 run");
+  app.add_option("--cpu", cpus, "comma list of CPUs: the writer pins to the first, readers to the rest");
+  app.add_option("--rt-priority", o.rt_priority, "run writer and readers under SCHED_FIFO at this "
+                                                  "priority (1-99, needs root)")->check(CLI::Range(0, 99));
+  app.add_flag("--no-floor", o.no_floor, "do not measure the memcpy floor");
+  bool list = false;
+  app.add_flag("--list-transports", list, "print the transports this build has, one a line, and exit");
+  app.add_flag("--skip-missing", o.skip_missing, "leave out transports this build does not have "
+                                                  "instead of failing");
+  // The roles sim_bench starts itself in; hidden from --help.
+  app.add_option("--role", role.role)->group("")->check(CLI::IsMember({"writer", "reader"}));
+  app.add_option("--role-transport", role.transport)->group("");
+  app.add_option("--role-topic", role.topic)->group("");
+  app.add_option("--role-payload", role.payload)->group("");
+  app.add_option("--role-readers", role.readers)->group("");
+  app.add_option("--role-index", role.index)->group("");
+  app.add_option("--role-domain", role.domain)->group("");
+  app.add_option("--role-cpu", role.cpu)->group("");
+  CLI11_PARSE(app, argc, argv);
+
+  if (!role.role.empty()) {
+    Transport t;
+    if (!parse_transport(role.transport, t)) return 2;
+    role.frames = o.frames;
+    role.warmup = o.warmup;
+    role.rate = o.rate;
+    role.rt_priority = o.rt_priority;
+    return role.role == "writer" ? run_writer(role, t) : run_reader(role, t);
+  }
+
+  if (list) {
+    for (const auto t : {Transport::sim_poll, Transport::sim_block, Transport::sim_zero,
+                         Transport::iceoryx, Transport::fastdds, Transport::cyclone}) {
+      if (available(t)) std::printf("%s\n", std::string(to_string(t)).c_str());
+    }
+    return 0;
+  }
+  o.transports = split_list(transports);
+  o.payloads.clear();
+  o.readers.clear();
+  try {
+    for (const auto& p : split_list(payloads)) o.payloads.push_back(std::stoull(p));
+    for (const auto& r : split_list(readers)) o.readers.push_back(std::stoi(r));
+    for (const auto& c : split_list(cpus)) o.cpus.push_back(std::stoi(c));
+  } catch (const std::exception&) {
+    std::fprintf(stderr, "sim_bench: --payloads, --readers and --cpu take comma lists of numbers, "
+                         "e.g. --payloads 25920,921600.\n");
+    return 2;
+  }
+  if (o.transports.empty() || o.payloads.empty() || o.readers.empty() ||
+      std::any_of(o.readers.begin(), o.readers.end(), [](int r) { return r < 1 || r > 64; })) {
+    std::fprintf(stderr, "sim_bench: give at least one transport, payload and reader count "
+                         "(1-64 readers).\n");
+    return 2;
+  }
+  if (o.quick) {
+    o.frames = 60;
+    o.warmup = 10;
+    o.runs = 1;
+  }
+  if (o.rate <= 0) o.max_rate = true;
+  if (o.warmup >= o.frames) {
+    std::fprintf(stderr, "sim_bench: --warmup must be smaller than --frames.\n");
+    return 2;
+  }
+  return Bench(std::move(o)).run_all();
+}
