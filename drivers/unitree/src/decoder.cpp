@@ -138,13 +138,10 @@ void Decoder::on_l2_packet(std::span<const std::byte> packet, std::int64_t host_
   const std::span<LidarPoint> room = assembler_.begin_packet(stamp, header->stamp_ns);
   const std::uint32_t base = clamp_offset(header->stamp_ns - assembler_.scan_clock_ns());
   const l2::DecodeLimits limits{options_.range_min_m, options_.range_max_m};
-  const std::size_t written = l2::decode_points(packet, *header, limits, base, room);
-  // Count what would not fit (decode_points stops at the end of the storage).
-  if (written == room.size() && header->point_num > written) {
-    counters_.dropped_points += header->point_num - written;
-  }
-  counters_.points += written;
-  if (assembler_.end_packet(written)) ++counters_.scans;
+  const l2::DecodeResult result = l2::decode_points(packet, *header, limits, base, room);
+  counters_.dropped_points += result.overflow;
+  counters_.points += result.written;
+  if (assembler_.end_packet(result.written)) ++counters_.scans;
 }
 
 void Decoder::on_l1_message(const MavlinkMessage& message, std::int64_t host_ns) noexcept {
@@ -192,16 +189,11 @@ void Decoder::decode_l1_pair(std::int64_t host_ns) noexcept {
   const std::uint32_t base = clamp_offset(std::int64_t{assembler_.packets_in_scan()} *
                                           l1::kPointsPerPacket * kL1PointPeriodNs);
   const l1::DecodeLimits limits{options_.range_min_m, options_.range_max_m, 0.0F};
-  const std::size_t written =
+  const l1::DecodeResult result =
       l1::decode_points(*l1_distance_, *l1_aux_, limits, base, kL1PointPeriodNs, room);
-  if (written == room.size()) {
-    const auto nonzero = static_cast<std::size_t>(std::count_if(
-        std::begin(l1_distance_->ranges_mm), std::end(l1_distance_->ranges_mm),
-        [](std::uint16_t r) { return r != 0; }));
-    if (nonzero > written) counters_.dropped_points += nonzero - written;
-  }
-  counters_.points += written;
-  if (assembler_.end_packet(written)) ++counters_.scans;
+  counters_.dropped_points += result.overflow;
+  counters_.points += result.written;
+  if (assembler_.end_packet(result.written)) ++counters_.scans;
   l1_distance_.reset();
   l1_aux_.reset();
 }

@@ -56,7 +56,7 @@ std::optional<ImuSample> parse_imu(std::span<const std::byte> p) noexcept {
   return s;
 }
 
-std::size_t decode_points(const DistancePacket& d, const AuxiliaryPacket& a,
+DecodeResult decode_points(const DistancePacket& d, const AuxiliaryPacket& a,
                           const DecodeLimits& limits, std::uint32_t base_offset_ns,
                           std::uint32_t point_period_ns, std::span<LidarPoint> out) noexcept {
   // Symbols as in the L1 SDK: θ and ξ tilt the mirror axis, β is the horizontal (yaw) angle.
@@ -65,8 +65,8 @@ std::size_t decode_points(const DistancePacket& d, const AuxiliaryPacket& a,
   const double sin_ksi = std::sin(double{a.ksi_angle_rad});
   const double cos_ksi = std::cos(double{a.ksi_angle_rad});
   const double b_axis = double{a.b_axis_dist_mm} / 1000.0;
-  std::size_t written = 0;
-  for (std::size_t j = 0; j < kPointsPerPacket && written < out.size(); ++j) {
+  DecodeResult result;
+  for (std::size_t j = 0; j < kPointsPerPacket; ++j) {
     if (d.ranges_mm[j] == 0) continue;
     const double r = 0.001 * d.ranges_mm[j];
     if (!(r >= limits.range_min_m && r <= limits.range_max_m)) continue;
@@ -84,7 +84,11 @@ std::size_t decode_points(const DistancePacket& d, const AuxiliaryPacket& a,
     const double y = std::sin(beta) * big_a + std::cos(beta) * big_b;
     const double z = (sin_theta * sin_ksi + cos_theta * sin_alpha * cos_ksi) * r + kZBias;
     if (!plausible(x) || !plausible(y) || !plausible(z)) continue;
-    LidarPoint& pt = out[written++];
+    if (result.written == out.size()) {
+      ++result.overflow;
+      continue;
+    }
+    LidarPoint& pt = out[result.written++];
     pt.x = static_cast<float>(x);
     pt.y = static_cast<float>(y);
     pt.z = static_cast<float>(z);
@@ -95,7 +99,7 @@ std::size_t decode_points(const DistancePacket& d, const AuxiliaryPacket& a,
     pt.return_index = 0;
     pt.reserved = 0;
   }
-  return written;
+  return result;
 }
 
 }  // namespace sim::unitree::l1

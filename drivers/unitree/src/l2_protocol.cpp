@@ -58,7 +58,7 @@ std::optional<PointPacketHeader> parse_point_header(std::span<const std::byte> p
   return h;
 }
 
-std::size_t decode_points(std::span<const std::byte> p, const PointPacketHeader& h,
+DecodeResult decode_points(std::span<const std::byte> p, const PointPacketHeader& h,
                           const DecodeLimits& limits, std::uint32_t base_offset_ns,
                           std::span<LidarPoint> out) noexcept {
   // Double precision inside, so the angle accumulation j·step does not lose the last digits.
@@ -69,8 +69,8 @@ std::size_t decode_points(std::span<const std::byte> p, const PointPacketHeader&
   const double r_min = std::max(double{h.range_min}, double{limits.range_min_m});
   const double r_max = std::min(double{h.range_max}, double{limits.range_max_m});
   const std::size_t count = std::min<std::size_t>(h.point_num, kPointsPerPacket);
-  std::size_t written = 0;
-  for (std::size_t j = 0; j < count && written < out.size(); ++j) {
+  DecodeResult result;
+  for (std::size_t j = 0; j < count; ++j) {
     const std::uint16_t raw = le::u16(p, point3d::ranges + 2 * j);
     if (raw < 1) continue;
     const double r = double{h.range_scale} * (static_cast<double>(raw) + double{h.range_bias});
@@ -88,8 +88,12 @@ std::size_t decode_points(std::span<const std::byte> p, const PointPacketHeader&
     const double y = std::sin(theta) * a + std::cos(theta) * b;
     const double z = c + h.a_axis_dist;
     if (!plausible(x) || !plausible(y) || !plausible(z)) continue;
+    if (result.written == out.size()) {
+      ++result.overflow;
+      continue;
+    }
     const double t = static_cast<double>(base_offset_ns) + jd * double{h.time_increment} * 1e9;
-    LidarPoint& pt = out[written++];
+    LidarPoint& pt = out[result.written++];
     pt.x = static_cast<float>(x);
     pt.y = static_cast<float>(y);
     pt.z = static_cast<float>(z);
@@ -99,7 +103,7 @@ std::size_t decode_points(std::span<const std::byte> p, const PointPacketHeader&
     pt.return_index = 0;
     pt.reserved = 0;
   }
-  return written;
+  return result;
 }
 
 std::optional<ImuSample> parse_imu(std::span<const std::byte> p) noexcept {

@@ -71,7 +71,7 @@ class UdpSource {
 
   void open(const asio::ip::udp::endpoint& local) {
     socket_.open(local.protocol());
-    socket_.set_option(asio::socket_base::reuse_address(true));
+    // No SO_REUSEADDR: a second listener on the port must fail loudly, not steal datagrams.
     // Bursts of 1044-B packets at ~64,000 points/s: a large kernel buffer rides out scheduling.
     boost::system::error_code ignored;
     socket_.set_option(asio::socket_base::receive_buffer_size(4 << 20), ignored);

@@ -56,8 +56,12 @@ struct DecodeLimits {
 };
 
 // The SDK's XYZ formulas for one paired packet; point j gets
-// time_offset_ns = base_offset_ns + j·point_period_ns. Returns the number of points written.
-std::size_t decode_points(const DistancePacket& distance, const AuxiliaryPacket& aux,
+// time_offset_ns = base_offset_ns + j·point_period_ns.
+struct DecodeResult {
+  std::size_t written = 0;   // points stored in `out`
+  std::size_t overflow = 0;  // valid points that did not fit in `out`
+};
+DecodeResult decode_points(const DistancePacket& distance, const AuxiliaryPacket& aux,
                           const DecodeLimits& limits, std::uint32_t base_offset_ns,
                           std::uint32_t point_period_ns, std::span<LidarPoint> out) noexcept;
 

@@ -107,10 +107,15 @@ struct DecodeLimits {
   float range_max_m = 1.0e9F;
 };
 
+struct DecodeResult {
+  std::size_t written = 0;   // points stored in `out`
+  std::size_t overflow = 0;  // valid points that did not fit in `out`
+};
+
 // Converts the packet's points with the official range/angle→XYZ formulas into `out`
-// (at most out.size() points; non-finite results are skipped). time_offset_ns is
-// `base_offset_ns + j·time_increment`. Returns the number of points written.
-std::size_t decode_points(std::span<const std::byte> packet, const PointPacketHeader& header,
+// (at most out.size() points; zero, out-of-range and implausible results are skipped).
+// time_offset_ns is `base_offset_ns + j·time_increment`.
+DecodeResult decode_points(std::span<const std::byte> packet, const PointPacketHeader& header,
                           const DecodeLimits& limits, std::uint32_t base_offset_ns,
                           std::span<LidarPoint> out) noexcept;
 
