@@ -3,7 +3,7 @@
 // revolution, decoding straight into a span the caller owns (a SIM writer's loaned slot).
 // The live driver and the pcap replay use this same object.
 //
-//   FrameAssembler assembler{calibration, options};        // from FrameAssembler::create
+//   auto assembler = FrameAssembler::create(calibration, options).value();
 //   auto loan = writer.loan();
 //   assembler.set_output(loan.as<sim::LidarPoint>());
 //   for each UDP payload:
@@ -37,18 +37,18 @@
 
 namespace sim::hesai {
 
-// Every choice the decoder makes is an option; the defaults reproduce nebula's reference
-// clouds (see docs/hesai.md and ../shared/data/lidar/SOURCES.md).
 // Where a revolution ends.
 enum class CutBy : std::uint8_t {
   // Each point by its own azimuth (block azimuth + channel offset): a frame holds exactly the
   // points with azimuth in [cut, cut + 360°). This is what nebula's reference clouds do.
   point_azimuth,
   // Whole firings by block azimuth: simpler, but points of channels with an azimuth offset
-  // spill a few tenths of a degree (Pandar64: up to 5°) across the cut.
+  // spill across the cut by up to that offset (Pandar64: 5.2°, XT32: under 0.1°).
   block_azimuth,
 };
 
+// Every choice the decoder makes is an option; the defaults reproduce nebula's reference
+// clouds (see docs/hesai.md and ../shared/data/lidar/SOURCES.md).
 struct AssemblerOptions {
   Model model = Model::pandar64;
   // A new frame starts where the azimuth reaches this angle (degrees, Hesai frame).
@@ -76,7 +76,7 @@ struct AssemblerOptions {
 
 struct CompletedFrame {
   std::size_t point_count = 0;        // points written at the front of the output span
-  std::int64_t stamp_ns = 0;          // sensor UTC of the frame's first firing, ns since epoch
+  std::int64_t stamp_ns = 0;          // sensor UTC of the frame's earliest firing, ns since epoch
   std::int64_t host_receive_ns = 0;   // host receive time of the frame's first packet
   std::uint64_t index = 0;            // 0, 1, 2… frames completed by this assembler
   std::uint32_t packets = 0;          // packets that contributed points or firings
@@ -110,8 +110,9 @@ class FrameAssembler {
   static Expected<FrameAssembler> create(Calibration calibration, AssemblerOptions options);
 
   // The span the following points go to. Call once before the first push and again after
-  // every completed frame; the carried-over points of the straddling packet are copied to its
-  // front. The span must stay valid until the next completed frame.
+  // every completed frame (and flush); the points already decoded for the new frame are copied
+  // to its front. The span must stay valid until the next completed frame. Called in the middle
+  // of a frame, it restarts that frame's storage (the frame is then not a whole revolution).
   void set_output(std::span<LidarPoint> output) noexcept;
 
   // Decodes one UDP payload. At most one frame completes per call; its points are the front
@@ -119,10 +120,12 @@ class FrameAssembler {
   PushResult push(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns) noexcept;
 
   // Returns the frame in progress as a (partial, whole_revolution = false) frame and starts
-  // over, e.g. at the end of a recording. nullopt when it holds no firing or has no span.
+  // over, e.g. at the end of a recording; like a completed frame, the span then belongs to the
+  // caller again. nullopt when it holds no firing or has no span.
   std::optional<CompletedFrame> flush() noexcept;
 
-  // Forget the frame in progress and the loss-detection state (a new recording, a loop).
+  // Forget the frame in progress and the loss-detection state (a new recording, a loop). The
+  // output span, if any, stays attached and is refilled from its start.
   void reset() noexcept;
 
   const AssemblerCounters& counters() const noexcept { return counters_; }
