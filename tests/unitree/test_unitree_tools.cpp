@@ -304,6 +304,51 @@ TEST(UnitreeDriver, L2OverPseudoTerminal) {
   run_serial_driver(sim::unitree::Model::l2, wire, 2, "4000000 baud");
 }
 
+TEST(UnitreeDriver, L1BehindSerialToUdpBoard) {
+  // The L1's adapter board forwards the MAVLink byte stream over UDP in arbitrary pieces.
+  StreamGuard guard;
+  const std::string stream = unique_name("l1udp");
+  guard.names = {stream, stream + ".imu"};
+  ChildProcess driver({SIM_LIDAR_UNITREE_PATH, "--model", "L1", "--udp-port", "0",
+                       "--bind-address", "127.0.0.1", "--stream", stream, "--scan-packets", "4",
+                       "-q"});
+  const auto line = driver.read_line(kTimeout);
+  ASSERT_TRUE(line.has_value());
+  unsigned port = 0;
+  ASSERT_EQ(std::sscanf(line->c_str(), "listening on udp port %u", &port), 1) << *line;
+  auto points = open_reader(stream);
+  ASSERT_TRUE(points);
+
+  const Bytes wire = l1_wire();
+  UdpSender sender(static_cast<std::uint16_t>(port));
+  for (std::size_t off = 0; off < wire.size(); off += 100) {
+    sender.send(std::span<const std::byte>(wire).subspan(off, std::min<std::size_t>(100, wire.size() - off)));
+  }
+  const auto expected = expected_scans(sim::unitree::Model::l1, 4, wire);
+  ASSERT_EQ(expected.size(), 1U);
+  expect_frame(*points, expected[0], 1);
+  driver.signal(SIGTERM);
+  EXPECT_EQ(driver.wait(kTimeout), 0);
+}
+
+TEST(UnitreeDriver, PortInUseIsARuntimeFailure) {
+  StreamGuard guard;
+  const std::string first = unique_name("port1");
+  const std::string second = unique_name("port2");
+  guard.names = {first, first + ".imu", second, second + ".imu"};
+  ChildProcess driver({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", "0",
+                       "--bind-address", "127.0.0.1", "--stream", first, "-q"});
+  const auto line = driver.read_line(kTimeout);
+  ASSERT_TRUE(line.has_value());
+  unsigned port = 0;
+  ASSERT_EQ(std::sscanf(line->c_str(), "listening on udp port %u", &port), 1) << *line;
+  ChildProcess other({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", std::to_string(port),
+                      "--bind-address", "127.0.0.1", "--stream", second, "-q"});
+  EXPECT_EQ(other.wait(kTimeout), 1);
+  driver.signal(SIGTERM);
+  EXPECT_EQ(driver.wait(kTimeout), 0);
+}
+
 TEST(UnitreeDriver, BadOptionsExitWithUsageOrFailure) {
   {
     ChildProcess p({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--stream", "/a/b", "--udp-port", "0", "-q"});
