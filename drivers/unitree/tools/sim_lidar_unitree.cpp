@@ -240,12 +240,19 @@ int run(const Options& opt) {
   });
 
   const bool show_status = !opt.quiet && ::isatty(STDERR_FILENO) != 0;
+  auto status_line = [&] {
+    std::string line = (*stream)->status();
+    if (udp && udp->ignored_datagrams() > 0) {
+      line += "  other_senders " + std::to_string(udp->ignored_datagrams());
+    }
+    return line;
+  };
   asio::steady_timer status_timer(io);
   std::function<void()> tick = [&] {
     status_timer.expires_after(std::chrono::seconds(1));
     status_timer.async_wait([&](const boost::system::error_code& ec) {
       if (ec) return;
-      std::cerr << "\r" << (*stream)->status() << "\x1b[K" << std::flush;
+      std::cerr << "\r" << status_line() << "\x1b[K" << std::flush;
       if (record.is_open()) record.flush();
       tick();
     });
@@ -256,7 +263,7 @@ int run(const Options& opt) {
   (*stream)->finish();
   if (record.is_open()) record.flush();
   if (!opt.quiet) {
-    std::cerr << (show_status ? "\r" : "") << (*stream)->status()
+    std::cerr << (show_status ? "\r" : "") << status_line()
               << (show_status ? "\x1b[K\n" : "\n");
   }
   return exit_code;
