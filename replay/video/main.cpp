@@ -38,8 +38,10 @@ bool sleep_until(std::int64_t deadline_ns) {
   return true;
 }
 
-void fail(const std::string& message) {
+// One sentence on stderr; returns the runtime-failure exit code.
+int fail(const std::string& message) {
   std::fprintf(stderr, "sim_replay_video: %s\n", message.c_str());
+  return 1;
 }
 
 }  // namespace
@@ -81,30 +83,34 @@ int main(int argc, char** argv) {
   const auto output = *camera::parse_output_format(output_text);
 
   if (cpu >= 0) {
-    if (auto error = pin_current_thread(cpu)) return fail(error->message), 1;
+    if (auto error = pin_current_thread(cpu)) return fail(error->message);
   }
   if (rt_priority > 0) {
-    if (auto error = set_realtime_priority(rt_priority)) return fail(error->message), 1;
+    if (auto error = set_realtime_priority(rt_priority)) return fail(error->message);
   }
 
   auto source = replay::VideoSource::open(path);
-  if (!source) return fail(source.error().message), 1;
+  if (!source) return fail(source.error().message);
   auto& video = *source.value();
 
   cv::Mat frame;
-  if (!video.next(frame)) return fail(path + " has no frame that can be decoded"), 1;
-  if (frame.type() != CV_8UC3) return fail(path + " does not decode to 8-bit colour frames"), 1;
-  const auto width = static_cast<std::uint32_t>(frame.cols);
-  const auto height = static_cast<std::uint32_t>(frame.rows);
+  if (!video.next(frame)) return fail(path + " has no frame that can be decoded");
+  const bool jpeg = video.jpeg_frames();
+  const auto width = static_cast<std::uint32_t>(jpeg ? video.width() : frame.cols);
+  const auto height = static_cast<std::uint32_t>(jpeg ? video.height() : frame.rows);
+  if (!jpeg && frame.type() != CV_8UC3) return fail(path + " does not decode to 8-bit colour frames");
 
   if (fps <= 0) fps = video.fps();
   if (!(fps > 0 && fps <= 10000)) fps = 30;  // folders and files without a usable rate
   const auto period_ns = static_cast<std::int64_t>(std::llround(1e9 / (fps * rate)));
 
-  auto decoder = camera::FrameDecoder::create(
-      camera::make_layout(width, height, PixelFormat::bgr8, static_cast<std::uint32_t>(frame.step[0])),
-      output);
-  if (!decoder) return fail(decoder.error().message), 1;
+  // The decoder the live cameras use: JPEG bytes like a UVC camera's, or BGR pixels.
+  const ImageLayout input =
+      jpeg ? camera::make_layout(width, height, PixelFormat::mjpeg)
+           : camera::make_layout(width, height, PixelFormat::bgr8,
+                                 static_cast<std::uint32_t>(frame.step[0]));
+  auto decoder = camera::FrameDecoder::create(input, output);
+  if (!decoder) return fail(decoder.error().message);
   StreamSpec spec;
   spec.name = stream;
   spec.layout = Layout::of(decoder->output_layout());
@@ -113,11 +119,12 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   auto writer = Writer::create(spec);
-  if (!writer) return fail(writer.error().message), 1;
+  if (!writer) return fail(writer.error().message);
 
   const bool terminal = !quiet && isatty(STDERR_FILENO) != 0;
-  std::fprintf(stderr, "sim_replay_video: %s, %ux%u at %.4g fps x %.3g -> %s (%s)%s\n",
-               video.describe().c_str(), width, height, fps, rate, stream.c_str(),
+  std::fprintf(stderr, "sim_replay_video: %s, %ux%u%s at %.4g fps x %.3g -> %s (%s)%s\n",
+               video.describe().c_str(), width, height, jpeg ? " MJPEG" : "", fps, rate,
+               stream.c_str(),
                Layout::of(decoder->output_layout()).describe().c_str(), loop ? ", looping" : "");
 
   const long long total = video.frame_count();
@@ -133,8 +140,10 @@ int main(int argc, char** argv) {
     // Decode into the slot before the deadline, publish at the deadline: decode time does not
     // delay the frame.
     sim::Loan loan = writer->loan();
-    const bool fits = frame.cols == static_cast<int>(width) && frame.rows == static_cast<int>(height) &&
-                      frame.type() == CV_8UC3 && frame.isContinuous();
+    // Pixel frames must keep the first frame's size; JPEG frames are checked by the decoder.
+    const bool fits = frame.isContinuous() &&
+                      (jpeg || (frame.cols == static_cast<int>(width) &&
+                                frame.rows == static_cast<int>(height) && frame.type() == CV_8UC3));
     camera::DecodeResult decoded;
     if (fits) {
       decoded = decoder->decode(
@@ -155,7 +164,7 @@ int main(int argc, char** argv) {
         loan.commit(decoded.size, realtime_ns()) == WriteStatus::ok) {
       ++published;
     } else {
-      ++skipped;  // a frame of another size or type mid-file; never published
+      ++skipped;  // a corrupt frame, or one of another size: never published
     }
     ++index;
     ++in_pass;
@@ -173,7 +182,7 @@ int main(int argc, char** argv) {
 
     have_frame = video.next(frame);
     if (!have_frame && loop && !g_stop.load()) {
-      if (!video.rewind()) return fail("cannot reopen " + path + " to loop it"), 1;
+      if (!video.rewind()) return fail("cannot reopen " + path + " to loop it");
       ++pass;
       in_pass = 0;
       have_frame = video.next(frame);
@@ -181,7 +190,7 @@ int main(int argc, char** argv) {
   }
   if (terminal) std::fprintf(stderr, "\r\033[K");
   std::fprintf(stderr, "sim_replay_video: published %lld frames%s\n", published,
-               skipped > 0 ? (", skipped " + std::to_string(skipped) + " of another size").c_str()
+               skipped > 0 ? (", skipped " + std::to_string(skipped) + " corrupt or misfit").c_str()
                            : "");
   return 0;
 }

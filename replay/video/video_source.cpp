@@ -20,8 +20,16 @@ class FileSource final : public VideoSource {
   explicit FileSource(std::string path) : path_(std::move(path)) {}
   bool open() {
     capture_.open(path_, cv::CAP_FFMPEG);
-    return capture_.isOpened();
+    if (!capture_.isOpened()) return false;
+    // Motion-JPEG: ask FFmpeg for the undecoded packets and decode them ourselves.
+    const auto fourcc = static_cast<int>(capture_.get(cv::CAP_PROP_FOURCC));
+    jpeg_ = fourcc == cv::VideoWriter::fourcc('M', 'J', 'P', 'G') &&
+            capture_.set(cv::CAP_PROP_FORMAT, -1);
+    return true;
   }
+  bool jpeg_frames() const override { return jpeg_; }
+  int width() const override { return static_cast<int>(capture_.get(cv::CAP_PROP_FRAME_WIDTH)); }
+  int height() const override { return static_cast<int>(capture_.get(cv::CAP_PROP_FRAME_HEIGHT)); }
   bool next(cv::Mat& frame) override { return capture_.read(frame) && !frame.empty(); }
   // Reopening is more reliable than seeking to frame 0 in every container and codec.
   bool rewind() override {
@@ -38,6 +46,7 @@ class FileSource final : public VideoSource {
  private:
   std::string path_;
   mutable cv::VideoCapture capture_;
+  bool jpeg_ = false;
 };
 
 class FolderSource final : public VideoSource {

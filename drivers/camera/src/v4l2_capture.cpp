@@ -52,7 +52,12 @@ std::optional<Error> V4l2Capture::connect(bool first) {
   if (!decoder) return decoder.error();
 
   const Layout layout = Layout::of(decoder->output_layout());
-  const std::uint64_t capacity = decoder->output_capacity(format->size_image);
+  // A device that announces no sizeimage for MJPEG still needs room: two bytes a pixel is more
+  // than any camera JPEG at usable quality.
+  const std::uint64_t max_jpeg = format->size_image != 0
+                                     ? format->size_image
+                                     : std::uint64_t{format->layout.width} * format->layout.height * 2;
+  const std::uint64_t capacity = decoder->output_capacity(max_jpeg);
   if (!writer_ || writer_->layout() != layout || writer_->capacity() != capacity) {
     if (writer_) log("the camera came back with another format; the stream is recreated");
     writer_.reset();  // the stream's writer lock must be free before the region is replaced

@@ -142,6 +142,7 @@ V4l2Device::V4l2Device(V4l2Device&& other) noexcept
       path_(std::move(other.path_)),
       card_(std::move(other.card_)),
       buffers_(std::move(other.buffers_)),
+      buffers_requested_(std::exchange(other.buffers_requested_, false)),
       streaming_(std::exchange(other.streaming_, false)) {
   other.buffers_.clear();
 }
@@ -155,6 +156,7 @@ V4l2Device& V4l2Device::operator=(V4l2Device&& other) noexcept {
     card_ = std::move(other.card_);
     buffers_ = std::move(other.buffers_);
     other.buffers_.clear();
+    buffers_requested_ = std::exchange(other.buffers_requested_, false);
     streaming_ = std::exchange(other.streaming_, false);
   }
   return *this;
@@ -446,7 +448,9 @@ std::optional<Error> V4l2Device::start(std::uint32_t buffer_count) {
     return Error{ErrorCode::system_error,
                  path_ + " cannot allocate capture buffers: " + errno_text(errno)};
   }
+  buffers_requested_ = true;
   if (request.count < 2) {
+    stop();
     return Error{ErrorCode::system_error, path_ + " gave fewer than two capture buffers"};
   }
   for (std::uint32_t index = 0; index < request.count; ++index) {
@@ -533,8 +537,9 @@ void V4l2Device::stop() noexcept {
     streaming_ = false;
   }
   for (const Buffer& buffer : buffers_) io_->munmap(buffer.address, buffer.length);
-  if (!buffers_.empty()) {
-    buffers_.clear();
+  buffers_.clear();
+  if (buffers_requested_) {
+    buffers_requested_ = false;
     v4l2_requestbuffers request{};
     request.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     request.memory = V4L2_MEMORY_MMAP;

@@ -146,6 +146,7 @@ class V4l2Device {
   std::string path_;
   std::string card_;
   std::vector<Buffer> buffers_;
+  bool buffers_requested_ = false;  // REQBUFS succeeded: give them back with a count of 0
   bool streaming_ = false;
 };
 
