@@ -84,6 +84,22 @@ std::uint64_t checksum(std::span<const std::byte> bytes) {
   return sum;
 }
 
+// Evicts a buffer from every cache level (x86 clflush; elsewhere by sweeping a buffer larger
+// than any last-level cache), so the next access comes from memory.
+void flush_from_caches(std::span<const std::byte> bytes) {
+#if defined(__x86_64__) || defined(__i386__)
+  for (std::size_t i = 0; i < bytes.size(); i += 64) __builtin_ia32_clflush(bytes.data() + i);
+  if (!bytes.empty()) __builtin_ia32_clflush(bytes.data() + bytes.size() - 1);
+  __builtin_ia32_mfence();
+#else
+  static std::vector<std::byte> sweep(256u << 20);
+  static std::byte value{0};
+  value = static_cast<std::byte>(static_cast<unsigned>(value) + 1);
+  for (std::size_t i = 0; i < sweep.size(); i += 64) sweep[i] = value;
+  (void)bytes;
+#endif
+}
+
 void sleep_until_ns(std::int64_t t) {
   timespec ts{static_cast<time_t>(t / 1'000'000'000), static_cast<long>(t % 1'000'000'000)};
   while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
@@ -251,6 +267,10 @@ int run_reader(const RoleOptions& o, Transport t) {
 // ---------------------------------------------------------------------------------------------
 // Orchestrator
 
+// Set by SIGINT/SIGTERM: the run stops at the next step and cleans up (children, RouDi).
+volatile std::sig_atomic_t stop_requested = 0;
+extern "C" void request_stop(int) { stop_requested = 1; }
+
 struct Options {
   std::vector<std::string> transports{"sim-poll", "sim-block", "sim-zero", "iceoryx", "fastdds",
                                       "cyclone"};
@@ -392,6 +412,7 @@ class Bench {
     std::string error;
     auto fail = [&](const std::string& why) {
       row.status = "failed";
+      if (stop_requested) return row;
       std::fprintf(stderr, "sim_bench: %s %zu B %dR run %d failed: %s\n", transport.c_str(),
                    payload, readers, run, why.c_str());
       return row;
@@ -481,32 +502,56 @@ class Bench {
     return row;
   }
 
-  // The floor: copy the payload into "shared memory" and out again, as a writer and a reader at
-  // least must, with cold caches (a ring of slots larger than the last-level cache).
+  // The floor: what a writer and a reader at least pay to move the payload through memory. A
+  // writer thread copies it into a slot, a reader thread (on the other core when the scheduler
+  // allows) copies it out; the sample is the sum of the two copy times, without the hand-over
+  // between them. Before each frame the source, the slot and the destination are flushed from
+  // the caches ("cold": at 100 Hz on a busy machine, the transports' buffers are cold too), and
+  // the reader fetches what another core wrote, as in the transports.
   Row memcpy_floor(std::size_t payload, int run) {
     Row row;
     row.transport = "memcpy";
     row.payload = payload;
     row.readers = 1;
     row.run = run;
-    const std::size_t slots = std::clamp<std::size_t>((64u << 20) / payload, 2, 4096);
+    const std::size_t slots = 2;  // a double buffer
     std::vector<std::byte> src(payload), dst(payload), shm(slots * payload);
     for (std::size_t i = 0; i < src.size(); ++i) src[i] = static_cast<std::byte>(i);
     std::memset(shm.data(), 1, shm.size());
     std::memset(dst.data(), 2, dst.size());
     std::vector<std::int64_t> samples;
     samples.reserve(o_.frames);
+    std::atomic<std::uint64_t> written{0}, read{0};
+    std::atomic<std::int64_t> write_ns{0};
     const Usage start = usage_now();
-    for (std::uint64_t i = 0; i < o_.frames; ++i) {
-      std::byte* slot = shm.data() + (i % slots) * payload;
+    std::thread reader([&] {
+      for (std::uint64_t i = 1; i <= o_.frames; ++i) {
+        // Sleep, not spin: on 2 shared cores a spinning thread would preempt the writer's copy.
+        for (std::uint64_t w; (w = written.load(std::memory_order_acquire)) < i;) written.wait(w);
+        const std::byte* slot = shm.data() + ((i - 1) % slots) * payload;
+        const std::int64_t t0 = sim::monotonic_ns();
+        std::memcpy(dst.data(), slot, payload);
+        asm volatile("" ::: "memory");
+        const std::int64_t t1 = sim::monotonic_ns();
+        if (i > o_.warmup) samples.push_back(write_ns.load(std::memory_order_relaxed) + (t1 - t0));
+        read.store(i, std::memory_order_release);
+        read.notify_one();
+      }
+    });
+    for (std::uint64_t i = 1; i <= o_.frames; ++i) {
+      std::byte* slot = shm.data() + ((i - 1) % slots) * payload;
+      flush_from_caches(src);
+      flush_from_caches({slot, payload});
+      flush_from_caches(dst);
       const std::int64_t t0 = sim::monotonic_ns();
       std::memcpy(slot, src.data(), payload);
       asm volatile("" ::: "memory");
-      std::memcpy(dst.data(), slot, payload);
-      asm volatile("" ::: "memory");
-      const std::int64_t t1 = sim::monotonic_ns();
-      if (i >= o_.warmup) samples.push_back(t1 - t0);
+      write_ns.store(sim::monotonic_ns() - t0, std::memory_order_relaxed);
+      written.store(i, std::memory_order_release);
+      written.notify_one();
+      for (std::uint64_t r; (r = read.load(std::memory_order_acquire)) < i;) read.wait(r);
     }
+    reader.join();
     const Usage used = usage_since(start);
     checksum(dst);
     row.writer_cpu_s = used.cpu_s;
@@ -611,21 +656,25 @@ class Bench {
     };
 
     // Runs are the outer loop so slow drift of the machine touches every transport alike.
-    for (int run = 1; run <= o_.runs; ++run) {
+    for (int run = 1; run <= o_.runs && !stop_requested; ++run) {
       for (const auto payload : o_.payloads) {
         for (const int readers : o_.readers) {
-          if (!o_.no_floor && readers == o_.readers.front()) emit(memcpy_floor(payload, run));
+          if (!o_.no_floor && readers == o_.readers.front() && !stop_requested) {
+            emit(memcpy_floor(payload, run));
+          }
           for (const auto t : transports) {
+            if (stop_requested) break;
             emit(run_one(std::string(to_string(t)), payload, readers, run));
           }
         }
       }
     }
+    if (stop_requested) std::fprintf(stderr, "sim_bench: stopped by a signal; the CSV holds the rows so far.\n");
     if (isatty(STDERR_FILENO)) std::fprintf(stderr, "\n");
     if (csv != nullptr) std::fclose(csv);
     if (extra != nullptr) std::fclose(extra);
     if (roudi) stop_roudi(*roudi);
-    return failures == 0 ? 0 : 1;
+    return failures == 0 && !stop_requested ? 0 : 1;
   }
 
   // RouDi, iceoryx's daemon, with memory pools for every payload and reader count of this run.
@@ -799,5 +848,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "sim_bench: --warmup must be smaller than --frames.\n");
     return 2;
   }
+  struct sigaction sa{};
+  sa.sa_handler = request_stop;
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+  ChildProcess::set_stop_flag(&stop_requested);
   return Bench(std::move(o)).run_all();
 }

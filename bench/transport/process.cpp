@@ -13,6 +13,11 @@
 extern char** environ;
 
 namespace sim::bench {
+namespace {
+volatile std::sig_atomic_t* stop_flag_ = nullptr;
+}  // namespace
+
+void ChildProcess::set_stop_flag(volatile std::sig_atomic_t* flag) noexcept { stop_flag_ = flag; }
 
 ChildProcess::ChildProcess(const std::vector<std::string>& argv) {
   int in_pipe[2];
@@ -66,7 +71,7 @@ std::optional<std::string> ChildProcess::line(std::chrono::milliseconds timeout)
     }
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
         deadline - std::chrono::steady_clock::now());
-    if (left.count() <= 0) {
+    if (left.count() <= 0 || (stop_flag_ != nullptr && *stop_flag_ != 0)) {
       timed_out_ = true;
       return std::nullopt;
     }

@@ -6,6 +6,7 @@
 #include <sys/types.h>
 
 #include <chrono>
+#include <csignal>
 #include <optional>
 #include <string>
 #include <vector>
@@ -22,6 +23,9 @@ class ChildProcess {
 
   bool started() const noexcept { return pid_ > 0; }
   pid_t pid() const noexcept { return pid_; }
+
+  // line() gives up early once *flag is non-zero (set from a signal handler).
+  static void set_stop_flag(volatile std::sig_atomic_t* flag) noexcept;
 
   // The next line of output; nullopt at end of output or when the timeout passes (timed_out()).
   std::optional<std::string> line(std::chrono::milliseconds timeout);
