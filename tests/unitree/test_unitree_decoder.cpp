@@ -352,3 +352,28 @@ TEST(UnitreeModel, Parse) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(UnitreeL2Decoder, ResetDropsThePartialScanAndBufferedBytes) {
+  using namespace unitree_test;
+  sim::unitree::DecoderOptions options;
+  options.packets_per_scan = 2;
+  VectorSink sink(sim::unitree::Decoder::max_points_per_scan(options));
+  sim::unitree::Decoder decoder(options, sink);
+  L2PointSpec s;
+  s.ranges.fill(1000);
+  const Bytes packet = l2_point_packet(s);
+  decoder.push(packet, 0);                                          // half a scan
+  decoder.push(std::span<const std::byte>(packet).first(100), 0);   // and part of a packet
+  decoder.reset();
+  EXPECT_EQ(decoder.counters().framing.truncated, 1U);
+  s.ranges.fill(2000);
+  const Bytes after = l2_point_packet(s);
+  decoder.push(concat({after, after}), 0);
+  ASSERT_EQ(sink.scans.size(), 1U);
+  ASSERT_EQ(sink.scans[0].points.size(), 600U);
+  for (const auto& p : sink.scans[0].points) ASSERT_NEAR(p.y, 2.0F, 1e-4F);  // none from before
+}
+
+}  // namespace

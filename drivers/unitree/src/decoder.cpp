@@ -62,6 +62,13 @@ bool ScanAssembler::end_packet(std::size_t points_written) noexcept {
   return true;
 }
 
+void ScanAssembler::abandon() noexcept {
+  open_ = false;
+  storage_ = {};
+  points_ = 0;
+  packets_ = 0;
+}
+
 // ---------------------------------------------------------------------------------------------
 
 Decoder::Decoder(const DecoderOptions& options, ScanSink& sink)
@@ -96,6 +103,14 @@ void Decoder::finish() noexcept {
   } else {
     l1_framer_.finish();
   }
+}
+
+void Decoder::reset() noexcept {
+  finish();
+  assembler_.abandon();
+  last_seq_.reset();
+  l1_distance_.reset();
+  l1_aux_.reset();
 }
 
 DecoderCounters Decoder::counters() const noexcept {

@@ -71,6 +71,8 @@ class ScanAssembler {
   // Returns whether this packet completed (and published) the scan.
   bool end_packet(std::size_t points_written) noexcept;
   std::uint32_t packets_in_scan() const noexcept { return packets_; }
+  // Drops the open scan unpublished (its storage is simply not committed).
+  void abandon() noexcept;
 
  private:
   ScanSink& sink_;
@@ -95,6 +97,9 @@ class Decoder {
   void push(std::span<const std::byte> bytes, std::int64_t host_ns) noexcept;
   // End of input: a partial packet is counted as truncated; an unfinished scan is not published.
   void finish() noexcept;
+  // Starts over on a new, unrelated byte stream (a replay looping back to its start): buffered
+  // bytes and the open scan are dropped, counters are kept.
+  void reset() noexcept;
 
   DecoderCounters counters() const noexcept;
   const DecoderOptions& options() const noexcept { return options_; }

@@ -79,6 +79,7 @@ class UnitreeStream {
     decoder_.push(bytes, host_ns);
   }
   void finish() noexcept { decoder_.finish(); }
+  void reset() noexcept { decoder_.reset(); }  // a looping replay starts its file again
 
   DecoderCounters decoder_counters() const noexcept { return decoder_.counters(); }
   const SimSinkCounters& sink_counters() const noexcept { return sink_->counters(); }
