@@ -185,15 +185,15 @@ TEST(ReplayTool, MaxRateAndRawEthernetPandar40P) {
   EXPECT_EQ(info.seq, expected.size());
   EXPECT_EQ(info.size, expected.back().points.size() * sizeof(sim::LidarPoint));
   EXPECT_EQ(info.stamp_ns, expected.back().stamp_ns);
-  // A whole revolution of a 20 Hz sensor: its firings span 50 ms (± one packet).
+  // A whole revolution of a 20 Hz sensor: its firings span about 50 ms (a 10 Hz one, 100 ms).
   std::uint32_t last_firing = 0;
   for (std::size_t i = 0; i < info.size / sizeof(sim::LidarPoint); ++i) {
     sim::LidarPoint p;
     std::memcpy(&p, buffer.data() + i * sizeof p, sizeof p);
     last_firing = std::max(last_firing, p.time_offset_ns);
   }
-  EXPECT_GT(last_firing, 48'000'000u);
-  EXPECT_LT(last_firing, 51'000'000u);
+  EXPECT_GT(last_firing, 45'000'000u);
+  EXPECT_LT(last_firing, 55'000'000u);
 }
 
 TEST(ReplayTool, LoopStartAndDuration) {
