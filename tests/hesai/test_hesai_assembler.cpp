@@ -228,6 +228,49 @@ TEST(HesaiAssembler, ForgettingSetOutputDropsFramesButNeverWritesAnywhere) {
   EXPECT_GT(a.counters().dropped_points, 0u);
 }
 
+TEST(HesaiAssembler, AFirstSpanGivenLateStartsCleanAtTheNextCut) {
+  // A driver that attaches its first span only after the first cut: the partial revolution
+  // decoded before has nowhere to go and must not leak into the next frame.
+  AssemblerOptions options;
+  options.cut_by = CutBy::block_azimuth;  // the frame after the cut is then still whole
+  const auto& packets = pandar64_packets();
+  // The packet holding the first cut: where a partial frame is returned when asked for.
+  std::size_t first_cut = 0;
+  {
+    AssemblerOptions partial = options;
+    partial.emit_partial_frames = true;
+    auto a = make(partial);
+    std::vector<sim::LidarPoint> span(capacity());
+    a.set_output(span);
+    while (first_cut < packets.size() &&
+           !a.push(packets[first_cut].bytes, packets[first_cut].capture_ns).frame) {
+      ++first_cut;
+    }
+  }
+  ASSERT_LT(first_cut, packets.size());
+  auto normal = make(options);
+  const auto expected = run(normal, packets, capacity());
+  ASSERT_FALSE(expected.empty());
+
+  auto late = make(options);
+  for (std::size_t i = 0; i <= first_cut; ++i) {
+    EXPECT_FALSE(late.push(packets[i].bytes, packets[i].capture_ns).frame);
+  }
+  std::vector<sim::LidarPoint> late_span(capacity());
+  late.set_output(late_span);
+  std::optional<CompletedFrame> frame;
+  for (std::size_t i = first_cut + 1; i < packets.size() && !frame; ++i) {
+    frame = late.push(packets[i].bytes, packets[i].capture_ns).frame;
+  }
+  ASSERT_TRUE(frame);
+  EXPECT_TRUE(frame->whole_revolution);
+  EXPECT_EQ(frame->stamp_ns, expected[0].info.stamp_ns);
+  ASSERT_EQ(frame->point_count, expected[0].points.size());
+  EXPECT_EQ(std::memcmp(late_span.data(), expected[0].points.data(),
+                        expected[0].points.size() * sizeof(sim::LidarPoint)),
+            0);
+}
+
 TEST(HesaiAssembler, PartialFramesOnRequestAndFlushAtTheEnd) {
   AssemblerOptions options;
   options.emit_partial_frames = true;

@@ -170,7 +170,14 @@ void FrameAssembler::close_current(PushResult& result, bool ended_at_cut) noexce
   if (current_.started) {
     if (!current_.whole && !options_.emit_partial_frames && ended_at_cut) {
       ++counters_.partial_frames_dropped;
-      if (output_attached_) output_count_ = 0;
+      // Its points are in the span when one is attached (the carry-over then holds next_'s,
+      // moved below), or else in the carry-over.
+      if (output_attached_) {
+        output_count_ = 0;
+      } else {
+        counters_.dropped_points += carry_count_;
+        carry_count_ = 0;
+      }
     } else if (output_attached_) {
       CompletedFrame& frame = result.frame.emplace();
       frame.point_count = output_count_;
@@ -324,10 +331,8 @@ PushResult FrameAssembler::push(std::span<const std::uint8_t> payload,
     const double position = static_cast<double>(group_revolution) * full_turn + phase;
     const double current_end = static_cast<double>(current_revolution_ + 1) * full_turn;
     if (position + min_cut_offset_centi_ >= current_end) {
-      if (result.frame) {
-        // A second completion in one packet can only come from a corrupt stream: drop it.
-        ++counters_.frames_without_output;
-      }
+      // A second completion in one packet (only a corrupt stream can do that) finds no span
+      // attached and is counted as frames_without_output by close_current.
       PushResult closed;
       close_current(closed, true);
       if (closed.frame && !result.frame) result.frame = closed.frame;
