@@ -269,6 +269,15 @@ TEST(HesaiPacket, ImpossibleFieldValuesAreRejectedWithTheirReason) {
   EXPECT_EQ(with(tail + 19, 24), PacketError::bad_time);     // hour 24
   EXPECT_EQ(with(tail + 13, 0xFF), PacketError::bad_time);   // µs field ≥ 1 000 000
   {
+    auto p = good;  // no date yet (month and day 0): read as 1970-01-01 12:02:09.977341
+    p[tail + 16] = 0;
+    p[tail + 17] = 0;
+    p[tail + 18] = 0;
+    Packet packet;
+    ASSERT_EQ(Packet::parse(p, Model::pandar64, packet), PacketError::none);
+    EXPECT_EQ(packet.time_ns(), (12 * 3600 + 2 * 60 + 9) * s_to_ns + 977341000);
+  }
+  {
     auto p = good;  // 2020-02-30
     p[tail + 17] = 2;
     p[tail + 18] = 30;

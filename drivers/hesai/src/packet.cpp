@@ -56,8 +56,9 @@ bool leap(int y) noexcept { return (y % 4 == 0 && y % 100 != 0) || y % 400 == 0;
 
 // UTC from the six date bytes Y M D h m s plus the µs field. The year byte counts from 1900
 // on Pandar64/XT/QT firmware (120 = 2020) and from 2000 on Pandar40P firmware (17 = 2017);
-// both fit "below 70 means 20xx". An all-zero date is what an unsynchronised sensor sends:
-// it is read as 1970-01-01 so time still advances.
+// both fit "below 70 means 20xx". A date with month and day 0 is accepted and read as
+// 1970-01-01 (plus the time of day) rather than dropping every packet of a sensor that has no
+// time source yet.
 bool utc_time_ns(const std::uint8_t* t, std::uint32_t micros, std::int64_t& out) noexcept {
   if (micros >= 1'000'000) return false;
   const unsigned hour = t[3], minute = t[4], second = t[5];
