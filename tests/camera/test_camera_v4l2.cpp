@@ -10,6 +10,7 @@
 #include <array>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <thread>
 
 #include "fake_v4l2_device.hpp"
@@ -512,6 +513,22 @@ TEST(CameraConfig, ShippedExamplesParse) {
   ASSERT_EQ(aravis.features.size(), 2u);
   EXPECT_EQ(aravis.features[0].first, "ExposureAuto");
   EXPECT_EQ(aravis.features[0].second, "Off");
+}
+
+// Opt-in, for developer machines with a camera: SIM_CAMERA_DEVICE=/dev/video0 runs the real
+// libv4l2 path (this project's CI kernels have no V4L2).
+TEST(V4l2RealDevice, CapturesFramesWhenADeviceIsGiven) {
+  const char* path = std::getenv("SIM_CAMERA_DEVICE");
+  if (path == nullptr) GTEST_SKIP() << "set SIM_CAMERA_DEVICE=/dev/videoN to test a real camera";
+  const auto io = make_libv4l2_io();
+  V4l2CaptureConfig config;
+  config.device = path;
+  config.stream = unique_stream();
+  auto capture = V4l2Capture::start(*io, config);
+  ASSERT_TRUE(capture) << capture.error().message;
+  for (int i = 0; i < 200 && capture->stats().published < 10; ++i) capture->step(100ms);
+  EXPECT_GE(capture->stats().published, 10u);
+  sim::destroy(config.stream, true);
 }
 
 struct ToolRun {

@@ -68,6 +68,7 @@ struct AravisCapture::Impl {
   ImageLayout input{};
   std::string name;
   std::atomic<bool> lost{false};
+  bool device_time = false;  // stamp with the camera's clock: asked for, or PTP is on
   std::optional<std::uint64_t> last_frame_id;  // touched by the stream thread only
   std::atomic<std::uint64_t> published{0};
   std::atomic<std::uint64_t> incomplete{0};
@@ -123,7 +124,7 @@ struct AravisCapture::Impl {
     std::size_t size = 0;
     const void* data = arv_buffer_get_data(buffer, &size);
     const std::int64_t stamp = static_cast<std::int64_t>(
-        config.device_timestamps ? arv_buffer_get_timestamp(buffer)
+        device_time ? arv_buffer_get_timestamp(buffer)
                                  : arv_buffer_get_system_timestamp(buffer));
     Loan loan = writer->loan();
     const DecodeResult decoded =
@@ -202,6 +203,16 @@ struct AravisCapture::Impl {
       if (!config.packet_socket) {
         arv_camera_gv_set_stream_options(camera, ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED);
       }
+    }
+
+    // A camera synchronised by PTP has a clock worth using; otherwise the host receive time is
+    // the better stamp (free-running camera clocks start at power-up).
+    device_time = config.device_timestamps;
+    for (const char* ptp : {"PtpEnable", "GevIEEE1588"}) {
+      if (device_time || arv_device_get_feature(device, ptp) == nullptr) continue;
+      GError* ignored = nullptr;
+      device_time = arv_device_get_boolean_feature_value(device, ptp, &ignored) != FALSE;
+      g_clear_error(&ignored);
     }
 
     gint x = 0;

@@ -37,7 +37,9 @@ struct AravisCaptureConfig {
   bool packet_socket = true;     // AF_PACKET receive (needs CAP_NET_RAW); off: plain UDP socket
   std::vector<std::pair<std::string, std::string>> features;  // any GenICam feature, as text
   std::uint32_t buffers = 8;
-  bool device_timestamps = false;  // the camera's clock (use with PTP); default: host receive time
+  // The camera's clock instead of the host receive time; automatic when the camera reports PTP
+  // on (PtpEnable or GevIEEE1588).
+  bool device_timestamps = false;
   bool checksum = false;
   std::chrono::milliseconds retry_period{1000};
   std::function<void(std::string_view)> log;
