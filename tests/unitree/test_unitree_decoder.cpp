@@ -377,3 +377,60 @@ TEST(UnitreeL2Decoder, ResetDropsThePartialScanAndBufferedBytes) {
 }
 
 }  // namespace
+
+// ---- no allocation per packet ------------------------------------------------------------------
+
+#include "allocation_counter.hpp"
+
+namespace {
+
+// Lends fixed storage and keeps nothing: what the SIM sink does with its loaned slot.
+class CountingSink : public sim::unitree::ScanSink {
+ public:
+  explicit CountingSink(std::size_t capacity) : storage_(capacity) {}
+  std::span<sim::LidarPoint> begin_scan() override { return storage_; }
+  void end_scan(std::size_t, std::int64_t) override { ++scans; }
+  void imu(const sim::unitree::ImuSample&) override { ++imu_samples; }
+  int scans = 0;
+  int imu_samples = 0;
+
+ private:
+  std::vector<sim::LidarPoint> storage_;
+};
+
+TEST(UnitreeSteadyState, NoAllocationPerPacketOrScan) {
+  using namespace unitree_test;
+  for (const auto model : {sim::unitree::Model::l2, sim::unitree::Model::l1}) {
+    sim::unitree::DecoderOptions options;
+    options.model = model;
+    options.packets_per_scan = 3;
+    CountingSink sink(sim::unitree::Decoder::max_points_per_scan(options));
+    sim::unitree::Decoder decoder(options, sink);
+    Bytes stream;
+    if (model == sim::unitree::Model::l2) {
+      L2PointSpec s;
+      s.ranges.fill(1500);
+      for (int i = 0; i < 6; ++i) stream = concat({stream, l2_point_packet(s), l2_imu_packet({})});
+    } else {
+      std::array<std::uint16_t, 120> ranges{};
+      ranges.fill(1500);
+      for (std::uint16_t id = 0; id < 6; ++id) {
+        L1AuxSpec aux;
+        aux.packet_id = id;
+        stream = concat({stream, l1_distance_frame(id, ranges), l1_auxiliary_frame(aux),
+                         l1_imu_frame({0, 0, 0, 1}, {}, {}, id)});
+      }
+    }
+    const std::uint64_t before = unitree_test::allocations();
+    for (std::size_t off = 0; off < stream.size(); off += 517) {
+      decoder.push(std::span<const std::byte>(stream).subspan(
+                       off, std::min<std::size_t>(517, stream.size() - off)),
+                   0);
+    }
+    EXPECT_EQ(unitree_test::allocations(), before) << sim::unitree::to_string(model);
+    EXPECT_EQ(sink.scans, 2) << sim::unitree::to_string(model);
+    EXPECT_EQ(sink.imu_samples, 6) << sim::unitree::to_string(model);
+  }
+}
+
+}  // namespace
