@@ -76,7 +76,10 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1000.0));
   app.add_flag("-q,--quiet", quiet, "no progress line");
+  sim::tools::Placement placement;
+  sim::tools::add_placement_options(app, placement);
   if (auto code = sim::tools::parse(app, argc, argv)) return *code;
+  if (auto code = sim::tools::apply_placement(placement, "sim_replay_serial")) return *code;
 
   const auto model = sim::unitree::parse_model(model_text);
   if (!model) {

@@ -345,6 +345,7 @@ TEST(UnitreeDriver, PortInUseIsARuntimeFailure) {
   ChildProcess other({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", std::to_string(port),
                       "--bind-address", "127.0.0.1", "--stream", second, "-q"});
   EXPECT_EQ(other.wait(kTimeout), 1);
+  EXPECT_FALSE(sim::inspect(second).has_value());  // a failed start leaves no stream behind
   driver.signal(SIGTERM);
   EXPECT_EQ(driver.wait(kTimeout), 0);
 }

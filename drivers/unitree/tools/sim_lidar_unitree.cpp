@@ -49,19 +49,23 @@ struct Options {
 // Everything read off the wire goes to the decoder, and to the recording when there is one.
 class Pipeline {
  public:
-  Pipeline(sim::unitree::UnitreeStream& stream, std::ofstream* record)
-      : stream_(stream), record_(record) {}
+  // Bytes flow only once the streams exist; the sources are opened before them so that a busy
+  // port or a missing device leaves no stream behind.
+  void attach(sim::unitree::UnitreeStream& stream, std::ofstream* record) {
+    stream_ = &stream;
+    record_ = record;
+  }
   void on_bytes(std::span<const std::byte> bytes) {
     if (record_ != nullptr) {
       record_->write(reinterpret_cast<const char*>(bytes.data()),
                      static_cast<std::streamsize>(bytes.size()));
     }
-    stream_.push(bytes, sim::realtime_ns());
+    stream_->push(bytes, sim::realtime_ns());
   }
 
  private:
-  sim::unitree::UnitreeStream& stream_;
-  std::ofstream* record_;
+  sim::unitree::UnitreeStream* stream_ = nullptr;
+  std::ofstream* record_ = nullptr;
 };
 
 class UdpSource {
@@ -178,6 +182,37 @@ int run(const Options& opt) {
   stream_options.imu_stream = opt.imu_stream;
   stream_options.no_imu = opt.no_imu;
   stream_options.checksum = opt.checksum;
+
+  Pipeline pipeline;
+
+  asio::io_context io;
+  int exit_code = sim::tools::kExitOk;
+  std::optional<UdpSource> udp;
+  std::optional<SerialSource> serial;
+  const unsigned baud =
+      opt.baud != 0 ? opt.baud : (*model == sim::unitree::Model::l1 ? 2'000'000U : 4'000'000U);
+  if (!opt.serial_device.empty()) {
+    serial.emplace(io, pipeline);
+    try {
+      serial->open(opt.serial_device, baud);
+    } catch (const boost::system::system_error& e) {
+      std::cerr << "sim_lidar_unitree: cannot open serial port " << opt.serial_device << " at "
+                << baud << " baud (" << e.code().message()
+                << "); check the device path and that you may use it (group dialout).\n";
+      return sim::tools::kExitFailure;
+    }
+  } else {
+    udp.emplace(io, pipeline, lidar);
+    try {
+      udp->open(asio::ip::udp::endpoint(bind_address, opt.udp_port));
+    } catch (const boost::system::system_error& e) {
+      std::cerr << "sim_lidar_unitree: cannot listen on UDP " << opt.bind_address << ":"
+                << opt.udp_port << " (" << e.code().message()
+                << "); pick a free port with --udp-port or stop the other listener.\n";
+      return sim::tools::kExitFailure;
+    }
+  }
+
   auto stream = sim::unitree::UnitreeStream::create(stream_options);
   if (!stream) {
     std::cerr << "sim_lidar_unitree: " << stream.error().message << "\n";
@@ -194,24 +229,9 @@ int run(const Options& opt) {
       return sim::tools::kExitFailure;
     }
   }
-  Pipeline pipeline(**stream, record.is_open() ? &record : nullptr);
+  pipeline.attach(**stream, record.is_open() ? &record : nullptr);
 
-  asio::io_context io;
-  int exit_code = sim::tools::kExitOk;
-  std::optional<UdpSource> udp;
-  std::optional<SerialSource> serial;
-  if (!opt.serial_device.empty()) {
-    const unsigned baud =
-        opt.baud != 0 ? opt.baud : (*model == sim::unitree::Model::l1 ? 2'000'000U : 4'000'000U);
-    serial.emplace(io, pipeline);
-    try {
-      serial->open(opt.serial_device, baud);
-    } catch (const boost::system::system_error& e) {
-      std::cerr << "sim_lidar_unitree: cannot open serial port " << opt.serial_device << " at "
-                << baud << " baud (" << e.code().message()
-                << "); check the device path and that you may use it (group dialout).\n";
-      return sim::tools::kExitFailure;
-    }
+  if (serial) {
     std::cout << "reading " << opt.serial_device << " at " << baud << " baud" << std::endl;
     serial->start([&](const boost::system::error_code& ec) {
       std::cerr << "\nsim_lidar_unitree: serial port " << opt.serial_device
@@ -220,15 +240,6 @@ int run(const Options& opt) {
       io.stop();
     });
   } else {
-    udp.emplace(io, pipeline, lidar);
-    try {
-      udp->open(asio::ip::udp::endpoint(bind_address, opt.udp_port));
-    } catch (const boost::system::system_error& e) {
-      std::cerr << "sim_lidar_unitree: cannot listen on UDP " << opt.bind_address << ":"
-                << opt.udp_port << " (" << e.code().message()
-                << "); pick a free port with --udp-port or stop the other listener.\n";
-      return sim::tools::kExitFailure;
-    }
     // Printed on stdout so scripts (and tests binding port 0) learn the port.
     std::cout << "listening on udp port " << udp->port() << std::endl;
     udp->start();
@@ -303,7 +314,10 @@ int main(int argc, char** argv) {
                  "sim_replay_serial)");
   app.add_flag("--checksum", opt.checksum, "publish frames with an XXH3 checksum");
   app.add_flag("-q,--quiet", opt.quiet, "no status line");
+  sim::tools::Placement placement;
+  sim::tools::add_placement_options(app, placement);
   if (auto code = sim::tools::parse(app, argc, argv)) return *code;
+  if (auto code = sim::tools::apply_placement(placement, "sim_lidar_unitree")) return *code;
   try {
     return run(opt);
   } catch (const std::exception& e) {
