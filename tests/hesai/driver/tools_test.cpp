@@ -307,7 +307,14 @@ TEST(ReplayTool, BadInputGetsOneSentenceAndExitCode) {
 
 class UdpSender {
  public:
-  explicit UdpSender(int port) : fd_(::socket(AF_INET, SOCK_DGRAM, 0)) {
+  // `from`: the loopback address to send from (all of 127/8 is local on Linux), 0 for any.
+  explicit UdpSender(int port, std::uint32_t from = 0) : fd_(::socket(AF_INET, SOCK_DGRAM, 0)) {
+    if (from != 0) {
+      sockaddr_in local{};
+      local.sin_family = AF_INET;
+      local.sin_addr.s_addr = htonl(from);
+      ::bind(fd_, reinterpret_cast<const sockaddr*>(&local), sizeof local);
+    }
     to_.sin_family = AF_INET;
     to_.sin_port = htons(static_cast<std::uint16_t>(port));
     to_.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
@@ -415,6 +422,31 @@ TEST(LiveDriver, CountsBadPacketsAndResumesAfterSilence) {
   EXPECT_EQ(summary_value(driver.out(), "wrong_model"), 1);
   EXPECT_EQ(summary_value(driver.out(), "frames"),
             static_cast<long long>(expected_first.size() + expected_all.size()));
+}
+
+TEST(LiveDriver, SourceFilterIgnoresOtherSenders) {
+  const auto payloads = payloads_of(p64_capture);
+  const auto expected = decode_directly(payloads, sim::hesai::Model::pandar64, p64_calibration);
+  StreamGuard stream;
+  Process driver({live_tool, "--model", "Pandar64", "--port", "0", "--bind", "0.0.0.0",
+                  "--source", "127.0.0.2", "--stream", stream.name, "--calibration",
+                  p64_calibration, "--status-interval", "0", "--summary"});
+  const int port = listening_port(driver);
+  ASSERT_GT(port, 0) << driver.err();
+  auto reader = open_when_created(stream.name);
+  ASSERT_TRUE(reader);
+  UdpSender stranger(port, 0x7f000001);  // 127.0.0.1: another device on the port
+  for (int i = 0; i < 600; ++i) stranger.send(payloads[static_cast<std::size_t>(i)].bytes);
+  UdpSender sensor(port, 0x7f000002);    // 127.0.0.2: the sensor
+  std::thread feed([&] { sensor.send_paced(payloads, 2.0); });
+  const auto frames = receive(*reader, expected.size());
+  feed.join();
+  driver.signal(SIGTERM);
+  ASSERT_EQ(driver.wait(), 0) << driver.err();
+  // The stranger's packets, sent first, were all seen and none went into a frame.
+  expect_same_frames(frames, expected, 1);
+  EXPECT_EQ(summary_value(driver.out(), "other_source"), 600);
+  EXPECT_EQ(summary_value(driver.out(), "lost"), 0);
 }
 
 TEST(LiveDriver, ConfigFileAndAutoDetectedModel) {
