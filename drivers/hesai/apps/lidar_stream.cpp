@@ -18,6 +18,7 @@ struct LidarStream::Impl {
   Loan loan{writer.loan()};
   PublishCounters published;
   std::size_t last_points = 0;
+  std::int64_t stamp_offset_ns = 0;
 
   void attach() noexcept {
     loan = writer.loan();
@@ -26,7 +27,7 @@ struct LidarStream::Impl {
 
   void publish(const CompletedFrame& frame) noexcept {
     const WriteStatus status =
-        loan.commit(frame.point_count * sizeof(LidarPoint), frame.stamp_ns);
+        loan.commit(frame.point_count * sizeof(LidarPoint), frame.stamp_ns + stamp_offset_ns);
     if (status == WriteStatus::ok) {
       ++published.frames;
       published.points += frame.point_count;
@@ -95,6 +96,8 @@ std::optional<CompletedFrame> LidarStream::finish() noexcept {
 }
 
 void LidarStream::reset() noexcept { impl_->assembler.reset(); }
+void LidarStream::set_stamp_offset(std::int64_t offset_ns) noexcept { impl_->stamp_offset_ns = offset_ns; }
+std::int64_t LidarStream::stamp_offset() const noexcept { return impl_->stamp_offset_ns; }
 
 Model LidarStream::model() const noexcept { return impl_->assembler.options().model; }
 const AssemblerCounters& LidarStream::counters() const noexcept { return impl_->assembler.counters(); }

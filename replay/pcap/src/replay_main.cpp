@@ -44,6 +44,7 @@ struct ReplayOptions {
   bool loop = false;
   double start_s = 0.0;
   double duration_s = 0.0;  // 0: to the end
+  bool restamp = false;
   bool summary = false;
   bool quiet = false;
 };
@@ -167,6 +168,9 @@ int main(int argc, char** argv) {
   app.add_option("--duration", r.duration_s, "replay only D seconds of the capture [to the end]")
       ->check(CLI::PositiveNumber)
       ->type_name("D");
+  app.add_flag("--restamp", r.restamp,
+               "publish stamps of the present (sensor time shifted to the replay's start) "
+               "instead of the capture's");
   app.add_flag("--summary", r.summary,
                "print one line of counters at the end: summary frames=… packets=… lost=… "
                "malformed=…");
@@ -206,6 +210,7 @@ int main(int argc, char** argv) {
   std::uint64_t datagrams = 0;
   std::uint64_t skipped = 0;
   unsigned pass = 0;
+  bool restamped = false;
   std::optional<std::string> read_error;
   for (;;) {
     ++pass;
@@ -227,6 +232,15 @@ int main(int argc, char** argv) {
       last_ts = datagram.timestamp_ns;
       ++in_window;
       if (!pacer.wait(datagram.timestamp_ns, stop_requested)) break;
+      if (r.restamp && !restamped) {
+        // Shift the sensor's clock so the first packet's time is now; a loop adds to it below.
+        sim::hesai::Packet packet;
+        if (sim::hesai::Packet::parse(as_u8(datagram.payload), stream->model(), packet) ==
+            sim::hesai::PacketError::none) {
+          stream->set_stamp_offset(sim::realtime_ns() - packet.time_ns());
+          restamped = true;
+        }
+      }
       stream->push(as_u8(datagram.payload), sim::realtime_ns());
       const double fraction =
           r.duration_s > 0 ? static_cast<double>(since_first - start_ns) / static_cast<double>(end_ns - start_ns)
@@ -252,8 +266,12 @@ int main(int argc, char** argv) {
     // Continue the schedule one mean packet interval after the last packet of this pass.
     const std::int64_t span = last_ts - (*first_ts + start_ns);
     const std::int64_t gap = in_window > 1 ? span / static_cast<std::int64_t>(in_window - 1) : 0;
-    pacer.shift(std::max<std::int64_t>(span + gap, 0));
-    stream->reset();  // the next pass starts mid-revolution, its stamps jump back
+    const std::int64_t shift = std::max<std::int64_t>(span + gap, 0);
+    pacer.shift(shift);
+    // The next pass starts mid-revolution: drop the revolution in progress. Its sensor times
+    // start over too: shift the stamps so they keep increasing as a sensor's would.
+    stream->reset();
+    stream->set_stamp_offset(stream->stamp_offset() + shift);
   }
   stream->finish();
   progress.update(1.0, stream->counters().packets, stream->published().frames, pass, true);

@@ -203,10 +203,18 @@ TEST(ReplayTool, LoopStartAndDuration) {
                    p64_calibration, "--max-rate", "--loop", "--summary"});
   auto reader = open_when_created(stream.name);
   ASSERT_TRUE(reader);
-  // Wait until frames of a later pass exist, then stop the replay with SIGINT.
+  // Read until frames of a third pass arrived, then stop the replay with SIGINT. Stamps keep
+  // increasing across passes, as a sensor's would, although the capture starts over.
   const auto deadline = std::chrono::steady_clock::now() + 30s;
-  while (reader->status().latest_seq < 5 && std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(5ms);
+  std::vector<std::byte> buffer(reader->capacity());
+  sim::FrameInfo info;
+  std::int64_t last_stamp = 0;
+  std::uint64_t last_seq = 0;
+  while (last_seq < 5 && std::chrono::steady_clock::now() < deadline) {
+    if (reader->read_next(buffer, info, 100ms) != sim::ReadStatus::new_frame) continue;
+    EXPECT_GT(info.stamp_ns, last_stamp) << "seq " << info.seq;
+    last_stamp = info.stamp_ns;
+    last_seq = info.seq;
   }
   looping.signal(SIGINT);
   ASSERT_EQ(looping.wait(), 0) << looping.err();
@@ -224,6 +232,19 @@ TEST(ReplayTool, LoopStartAndDuration) {
   EXPECT_LT(summary_value(result.out, "packets"), 2400);
   EXPECT_GT(summary_value(result.out, "packets"), 0);
   EXPECT_LE(summary_value(result.out, "frames"), 1);
+
+  // --restamp moves the sensor's time to the present.
+  const std::int64_t before = sim::realtime_ns();
+  const auto restamped = run({replay_tool, p64_capture, "--stream", windowed.name, "--calibration",
+                              p64_calibration, "--max-rate", "--restamp"});
+  ASSERT_EQ(restamped.code, 0) << restamped.err;
+  auto newest = sim::Reader::open(windowed.name);
+  ASSERT_TRUE(newest);
+  std::vector<std::byte> frame(newest->capacity());
+  sim::FrameInfo newest_info;
+  ASSERT_EQ(newest->read(frame, newest_info), sim::ReadStatus::new_frame);
+  EXPECT_GT(newest_info.stamp_ns, before);
+  EXPECT_LT(newest_info.stamp_ns, sim::realtime_ns() + 1'000'000'000);
 
   const auto beyond = run({replay_tool, p64_capture, "--stream", windowed.name, "--calibration",
                            p64_calibration, "--max-rate", "--start", "5"});

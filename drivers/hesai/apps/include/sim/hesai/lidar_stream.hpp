@@ -60,6 +60,11 @@ class LidarStream {
   std::optional<CompletedFrame> finish() noexcept;
   // Forgets the revolution in progress (a capture loops, a sensor was silent).
   void reset() noexcept;
+  // Added to every published stamp from now on: a replay keeps stamps increasing across loops
+  // of its capture, or moves them to the present (--restamp). Zero (the default) publishes the
+  // sensor's own time, as the live driver does.
+  void set_stamp_offset(std::int64_t offset_ns) noexcept;
+  std::int64_t stamp_offset() const noexcept;
 
   Model model() const noexcept;
   const AssemblerCounters& counters() const noexcept;
