@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 #include <boost/asio.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <optional>
@@ -92,7 +93,6 @@ class Driver {
     signals_.async_wait([this](const boost::system::error_code& ec, int) {
       if (!ec) io_.stop();
     });
-    start_time_ = sim::monotonic_ns();
     receive();
     schedule_status();
     io_.run();
@@ -257,7 +257,6 @@ class Driver {
   std::optional<asio::ip::address> source_;
   std::optional<sim::hesai::LidarStream> stream_;
   std::array<std::uint8_t, receive_buffer_size> buffer_{};
-  std::int64_t start_time_ = 0;
   std::int64_t last_packet_ns_ = 0;
   std::uint64_t datagrams_ = 0;
   std::uint64_t other_source_ = 0;

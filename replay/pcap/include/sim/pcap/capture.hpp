@@ -81,8 +81,9 @@ class CaptureReader {
   std::unique_ptr<Impl> impl_;
 };
 
-// The BPF expression CaptureOptions compile to ("" when there is nothing to filter). UDP on the
-// port whether the frame carries zero, one or two VLAN tags; the user's filter is ANDed.
+// The BPF expression CaptureOptions compile to ("" when there is nothing to filter): UDP on the
+// port whether the frame carries zero, one or two VLAN tags, and all IPv6 (BPF cannot see UDP
+// behind extension headers; next() checks the port). The user's filter is ANDed in front.
 std::string bpf_expression(const CaptureOptions& options, LinkType link);
 
 }  // namespace sim::pcap
