@@ -196,6 +196,50 @@ TEST(ReplayTool, MaxRateAndRawEthernetPandar40P) {
   EXPECT_LT(last_firing, 55'000'000u);
 }
 
+TEST(ReplayTool, SameFramesThroughEveryEncapsulation) {
+  // The Pandar64 payloads rewrapped as a trunk port (QinQ, IPv4 options) and as "tcpdump -i any"
+  // (SLL2) would record them: the replay must publish the same revolutions as from the original.
+  using namespace sim::pcap::testing;
+  const auto payloads = payloads_of(p64_capture);
+  const auto expected = decode_directly(payloads, sim::hesai::Model::pandar64, p64_calibration);
+  const fs::path dir = fs::temp_directory_path() / ("sim_replay_encap_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::vector<Record> trunk, any;
+  for (const Payload& p : payloads) {
+    const Bytes datagram = udp(10000, 2368, p.bytes);
+    trunk.push_back({ethernet(0x0800, ipv4({192, 168, 1, 201}, {192, 168, 1, 100}, datagram, 17,
+                                           {0x94, 0x04, 0x00, 0x00}),
+                              {{0x88a8, 0x0010}, {0x8100, 0x0064}}),
+                     p.timestamp_ns});
+    any.push_back({sll2(0x0800, ipv4({192, 168, 1, 201}, {192, 168, 1, 100}, datagram)), p.timestamp_ns});
+    // Other traffic on the wire: the filter or the parser must drop it.
+    trunk.push_back({ethernet(0x0800, ipv4({192, 168, 1, 201}, {192, 168, 1, 100}, udp(10000, 10110, Bytes(512, 0))),
+                              {{0x8100, 0x0064}}),
+                     p.timestamp_ns});
+  }
+  write_capture((dir / "trunk.pcap").string(), DLT_EN10MB, trunk, true);
+  write_capture((dir / "any.pcap").string(), DLT_LINUX_SLL2, any);
+  for (const std::string name : {"trunk.pcap", "any.pcap"}) {
+    StreamGuard stream;
+    const auto result = run({replay_tool, (dir / name).string(), "--stream", stream.name,
+                             "--calibration", p64_calibration, "--max-rate", "--port", "2368",
+                             "--summary"});
+    ASSERT_EQ(result.code, 0) << name << ": " << result.err;
+    EXPECT_EQ(summary_value(result.out, "frames"), static_cast<long long>(expected.size())) << name;
+    EXPECT_EQ(summary_value(result.out, "packets"), 2400) << name;
+    EXPECT_EQ(summary_value(result.out, "malformed"), 0) << name;
+    auto reader = sim::Reader::open(stream.name);
+    ASSERT_TRUE(reader);
+    std::vector<std::byte> buffer(reader->capacity());
+    sim::FrameInfo info;
+    ASSERT_EQ(reader->read(buffer, info), sim::ReadStatus::new_frame);
+    EXPECT_EQ(info.stamp_ns, expected.back().stamp_ns) << name;
+    ASSERT_EQ(info.size, expected.back().points.size() * sizeof(sim::LidarPoint)) << name;
+    EXPECT_EQ(std::memcmp(buffer.data(), expected.back().points.data(), info.size), 0) << name;
+  }
+  fs::remove_all(dir);
+}
+
 TEST(ReplayTool, LoopStartAndDuration) {
   StreamGuard stream;
   // Passes of the whole capture at full speed: each pass publishes the same revolutions.
