@@ -2,8 +2,8 @@
 // libFuzzer target for the decoders behind the checksums. Random bytes almost never pass a
 // CRC, so fuzz_unitree_stream rarely reaches the point math; here the input becomes the body of
 // a packet and its checksum is made valid, so every header field (calibration floats, point
-// counts, angles, stamps) takes arbitrary values. The first byte picks L2 point, L2 IMU, or an
-// L1 distance+auxiliary pair (with trimmed payloads).
+// counts, angles, stamps) takes arbitrary values. The first byte (mod 4) picks L2 3D point,
+// L2 IMU, an L1 distance+auxiliary pair (with trimmed payloads), or an L2 2D-mode packet.
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -78,7 +78,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.time_source = (data[0] & 4U) ? sim::unitree::TimeSource::sensor
                                        : sim::unitree::TimeSource::host;
   std::vector<std::byte> stream;
-  switch (data[0] % 3) {
+  switch (data[0] % 4) {
     case 0: {
       const auto p = l2_packet(102, 1020, body);
       stream.insert(stream.end(), p.begin(), p.end());
@@ -87,6 +87,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     case 1: {
       const auto p = l2_packet(104, 56, body);
+      stream.insert(stream.end(), p.begin(), p.end());
+      break;
+    }
+    case 3: {
+      const auto p = l2_packet(103, 5512, body);  // 2D mode
       stream.insert(stream.end(), p.begin(), p.end());
       break;
     }

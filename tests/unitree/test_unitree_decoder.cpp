@@ -125,6 +125,37 @@ TEST(UnitreeL2Xyz, PointNumBoundsThePoints) {
   EXPECT_EQ(decode_one(s).size(), 10U);
 }
 
+TEST(UnitreeL2Xyz, TwoDimensionalModePacket) {
+  // 2D mode: x = 0, y = cosα·r, z = sinα·r + a. r = 2 m, a = 0.05:
+  // j = 0, α = 30°: y = 1.7320508, z = 1.0 + 0.05 = 1.05
+  // j = 1, α = 60°: y = 1.0,       z = 1.7320508 + 0.05 = 1.7820508
+  L2Point2dSpec s;
+  s.a_axis_dist = 0.05F;
+  s.angle_min = static_cast<float>(std::numbers::pi / 6);
+  s.angle_increment = static_cast<float>(std::numbers::pi / 6);
+  s.ranges[0] = 2000;
+  s.ranges[1] = 2000;
+  s.intensities[1] = 9;
+  DecoderOptions options;  // 18 packets per 3D scan; a 2D packet is a scan of its own
+  ASSERT_GE(Decoder::max_points_per_scan(options), 1800U);
+  VectorSink sink(Decoder::max_points_per_scan(options));
+  Decoder decoder(options, sink);
+  L2PointSpec partial;
+  partial.ranges.fill(1000);
+  decoder.push(l2_point_packet(partial), 0);  // a 3D scan begun before a work-mode change
+  decoder.push(l2_2d_packet(s), 0);
+  ASSERT_EQ(sink.scans.size(), 1U);
+  const auto& points = sink.scans[0].points;
+  ASSERT_EQ(points.size(), 2U);  // only the 2D packet's points
+  EXPECT_EQ(points[0].x, 0.0F);
+  EXPECT_NEAR(points[0].y, 1.7320508F, kTol);
+  EXPECT_NEAR(points[0].z, 1.05F, kTol);
+  EXPECT_NEAR(points[1].y, 1.0F, kTol);
+  EXPECT_NEAR(points[1].z, 1.7820508F, kTol);
+  EXPECT_EQ(points[1].intensity, 9.0F);
+  EXPECT_EQ(decoder.counters().scans, 1U);
+}
+
 TEST(UnitreeL2Decoder, ImpossiblePointCountIsMalformed) {
   L2PointSpec s;
   s.ranges.fill(1000);

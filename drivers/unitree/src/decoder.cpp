@@ -62,6 +62,13 @@ bool ScanAssembler::end_packet(std::size_t points_written) noexcept {
   return true;
 }
 
+void ScanAssembler::close() noexcept {
+  if (!open_) return;
+  sink_.end_scan(points_, stamp_ns_);
+  open_ = false;
+  storage_ = {};
+}
+
 void ScanAssembler::abandon() noexcept {
   open_ = false;
   storage_ = {};
@@ -75,9 +82,9 @@ Decoder::Decoder(const DecoderOptions& options, ScanSink& sink)
     : options_(options), sink_(sink), assembler_(sink, options.packets_per_scan) {}
 
 std::uint64_t Decoder::max_points_per_scan(const DecoderOptions& options) noexcept {
-  const std::uint64_t per_packet =
-      options.model == Model::l2 ? l2::kPointsPerPacket : l1::kPointsPerPacket;
-  return per_packet * std::max<std::uint32_t>(options.packets_per_scan, 1);
+  const std::uint64_t packets = std::max<std::uint32_t>(options.packets_per_scan, 1);
+  if (options.model == Model::l1) return l1::kPointsPerPacket * packets;
+  return std::max<std::uint64_t>(l2::kPointsPerPacket * packets, l2::kPointsPer2dPacket);
 }
 
 void Decoder::push(std::span<const std::byte> bytes, std::int64_t host_ns) noexcept {
@@ -132,6 +139,10 @@ void Decoder::on_l2_packet(std::span<const std::byte> packet, std::int64_t host_
     sink_.imu(*sample);
     return;
   }
+  if (type == l2::point_2d) {
+    on_l2_2d_packet(packet, host_ns);
+    return;
+  }
   if (type != l2::point_3d) {
     ++counters_.ignored;
     return;
@@ -157,6 +168,26 @@ void Decoder::on_l2_packet(std::span<const std::byte> packet, std::int64_t host_
   counters_.dropped_points += result.overflow;
   counters_.points += result.written;
   if (assembler_.end_packet(result.written)) ++counters_.scans;
+}
+
+void Decoder::on_l2_2d_packet(std::span<const std::byte> packet, std::int64_t host_ns) noexcept {
+  const std::optional<l2::PointPacketHeader> header = l2::parse_2d_header(packet);
+  if (!header) {
+    ++counters_.malformed;
+    return;
+  }
+  // One 2D packet is one whole planar scan: it never joins a 3D scan (a work-mode change
+  // drops a half-assembled 3D scan).
+  if (assembler_.packets_in_scan() > 0) assembler_.abandon();
+  const std::int64_t stamp = options_.time_source == TimeSource::host ? host_ns : header->stamp_ns;
+  const std::span<LidarPoint> room = assembler_.begin_packet(stamp, header->stamp_ns);
+  const l2::DecodeLimits limits{options_.range_min_m, options_.range_max_m};
+  const l2::DecodeResult result = l2::decode_2d_points(packet, *header, limits, 0, room);
+  counters_.dropped_points += result.overflow;
+  counters_.points += result.written;
+  assembler_.end_packet(result.written);
+  assembler_.close();
+  ++counters_.scans;
 }
 
 void Decoder::on_l1_message(const MavlinkMessage& message, std::int64_t host_ns) noexcept {

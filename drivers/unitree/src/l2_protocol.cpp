@@ -58,6 +58,67 @@ std::optional<PointPacketHeader> parse_point_header(std::span<const std::byte> p
   return h;
 }
 
+std::optional<PointPacketHeader> parse_2d_header(std::span<const std::byte> p) noexcept {
+  if (p.size() != kPoint2dSize || le::u32(p, 4) != point_2d) return std::nullopt;
+  namespace o = point3d;  // DataInfo and calibration sit where they do in 3D packets
+  namespace t = point2d;
+  PointPacketHeader h;
+  h.seq = le::u32(p, o::seq);
+  h.stamp_ns = std::int64_t{le::u32(p, o::stamp_sec)} * 1'000'000'000 + le::u32(p, o::stamp_nsec);
+  h.a_axis_dist = le::f32(p, o::a_axis_dist);
+  h.b_axis_dist = le::f32(p, o::b_axis_dist);
+  h.theta_angle_bias = le::f32(p, o::theta_angle_bias);
+  h.alpha_angle_bias = le::f32(p, o::alpha_angle_bias);
+  h.beta_angle = le::f32(p, o::beta_angle);
+  h.xi_angle = le::f32(p, o::xi_angle);
+  h.range_bias = le::f32(p, o::range_bias);
+  h.range_scale = le::f32(p, o::range_scale);
+  h.scan_period = le::f32(p, t::scan_period);
+  h.range_min = le::f32(p, t::range_min);
+  h.range_max = le::f32(p, t::range_max);
+  h.angle_min = le::f32(p, t::angle_min);
+  h.angle_increment = le::f32(p, t::angle_increment);
+  h.time_increment = le::f32(p, t::time_increment);
+  h.point_num = le::u32(p, t::point_num);
+  if (h.point_num > kPointsPer2dPacket) return std::nullopt;
+  return h;
+}
+
+DecodeResult decode_2d_points(std::span<const std::byte> p, const PointPacketHeader& h,
+                              const DecodeLimits& limits, std::uint32_t base_offset_ns,
+                              std::span<LidarPoint> out) noexcept {
+  const double r_min = std::max(double{h.range_min}, double{limits.range_min_m});
+  const double r_max = std::min(double{h.range_max}, double{limits.range_max_m});
+  const std::size_t count = std::min<std::size_t>(h.point_num, kPointsPer2dPacket);
+  DecodeResult result;
+  for (std::size_t j = 0; j < count; ++j) {
+    const std::uint16_t raw = le::u16(p, point2d::ranges + 2 * j);
+    if (raw < 1) continue;
+    const double r = double{h.range_scale} * (static_cast<double>(raw) + double{h.range_bias});
+    if (!(r >= r_min && r <= r_max)) continue;
+    const double jd = static_cast<double>(j);
+    const double alpha = double{h.angle_min} + double{h.alpha_angle_bias} + jd * h.angle_increment;
+    const double y = std::cos(alpha) * r;
+    const double z = std::sin(alpha) * r + h.a_axis_dist;
+    if (!plausible(y) || !plausible(z)) continue;
+    if (result.written == out.size()) {
+      ++result.overflow;
+      continue;
+    }
+    const double t = static_cast<double>(base_offset_ns) + jd * double{h.time_increment} * 1e9;
+    LidarPoint& pt = out[result.written++];
+    pt.x = 0.0F;
+    pt.y = static_cast<float>(y);
+    pt.z = static_cast<float>(z);
+    pt.intensity = static_cast<float>(static_cast<std::uint8_t>(p[point2d::intensities + j]));
+    pt.time_offset_ns = (t >= 0.0 && t < 4.0e9) ? static_cast<std::uint32_t>(t) : base_offset_ns;
+    pt.ring = 0;
+    pt.return_index = 0;
+    pt.reserved = 0;
+  }
+  return result;
+}
+
 DecodeResult decode_points(std::span<const std::byte> p, const PointPacketHeader& h,
                           const DecodeLimits& limits, std::uint32_t base_offset_ns,
                           std::span<LidarPoint> out) noexcept {

@@ -87,6 +87,28 @@ Bytes l2_point_packet(const L2PointSpec& s) {
   return l2_packet(102, std::span<const std::byte>(p).subspan(12, 1020));
 }
 
+Bytes l2_2d_packet(const L2Point2dSpec& s) {
+  Bytes p(5536);
+  put_u32(p, 12, s.seq);
+  put_u32(p, 16, 5512);
+  put_f32(p, 64, s.a_axis_dist);
+  put_f32(p, 76, s.alpha_angle_bias);
+  put_f32(p, 88, s.range_bias);
+  put_f32(p, 92, s.range_scale);
+  put_f32(p, 96, 0.1F);
+  put_f32(p, 100, s.range_min);
+  put_f32(p, 104, s.range_max);
+  put_f32(p, 108, s.angle_min);
+  put_f32(p, 112, s.angle_increment);
+  put_f32(p, 116, s.time_increment);
+  put_u32(p, 120, s.point_num);
+  for (std::size_t j = 0; j < 1800; ++j) {
+    put_u16(p, 124 + 2 * j, s.ranges.at(j));
+    put_u8(p, 3724 + j, s.intensities.at(j));
+  }
+  return l2_packet(103, std::span<const std::byte>(p).subspan(12, 5512));
+}
+
 Bytes l2_imu_packet(const L2ImuSpec& s) {
   Bytes p(80);
   put_u32(p, 12, s.seq);

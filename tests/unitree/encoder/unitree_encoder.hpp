@@ -38,6 +38,20 @@ struct L2PointSpec {
 };
 Bytes l2_point_packet(const L2PointSpec& spec);  // 1044 B, type 102
 
+// A 2D-mode packet (type 103, 5536 B; reference §7.1 "2D packet"): DataInfo and calibration as
+// in 3D packets, then scan_period 96, range_min 100, range_max 104, angle_min 108,
+// angle_increment 112, time_increment 116, point_num 120, ranges 124, intensities 3724.
+struct L2Point2dSpec {
+  std::uint32_t seq = 0;
+  float a_axis_dist = 0, alpha_angle_bias = 0, range_bias = 0, range_scale = 0.001F;
+  float range_min = 0.0F, range_max = 100.0F;
+  float angle_min = 0, angle_increment = 0, time_increment = 0;
+  std::uint32_t point_num = 1800;
+  std::vector<std::uint16_t> ranges = std::vector<std::uint16_t>(1800);
+  std::vector<std::uint8_t> intensities = std::vector<std::uint8_t>(1800);
+};
+Bytes l2_2d_packet(const L2Point2dSpec& spec);
+
 struct L2ImuSpec {
   std::uint32_t seq = 0;
   std::uint32_t stamp_sec = 0;

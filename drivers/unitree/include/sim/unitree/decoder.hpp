@@ -56,7 +56,7 @@ struct DecoderCounters {
   std::uint64_t lost_packets = 0;    // L2 sequence gaps
   std::uint64_t imu_samples = 0;
   std::uint64_t unpaired = 0;        // L1 distance/auxiliary packets without their partner
-  std::uint64_t ignored = 0;         // good packets of types not decoded (2D, version, ACK…)
+  std::uint64_t ignored = 0;         // good packets of types not decoded (version, ACK…)
   std::uint64_t malformed = 0;       // good CRC but impossible contents (point_num > 300)
 };
 
@@ -73,6 +73,8 @@ class ScanAssembler {
   std::uint32_t packets_in_scan() const noexcept { return packets_; }
   // Drops the open scan unpublished (its storage is simply not committed).
   void abandon() noexcept;
+  // Publishes the open scan now, whatever its packet count (a 2D packet is a whole scan).
+  void close() noexcept;
 
  private:
   ScanSink& sink_;
@@ -90,6 +92,7 @@ class Decoder {
   Decoder(const DecoderOptions& options, ScanSink& sink);
 
   // Points in the largest scan these options produce: size the sink's storage with it.
+  // (For the L2 at least one 2D-mode packet, 1,800 points, which is published as one scan.)
   static std::uint64_t max_points_per_scan(const DecoderOptions& options) noexcept;
 
   // Any chunk of the byte stream: one UDP datagram (holding several packets or part of one), or
@@ -107,6 +110,7 @@ class Decoder {
  private:
   void drain(std::int64_t host_ns) noexcept;
   void on_l2_packet(std::span<const std::byte> packet, std::int64_t host_ns) noexcept;
+  void on_l2_2d_packet(std::span<const std::byte> packet, std::int64_t host_ns) noexcept;
   void on_l1_message(const MavlinkMessage& message, std::int64_t host_ns) noexcept;
   void decode_l1_pair(std::int64_t host_ns) noexcept;
 

@@ -45,6 +45,8 @@ enum PacketType : std::uint32_t {
 std::optional<std::size_t> expected_size(std::uint32_t packet_type) noexcept;
 
 inline constexpr std::size_t kPoint3dSize = 1044;
+inline constexpr std::size_t kPoint2dSize = 5536;
+inline constexpr std::size_t kPointsPer2dPacket = 1800;
 inline constexpr std::size_t kImuSize = 80;
 inline constexpr std::size_t kPointsPerPacket = 300;
 
@@ -76,6 +78,19 @@ inline constexpr std::size_t intensities = 732;  // u8[300]
 inline constexpr std::size_t crc = 1032;
 }  // namespace point3d
 
+// Absolute offsets in a type-103 (2D mode) packet where they differ from type 102.
+namespace point2d {
+inline constexpr std::size_t scan_period = 96;
+inline constexpr std::size_t range_min = 100;
+inline constexpr std::size_t range_max = 104;
+inline constexpr std::size_t angle_min = 108;
+inline constexpr std::size_t angle_increment = 112;
+inline constexpr std::size_t time_increment = 116;
+inline constexpr std::size_t point_num = 120;
+inline constexpr std::size_t ranges = 124;        // u16[1800], mm
+inline constexpr std::size_t intensities = 3724;  // u8[1800]
+}  // namespace point2d
+
 namespace imu_packet {
 inline constexpr std::size_t seq = 12;
 inline constexpr std::size_t stamp_sec = 20;
@@ -102,6 +117,9 @@ struct PointPacketHeader {
 // (wrong size/type) or its point count exceeds 300.
 std::optional<PointPacketHeader> parse_point_header(std::span<const std::byte> packet) noexcept;
 
+// The same for a type-103 (2D) packet: no horizontal angle fields; point_num ≤ 1800.
+std::optional<PointPacketHeader> parse_2d_header(std::span<const std::byte> packet) noexcept;
+
 struct DecodeLimits {
   float range_min_m = 0.0F;   // user limits, applied on top of the packet's own
   float range_max_m = 1.0e9F;
@@ -118,6 +136,12 @@ struct DecodeResult {
 DecodeResult decode_points(std::span<const std::byte> packet, const PointPacketHeader& header,
                           const DecodeLimits& limits, std::uint32_t base_offset_ns,
                           std::span<LidarPoint> out) noexcept;
+
+// 2D mode (reference §7.2): x = 0, y = cosα·r, z = sinα·r + a_axis_dist, with α and r as for
+// 3D packets.
+DecodeResult decode_2d_points(std::span<const std::byte> packet, const PointPacketHeader& header,
+                              const DecodeLimits& limits, std::uint32_t base_offset_ns,
+                              std::span<LidarPoint> out) noexcept;
 
 // Reads a framed, CRC-checked type-104 packet.
 std::optional<ImuSample> parse_imu(std::span<const std::byte> packet) noexcept;
