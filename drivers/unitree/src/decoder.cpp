@@ -178,7 +178,7 @@ void Decoder::on_l2_2d_packet(std::span<const std::byte> packet, std::int64_t ho
   }
   // One 2D packet is one whole planar scan: it never joins a 3D scan (a work-mode change
   // drops a half-assembled 3D scan).
-  if (assembler_.packets_in_scan() > 0) assembler_.abandon();
+  assembler_.abandon();
   const std::int64_t stamp = options_.time_source == TimeSource::host ? host_ns : header->stamp_ns;
   const std::span<LidarPoint> room = assembler_.begin_packet(stamp, header->stamp_ns);
   const l2::DecodeLimits limits{options_.range_min_m, options_.range_max_m};

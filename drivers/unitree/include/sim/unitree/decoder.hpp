@@ -57,7 +57,7 @@ struct DecoderCounters {
   std::uint64_t imu_samples = 0;
   std::uint64_t unpaired = 0;        // L1 distance/auxiliary packets without their partner
   std::uint64_t ignored = 0;         // good packets of types not decoded (version, ACK…)
-  std::uint64_t malformed = 0;       // good CRC but impossible contents (point_num > 300)
+  std::uint64_t malformed = 0;       // good CRC but impossible contents (too many points)
 };
 
 // Opens a scan at its first packet and hands it to the sink after packets_per_scan packets.
@@ -70,7 +70,7 @@ class ScanAssembler {
   std::int64_t scan_clock_ns() const noexcept { return scan_clock_ns_; }
   // Returns whether this packet completed (and published) the scan.
   bool end_packet(std::size_t points_written) noexcept;
-  std::uint32_t packets_in_scan() const noexcept { return packets_; }
+  std::uint32_t packets_in_scan() const noexcept { return open_ ? packets_ : 0; }
   // Drops the open scan unpublished (its storage is simply not committed).
   void abandon() noexcept;
   // Publishes the open scan now, whatever its packet count (a 2D packet is a whole scan).
