@@ -34,6 +34,7 @@
 #include "process.hpp"
 #include "sim/clock.hpp"
 #include "sim/os.hpp"
+#include "sim/reader.hpp"
 #include "stats.hpp"
 #include "transport.hpp"
 
@@ -410,6 +411,14 @@ class Bench {
         "simbench_" + std::to_string(getpid()) + "_" + std::to_string(counter_++);
     const long long udp_before = udp_datagrams();
     std::string error;
+    // Declared before the processes, so it runs after they are gone: a SIM writer that had to be
+    // killed cannot remove its region, so it is removed here.
+    struct RegionSweep {
+      std::string name;
+      ~RegionSweep() {
+        if (!name.empty()) sim::destroy(name, /*force=*/true);
+      }
+    } sweep{transport.rfind("sim-", 0) == 0 ? "/" + topic : std::string()};
     auto fail = [&](const std::string& why) {
       row.status = "failed";
       if (stop_requested) return row;
@@ -592,6 +601,14 @@ class Bench {
     domain_ = static_cast<int>(getpid() % 200) + 1;
 
     std::unique_ptr<ChildProcess> roudi;
+    // Stops RouDi on every way out, so its shared memory never outlives the run.
+    struct RoudiStop {
+      Bench& bench;
+      std::unique_ptr<ChildProcess>& roudi;
+      ~RoudiStop() {
+        if (roudi) bench.stop_roudi(*roudi);
+      }
+    } roudi_stop{*this, roudi};
     if (std::any_of(transports.begin(), transports.end(), needs_roudi)) {
       std::string error;
       roudi = start_roudi(error);
@@ -673,7 +690,6 @@ class Bench {
     if (isatty(STDERR_FILENO)) std::fprintf(stderr, "\n");
     if (csv != nullptr) std::fclose(csv);
     if (extra != nullptr) std::fclose(extra);
-    if (roudi) stop_roudi(*roudi);
     return failures == 0 && !stop_requested ? 0 : 1;
   }
 

@@ -45,11 +45,14 @@ ChildProcess::ChildProcess(const std::vector<std::string>& argv) {
 }
 
 ChildProcess::~ChildProcess() {
-  if (pid_ > 0 && !reaped_) {
+  // Closing its stdin first lets a role process waiting for "go" or "stop" leave by itself and
+  // clean up (a SIM writer removes its region); only a child that does not is killed.
+  if (in_fd_ >= 0) close(in_fd_);
+  in_fd_ = -1;
+  if (pid_ > 0 && !reaped_ && wait(std::chrono::milliseconds(2000)) < 0) {
     kill(pid_, SIGKILL);
     wait(std::chrono::milliseconds(5000));
   }
-  if (in_fd_ >= 0) close(in_fd_);
   if (out_fd_ >= 0) close(out_fd_);
 }
 
