@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
-# The transport benchmark in one command (issue 5): installs the peers (Debian packages), builds
-# sim_bench, runs SIM against iceoryx, Fast DDS and Cyclone DDS on the SIM paper's workloads, and
-# writes the Markdown table, the CSV/JSON and the plots into bench/results/.
+# Every benchmark in one command (`make bench` runs it): installs the peers (Debian packages),
+# builds, runs SIM against iceoryx, Fast DDS and Cyclone DDS on the SIM paper's workloads and
+# writes the Markdown table, the CSV/JSON and the plots into bench/results/; then the driver
+# benchmarks (Hesai decode, cut-to-reader and live CPU; camera decode paths) into
+# bench/results/{hesai,camera}.txt.
 #
 #   scripts/bench.sh [--no-install] [--quick] [-- extra sim_bench options, e.g. --runs 3 --cpu 0,1]
 #
@@ -51,6 +53,8 @@ step "Building sim_bench in $build"
 cmake -S "$root" -B "$build" -DSIM_BUILD_BENCH=ON -DSIM_BUILD_TESTS=OFF \
   -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 cmake --build "$build" --target sim_bench -j"$(nproc)"
+drivers=(bench_hesai_decode bench_hesai_live bench_camera_decode)
+cmake --build "$build" --target "${drivers[@]}" -j"$(nproc)"
 bench="$build/bench/transport/sim_bench"
 
 mkdir -p "$out"
@@ -75,5 +79,15 @@ python=/usr/bin/python3
 [ -x "$python" ] || python=python3
 "$python" "$root/bench/transport/report.py" "$csv" \
   --title "SIM transport benchmark ($(uname -m), $(nproc) CPUs, $(date -u +%Y-%m-%d))" \
-  --command "sim_bench ${args[*]}"
+  --command "sim_bench ${args[*]}" || status=1
+
+min_time=1
+live=(--seconds 20 --revolutions 300)
+if [ "$quick" = 1 ]; then min_time=0.05; live=(--seconds 2 --revolutions 20); fi
+step "Hesai: decode throughput, cut to reader, live driver CPU -> $out/hesai.txt"
+{ "$build/bench/hesai/bench_hesai_decode" --benchmark_min_time="$min_time" &&
+  "$build/bench/hesai/bench_hesai_live" "${live[@]}"; } 2>&1 | tee "$out/hesai.txt" || status=1
+step "Camera: decode paths into the slot against OpenCV -> $out/camera.txt"
+"$build/bench/camera/bench_camera_decode" --benchmark_min_time="$min_time" 2>&1 |
+  tee "$out/camera.txt" || status=1
 exit "$status"

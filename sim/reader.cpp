@@ -36,6 +36,7 @@ struct Snapshot {
   std::uint64_t size;
   std::int64_t stamp_ns;
   std::int64_t publish_ns;
+  std::int64_t receive_ns;
   std::uint64_t checksum;
 };
 
@@ -135,6 +136,7 @@ struct Reader::Impl {
     s.size = m.size.load(std::memory_order_relaxed);
     s.stamp_ns = m.stamp_ns.load(std::memory_order_relaxed);
     s.publish_ns = m.publish_ns.load(std::memory_order_relaxed);
+    s.receive_ns = m.receive_ns.load(std::memory_order_relaxed);
     s.checksum = m.checksum.load(std::memory_order_relaxed);
     if (s.size > capacity()) {
       // A torn metadata read is retried; a length the writer really published is a bad region.
@@ -150,6 +152,7 @@ struct Reader::Impl {
     info.seq = s.seq;
     info.stamp_ns = s.stamp_ns;
     info.publish_ns = s.publish_ns;
+    info.receive_ns = s.receive_ns;
     info.size = s.size;
     info.layout = layout;
   }
@@ -329,7 +332,8 @@ std::vector<std::string> list_streams() {
   while (const dirent* entry = readdir(d)) {
     const std::string_view file(entry->d_name);
     if (!file.starts_with(kRegionPrefix)) continue;
-    const std::string name = "/" + std::string(file.substr(kRegionPrefix.size()));
+    std::string name(1, '/');  // built in place: GCC 12's -Wrestrict misfires on "/" + string
+    name += file.substr(kRegionPrefix.size());
     if (name_problem(name).empty() && name.find(".tmp") == std::string::npos) {
       names.push_back(name);
     }

@@ -51,7 +51,8 @@ std::string name_problem(std::string_view name) {
                     c == '_' || c == '-' || c == '.';
     if (!ok) {
       return "stream name \"" + std::string(name) +
-             "\" may only contain letters, digits, '_', '-' and '.' after its leading '/'";
+             "\" may only contain letters, digits, '_', '-' and '.' after its leading '/'; "
+             "rename it, like \"/camera_front\"";
     }
   }
   return {};

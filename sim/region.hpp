@@ -104,7 +104,11 @@ struct alignas(kCacheLine) SlotMeta {
   std::atomic<std::int64_t> stamp_ns;
   std::atomic<std::int64_t> publish_ns;
   std::atomic<std::uint64_t> checksum;
+  // Added in place of padding (zero in regions whose writer did not set it): readers of either
+  // age agree on every other field, so the format version stays 1.
+  std::atomic<std::int64_t> receive_ns;
 };
+static_assert(sizeof(SlotMeta) == kCacheLine);
 
 struct alignas(kPage) RegionHeader {
   Identity identity;

@@ -74,7 +74,8 @@ struct detail::WriterState {
 
 namespace {
 
-WriteStatus publish(WriterState& w, std::uint64_t size, std::int64_t stamp_ns) noexcept;
+WriteStatus publish(WriterState& w, std::uint64_t size, std::int64_t stamp_ns,
+                    std::int64_t receive_ns) noexcept;
 
 bool compatible(const Identity& id, const StreamSpec& spec, std::uint64_t capacity) {
   return id.capacity == capacity && from_record(id.layout) == spec.layout &&
@@ -228,13 +229,14 @@ Writer::Writer(Writer&&) noexcept = default;
 Writer& Writer::operator=(Writer&&) noexcept = default;
 Writer::~Writer() = default;
 
-WriteStatus Writer::write(std::span<const std::byte> frame, std::int64_t stamp_ns) noexcept {
+WriteStatus Writer::write(std::span<const std::byte> frame, std::int64_t stamp_ns,
+                          std::int64_t receive_ns) noexcept {
   if (!impl_) return WriteStatus::closed;
   if (frame.size() > impl_->capacity) return WriteStatus::too_large;
   impl_->begin_write();
   ++impl_->loans_started;  // a loan still open is overtaken by this write
   std::memcpy(impl_->slot(impl_->last_seq + 1), frame.data(), frame.size());
-  return publish(*impl_, frame.size(), stamp_ns);
+  return publish(*impl_, frame.size(), stamp_ns, receive_ns);
 }
 
 Loan Writer::loan() noexcept {
@@ -246,7 +248,8 @@ Loan Writer::loan() noexcept {
 
 namespace {
 
-WriteStatus publish(WriterState& w, std::uint64_t size, std::int64_t stamp_ns) noexcept {
+WriteStatus publish(WriterState& w, std::uint64_t size, std::int64_t stamp_ns,
+                    std::int64_t receive_ns) noexcept {
   if (size > w.capacity) return WriteStatus::too_large;
   const std::uint64_t seq = w.last_seq + 1;
   SlotMeta& meta = w.meta(seq);
@@ -254,6 +257,7 @@ WriteStatus publish(WriterState& w, std::uint64_t size, std::int64_t stamp_ns) n
   meta.size.store(size, std::memory_order_relaxed);
   meta.stamp_ns.store(stamp_ns, std::memory_order_relaxed);
   meta.publish_ns.store(now, std::memory_order_relaxed);
+  meta.receive_ns.store(receive_ns, std::memory_order_relaxed);
   meta.checksum.store(w.checksum ? XXH3_64bits(w.slot(seq), size) : 0, std::memory_order_relaxed);
   // The frame is complete: release it under its number, then make it the newest.
   meta.seq.store(seq, std::memory_order_release);
@@ -304,9 +308,9 @@ Loan& Loan::operator=(Loan&& other) noexcept {
   return *this;
 }
 
-WriteStatus Loan::commit(std::uint64_t size, std::int64_t stamp_ns) noexcept {
+WriteStatus Loan::commit(std::uint64_t size, std::int64_t stamp_ns, std::int64_t receive_ns) noexcept {
   if (writer_ == nullptr || writer_->loans_started != seq_) return WriteStatus::closed;
-  const WriteStatus status = publish(*writer_, size, stamp_ns);
+  const WriteStatus status = publish(*writer_, size, stamp_ns, receive_ns);
   if (status == WriteStatus::ok) {
     writer_ = nullptr;
     bytes_ = {};

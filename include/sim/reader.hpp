@@ -23,6 +23,8 @@ struct FrameInfo {
   std::uint64_t seq = 0;         // 1 for the first frame ever published on the stream
   std::int64_t stamp_ns = 0;     // sensor time of the frame (CLOCK_REALTIME, ns)
   std::int64_t publish_ns = 0;   // when the writer published it (CLOCK_MONOTONIC, ns)
+  std::int64_t receive_ns = 0;   // when the host received the frame's first data (CLOCK_REALTIME,
+                                 // ns), kept beside the sensor's own stamp; 0 if not given
   std::uint64_t size = 0;        // bytes
   Layout layout{};
 };

@@ -59,9 +59,10 @@ class Loan {
   }
   bool valid() const noexcept { return writer_ != nullptr; }
 
-  // Publishes the first `size` bytes with the sensor time of the frame (realtime, ns).
+  // Publishes the first `size` bytes with the sensor time of the frame and, optionally, the
+  // host time its first data arrived (both CLOCK_REALTIME, ns; see FrameInfo).
   // A loan overtaken by a later loan or write() publishes nothing and returns closed.
-  WriteStatus commit(std::uint64_t size, std::int64_t stamp_ns) noexcept;
+  WriteStatus commit(std::uint64_t size, std::int64_t stamp_ns, std::int64_t receive_ns = 0) noexcept;
 
  private:
   friend class Writer;
@@ -85,12 +86,14 @@ class Writer {
   Writer& operator=(const Writer&) = delete;
   ~Writer();
 
-  // Copies one frame in and publishes it.
-  WriteStatus write(std::span<const std::byte> frame, std::int64_t stamp_ns) noexcept;
+  // Copies one frame in and publishes it (stamps as in Loan::commit).
+  WriteStatus write(std::span<const std::byte> frame, std::int64_t stamp_ns,
+                    std::int64_t receive_ns = 0) noexcept;
   template <typename T>
-  WriteStatus write(std::span<const T> items, std::int64_t stamp_ns) noexcept {
+  WriteStatus write(std::span<const T> items, std::int64_t stamp_ns,
+                    std::int64_t receive_ns = 0) noexcept {
     static_assert(std::is_trivially_copyable_v<T>);
-    return write(std::as_bytes(items), stamp_ns);
+    return write(std::as_bytes(items), stamp_ns, receive_ns);
   }
 
   // The back slot, to fill in place. At most one loan at a time; a new loan discards the last.

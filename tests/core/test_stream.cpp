@@ -97,15 +97,20 @@ TEST(Stream, DeliversEachNewFrameOnceWithItsMetadata) {
   ASSERT_EQ(r.read(buf, info), ReadStatus::new_frame);
   EXPECT_EQ(info.seq, 1u);
   EXPECT_EQ(info.stamp_ns, 1234);
+  EXPECT_EQ(info.receive_ns, 0);  // the writer did not say when the data arrived
   EXPECT_GE(info.publish_ns, before);
   EXPECT_EQ(info.size, frame.size());
   EXPECT_EQ(std::string(reinterpret_cast<char*>(buf.data()), info.size), "first frame");
   EXPECT_EQ(r.read(buf, info), ReadStatus::no_new_frame);  // not twice
 
   // A reader that falls behind gets the newest frame and counts what it skipped.
-  for (int i = 0; i < 5; ++i) w.write(std::span<const std::byte>(bytes_of("x" + std::to_string(i))), i);
+  for (int i = 0; i < 5; ++i) {
+    w.write(std::span<const std::byte>(bytes_of("x" + std::to_string(i))), i, 1000 + i);
+  }
   ASSERT_EQ(r.read(buf, info), ReadStatus::new_frame);
   EXPECT_EQ(info.seq, 6u);
+  EXPECT_EQ(info.stamp_ns, 4);
+  EXPECT_EQ(info.receive_ns, 1004);  // the host time travels with its own frame
   EXPECT_EQ(std::string(reinterpret_cast<char*>(buf.data()), info.size), "x4");
   EXPECT_EQ(r.stats().skipped, 4u);
   EXPECT_EQ(r.stats().frames, 2u);
@@ -145,11 +150,12 @@ TEST(Stream, LoanPublishesOnlyOnCommitAndAnOvertakenLoanPublishesNothing) {
   ASSERT_EQ(loan.bytes().size(), 4096u);
   auto words = loan.as<std::uint32_t>();
   for (std::size_t i = 0; i < 10; ++i) words[i] = static_cast<std::uint32_t>(i * i);
-  EXPECT_EQ(loan.commit(40, 99), WriteStatus::ok);
+  EXPECT_EQ(loan.commit(40, 99, 77), WriteStatus::ok);
   EXPECT_EQ(loan.commit(40, 99), WriteStatus::closed);  // once only
   ASSERT_EQ(r.read(buf, info), ReadStatus::new_frame);
   EXPECT_EQ(info.size, 40u);
   EXPECT_EQ(info.stamp_ns, 99);
+  EXPECT_EQ(info.receive_ns, 77);
   std::uint32_t ninth;
   std::memcpy(&ninth, buf.data() + 36, 4);
   EXPECT_EQ(ninth, 81u);

@@ -90,6 +90,7 @@ std::string sidecar_json(const std::string& stream, const FrameInfo& info,
   return "{\n  \"stream\": \"" + escaped(stream) + "\",\n  \"file\": \"" + escaped(file_name) +
          "\",\n  \"seq\": " + std::to_string(info.seq) +
          ",\n  \"stamp_ns\": " + std::to_string(info.stamp_ns) +
+         ",\n  \"receive_ns\": " + std::to_string(info.receive_ns) +
          ",\n  \"publish_ns\": " + std::to_string(info.publish_ns) +
          ",\n  \"size\": " + std::to_string(info.size) +
          ",\n  \"layout\": " + layout_json(info.layout, info.size) + "\n}\n";

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Where sim_dump writes a frame: one FrameSink per stream, chosen from the stream's layout.
 // Point streams go to PCD through PCL (pcd_sink.cpp, the only file that includes PCL), raw
-// streams to .bin files, image streams to PNG (image_sink.cpp: the place PNG writing plugs in).
+// streams to .bin files, image streams to PNG (image_sink.cpp, through OpenCV).
 #pragma once
 
 #include <cstddef>

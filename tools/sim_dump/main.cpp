@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // sim_dump: writes frames of a SIM stream to files, one frame file plus a JSON sidecar of its
-// metadata per frame: LiDAR streams as PCD (through PCL), raw streams as .bin, image streams as
-// PNG once that sink exists (see image_sink.cpp).
+// metadata per frame: LiDAR streams as PCD (through PCL), image streams as PNG (through OpenCV),
+// raw streams as .bin.
 #include <signal.h>
 #include <unistd.h>
 

@@ -132,10 +132,11 @@ int main(int argc, char** argv) {
         window.add(latency_us, info.size);
       } else {
         std::printf(
-            "{\"seq\":%llu,\"stamp_ns\":%lld,\"publish_ns\":%lld,\"size\":%llu,"
-            "\"latency_us\":%.1f,\"skipped\":%llu,\"layout\":\"%s\"}\n",
+            "{\"seq\":%llu,\"stamp_ns\":%lld,\"receive_ns\":%lld,\"publish_ns\":%lld,"
+            "\"size\":%llu,\"latency_us\":%.1f,\"skipped\":%llu,\"layout\":\"%s\"}\n",
             static_cast<unsigned long long>(info.seq), static_cast<long long>(info.stamp_ns),
-            static_cast<long long>(info.publish_ns), static_cast<unsigned long long>(info.size),
+            static_cast<long long>(info.receive_ns), static_cast<long long>(info.publish_ns),
+            static_cast<unsigned long long>(info.size),
             latency_us, static_cast<unsigned long long>(rs.skipped),
             info.layout.describe().c_str());
         std::fflush(stdout);

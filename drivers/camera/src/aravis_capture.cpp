@@ -123,9 +123,10 @@ struct AravisCapture::Impl {
     }
     std::size_t size = 0;
     const void* data = arv_buffer_get_data(buffer, &size);
-    const std::int64_t stamp = static_cast<std::int64_t>(
-        device_time ? arv_buffer_get_timestamp(buffer)
-                                 : arv_buffer_get_system_timestamp(buffer));
+    // Aravis stamps each buffer with the host's realtime clock when its first packet arrived.
+    const auto received = static_cast<std::int64_t>(arv_buffer_get_system_timestamp(buffer));
+    const std::int64_t stamp =
+        device_time ? static_cast<std::int64_t>(arv_buffer_get_timestamp(buffer)) : received;
     Loan loan = writer->loan();
     const DecodeResult decoded =
         decoder->decode({static_cast<const std::byte*>(data), size}, loan.bytes());
@@ -133,7 +134,7 @@ struct AravisCapture::Impl {
       bad_size.fetch_add(1, std::memory_order_relaxed);
       return;
     }
-    if (loan.commit(decoded.size, stamp > 0 ? stamp : realtime_ns()) == WriteStatus::ok) {
+    if (loan.commit(decoded.size, stamp > 0 ? stamp : realtime_ns(), received) == WriteStatus::ok) {
       published.fetch_add(1, std::memory_order_relaxed);
     }
   }

@@ -27,7 +27,8 @@ struct LidarStream::Impl {
 
   void publish(const CompletedFrame& frame) noexcept {
     const WriteStatus status =
-        loan.commit(frame.point_count * sizeof(LidarPoint), frame.stamp_ns + stamp_offset_ns);
+        loan.commit(frame.point_count * sizeof(LidarPoint), frame.stamp_ns + stamp_offset_ns,
+                    frame.host_receive_ns);
     if (status == WriteStatus::ok) {
       ++published.frames;
       published.points += frame.point_count;

@@ -53,6 +53,7 @@ struct Frame {
   std::vector<sim::LidarPoint> points;
   std::int64_t stamp_ns = 0;
   std::uint64_t seq = 0;
+  std::int64_t receive_ns = 0;  // host time of the frame's first packet
 };
 
 bool same_points(const std::vector<sim::LidarPoint>& a, const std::vector<sim::LidarPoint>& b) {
@@ -122,6 +123,7 @@ std::vector<Frame> receive(sim::Reader& reader, std::size_t count) {
     std::memcpy(f.points.data(), buffer.data(), f.points.size() * sizeof(sim::LidarPoint));
     f.stamp_ns = info.stamp_ns;
     f.seq = info.seq;
+    f.receive_ns = info.receive_ns;
     frames.push_back(std::move(f));
   }
   return frames;
@@ -423,9 +425,17 @@ TEST(LiveDriver, SameFramesAsReplayOverUdpLoopback) {
   ASSERT_TRUE(reader) << reader.error().message;
 
   UdpSender sender(port);
+  const std::int64_t first_send_ns = sim::realtime_ns();
   std::thread feed([&] { sender.send_paced(payloads, 2.0); });
   const auto frames = receive(*reader, expected.size());
   feed.join();
+  const std::int64_t last_send_ns = sim::realtime_ns();
+  // Beside the sensor's stamp, each frame carries when this host received its first packet.
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    EXPECT_GE(frames[i].receive_ns, first_send_ns) << "frame " << i;
+    EXPECT_LE(frames[i].receive_ns, last_send_ns) << "frame " << i;
+    if (i > 0) EXPECT_GT(frames[i].receive_ns, frames[i - 1].receive_ns) << "frame " << i;
+  }
   driver.signal(SIGTERM);
   ASSERT_EQ(driver.wait(), 0) << driver.err();
   expect_same_frames(frames, expected, 1);

@@ -1,0 +1,126 @@
+// SPDX-License-Identifier: Apache-2.0
+// sim_dump as a real process on image streams: the PNG it writes must hold the frame's pixels,
+// as they are for formats PNG stores (mono8, mono16, bgr8) and as OpenCV's reference conversion
+// to BGR for the others (rgb8, YUYV, Bayer, MJPEG).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <string>
+
+#include "process.hpp"
+#include "sim/sim.hpp"
+#include "test_images.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using sim::ImageLayout;
+using sim::PixelFormat;
+using sim::camera::OutputFormat;
+using sim::camera::testing::Bytes;
+using sim::testing::run;
+
+constexpr std::uint32_t kWidth = 64;
+constexpr std::uint32_t kHeight = 48;
+
+class DumpPng : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const std::string id = std::to_string(getpid()) + "_" +
+                           ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    stream_ = "/test_dump_png_" + id;
+    dir_ = fs::temp_directory_path() / ("test_dump_png_" + id);
+    fs::remove_all(dir_);
+  }
+  void TearDown() override {
+    sim::destroy(stream_, true);
+    fs::remove_all(dir_);
+  }
+
+  // Publishes `frame` as one image of `layout` (capacity: `capacity` or the layout's), dumps it
+  // with sim_dump and returns the PNG as OpenCV reads it back, unchanged.
+  cv::Mat publish_and_dump(const ImageLayout& layout, const Bytes& frame, std::uint64_t capacity = 0) {
+    auto writer = sim::Writer::create({.name = stream_, .capacity = capacity, .layout = sim::Layout::of(layout)});
+    EXPECT_TRUE(writer) << writer.error().message;
+    if (!writer) return {};
+    EXPECT_EQ(writer->write(std::span<const std::byte>(frame), 42), sim::WriteStatus::ok);
+    const auto result = run({SIM_DUMP, stream_, "--current", "--count", "1", "--out", dir_.string()});
+    EXPECT_EQ(result.code, 0) << result.err;
+    const fs::path png = dir_ / (stream_.substr(1) + "_00000001.png");
+    EXPECT_TRUE(fs::exists(png)) << result.out << result.err;
+    EXPECT_TRUE(fs::exists(dir_ / (stream_.substr(1) + "_00000001.json")));
+    return cv::imread(png.string(), cv::IMREAD_UNCHANGED);
+  }
+
+  std::string stream_;
+  fs::path dir_;
+};
+
+Bytes bytes_of(const cv::Mat& image) {
+  const cv::Mat packed = image.isContinuous() ? image : image.clone();
+  const auto* p = reinterpret_cast<const std::byte*>(packed.data);
+  return Bytes(p, p + packed.total() * packed.elemSize());
+}
+
+TEST_F(DumpPng, FormatsPngHoldsAreWrittenBitExact) {
+  const Bytes bgr = sim::camera::testing::scene_bgr(kWidth, kHeight, 1);
+  const cv::Mat written = publish_and_dump(ImageLayout::packed(kWidth, kHeight, PixelFormat::bgr8), bgr);
+  ASSERT_EQ(written.type(), CV_8UC3);
+  EXPECT_EQ(bytes_of(written), bgr);
+}
+
+TEST_F(DumpPng, SixteenBitMonoKeepsItsDepth) {
+  const Bytes y16 = sim::camera::testing::noise(kWidth * kHeight * 2, 7);
+  const cv::Mat written = publish_and_dump(ImageLayout::packed(kWidth, kHeight, PixelFormat::mono16), y16);
+  ASSERT_EQ(written.type(), CV_16UC1);
+  EXPECT_EQ(bytes_of(written), y16);
+}
+
+TEST_F(DumpPng, OtherFormatsAreConvertedToBgrLikeOpenCv) {
+  for (const PixelFormat format : {PixelFormat::rgb8, PixelFormat::yuyv, PixelFormat::bayer_rggb8}) {
+    SCOPED_TRACE(sim::to_string(format));
+    TearDown();
+    const ImageLayout layout = ImageLayout::packed(kWidth, kHeight, format);
+    const Bytes input = sim::camera::testing::noise(layout.frame_bytes(), 3);
+    const cv::Mat written = publish_and_dump(layout, input);
+    ASSERT_EQ(written.type(), CV_8UC3);
+    const Bytes expected = sim::camera::testing::reference(layout, input, OutputFormat::bgr8);
+    ASSERT_FALSE(expected.empty());
+    EXPECT_EQ(sim::camera::testing::max_difference(bytes_of(written), expected), 0);
+  }
+}
+
+TEST_F(DumpPng, MjpegFramesAreDecoded) {
+  const Bytes bgr = sim::camera::testing::scene_bgr(kWidth, kHeight, 5);
+  const Bytes jpeg = sim::camera::testing::encode_jpeg(bgr, kWidth, kHeight);
+  ImageLayout layout;
+  layout.width = kWidth;
+  layout.height = kHeight;
+  layout.format = PixelFormat::mjpeg;
+  const cv::Mat written = publish_and_dump(layout, jpeg, 64 * 1024);
+  ASSERT_EQ(written.type(), CV_8UC3);
+  const Bytes expected = sim::camera::testing::reference(layout, jpeg, OutputFormat::bgr8);
+  ASSERT_FALSE(expected.empty());
+  // libjpeg-turbo against OpenCV's JPEG decoder: the same codec family, not always the same IDCT.
+  EXPECT_LE(sim::camera::testing::max_difference(bytes_of(written), expected), 3);
+}
+
+TEST_F(DumpPng, CorruptJpegIsAClearErrorAndNoFile) {
+  ImageLayout layout;
+  layout.width = kWidth;
+  layout.height = kHeight;
+  layout.format = PixelFormat::mjpeg;
+  auto writer = sim::Writer::create({.name = stream_, .capacity = 4096, .layout = sim::Layout::of(layout)});
+  ASSERT_TRUE(writer) << writer.error().message;
+  const Bytes garbage = sim::camera::testing::noise(1000, 9);
+  ASSERT_EQ(writer->write(std::span<const std::byte>(garbage), 1), sim::WriteStatus::ok);
+  const auto result = run({SIM_DUMP, stream_, "--current", "--count", "1", "--out", dir_.string()});
+  EXPECT_EQ(result.code, 1);
+  EXPECT_NE(result.err.find("does not decode"), std::string::npos) << result.err;
+  EXPECT_FALSE(fs::exists(dir_ / (stream_.substr(1) + "_00000001.png")));
+}
+
+}  // namespace
