@@ -106,6 +106,21 @@ Bytes reference(const ImageLayout& layout, std::span<const std::byte> input, Out
       if (output == OutputFormat::mono8) cv::cvtColor(image, result, cv::COLOR_BGR2GRAY);
       break;
     }
+    case PixelFormat::rgb8: {
+      const cv::Mat image(rows, cols, CV_8UC3, data, layout.stride);
+      if (bgr) cv::cvtColor(image, result, cv::COLOR_RGB2BGR);
+      if (rgb) result = image.clone();
+      if (output == OutputFormat::mono8) cv::cvtColor(image, result, cv::COLOR_RGB2GRAY);
+      break;
+    }
+    case PixelFormat::bayer_rggb8: {
+      // OpenCV names Bayer patterns after the second row's first two pixels: RGGB is "BG".
+      const cv::Mat mosaic(rows, cols, CV_8UC1, data, layout.stride);
+      if (bgr) cv::cvtColor(mosaic, result, cv::COLOR_BayerBG2BGR);
+      if (rgb) cv::cvtColor(mosaic, result, cv::COLOR_BayerBG2RGB);
+      if (output == OutputFormat::mono8) cv::cvtColor(mosaic, result, cv::COLOR_BayerBG2GRAY);
+      break;
+    }
     default:
       return {};
   }

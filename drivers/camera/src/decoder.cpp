@@ -11,6 +11,8 @@
 #include <opencv2/imgproc.hpp>
 #include <string>
 
+#include "sim/opencv.hpp"
+
 namespace sim::camera {
 
 const char* to_string(DecodeStatus status) noexcept {
@@ -36,19 +38,6 @@ enum class Method : std::uint8_t {
   jpeg_decode,      // tjDecompress2 straight into the destination
   jpeg_pass,        // raw MJPEG: header checked, bytes copied
 };
-
-int mat_type(PixelFormat format) {
-  switch (format) {
-    case PixelFormat::mono16: return CV_16UC1;
-    case PixelFormat::bgr8:
-    case PixelFormat::rgb8: return CV_8UC3;
-    case PixelFormat::bgra8:
-    case PixelFormat::rgba8: return CV_8UC4;
-    case PixelFormat::yuyv:
-    case PixelFormat::uyvy: return CV_8UC2;
-    default: return CV_8UC1;
-  }
-}
 
 // cv::COLOR_* code for input → output, or -1. OpenCV names Bayer patterns by the second row, so a
 // sensor whose first row starts R G (RGGB) needs the BayerBG codes.
@@ -165,12 +154,10 @@ struct FrameDecoder::Impl {
     }
     if (dst.size() < out.frame_bytes()) return {DecodeStatus::output_too_small, 0};
 
-    const int rows = static_cast<int>(in.height);
-    const int cols = static_cast<int>(in.width);
-    // OpenCV takes non-const pointers; the input Mat is only ever read.
-    const cv::Mat source(rows, cols, mat_type(in.format),
-                         const_cast<std::byte*>(src.data()), in.stride);
-    cv::Mat target(rows, cols, mat_type(out.format), dst.data(), out.stride);
+    // Headers over the caller's bytes, as consumers get them (sim/opencv.hpp); sizes were checked.
+    const cv::Mat source = as_mat(in, src);
+    cv::Mat target = as_mat(out, dst);
+    if (source.empty() || target.empty()) return {DecodeStatus::failed, 0};
     switch (method) {
       case Method::copy_rows:
         source.copyTo(target);

@@ -434,7 +434,9 @@ TEST(LiveDriver, SameFramesAsReplayOverUdpLoopback) {
   for (std::size_t i = 0; i < frames.size(); ++i) {
     EXPECT_GE(frames[i].receive_ns, first_send_ns) << "frame " << i;
     EXPECT_LE(frames[i].receive_ns, last_send_ns) << "frame " << i;
-    if (i > 0) EXPECT_GT(frames[i].receive_ns, frames[i - 1].receive_ns) << "frame " << i;
+    if (i > 0) {
+      EXPECT_GT(frames[i].receive_ns, frames[i - 1].receive_ns) << "frame " << i;
+    }
   }
   driver.signal(SIGTERM);
   ASSERT_EQ(driver.wait(), 0) << driver.err();
