@@ -5,9 +5,11 @@
 //     the frame is published (LidarStream::push of that packet: decode, cut, commit), and until
 //     a reader blocked in wait() on another thread is running with it. Beside it, for scale,
 //     the cost of an ordinary packet's push.
-//  2. Live driver CPU: sim_lidar_hesai as its own process, fed the capture's payloads over UDP
-//     on 127.0.0.1 at the sensor's recorded rate (looped), its user+system CPU time over the
-//     run as a percentage of one core (the target: under 5 %).
+//  2. The live driver: sim_lidar_hesai as its own process, fed the capture's payloads over UDP
+//     on 127.0.0.1 at the sensor's recorded rate (looped): its user+system CPU time over the
+//     run as a percentage of one core (the target: under 5 %), how often it woke, and
+//     the time from sending a revolution's completing packet until a reader blocked in wait()
+//     in this process runs with the frame (UDP, the driver's naps and decode, the futex wake).
 //
 //   bench_hesai_live [--seconds S] [--revolutions N]
 //
@@ -32,6 +34,7 @@
 #include <vector>
 
 #include "pcap_payloads.hpp"
+#include "sim/hesai/frame_assembler.hpp"
 #include "sim/hesai/lidar_stream.hpp"
 #include "sim/sim.hpp"
 
@@ -179,7 +182,31 @@ double cpu_seconds(pid_t pid) {
   return (utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
 }
 
+// Times the process's main thread (the driver's receive loop) went to sleep and was woken:
+// voluntary context switches, from /proc/PID/status. Unlike CPU time, not inflated by a busy machine.
+std::uint64_t wake_ups(pid_t pid) {
+  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("voluntary_ctxt_switches:", 0) == 0) return std::stoull(line.substr(line.find(':') + 1));
+  }
+  return 0;
+}
+
 int measure_driver_cpu(const Payloads& payloads, const std::string& calibration, double seconds) {
+  // Decodes the packets beside the driver, to know which ones complete a revolution.
+  auto calibration_table = sim::hesai::Calibration::load(calibration, sim::hesai::Model::pandar64);
+  if (!calibration_table) {
+    std::fprintf(stderr, "bench_hesai_live: %s\n", calibration_table.error().message.c_str());
+    return 1;
+  }
+  auto twin = sim::hesai::FrameAssembler::create(std::move(*calibration_table), {});
+  if (!twin) {
+    std::fprintf(stderr, "bench_hesai_live: %s\n", twin.error().message.c_str());
+    return 1;
+  }
+  std::vector<sim::LidarPoint> twin_points(sim::hesai::frame_capacity(sim::hesai::Model::pandar64, 2));
+  twin->set_output(twin_points);
   const std::string stream = unique_stream("live");
   Child driver = spawn_driver({SIM_LIDAR_HESAI, "--model", "Pandar64", "--bind", "127.0.0.1",
                                "--port", "0", "--stream", stream, "--calibration", calibration,
@@ -196,11 +223,37 @@ int measure_driver_cpu(const Payloads& payloads, const std::string& calibration,
   to.sin_port = htons(static_cast<std::uint16_t>(port));
   to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
 
+  // A blocked reader notes when each frame woke it; the sender notes when it sent each packet
+  // that completes a revolution (found by decoding the same packets here, in step).
+  struct Event {
+    std::int64_t stamp_ns;  // the frame's sensor stamp, to pair the two sides
+    std::int64_t at_ns;     // monotonic
+  };
+  std::vector<Event> woken, cuts_sent;
+  std::atomic<bool> stop{false};
+  std::thread consumer([&] {
+    // The driver creates the stream just after it reports its port.
+    auto reader = sim::Reader::open(stream);
+    for (int attempt = 0; !reader && attempt < 200 && !stop.load(); ++attempt) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      reader = sim::Reader::open(stream);
+    }
+    if (!reader) return;
+    std::vector<std::byte> frame(reader->capacity());
+    while (!stop.load()) {
+      if (reader->wait(std::chrono::milliseconds(50)) != sim::ReadStatus::new_frame) continue;
+      const std::int64_t now = sim::monotonic_ns();
+      sim::FrameInfo info;
+      if (reader->read(frame, info) == sim::ReadStatus::new_frame) woken.push_back({info.stamp_ns, now});
+    }
+  });
+
   // Paced on an absolute schedule from the capture's own timestamps, looped.
   const std::int64_t capture_span = payloads.back().capture_ns - payloads.front().capture_ns +
                                     (payloads.back().capture_ns - payloads.front().capture_ns) /
                                         static_cast<std::int64_t>(payloads.size() - 1);
   const double cpu_before = cpu_seconds(driver.pid);
+  const std::uint64_t wake_ups_before = wake_ups(driver.pid);
   const std::int64_t start = sim::monotonic_ns();
   const auto end = start + static_cast<std::int64_t>(seconds * 1e9);
   std::uint64_t sent = 0;
@@ -209,15 +262,30 @@ int measure_driver_cpu(const Payloads& payloads, const std::string& calibration,
       const std::int64_t due = loop_start + (p.capture_ns - payloads.front().capture_ns);
       if (due >= end) break;
       timespec at{static_cast<time_t>(due / 1'000'000'000), static_cast<long>(due % 1'000'000'000)};
+      const auto completes = twin->push(p.bytes, 0).frame;
+      if (completes) twin->set_output(twin_points);
       clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &at, nullptr);
+      const std::int64_t send_ns = sim::monotonic_ns();
       sendto(sock, p.bytes.data(), p.bytes.size(), 0, reinterpret_cast<const sockaddr*>(&to), sizeof to);
+      if (completes) cuts_sent.push_back({completes->stamp_ns, send_ns});
       ++sent;
     }
   }
   const double wall = static_cast<double>(sim::monotonic_ns() - start) / 1e9;
   const double cpu = cpu_seconds(driver.pid) - cpu_before;
+  const std::uint64_t wakes = wake_ups(driver.pid) - wake_ups_before;
   std::uint64_t frames = 0;
   if (auto status = sim::inspect(stream)) frames = status->frames_published;
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));  // the last frame's wake-up
+  stop.store(true);
+  consumer.join();
+  std::vector<std::int64_t> send_to_reader;
+  std::size_t next_cut = 0;
+  for (const Event& w : woken) {
+    while (next_cut < cuts_sent.size() && cuts_sent[next_cut].stamp_ns != w.stamp_ns) ++next_cut;
+    if (next_cut == cuts_sent.size()) break;
+    send_to_reader.push_back(w.at_ns - cuts_sent[next_cut++].at_ns);
+  }
   close(sock);
   kill(driver.pid, SIGTERM);
   waitpid(driver.pid, nullptr, 0);
@@ -230,6 +298,17 @@ int measure_driver_cpu(const Payloads& payloads, const std::string& calibration,
               static_cast<unsigned long long>(frames));
   std::printf("  sim_lidar_hesai used %.3f s of CPU = %.2f %% of one core (target < 5 %%)\n", cpu,
               100.0 * cpu / wall);
+  std::printf("  it woke %.0f times a second (%.1f packets per wake-up)\n",
+              static_cast<double>(wakes) / wall,
+              wakes == 0 ? 0.0 : static_cast<double>(sent) / static_cast<double>(wakes));
+  if (send_to_reader.empty()) {
+    std::printf("  no frame reached the reader: the latency below cannot be measured\n");
+    return 1;
+  }
+  const Percentiles latency = summarise(send_to_reader);
+  std::printf("  completing packet sent → blocked reader runs (%zu revolutions, µs: p50 / p99 / max)\n"
+              "                                                 %8.1f / %8.1f / %8.1f\n",
+              send_to_reader.size(), latency.p50_us, latency.p99_us, latency.max_us);
   return 0;
 }
 

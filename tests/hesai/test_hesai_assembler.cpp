@@ -113,6 +113,45 @@ TEST(HesaiAssembler, FramesAreWholeRevolutionsWithSensorStampsAndPointTimes) {
   }
 }
 
+// The live driver sleeps through time_to_cut_ns() (less a 1 ms margin) instead of waking per
+// packet: it must never promise time that is not there, and should promise what is.
+TEST(HesaiAssembler, TimeToCutPredictsWhenTheNextFrameCompletes) {
+  for (const double cut_deg : {0.0, 137.5}) {
+    SCOPED_TRACE(cut_deg);
+    AssemblerOptions options;
+    options.cut_azimuth_deg = cut_deg;
+    auto a = make(options);
+    std::vector<sim::LidarPoint> span(capacity());
+    a.set_output(span);
+    EXPECT_FALSE(a.time_to_cut_ns().has_value()) << "before the first packet";
+    const Payloads& packets = pandar64_packets();
+    std::vector<std::int64_t> predicted(packets.size(), -1);
+    std::vector<std::size_t> completing;
+    for (std::size_t i = 0; i < packets.size(); ++i) {
+      if (i > 0) predicted[i] = a.time_to_cut_ns().value_or(-1);
+      if (a.push(packets[i].bytes, packets[i].capture_ns).frame) {
+        completing.push_back(i);
+        a.set_output(span);
+      }
+    }
+    ASSERT_GE(completing.size(), 2u);
+    std::size_t checked = 0;
+    for (std::size_t f = 1; f < completing.size(); ++f) {
+      const std::size_t cut = completing[f];
+      // Before the completing packet no nap may be left (the driver keeps a 1 ms margin).
+      EXPECT_LT(predicted[cut], 500'000) << "packet " << cut;
+      // Through the revolution, the prediction follows the capture's own clock.
+      for (std::size_t i = completing[f - 1] + 1; i <= cut; ++i) {
+        const std::int64_t actual = packets[cut].capture_ns - packets[i - 1].capture_ns;
+        ASSERT_GE(predicted[i], 0) << "packet " << i;
+        EXPECT_NEAR(static_cast<double>(predicted[i]), static_cast<double>(actual), 2e6) << "packet " << i;
+        ++checked;
+      }
+    }
+    EXPECT_GT(checked, 500u);
+  }
+}
+
 TEST(HesaiAssembler, CutAtAnotherAzimuth) {
   AssemblerOptions options;
   options.cut_azimuth_deg = 180.0;

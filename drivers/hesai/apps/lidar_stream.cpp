@@ -103,6 +103,9 @@ std::int64_t LidarStream::stamp_offset() const noexcept { return impl_->stamp_of
 Model LidarStream::model() const noexcept { return impl_->assembler.options().model; }
 const AssemblerCounters& LidarStream::counters() const noexcept { return impl_->assembler.counters(); }
 const PublishCounters& LidarStream::published() const noexcept { return impl_->published; }
+std::optional<std::int64_t> LidarStream::time_to_cut_ns() const noexcept {
+  return impl_->assembler.time_to_cut_ns();
+}
 std::uint64_t LidarStream::max_points() const noexcept {
   return impl_->writer.layout().points.max_points;
 }

@@ -1,6 +1,11 @@
 // SPDX-License-Identifier: Apache-2.0
-// sim_lidar_hesai: receives a Hesai Pandar's UDP packets (Boost.Asio) and publishes one SIM
-// frame per revolution through LidarStream, the path sim_replay_pcap uses too.
+// sim_lidar_hesai: receives a Hesai Pandar's UDP packets (socket set up with Boost.Asio, taken in
+// batches with recvmmsg) and publishes one SIM frame per revolution through LidarStream, the path
+// sim_replay_pcap uses too.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <pthread.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -9,9 +14,13 @@
 
 #include <algorithm>
 #include <array>
+#include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <optional>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "config_file.hpp"
 #include "sim/clock.hpp"
@@ -29,6 +38,67 @@ constexpr char tool[] = "sim_lidar_hesai";
 // whole and be rejected by its size instead of silently cut to a plausible one.
 constexpr std::size_t receive_buffer_size = 9000;
 
+// Room for one recvmmsg: payloads, sender addresses and the kernel's receive stamps.
+struct ReceiveBatch {
+  static constexpr std::size_t size = 32;
+  std::vector<std::array<std::uint8_t, receive_buffer_size>> payloads =
+      std::vector<std::array<std::uint8_t, receive_buffer_size>>(size);
+  std::array<sockaddr_storage, size> senders{};
+  std::array<iovec, size> vectors{};
+  std::array<std::array<char, CMSG_SPACE(sizeof(timespec))>, size> controls{};
+  std::array<mmsghdr, size> headers{};
+
+  // recvmmsg overwrites the lengths; set them again before each call.
+  void prepare() {
+    for (std::size_t i = 0; i < size; ++i) {
+      vectors[i] = {payloads[i].data(), payloads[i].size()};
+      msghdr& h = headers[i].msg_hdr;
+      h = {};
+      h.msg_name = &senders[i];
+      h.msg_namelen = sizeof(sockaddr_storage);
+      h.msg_iov = &vectors[i];
+      h.msg_iovlen = 1;
+      h.msg_control = controls[i].data();
+      h.msg_controllen = controls[i].size();
+      headers[i].msg_len = 0;
+    }
+  }
+
+  std::span<const std::uint8_t> payload(int i) const {
+    return {payloads[static_cast<std::size_t>(i)].data(), headers[static_cast<std::size_t>(i)].msg_len};
+  }
+
+  asio::ip::address sender(int i) const {
+    const sockaddr_storage& from = senders[static_cast<std::size_t>(i)];
+    if (from.ss_family == AF_INET6) {
+      const auto& v6 = reinterpret_cast<const sockaddr_in6&>(from);
+      asio::ip::address_v6::bytes_type bytes;
+      std::memcpy(bytes.data(), &v6.sin6_addr, bytes.size());
+      const asio::ip::address_v6 address(bytes, v6.sin6_scope_id);
+      // A dual-stack socket reports IPv4 senders as ::ffff:a.b.c.d; --source is written as IPv4.
+      if (address.is_v4_mapped()) return asio::ip::make_address_v4(asio::ip::v4_mapped, address);
+      return address;
+    }
+    const auto& v4 = reinterpret_cast<const sockaddr_in&>(from);
+    return asio::ip::address_v4(ntohl(v4.sin_addr.s_addr));
+  }
+
+  // CLOCK_REALTIME of the datagram's arrival, from the kernel; now if it gave none.
+  std::int64_t kernel_receive_ns(int i) {
+    msghdr& h = headers[static_cast<std::size_t>(i)].msg_hdr;
+    for (cmsghdr* c = CMSG_FIRSTHDR(&h); c != nullptr; c = CMSG_NXTHDR(&h, c)) {
+      if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS) {
+        timespec t;
+        std::memcpy(&t, CMSG_DATA(c), sizeof t);
+        return std::int64_t{t.tv_sec} * 1'000'000'000 + t.tv_nsec;
+      }
+    }
+    return sim::realtime_ns();
+  }
+};
+
+volatile std::sig_atomic_t stop_requested = 0;
+
 class Driver {
  public:
   Driver(sim::hesai::StreamOptions stream_options, sim::hesai::NetworkOptions network, bool summary)
@@ -36,9 +106,23 @@ class Driver {
         network_(std::move(network)),
         summary_(summary),
         socket_(io_),
-        status_timer_(io_),
-        signals_(io_, SIGINT, SIGTERM),
-        terminal_(isatty(STDERR_FILENO) != 0) {}
+        terminal_(isatty(STDERR_FILENO) != 0) {
+    // SIGINT and SIGTERM are blocked from the start, before the stream's heartbeat thread
+    // exists (it inherits the mask), and let in only inside ppoll: so the handler runs on the
+    // receiving thread, a stop request cannot slip in between checking the flag and going to
+    // sleep, and one during setup still ends the driver cleanly. A nap (≤ 2 ms) is waited out.
+    struct sigaction on_stop {};
+    on_stop.sa_handler = [](int) { stop_requested = 1; };
+    sigaction(SIGINT, &on_stop, nullptr);
+    sigaction(SIGTERM, &on_stop, nullptr);
+    sigset_t stop_signals;
+    sigemptyset(&stop_signals);
+    sigaddset(&stop_signals, SIGINT);
+    sigaddset(&stop_signals, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &stop_signals, &while_waiting_);
+    sigdelset(&while_waiting_, SIGINT);
+    sigdelset(&while_waiting_, SIGTERM);
+  }
 
   // Binds the socket and, when the model is known, creates the stream. Returns the exit code
   // to use on failure, or nullopt when ready.
@@ -64,6 +148,8 @@ class Driver {
     // shared, so two drivers on one port fail loudly instead of splitting the packets.
     if (group) socket_.set_option(udp::socket::reuse_address(true), ec);
     set_receive_buffer();
+    const int on = 1;
+    ::setsockopt(socket_.native_handle(), SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on);
     socket_.bind(local, ec);
     if (ec == asio::error::address_in_use) {
       return failure("UDP port " + std::to_string(network_.port) + " on " + network_.bind +
@@ -89,13 +175,33 @@ class Driver {
     return std::nullopt;
   }
 
+  // The loop is ppoll and clock_nanosleep rather than io_context::run(): Asio's reactor watches
+  // the socket even with no read pending, so every datagram would wake a napping driver.
   int run() {
-    signals_.async_wait([this](const boost::system::error_code& ec, int) {
-      if (!ec) io_.stop();
-    });
-    receive();
-    schedule_status();
-    io_.run();
+    const auto interval_ns = static_cast<std::int64_t>(status_interval() * 1e9);
+    std::int64_t next_status_ns = sim::monotonic_ns() + interval_ns;
+    while (stop_requested == 0 && exit_code_ == 0) {
+      if (const std::int64_t nap_ns = nap_length_ns(); nap_ns > 0) {
+        const timespec nap{0, static_cast<long>(nap_ns)};
+        clock_nanosleep(CLOCK_MONOTONIC, 0, &nap, nullptr);
+      } else {
+        // Sleep until a datagram arrives, a stop signal, or the next status line.
+        pollfd readable{socket_.native_handle(), POLLIN, 0};
+        timespec until_status{};
+        const timespec* timeout = nullptr;
+        if (interval_ns > 0) {
+          const std::int64_t left = std::max<std::int64_t>(0, next_status_ns - sim::monotonic_ns());
+          until_status = {static_cast<time_t>(left / 1'000'000'000), static_cast<long>(left % 1'000'000'000)};
+          timeout = &until_status;
+        }
+        ppoll(&readable, 1, timeout, &while_waiting_);
+      }
+      take_queued_packets();
+      if (interval_ns > 0 && sim::monotonic_ns() >= next_status_ns) {
+        print_status(false);
+        next_status_ns = sim::monotonic_ns() + interval_ns;
+      }
+    }
     if (exit_code_ != 0) return exit_code_;
     print_status(true);
     if (terminal_) std::fprintf(stderr, "\n");
@@ -149,24 +255,50 @@ class Driver {
     return std::nullopt;
   }
 
-  void receive() {
-    socket_.async_receive_from(asio::buffer(buffer_), sender_,
-                               [this](const boost::system::error_code& ec, std::size_t size) {
-                                 if (ec == asio::error::operation_aborted) return;
-                                 if (!ec) on_packet(size);
-                                 if (exit_code_ == 0) receive();
-                               });
+  // Waking once per packet (6,000 a second for a dual-return Pandar64) costs more CPU than
+  // decoding them. Far from the cut no packet can complete a revolution, so the driver naps
+  // and then takes every queued packet in one recvmmsg; near the cut it wakes for each packet,
+  // so a finished revolution is published as soon as its last packet lands. The kernel stamps
+  // each datagram's arrival (SO_TIMESTAMPNS), so batching does not blur receive times.
+  //
+  // 0: wait for the next packet. A nap ends a margin before the cut can come, and never
+  // follows an empty take (the sensor may have stopped: then the driver sleeps until it sends).
+  std::int64_t nap_length_ns() const {
+    constexpr std::int64_t longest_nap_ns = 2'000'000;  // ~12 packets; the socket buffer holds seconds
+    constexpr std::int64_t wake_margin_ns = 1'000'000;  // timer lateness and motor speed drift
+    constexpr std::int64_t shortest_nap_ns = 200'000;   // below this a nap saves nothing
+    if (!stream_ || last_take_ == 0) return 0;
+    const auto to_cut = stream_->time_to_cut_ns();
+    if (!to_cut) return 0;
+    const std::int64_t nap = std::min(longest_nap_ns, *to_cut - wake_margin_ns);
+    return nap >= shortest_nap_ns ? nap : 0;
   }
 
-  void on_packet(std::size_t size) {
+  void take_queued_packets() {
+    last_take_ = 0;
+    for (;;) {
+      batch_.prepare();
+      const int count = ::recvmmsg(socket_.native_handle(), batch_.headers.data(),
+                                   static_cast<unsigned>(batch_.headers.size()), MSG_DONTWAIT, nullptr);
+      // EAGAIN: all taken. Other errors on an unconnected UDP socket are transient (e.g. an
+      // ICMP error queued for it); the next wake-up tries again.
+      if (count <= 0) return;
+      const std::int64_t now = sim::monotonic_ns();
+      for (int i = 0; i < count && exit_code_ == 0; ++i) {
+        on_packet(batch_.payload(i), batch_.sender(i), batch_.kernel_receive_ns(i), now);
+      }
+      last_take_ += static_cast<unsigned>(count);
+      if (static_cast<std::size_t>(count) < batch_.headers.size() || exit_code_ != 0) return;
+    }
+  }
+
+  void on_packet(std::span<const std::uint8_t> payload, const asio::ip::address& sender,
+                 std::int64_t host_ns, std::int64_t now) {
     ++datagrams_;
-    if (source_ && sender_.address() != *source_) {
+    if (source_ && sender != *source_) {
       ++other_source_;
       return;
     }
-    const std::span<const std::uint8_t> payload(buffer_.data(), size);
-    const std::int64_t host_ns = sim::realtime_ns();
-    const std::int64_t now = sim::monotonic_ns();
     if (!stream_) {
       // No --model: the first packet that is a Hesai point-cloud packet tells it.
       const auto model = sim::hesai::detect_model(payload);
@@ -179,11 +311,9 @@ class Driver {
         options_.config.returns = std::max(options_.config.returns, *returns);
       }
       std::fprintf(stderr, "%s: detected a %s from %s\n", tool,
-                   std::string(sim::hesai::to_string(*model)).c_str(),
-                   sender_.address().to_string().c_str());
+                   std::string(sim::hesai::to_string(*model)).c_str(), sender.to_string().c_str());
       if (auto code = create_stream()) {
         exit_code_ = *code;
-        io_.stop();
         return;
       }
     }
@@ -208,17 +338,6 @@ class Driver {
   double status_interval() const {
     if (network_.status_interval_s >= 0) return network_.status_interval_s;
     return terminal_ ? 1.0 : 10.0;
-  }
-
-  void schedule_status() {
-    const double interval = status_interval();
-    if (interval <= 0) return;
-    status_timer_.expires_after(std::chrono::milliseconds(static_cast<long>(interval * 1000)));
-    status_timer_.async_wait([this](const boost::system::error_code& ec) {
-      if (ec) return;
-      print_status(false);
-      schedule_status();
-    });
   }
 
   void print_status(bool final_line) {
@@ -248,15 +367,14 @@ class Driver {
   sim::hesai::StreamOptions options_;
   sim::hesai::NetworkOptions network_;
   bool summary_;
-  asio::io_context io_;
+  asio::io_context io_;  // only for the socket's setup; never run (see run())
   udp::socket socket_;
-  udp::endpoint sender_;
-  asio::steady_timer status_timer_;
-  asio::signal_set signals_;
+  ReceiveBatch batch_;
+  sigset_t while_waiting_{};  // the signal mask inside ppoll: SIGINT and SIGTERM let in
+  unsigned last_take_ = 0;  // packets the last take_queued_packets() found
   bool terminal_;
   std::optional<asio::ip::address> source_;
   std::optional<sim::hesai::LidarStream> stream_;
-  std::array<std::uint8_t, receive_buffer_size> buffer_{};
   std::int64_t last_packet_ns_ = 0;
   std::uint64_t datagrams_ = 0;
   std::uint64_t other_source_ = 0;

@@ -129,6 +129,17 @@ std::size_t FrameAssembler::pending_points() const noexcept {
   return output_attached_ ? output_count_ : carry_count_;
 }
 
+std::optional<std::int64_t> FrameAssembler::time_to_cut_ns() const noexcept {
+  if (!have_last_ || last_rpm_ == 0) return std::nullopt;
+  // push() completes the frame once a group's position + min_cut_offset reaches its end.
+  const double position = static_cast<double>(block_revolution_) * full_turn + last_phase_;
+  const double end = static_cast<double>(current_revolution_ + 1) * full_turn;
+  const double centi_degrees = end - min_cut_offset_centi_ - position;
+  if (centi_degrees <= 0) return 0;
+  // rpm · 6 degrees per second.
+  return static_cast<std::int64_t>(centi_degrees / 100.0 / (last_rpm_ * 6.0) * 1e9);
+}
+
 void FrameAssembler::set_output(std::span<LidarPoint> output) noexcept {
   if (output_attached_) {
     // Replaced in the middle of a frame: its points so far stay in the old span.
@@ -293,6 +304,7 @@ PushResult FrameAssembler::push(std::span<const std::uint8_t> payload,
   }
   ++counters_.packets;
   ++packet_counter_;
+  last_rpm_ = packet.motor_rpm();
   count_loss(packet);
   if (options_.firetimes && options_.firetime_azimuth_compensation &&
       packet.motor_rpm() != compensated_rpm_) {

@@ -6,6 +6,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <limits>
 #include <utility>
 
 namespace sim::pcap {
@@ -162,6 +163,13 @@ NextStatus CaptureReader::next(Datagram& out) noexcept {
       continue;
     }
     // Opened with nanosecond precision, libpcap scales µs files: tv_usec holds nanoseconds.
+    // pcapng stamps are 64-bit: one past the year 2262 does not fit in int64 nanoseconds.
+    constexpr std::int64_t latest_second = std::numeric_limits<std::int64_t>::max() / 1'000'000'000 - 1;
+    if (header->ts.tv_sec < 0 || header->ts.tv_sec > latest_second || header->ts.tv_usec < 0 ||
+        header->ts.tv_usec >= 1'000'000'000) {
+      ++s.stats.malformed;
+      continue;
+    }
     out.timestamp_ns = std::int64_t{header->ts.tv_sec} * 1'000'000'000 + header->ts.tv_usec;
     ++s.stats.datagrams;
     return NextStatus::datagram;

@@ -133,6 +133,10 @@ class FrameAssembler {
   const Calibration& calibration() const noexcept { return calibration_; }
   // Points the frame in progress holds so far.
   std::size_t pending_points() const noexcept;
+  // How long, at the motor speed the last packet reported, until a packet can complete the
+  // frame in progress (0 when the next one may). nullopt before the first packet or when the
+  // motor speed is 0. A live driver sleeps through this time instead of waking per packet.
+  std::optional<std::int64_t> time_to_cut_ns() const noexcept;
 
  private:
   FrameAssembler(Calibration calibration, AssemblerOptions options);
@@ -195,6 +199,7 @@ class FrameAssembler {
   std::uint16_t last_phase_ = 0;     // last group's block azimuth relative to the cut, 0.01°
   std::uint16_t last_azimuth_ = 0;   // last group's block azimuth, 0.01°
   std::uint16_t azimuth_step_ = 0;   // between firing groups, learned inside packets
+  std::uint16_t last_rpm_ = 0;       // motor speed of the last decoded packet
   bool have_sequence_ = false;
   std::uint32_t last_sequence_ = 0;
   std::uint64_t packet_counter_ = 0;

@@ -70,6 +70,8 @@ class LidarStream {
   const AssemblerCounters& counters() const noexcept;
   const PublishCounters& published() const noexcept;
   std::uint64_t max_points() const noexcept;
+  // FrameAssembler::time_to_cut_ns: how long no packet can complete a revolution.
+  std::optional<std::int64_t> time_to_cut_ns() const noexcept;
   Writer& writer() noexcept;
 
   // "frames 12 packets 3600 lost 0 malformed 0 wrong-model 0 points/frame 93591", for status
