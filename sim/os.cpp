@@ -39,4 +39,14 @@ std::optional<Error> set_realtime_priority(int priority) {
   return std::nullopt;
 }
 
+std::optional<Error> apply_thread_placement(const ThreadPlacement& placement) {
+  if (placement.cpu) {
+    if (auto error = pin_current_thread(*placement.cpu)) return error;
+  }
+  if (placement.rt_priority) {
+    if (auto error = set_realtime_priority(*placement.rt_priority)) return error;
+  }
+  return std::nullopt;
+}
+
 }  // namespace sim

@@ -82,12 +82,10 @@ int main(int argc, char** argv) {
   }
   const auto output = *camera::parse_output_format(output_text);
 
-  if (cpu >= 0) {
-    if (auto error = pin_current_thread(cpu)) return fail(error->message);
-  }
-  if (rt_priority > 0) {
-    if (auto error = set_realtime_priority(rt_priority)) return fail(error->message);
-  }
+  ThreadPlacement placement;
+  if (cpu >= 0) placement.cpu = cpu;
+  if (rt_priority > 0) placement.rt_priority = rt_priority;
+  if (auto error = apply_thread_placement(placement)) return fail(error->message);
 
   auto source = replay::VideoSource::open(path);
   if (!source) return fail(source.error().message);

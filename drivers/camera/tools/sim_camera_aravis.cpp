@@ -66,9 +66,9 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? 0 : 2;
   }
   // The file gives the base; options given on the command line win.
+  sim::ThreadPlacement placement;
   if (!config_file.empty()) {
     AravisCaptureConfig base;
-    sim::camera::Placement placement;
     if (auto error = load_aravis_config(config_file, base, placement)) {
       std::fprintf(stderr, "sim_camera_aravis: %s\n", error->message.c_str());
       return 2;
@@ -97,8 +97,6 @@ int main(int argc, char** argv) {
     config.checksum = config.checksum || base.checksum;
     config.retry_period = base.retry_period;
     config.features = base.features;  // command-line --feature entries follow and win
-    if (cpu < 0 && placement.cpu) cpu = *placement.cpu;
-    if (rt_priority == 0 && placement.rt_priority) rt_priority = *placement.rt_priority;
   }
   config.output = *parse_output_format(output_text.empty() ? "bgr8" : output_text);
   config.packet_socket = !no_packet_socket;
@@ -122,17 +120,11 @@ int main(int argc, char** argv) {
     for (const auto& camera : cameras) std::printf("%s\n", camera.c_str());
     return 0;
   }
-  if (cpu >= 0) {
-    if (auto error = sim::pin_current_thread(cpu)) {
-      std::fprintf(stderr, "sim_camera_aravis: %s\n", error->message.c_str());
-      return 1;
-    }
-  }
-  if (rt_priority > 0) {
-    if (auto error = sim::set_realtime_priority(rt_priority)) {
-      std::fprintf(stderr, "sim_camera_aravis: %s\n", error->message.c_str());
-      return 1;
-    }
+  if (cpu >= 0) placement.cpu = cpu;
+  if (rt_priority > 0) placement.rt_priority = rt_priority;
+  if (auto error = sim::apply_thread_placement(placement)) {
+    std::fprintf(stderr, "sim_camera_aravis: %s\n", error->message.c_str());
+    return 1;
   }
   const bool terminal = !quiet && isatty(STDERR_FILENO) != 0;
   config.log = [terminal](std::string_view message) {

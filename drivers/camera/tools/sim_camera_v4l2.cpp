@@ -159,17 +159,9 @@ int main(int argc, char** argv) {
     return 0;
   }
 
-  if (placement.cpu) {
-    if (auto error = sim::pin_current_thread(*placement.cpu)) {
-      std::fprintf(stderr, "sim_camera_v4l2: %s\n", error->message.c_str());
-      return 1;
-    }
-  }
-  if (placement.rt_priority) {
-    if (auto error = sim::set_realtime_priority(*placement.rt_priority)) {
-      std::fprintf(stderr, "sim_camera_v4l2: %s\n", error->message.c_str());
-      return 1;
-    }
+  if (auto error = sim::apply_thread_placement(placement)) {
+    std::fprintf(stderr, "sim_camera_v4l2: %s\n", error->message.c_str());
+    return 1;
   }
 
   const bool terminal = !quiet && isatty(STDERR_FILENO) != 0;

@@ -27,10 +27,7 @@ inline std::optional<int> parse(CLI::App& app, int argc, char** argv) {
 }
 
 // Where the tool's main thread runs: --cpu and --rt-priority, shared by every tool and driver.
-struct Placement {
-  std::optional<int> cpu;
-  std::optional<int> rt_priority;
-};
+using Placement = sim::ThreadPlacement;
 
 inline void add_placement_options(CLI::App& app, Placement& placement) {
   app.add_option("--cpu", placement.cpu, "pin the main thread to this CPU");

@@ -8,14 +8,12 @@
 
 #include "sim/camera/aravis_capture.hpp"
 #include "sim/camera/v4l2_capture.hpp"
+#include "sim/os.hpp"
 #include "sim/result.hpp"
 
 namespace sim::camera {
 
-struct Placement {
-  std::optional<int> cpu;
-  std::optional<int> rt_priority;
-};
+using Placement = sim::ThreadPlacement;
 
 // Reads `path` into `config` and `placement`, leaving keys the file does not mention unchanged.
 // One sentence naming the file and the key on any error.
