@@ -31,13 +31,13 @@ class PacedSink final : public sim::unitree::ScanSink {
     }
   }
   std::span<sim::LidarPoint> begin_scan() override { return inner_.begin_scan(); }
-  void end_scan(std::size_t points, std::int64_t) override {
+  void end_scan(std::size_t points, std::int64_t, std::int64_t receive_ns) override {
     if (period_.count() > 0) {
       if (next_ == std::chrono::steady_clock::time_point{}) next_ = std::chrono::steady_clock::now();
       std::this_thread::sleep_until(next_);
       next_ += period_;
     }
-    inner_.end_scan(points, sim::realtime_ns());
+    inner_.end_scan(points, sim::realtime_ns(), receive_ns);
   }
   void imu(const sim::unitree::ImuSample& sample) override {
     sim::unitree::ImuSample s = sample;

@@ -19,7 +19,7 @@ class CheckingSink : public sim::unitree::ScanSink {
  public:
   explicit CheckingSink(std::size_t capacity) : storage_(capacity) {}
   std::span<sim::LidarPoint> begin_scan() override { return storage_; }
-  void end_scan(std::size_t points, std::int64_t) override {
+  void end_scan(std::size_t points, std::int64_t, std::int64_t) override {
     if (points > storage_.size()) std::abort();
     for (std::size_t i = 0; i < points; ++i) {
       const auto& p = storage_[i];

@@ -23,7 +23,7 @@ class CheckingSink : public sim::unitree::ScanSink {
     storage_.back() = guard();
     return std::span<sim::LidarPoint>(storage_).first(storage_.size() - 1);
   }
-  void end_scan(std::size_t points, std::int64_t) override {
+  void end_scan(std::size_t points, std::int64_t, std::int64_t) override {
     if (points > storage_.size() - 1) std::abort();
     const sim::LidarPoint g = guard();
     if (storage_.back().x != g.x || storage_.back().ring != g.ring) std::abort();

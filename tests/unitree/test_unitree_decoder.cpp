@@ -211,6 +211,7 @@ TEST(UnitreeL2Decoder, SensorTimeStamps) {
   decoder.push(l2_point_packet(full_packet(1, 1700000000, 900)), 6);
   ASSERT_EQ(sink.scans.size(), 1U);
   EXPECT_EQ(sink.scans[0].stamp_ns, 1'700'000'000'000'000'250LL);
+  EXPECT_EQ(sink.scans[0].receive_ns, 5) << "host time of the scan's first packet, beside the sensor's";
 }
 
 TEST(UnitreeL2Decoder, SequenceGapsAreCounted) {
@@ -420,7 +421,7 @@ class CountingSink : public sim::unitree::ScanSink {
  public:
   explicit CountingSink(std::size_t capacity) : storage_(capacity) {}
   std::span<sim::LidarPoint> begin_scan() override { return storage_; }
-  void end_scan(std::size_t, std::int64_t) override { ++scans; }
+  void end_scan(std::size_t, std::int64_t, std::int64_t) override { ++scans; }
   void imu(const sim::unitree::ImuSample&) override { ++imu_samples; }
   int scans = 0;
   int imu_samples = 0;

@@ -114,6 +114,9 @@ void expect_frame(sim::Reader& reader, const Scan& scan, std::uint64_t seq) {
   ASSERT_EQ(info.size, scan.points.size() * sizeof(sim::LidarPoint));
   EXPECT_EQ(0, std::memcmp(buffer.data(), scan.points.data(), info.size));
   EXPECT_GT(info.stamp_ns, 0);  // host receive time
+  // When the scan's first packet reached the host (a replay re-stamps frames later).
+  EXPECT_GT(info.receive_ns, 0);
+  EXPECT_LE(info.receive_ns, info.stamp_ns);
 }
 
 std::optional<sim::Reader> open_reader(const std::string& name) {

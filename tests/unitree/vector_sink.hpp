@@ -14,6 +14,7 @@ namespace unitree_test {
 struct Scan {
   std::vector<sim::LidarPoint> points;
   std::int64_t stamp_ns = 0;
+  std::int64_t receive_ns = 0;
 };
 
 class VectorSink : public sim::unitree::ScanSink {
@@ -23,9 +24,9 @@ class VectorSink : public sim::unitree::ScanSink {
     ++begun;
     return storage_;
   }
-  void end_scan(std::size_t points, std::int64_t stamp_ns) override {
+  void end_scan(std::size_t points, std::int64_t stamp_ns, std::int64_t receive_ns) override {
     scans.push_back({{storage_.begin(), storage_.begin() + static_cast<std::ptrdiff_t>(points)},
-                     stamp_ns});
+                     stamp_ns, receive_ns});
   }
   void imu(const sim::unitree::ImuSample& sample) override { imu_samples.push_back(sample); }
 

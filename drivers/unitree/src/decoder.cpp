@@ -40,14 +40,15 @@ std::optional<Model> parse_model(std::string_view text) noexcept {
 ScanAssembler::ScanAssembler(ScanSink& sink, std::uint32_t packets_per_scan) noexcept
     : sink_(sink), packets_per_scan_(std::max<std::uint32_t>(packets_per_scan, 1)) {}
 
-std::span<LidarPoint> ScanAssembler::begin_packet(std::int64_t stamp_ns,
-                                                  std::int64_t clock_ns) noexcept {
+std::span<LidarPoint> ScanAssembler::begin_packet(std::int64_t stamp_ns, std::int64_t clock_ns,
+                                                  std::int64_t receive_ns) noexcept {
   if (!open_) {
     storage_ = sink_.begin_scan();
     open_ = true;
     points_ = 0;
     packets_ = 0;
     stamp_ns_ = stamp_ns;
+    receive_ns_ = receive_ns;
     scan_clock_ns_ = clock_ns;
   }
   return storage_.subspan(points_);
@@ -56,7 +57,7 @@ std::span<LidarPoint> ScanAssembler::begin_packet(std::int64_t stamp_ns,
 bool ScanAssembler::end_packet(std::size_t points_written) noexcept {
   points_ = std::min(points_ + points_written, storage_.size());
   if (++packets_ < packets_per_scan_) return false;
-  sink_.end_scan(points_, stamp_ns_);
+  sink_.end_scan(points_, stamp_ns_, receive_ns_);
   open_ = false;
   storage_ = {};
   return true;
@@ -64,7 +65,7 @@ bool ScanAssembler::end_packet(std::size_t points_written) noexcept {
 
 void ScanAssembler::close() noexcept {
   if (!open_) return;
-  sink_.end_scan(points_, stamp_ns_);
+  sink_.end_scan(points_, stamp_ns_, receive_ns_);
   open_ = false;
   storage_ = {};
 }
@@ -161,7 +162,7 @@ void Decoder::on_l2_packet(std::span<const std::byte> packet, std::int64_t host_
   const std::int64_t stamp = options_.time_source == TimeSource::host ? host_ns : header->stamp_ns;
   // Offsets within a scan always come from the sensor's clock: host receive times of packets in
   // one burst of datagrams say nothing about when they were measured.
-  const std::span<LidarPoint> room = assembler_.begin_packet(stamp, header->stamp_ns);
+  const std::span<LidarPoint> room = assembler_.begin_packet(stamp, header->stamp_ns, host_ns);
   const std::uint32_t base = clamp_offset(header->stamp_ns - assembler_.scan_clock_ns());
   const l2::DecodeLimits limits{options_.range_min_m, options_.range_max_m};
   const l2::DecodeResult result = l2::decode_points(packet, *header, limits, base, room);
@@ -180,7 +181,7 @@ void Decoder::on_l2_2d_packet(std::span<const std::byte> packet, std::int64_t ho
   // drops a half-assembled 3D scan).
   assembler_.abandon();
   const std::int64_t stamp = options_.time_source == TimeSource::host ? host_ns : header->stamp_ns;
-  const std::span<LidarPoint> room = assembler_.begin_packet(stamp, header->stamp_ns);
+  const std::span<LidarPoint> room = assembler_.begin_packet(stamp, header->stamp_ns, host_ns);
   const l2::DecodeLimits limits{options_.range_min_m, options_.range_max_m};
   const l2::DecodeResult result = l2::decode_2d_points(packet, *header, limits, 0, room);
   counters_.dropped_points += result.overflow;
@@ -231,7 +232,7 @@ void Decoder::on_l1_message(const MavlinkMessage& message, std::int64_t host_ns)
 }
 
 void Decoder::decode_l1_pair(std::int64_t host_ns) noexcept {
-  const std::span<LidarPoint> room = assembler_.begin_packet(host_ns, 0);
+  const std::span<LidarPoint> room = assembler_.begin_packet(host_ns, 0, host_ns);
   const std::uint32_t base = clamp_offset(std::int64_t{assembler_.packets_in_scan()} *
                                           l1::kPointsPerPacket * kL1PointPeriodNs);
   const l1::DecodeLimits limits{options_.range_min_m, options_.range_max_m, 0.0F};

@@ -49,9 +49,9 @@ std::span<LidarPoint> SimScanSink::begin_scan() {
   return slot.first(std::min<std::size_t>(slot.size(), max_points_));
 }
 
-void SimScanSink::end_scan(std::size_t points, std::int64_t stamp_ns) {
+void SimScanSink::end_scan(std::size_t points, std::int64_t stamp_ns, std::int64_t receive_ns) {
   if (!loan_) return;
-  const WriteStatus status = loan_->commit(points * sizeof(LidarPoint), stamp_ns);
+  const WriteStatus status = loan_->commit(points * sizeof(LidarPoint), stamp_ns, receive_ns);
   loan_.reset();
   if (status == WriteStatus::ok) {
     ++counters_.scans_published;

@@ -30,7 +30,8 @@ class ScanSink {
  public:
   virtual ~ScanSink() = default;
   virtual std::span<LidarPoint> begin_scan() = 0;
-  virtual void end_scan(std::size_t points, std::int64_t stamp_ns) = 0;
+  // receive_ns: host receive time (CLOCK_REALTIME) of the scan's first packet.
+  virtual void end_scan(std::size_t points, std::int64_t stamp_ns, std::int64_t receive_ns) = 0;
   virtual void imu(const ImuSample& sample) = 0;
 };
 
@@ -65,7 +66,8 @@ class ScanAssembler {
  public:
   ScanAssembler(ScanSink& sink, std::uint32_t packets_per_scan) noexcept;
   // Room for one packet's points (empty when the scan's storage is full).
-  std::span<LidarPoint> begin_packet(std::int64_t stamp_ns, std::int64_t clock_ns) noexcept;
+  std::span<LidarPoint> begin_packet(std::int64_t stamp_ns, std::int64_t clock_ns,
+                                     std::int64_t receive_ns) noexcept;
   // `clock_ns` of the scan's first packet, on the clock used for time offsets.
   std::int64_t scan_clock_ns() const noexcept { return scan_clock_ns_; }
   // Returns whether this packet completed (and published) the scan.
@@ -84,6 +86,7 @@ class ScanAssembler {
   std::size_t points_ = 0;
   std::uint32_t packets_ = 0;
   std::int64_t stamp_ns_ = 0;
+  std::int64_t receive_ns_ = 0;
   std::int64_t scan_clock_ns_ = 0;
 };
 

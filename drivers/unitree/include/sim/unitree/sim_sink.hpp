@@ -45,7 +45,7 @@ class SimScanSink final : public ScanSink {
   static Expected<std::unique_ptr<SimScanSink>> create(const SimSinkOptions& options);
 
   std::span<LidarPoint> begin_scan() override;
-  void end_scan(std::size_t points, std::int64_t stamp_ns) override;
+  void end_scan(std::size_t points, std::int64_t stamp_ns, std::int64_t receive_ns) override;
   void imu(const ImuSample& sample) override;
 
   const SimSinkCounters& counters() const noexcept { return counters_; }
