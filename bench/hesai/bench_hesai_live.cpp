@@ -323,8 +323,9 @@ int main(int argc, char** argv) {
       std::printf(
           "Usage: bench_hesai_live [--seconds S] [--revolutions N]\n"
           "Times a revolution from its last packet to a reader (N revolutions, default 200), then\n"
-          "feeds sim_lidar_hesai the Pandar64 capture at its recorded rate for S seconds\n"
-          "(default 10) and reports the driver's CPU use.\n");
+          "feeds sim_lidar_hesai the Pandar64 capture over UDP at its recorded rate for S seconds\n"
+          "(default 10) and reports the driver's CPU use, its wake-ups, and the time from sending\n"
+          "a revolution's last packet to a blocked reader in this process.\n");
       return 0;
     }
     if (i + 1 < argc && arg == "--seconds") {
