@@ -302,7 +302,7 @@ int measure_driver_cpu(const Payloads& payloads, const std::string& calibration,
               static_cast<double>(wakes) / wall,
               wakes == 0 ? 0.0 : static_cast<double>(sent) / static_cast<double>(wakes));
   if (send_to_reader.empty()) {
-    std::printf("  no frame reached the reader: the latency below cannot be measured\n");
+    std::printf("  no frame reached the reader: the send-to-reader time cannot be measured\n");
     return 1;
   }
   const Percentiles latency = summarise(send_to_reader);
