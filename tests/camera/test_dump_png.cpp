@@ -10,8 +10,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 
-#include "process.hpp"
 #include "sim/sim.hpp"
+#include "sim_test/process.hpp"
 #include "test_images.hpp"
 
 namespace {

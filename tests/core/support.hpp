@@ -1,25 +1,18 @@
 // SPDX-License-Identifier: Apache-2.0
-// What the core tests share: unique stream names, frames whose content proves they are whole,
-// and child processes.
+// What the core tests share: unique stream names and frames whose content proves they are
+// whole. Child processes: tests/support/sim_test/process.hpp.
 #pragma once
 
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
-#include <cstdio>
 #include <cstring>
 #include <span>
 #include <string>
-#include <vector>
 
 #include "sim/reader.hpp"
-
-extern char** environ;
 
 namespace sim::test {
 
@@ -79,67 +72,6 @@ inline std::size_t frame_size(std::uint64_t seq, std::size_t min_bytes, std::siz
   const std::size_t span = (max_bytes - min_bytes) / 8;
   return min_bytes + (span == 0 ? 0 : (pattern_word(seq, 0) % (span + 1)) * 8);
 }
-
-// A child process running a program, with its stdout readable line by line.
-class Child {
- public:
-  explicit Child(std::vector<std::string> argv) {
-    int pipe_fds[2];
-    if (pipe(pipe_fds) != 0) return;
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], STDOUT_FILENO);
-    posix_spawn_file_actions_addclose(&actions, pipe_fds[0]);
-    std::vector<char*> args;
-    for (auto& a : argv) args.push_back(a.data());
-    args.push_back(nullptr);
-    if (posix_spawn(&pid_, args[0], &actions, nullptr, args.data(), environ) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&actions);
-    close(pipe_fds[1]);
-    out_ = fdopen(pipe_fds[0], "r");
-  }
-  Child(const Child&) = delete;
-  Child& operator=(const Child&) = delete;
-  ~Child() {
-    if (pid_ > 0 && !reaped_) {
-      kill(pid_, SIGKILL);
-      wait();
-    }
-    if (out_ != nullptr) fclose(out_);
-  }
-  pid_t pid() const { return pid_; }
-  bool started() const { return pid_ > 0; }
-  // The next line of output, or "" at end of output.
-  std::string line() {
-    char buf[4096];
-    if (out_ == nullptr || fgets(buf, sizeof(buf), out_) == nullptr) return {};
-    std::string s(buf);
-    if (!s.empty() && s.back() == '\n') s.pop_back();
-    return s;
-  }
-  // All remaining output.
-  std::string rest() {
-    std::string all, l;
-    while (!(l = line()).empty()) all += l + "\n";
-    return all;
-  }
-  void signal(int sig) { kill(pid_, sig); }
-  // Exit code, or 128 + signal number.
-  int wait() {
-    if (reaped_) return status_;
-    int status = 0;
-    waitpid(pid_, &status, 0);
-    reaped_ = true;
-    status_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    return status_;
-  }
-
- private:
-  pid_t pid_ = -1;
-  FILE* out_ = nullptr;
-  bool reaped_ = false;
-  int status_ = -1;
-};
 
 // Reads "key=value" out of a line of the peer's output.
 inline std::uint64_t field(const std::string& line, const std::string& key) {

@@ -7,11 +7,12 @@
 #include <thread>
 
 #include "sim/sim.hpp"
+#include "sim_test/process.hpp"
 #include "support.hpp"
 
 using namespace sim;
 using namespace std::chrono_literals;
-using test::Child;
+using sim::testing::Process;
 using test::field;
 using test::StreamGuard;
 using test::unique_name;
@@ -20,29 +21,29 @@ namespace {
 
 const std::string kPeer = SIM_TEST_PEER;
 
-std::unique_ptr<Child> spawn_writer(const std::string& name, int frames, double rate,
+std::unique_ptr<Process> spawn_writer(const std::string& name, int frames, double rate,
                                     std::size_t min_bytes, std::size_t max_bytes, int linger_ms) {
-  auto child = std::make_unique<Child>(std::vector<std::string>{
+  auto child = std::make_unique<Process>(std::vector<std::string>{
       kPeer, "writer", name, std::to_string(frames), std::to_string(rate),
       std::to_string(min_bytes), std::to_string(max_bytes), std::to_string(linger_ms)});
-  EXPECT_EQ(child->line().rfind("ready", 0), 0u);
+  EXPECT_EQ(child->next_line().value_or("").rfind("ready", 0), 0u);
   return child;
 }
 
-std::unique_ptr<Child> spawn_reader(const std::string& name, std::uint64_t until, int timeout_ms,
+std::unique_ptr<Process> spawn_reader(const std::string& name, std::uint64_t until, int timeout_ms,
                                     const std::string& mode) {
-  auto child = std::make_unique<Child>(std::vector<std::string>{
+  auto child = std::make_unique<Process>(std::vector<std::string>{
       kPeer, "reader", name, std::to_string(until), std::to_string(timeout_ms), mode});
-  EXPECT_EQ(child->line(), "ready");
+  EXPECT_EQ(child->next_line().value_or(""), "ready");
   return child;
 }
 
 struct ReaderResult {
   std::uint64_t received, torn, disorder, skipped, first, last;
 };
-ReaderResult finish(Child& reader) {
-  const std::string summary = reader.rest();
-  EXPECT_EQ(reader.wait(), 0) << summary;
+ReaderResult finish(Process& reader) {
+  EXPECT_EQ(reader.wait(), 0) << reader.err();
+  const std::string summary = reader.unread();
   return {field(summary, "received"), field(summary, "torn"), field(summary, "disorder"),
           field(summary, "skipped"), field(summary, "first"), field(summary, "last")};
 }
@@ -55,7 +56,7 @@ void fan_out(int readers, const std::string& mode) {
     auto created = Writer::create({.name = g.name, .capacity = 64 * 1024});
     ASSERT_TRUE(created);
   }
-  std::vector<std::unique_ptr<Child>> children;
+  std::vector<std::unique_ptr<Process>> children;
   for (int i = 0; i < readers; ++i) children.push_back(spawn_reader(g.name, kFrames, 60000, mode));
   auto writer = spawn_writer(g.name, kFrames, 200, 4096, 64 * 1024, 3000);
   for (auto& child : children) {
@@ -84,13 +85,13 @@ TEST(MultiProcess, AKilledWriterIsSeenGoneAndItsSuccessorResumesTheSequence) {
   first->signal(SIGKILL);
   EXPECT_EQ(first->wait(), 128 + SIGKILL);
 
-  const std::string gone = reader->line();
+  const std::string gone = reader->next_line().value_or("");
   ASSERT_EQ(gone.rfind("event=writer_gone", 0), 0u) << gone;
   const std::uint64_t seen_before = field(gone, "seq");
   EXPECT_GT(seen_before, 0u);
 
   auto second = spawn_writer(g.name, 20, 200, 64, 4096, 60000);
-  const std::string resumed = reader->line();
+  const std::string resumed = reader->next_line().value_or("");
   ASSERT_EQ(resumed.rfind("event=resumed", 0), 0u) << resumed;
   EXPECT_GT(field(resumed, "seq"), seen_before);  // numbers keep rising across the restart
   reader->signal(SIGKILL);
@@ -104,7 +105,7 @@ TEST(MultiProcess, AReaderKilledMidCopyAffectsNobody) {
     ASSERT_TRUE(created);
   }
   auto survivor = spawn_reader(g.name, kFrames, 60000, "wait");
-  std::vector<std::unique_ptr<Child>> victims;
+  std::vector<std::unique_ptr<Process>> victims;
   for (int i = 0; i < 4; ++i) victims.push_back(spawn_reader(g.name, kFrames, 60000, i % 2 ? "poll" : "borrow"));
   // Large frames make each copy long, so the kills land inside copies.
   auto writer = spawn_writer(g.name, kFrames, 200, 1 << 20, 4 << 20, 3000);
@@ -121,16 +122,16 @@ TEST(MultiProcess, AReaderKilledMidCopyAffectsNobody) {
 
 TEST(MultiProcess, ASecondWriterProcessIsRefused) {
   StreamGuard g{unique_name("second")};
-  Child holder({kPeer, "hold", g.name});
-  const std::string ready = holder.line();
+  Process holder({kPeer, "hold", g.name});
+  const std::string ready = holder.next_line().value_or("");
   ASSERT_EQ(ready.rfind("ready", 0), 0u);
   auto refused = Writer::create({.name = g.name, .capacity = 4096});
   ASSERT_FALSE(refused);
   EXPECT_EQ(refused.error().code, ErrorCode::writer_exists);
   EXPECT_NE(refused.error().message.find("pid " + std::to_string(holder.pid())), std::string::npos)
       << refused.error().message;
-  Child other({kPeer, "hold", g.name});
-  EXPECT_NE(other.line().find("already has a live writer"), std::string::npos);
+  Process other({kPeer, "hold", g.name});
+  EXPECT_NE(other.next_line().value_or("").find("already has a live writer"), std::string::npos);
   EXPECT_EQ(other.wait(), 1);
   holder.signal(SIGKILL);
   holder.wait();

@@ -8,10 +8,11 @@
 #include <thread>
 
 #include "sim/sim.hpp"
+#include "sim_test/process.hpp"
 #include "support.hpp"
 
 using namespace sim;
-using test::Child;
+using sim::testing::Process;
 using test::StreamGuard;
 using test::unique_name;
 
@@ -22,11 +23,11 @@ const std::string kEcho = SIM_ECHO;
 const std::string kLs = SIM_LS;
 const std::string kRm = SIM_RM;
 
-std::unique_ptr<Child> start_writer(const std::string& name, int frames, double rate, int linger_ms) {
-  auto child = std::make_unique<Child>(std::vector<std::string>{
+std::unique_ptr<Process> start_writer(const std::string& name, int frames, double rate, int linger_ms) {
+  auto child = std::make_unique<Process>(std::vector<std::string>{
       kPeer, "writer", name, std::to_string(frames), std::to_string(rate), "64", "1024",
       std::to_string(linger_ms)});
-  EXPECT_EQ(child->line().rfind("ready", 0), 0u);
+  EXPECT_EQ(child->next_line().value_or("").rfind("ready", 0), 0u);
   return child;
 }
 
@@ -41,11 +42,11 @@ double json_number(const std::string& line, const std::string& key) {
 TEST(SimEcho, PrintsOneJsonLinePerFrame) {
   StreamGuard g{unique_name("echo")};
   auto writer = start_writer(g.name, 1000000, 100, 0);
-  Child echo({kEcho, g.name, "--count", "5"});
+  Process echo({kEcho, g.name, "--count", "5"});
   std::uint64_t previous = 0;
   for (int i = 0; i < 5; ++i) {
-    const std::string line = echo.line();
-    ASSERT_EQ(line.front(), '{') << line;
+    const std::string line = echo.next_line().value_or("");
+    ASSERT_TRUE(line.starts_with('{')) << line << echo.err();
     const auto seq = static_cast<std::uint64_t>(json_number(line, "seq"));
     EXPECT_GT(seq, previous);
     previous = seq;
@@ -61,15 +62,15 @@ TEST(SimEcho, StatsAtOneHundredHertzSeeEveryFrame) {
   // sim_echo must be listening before the first frame: create the stream, wait until sim_echo
   // sleeps on it, then hand the stream to the writer process.
   std::optional<Writer> creator = Writer::create({.name = g.name, .capacity = 1024}).value();
-  Child echo({kEcho, g.name, "--stats", "--count", "100", "--timeout", "60"});
+  Process echo({kEcho, g.name, "--stats", "--count", "100", "--timeout", "60"});
   for (int i = 0; i < 1000 && inspect(g.name)->sleeping_readers == 0; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   creator.reset();
   auto writer = start_writer(g.name, 100, 100, 5000);
   std::string summary;
-  for (std::string line = echo.line(); !line.empty(); line = echo.line()) {
-    if (line.find("\"summary\"") != std::string::npos) summary = line;
+  while (const auto line = echo.next_line()) {
+    if (line->find("\"summary\"") != std::string::npos) summary = *line;
   }
   ASSERT_EQ(echo.wait(), 0);
   ASSERT_FALSE(summary.empty());
@@ -80,24 +81,24 @@ TEST(SimEcho, StatsAtOneHundredHertzSeeEveryFrame) {
 }
 
 TEST(SimEcho, AMissingStreamOrBadOptionGivesAnExitCodeScriptsCanTrust) {
-  Child missing({kEcho, unique_name("missing")});
+  Process missing({kEcho, unique_name("missing")});
   EXPECT_EQ(missing.wait(), 1);
-  Child bad_name({kEcho, "no-slash"});
+  Process bad_name({kEcho, "no-slash"});
   EXPECT_EQ(bad_name.wait(), 1);
-  Child bad_option({kEcho, "/x", "--no-such-option"});
+  Process bad_option({kEcho, "/x", "--no-such-option"});
   EXPECT_EQ(bad_option.wait(), 2);
-  Child help({kEcho, "--help"});
-  EXPECT_NE(help.rest().find("--stats"), std::string::npos);
+  Process help({kEcho, "--help"});
   EXPECT_EQ(help.wait(), 0);
+  EXPECT_NE(help.out().find("--stats"), std::string::npos);
 }
 
 TEST(SimLs, ListsAStreamWithItsWriter) {
   StreamGuard g{unique_name("ls")};
   auto writer = start_writer(g.name, 10, 1000, 60000);
-  EXPECT_EQ(writer->line().rfind("done", 0), 0u);
-  Child ls({kLs, "--json"});
-  const std::string out = ls.rest();
+  EXPECT_EQ(writer->next_line().value_or("").rfind("done", 0), 0u);
+  Process ls({kLs, "--json"});
   ls.wait();
+  const std::string out = ls.out();
   std::string mine;
   std::size_t start = 0;
   while (start < out.size()) {
@@ -119,19 +120,19 @@ TEST(SimRm, KeepsLiveStreamsUnlessForcedAndClearsDeadOnes) {
   auto writer = start_writer(alive.name, 1, 1000, 60000);
   { ASSERT_TRUE(Writer::create({.name = dead.name, .capacity = 64})); }
 
-  Child refused({kRm, alive.name});
+  Process refused({kRm, alive.name});
   EXPECT_EQ(refused.wait(), 1);
   EXPECT_TRUE(Reader::open(alive.name));
 
-  Child sweep({kRm, "--dead", alive.name, dead.name});
+  Process sweep({kRm, "--dead", alive.name, dead.name});
   EXPECT_EQ(sweep.wait(), 0);
   EXPECT_TRUE(Reader::open(alive.name));
   EXPECT_EQ(Reader::open(dead.name).error().code, ErrorCode::not_found);
 
-  Child forced({kRm, "--force", alive.name});
+  Process forced({kRm, "--force", alive.name});
   EXPECT_EQ(forced.wait(), 0);
   EXPECT_EQ(Reader::open(alive.name).error().code, ErrorCode::not_found);
 
-  Child nothing({kRm});
+  Process nothing({kRm});
   EXPECT_EQ(nothing.wait(), 2);
 }

@@ -17,15 +17,16 @@
 #include <fstream>
 #include <iterator>
 
-#include "child_process.hpp"
 #include "sim/reader.hpp"
 #include "sim/unitree/decoder.hpp"
+#include "sim_test/process.hpp"
 #include "unitree_encoder.hpp"
 #include "vector_sink.hpp"
 
 namespace {
 
 using namespace unitree_test;
+using sim::testing::Process;
 using namespace std::chrono_literals;
 
 constexpr auto kTimeout = 20s;  // generous: only a hang makes a test wait this long
@@ -154,11 +155,10 @@ TEST(UnitreeDriver, L2OverLoopbackUdp) {
   const std::string stream = unique_name("udp");
   const std::string record = temp_path("udp_record");
   guard.names = {stream, stream + ".imu"};
-  ChildProcess driver({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", "0",
+  Process driver({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", "0",
                        "--bind-address", "127.0.0.1", "--lidar-ip", "127.0.0.1", "--stream",
                        stream, "--scan-packets", "3", "--record", record, "-q"});
-  ASSERT_TRUE(driver.started());
-  const auto line = driver.read_line(kTimeout);
+  const auto line = driver.next_line(kTimeout);
   ASSERT_TRUE(line.has_value());
   unsigned port = 0;
   ASSERT_EQ(std::sscanf(line->c_str(), "listening on udp port %u", &port), 1) << *line;
@@ -243,11 +243,10 @@ void run_serial_driver(sim::unitree::Model model, const Bytes& wire, std::size_t
   const std::string stream = unique_name("serial");
   const std::string record = temp_path(model == sim::unitree::Model::l1 ? "l1_rec" : "l2_rec");
   guard.names = {stream, stream + ".imu"};
-  ChildProcess driver({SIM_LIDAR_UNITREE_PATH, "--model", sim::unitree::to_string(model),
+  Process driver({SIM_LIDAR_UNITREE_PATH, "--model", sim::unitree::to_string(model),
                        "--serial", pty.path, "--stream", stream, "--scan-packets", "2",
                        "--record", record, "-q"});
-  ASSERT_TRUE(driver.started());
-  const auto line = driver.read_line(kTimeout);
+  const auto line = driver.next_line(kTimeout);
   ASSERT_TRUE(line.has_value());
   EXPECT_NE(line->find(baud_text), std::string::npos) << *line;
   auto points = open_reader(stream);
@@ -313,10 +312,10 @@ TEST(UnitreeDriver, L1BehindSerialToUdpBoard) {
   StreamGuard guard;
   const std::string stream = unique_name("l1udp");
   guard.names = {stream, stream + ".imu"};
-  ChildProcess driver({SIM_LIDAR_UNITREE_PATH, "--model", "L1", "--udp-port", "0",
+  Process driver({SIM_LIDAR_UNITREE_PATH, "--model", "L1", "--udp-port", "0",
                        "--bind-address", "127.0.0.1", "--stream", stream, "--scan-packets", "4",
                        "-q"});
-  const auto line = driver.read_line(kTimeout);
+  const auto line = driver.next_line(kTimeout);
   ASSERT_TRUE(line.has_value());
   unsigned port = 0;
   ASSERT_EQ(std::sscanf(line->c_str(), "listening on udp port %u", &port), 1) << *line;
@@ -340,13 +339,13 @@ TEST(UnitreeDriver, PortInUseIsARuntimeFailure) {
   const std::string first = unique_name("port1");
   const std::string second = unique_name("port2");
   guard.names = {first, first + ".imu", second, second + ".imu"};
-  ChildProcess driver({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", "0",
+  Process driver({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", "0",
                        "--bind-address", "127.0.0.1", "--stream", first, "-q"});
-  const auto line = driver.read_line(kTimeout);
+  const auto line = driver.next_line(kTimeout);
   ASSERT_TRUE(line.has_value());
   unsigned port = 0;
   ASSERT_EQ(std::sscanf(line->c_str(), "listening on udp port %u", &port), 1) << *line;
-  ChildProcess other({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", std::to_string(port),
+  Process other({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", std::to_string(port),
                       "--bind-address", "127.0.0.1", "--stream", second, "-q"});
   EXPECT_EQ(other.wait(kTimeout), 1);
   EXPECT_FALSE(sim::inspect(second).has_value());  // a failed start leaves no stream behind
@@ -356,23 +355,23 @@ TEST(UnitreeDriver, PortInUseIsARuntimeFailure) {
 
 TEST(UnitreeDriver, BadOptionsExitWithUsageOrFailure) {
   {
-    ChildProcess p({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--stream", "/a/b", "--udp-port", "0", "-q"});
+    Process p({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--stream", "/a/b", "--udp-port", "0", "-q"});
     EXPECT_EQ(p.wait(kTimeout), 2);
   }
   {
-    ChildProcess p({SIM_LIDAR_UNITREE_PATH, "--model", "L3", "--stream", unique_name("x"), "-q"});
+    Process p({SIM_LIDAR_UNITREE_PATH, "--model", "L3", "--stream", unique_name("x"), "-q"});
     EXPECT_EQ(p.wait(kTimeout), 2);
   }
   {
     StreamGuard guard;
     const std::string stream = unique_name("nodev");
     guard.names = {stream, stream + ".imu"};
-    ChildProcess p({SIM_LIDAR_UNITREE_PATH, "--model", "L1", "--serial", "/dev/does-not-exist-unitree",
+    Process p({SIM_LIDAR_UNITREE_PATH, "--model", "L1", "--serial", "/dev/does-not-exist-unitree",
                     "--stream", stream, "-q"});
     EXPECT_EQ(p.wait(kTimeout), 1);
   }
   {
-    ChildProcess p({SIM_LIDAR_UNITREE_PATH, "--help"});
+    Process p({SIM_LIDAR_UNITREE_PATH, "--help"});
     EXPECT_EQ(p.wait(kTimeout), 0);
   }
 }
@@ -390,7 +389,7 @@ TEST(UnitreeReplaySerial, ReplaysARecordingThroughTheSameDecoder) {
   }
   wire = concat({wire, l2_imu_packet(imu_spec()), noise});
   write_file(file, wire);
-  ChildProcess replay({SIM_REPLAY_SERIAL_PATH, file, "--model", "L2", "--stream", stream,
+  Process replay({SIM_REPLAY_SERIAL_PATH, file, "--model", "L2", "--stream", stream,
                        "--scan-packets", "3", "--rate-hz", "0", "-q"});
   ASSERT_EQ(replay.wait(kTimeout), 0);
 
@@ -415,16 +414,16 @@ TEST(UnitreeReplaySerial, BadInputIsReportedWithExitCodes) {
   const std::string stream = unique_name("bad");
   guard.names = {stream, stream + ".imu"};
   {
-    ChildProcess p({SIM_REPLAY_SERIAL_PATH, garbage, "--model", "L2", "--stream", stream, "-q"});
+    Process p({SIM_REPLAY_SERIAL_PATH, garbage, "--model", "L2", "--stream", stream, "-q"});
     EXPECT_EQ(p.wait(kTimeout), 1);
   }
   {
-    ChildProcess p({SIM_REPLAY_SERIAL_PATH, "/nonexistent/unitree.bin", "--model", "L1",
+    Process p({SIM_REPLAY_SERIAL_PATH, "/nonexistent/unitree.bin", "--model", "L1",
                     "--stream", stream, "-q"});
     EXPECT_EQ(p.wait(kTimeout), 1);
   }
   {
-    ChildProcess p({SIM_REPLAY_SERIAL_PATH, garbage, "--model", "X9", "--stream", stream, "-q"});
+    Process p({SIM_REPLAY_SERIAL_PATH, garbage, "--model", "X9", "--stream", stream, "-q"});
     EXPECT_EQ(p.wait(kTimeout), 2);
   }
   std::filesystem::remove(garbage);

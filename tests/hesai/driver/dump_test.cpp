@@ -12,10 +12,10 @@
 #include <string>
 #include <vector>
 
-#include "process.hpp"
 #include "sim/hesai/hesai.hpp"
 #include "sim/pcap/capture.hpp"
 #include "sim/sim.hpp"
+#include "sim_test/process.hpp"
 
 namespace {
 

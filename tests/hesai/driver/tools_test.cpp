@@ -19,18 +19,26 @@
 #include <vector>
 
 #include "frames.hpp"
-#include "process.hpp"
 #include "sim/hesai/hesai.hpp"
 #include "sim/pcap/capture.hpp"
 #include "sim/sim.hpp"
+#include "sim_test/process.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
+
+// The value of `key=` in the tools' final "summary key=value …" line, or -1.
+long long summary_value(const std::string& text, const std::string& key) {
+  const auto line = text.find("summary ");
+  if (line == std::string::npos) return -1;
+  const auto at = text.find(" " + key + "=", line);
+  if (at == std::string::npos) return -1;
+  return std::stoll(text.substr(at + key.size() + 2));
+}
 using sim::testing::Process;
 using sim::testing::run;
-using sim::testing::summary_value;
 
 const fs::path data_dir = SIM_HESAI_TEST_DATA;
 const std::string replay_tool = SIM_REPLAY_PCAP;

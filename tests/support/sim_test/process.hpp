@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// A child process for the tool tests: spawned with its stdout and stderr on pipes, so a test
-// can wait for a line ("listening on …"), signal it, and check its exit code and messages.
+// A real child process for the multi-process and tool tests: spawned with its stdout and stderr
+// on pipes, so a test can read its output line by line, wait for a line ("ready", "listening on
+// …"), signal it, and check its exit code and messages. The one helper every test suite uses.
 #pragma once
 
 #include <fcntl.h>
@@ -14,18 +15,27 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
-#include <thread>
 #include <vector>
 
 extern char** environ;
 
 namespace sim::testing {
 
+// Limits against hangs, not timing checks: a test that reaches one has failed anyway.
+inline constexpr std::chrono::milliseconds line_timeout{30'000};
+inline constexpr std::chrono::milliseconds exit_timeout{120'000};
+
 class Process {
  public:
+  // Throws if the program cannot be started (the test then fails with that message).
   explicit Process(const std::vector<std::string>& argv) {
     int out[2], err[2];
-    if (pipe2(out, O_CLOEXEC) != 0 || pipe2(err, O_CLOEXEC) != 0) throw std::runtime_error("pipe");
+    if (pipe2(out, O_CLOEXEC) != 0) throw std::runtime_error("pipe2 failed");
+    if (pipe2(err, O_CLOEXEC) != 0) {
+      ::close(out[0]);
+      ::close(out[1]);
+      throw std::runtime_error("pipe2 failed");
+    }
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_adddup2(&actions, out[1], STDOUT_FILENO);
@@ -39,24 +49,31 @@ class Process {
     ::close(err[1]);
     out_ = out[0];
     err_ = err[0];
-    if (rc != 0) throw std::runtime_error("posix_spawn " + argv[0] + " failed");
+    if (rc != 0) {
+      pid_ = -1;
+      throw std::runtime_error("cannot start " + argv.at(0));
+    }
   }
   Process(const Process&) = delete;
   Process& operator=(const Process&) = delete;
   ~Process() {
-    if (!exit_code_) {
+    if (pid_ > 0 && !exit_code_) {
       ::kill(pid_, SIGKILL);
-      int status = 0;
-      ::waitpid(pid_, &status, 0);
+      ::waitpid(pid_, nullptr, 0);
     }
     ::close(out_);
     ::close(err_);
   }
 
-  // Reads stdout until a line containing `needle` arrives; returns that line, or nullopt at
-  // end of output or after `timeout` (a generous limit against hangs, not a timing check).
+  // The next line of stdout (without its newline); nullopt at end of output or after `timeout`.
+  std::optional<std::string> next_line(std::chrono::milliseconds timeout = line_timeout) {
+    return wait_for_line("", timeout);
+  }
+
+  // Reads stdout until a line containing `needle` arrives and returns that line; nullopt at end
+  // of output or after `timeout`.
   std::optional<std::string> wait_for_line(const std::string& needle,
-                                           std::chrono::seconds timeout = std::chrono::seconds(30)) {
+                                           std::chrono::milliseconds timeout = line_timeout) {
     const auto deadline = std::chrono::steady_clock::now() + timeout;
     for (;;) {
       std::size_t newline;
@@ -70,7 +87,7 @@ class Process {
           deadline - std::chrono::steady_clock::now());
       if (left.count() <= 0) return std::nullopt;
       pollfd p{out_, POLLIN, 0};
-      if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) return std::nullopt;
+      if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) continue;
       char chunk[4096];
       const ssize_t n = ::read(out_, chunk, sizeof chunk);
       if (n <= 0) return std::nullopt;
@@ -80,8 +97,9 @@ class Process {
 
   void signal(int sig) { ::kill(pid_, sig); }
 
-  // Waits for the exit (killing the child after `timeout`) and collects all output.
-  int wait(std::chrono::seconds timeout = std::chrono::seconds(60)) {
+  // Collects all output until the child ends (killing it after `timeout`) and returns its exit
+  // code, or 128 + the signal that ended it.
+  int wait(std::chrono::milliseconds timeout = exit_timeout) {
     if (exit_code_) return *exit_code_;
     const auto deadline = std::chrono::steady_clock::now() + timeout;
     bool out_open = true, err_open = true;
@@ -108,13 +126,18 @@ class Process {
     }
     int status = 0;
     ::waitpid(pid_, &status, 0);
+    unread_ = out_buffer_;
     out_text_ += out_buffer_;
     out_buffer_.clear();
     exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
     return *exit_code_;
   }
 
+  // All of stdout so far; after wait(), all of it.
   const std::string& out() const { return out_text_; }
+  // After wait(): the stdout that next_line()/wait_for_line() had not returned.
+  const std::string& unread() const { return unread_; }
+  // After wait(): all of stderr.
   const std::string& err() const { return err_text_; }
   bool deadline_passed() const { return deadline_passed_; }
   pid_t pid() const { return pid_; }
@@ -125,6 +148,7 @@ class Process {
   int err_ = -1;
   std::string out_buffer_;
   std::string out_text_;
+  std::string unread_;
   std::string err_text_;
   std::optional<int> exit_code_;
   bool deadline_passed_ = false;
@@ -140,15 +164,6 @@ inline Run run(const std::vector<std::string>& argv) {
   Process p(argv);
   const int code = p.wait();
   return {code, p.out(), p.err()};
-}
-
-// The value of `key=` in a "summary key=value …" line, or -1.
-inline long long summary_value(const std::string& text, const std::string& key) {
-  const auto line = text.find("summary ");
-  if (line == std::string::npos) return -1;
-  const auto at = text.find(" " + key + "=", line);
-  if (at == std::string::npos) return -1;
-  return std::stoll(text.substr(at + key.size() + 2));
 }
 
 }  // namespace sim::testing
