@@ -71,7 +71,8 @@ class Process {
   }
 
   // Reads stdout until a line containing `needle` arrives and returns that line; nullopt at end
-  // of output or after `timeout`.
+  // of output or after `timeout`. Stderr is collected meanwhile, so a child that logs a lot
+  // cannot stall on a full pipe.
   std::optional<std::string> wait_for_line(const std::string& needle,
                                            std::chrono::milliseconds timeout = line_timeout) {
     const auto deadline = std::chrono::steady_clock::now() + timeout;
@@ -83,15 +84,7 @@ class Process {
         out_buffer_.erase(0, newline + 1);
         if (line.find(needle) != std::string::npos) return line;
       }
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
-          deadline - std::chrono::steady_clock::now());
-      if (left.count() <= 0) return std::nullopt;
-      pollfd p{out_, POLLIN, 0};
-      if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) continue;
-      char chunk[4096];
-      const ssize_t n = ::read(out_, chunk, sizeof chunk);
-      if (n <= 0) return std::nullopt;
-      out_buffer_.append(chunk, static_cast<std::size_t>(n));
+      if (!out_open_ || !pump(deadline)) return std::nullopt;
     }
   }
 
@@ -102,26 +95,11 @@ class Process {
   int wait(std::chrono::milliseconds timeout = exit_timeout) {
     if (exit_code_) return *exit_code_;
     const auto deadline = std::chrono::steady_clock::now() + timeout;
-    bool out_open = true, err_open = true;
-    while (out_open || err_open) {
-      pollfd p[2] = {{out_open ? out_ : -1, POLLIN, 0}, {err_open ? err_ : -1, POLLIN, 0}};
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
-          deadline - std::chrono::steady_clock::now());
-      if (left.count() <= 0) {
+    while (out_open_ || err_open_) {
+      if (!pump(deadline)) {
         ::kill(pid_, SIGKILL);
         deadline_passed_ = true;
         break;
-      }
-      if (::poll(p, 2, static_cast<int>(left.count())) <= 0) continue;
-      char chunk[4096];
-      for (int i = 0; i < 2; ++i) {
-        if (p[i].fd < 0 || (p[i].revents & (POLLIN | POLLHUP)) == 0) continue;
-        const ssize_t n = ::read(p[i].fd, chunk, sizeof chunk);
-        if (n <= 0) {
-          (i == 0 ? out_open : err_open) = false;
-        } else {
-          (i == 0 ? out_buffer_ : err_text_).append(chunk, static_cast<std::size_t>(n));
-        }
       }
     }
     int status = 0;
@@ -137,12 +115,33 @@ class Process {
   const std::string& out() const { return out_text_; }
   // After wait(): the stdout that next_line()/wait_for_line() had not returned.
   const std::string& unread() const { return unread_; }
-  // After wait(): all of stderr.
+  // All of stderr so far; after wait(), all of it.
   const std::string& err() const { return err_text_; }
   bool deadline_passed() const { return deadline_passed_; }
   pid_t pid() const { return pid_; }
 
  private:
+  // Waits for output on either pipe until `deadline` and appends what came; false once the
+  // deadline has passed. A pipe at end of output is marked closed.
+  bool pump(std::chrono::steady_clock::time_point deadline) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) return false;
+    pollfd p[2] = {{out_open_ ? out_ : -1, POLLIN, 0}, {err_open_ ? err_ : -1, POLLIN, 0}};
+    if (::poll(p, 2, static_cast<int>(left.count())) <= 0) return true;  // timeout or EINTR: look again
+    char chunk[4096];
+    for (int i = 0; i < 2; ++i) {
+      if (p[i].fd < 0 || (p[i].revents & (POLLIN | POLLHUP | POLLERR)) == 0) continue;
+      const ssize_t n = ::read(p[i].fd, chunk, sizeof chunk);
+      if (n <= 0) {
+        (i == 0 ? out_open_ : err_open_) = false;
+      } else {
+        (i == 0 ? out_buffer_ : err_text_).append(chunk, static_cast<std::size_t>(n));
+      }
+    }
+    return true;
+  }
+
   pid_t pid_ = -1;
   int out_ = -1;
   int err_ = -1;
@@ -150,6 +149,8 @@ class Process {
   std::string out_text_;
   std::string unread_;
   std::string err_text_;
+  bool out_open_ = true;
+  bool err_open_ = true;
   std::optional<int> exit_code_;
   bool deadline_passed_ = false;
 };
