@@ -22,7 +22,7 @@ namespace {
 const std::string kPeer = SIM_TEST_PEER;
 
 std::unique_ptr<Process> spawn_writer(const std::string& name, int frames, double rate,
-                                    std::size_t min_bytes, std::size_t max_bytes, int linger_ms) {
+                                      std::size_t min_bytes, std::size_t max_bytes, int linger_ms) {
   auto child = std::make_unique<Process>(std::vector<std::string>{
       kPeer, "writer", name, std::to_string(frames), std::to_string(rate),
       std::to_string(min_bytes), std::to_string(max_bytes), std::to_string(linger_ms)});
@@ -30,8 +30,8 @@ std::unique_ptr<Process> spawn_writer(const std::string& name, int frames, doubl
   return child;
 }
 
-std::unique_ptr<Process> spawn_reader(const std::string& name, std::uint64_t until, int timeout_ms,
-                                    const std::string& mode) {
+std::unique_ptr<Process> spawn_reader(const std::string& name, std::uint64_t until,
+                                      int timeout_ms, const std::string& mode) {
   auto child = std::make_unique<Process>(std::vector<std::string>{
       kPeer, "reader", name, std::to_string(until), std::to_string(timeout_ms), mode});
   EXPECT_EQ(child->next_line().value_or(""), "ready");

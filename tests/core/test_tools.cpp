@@ -23,7 +23,8 @@ const std::string kEcho = SIM_ECHO;
 const std::string kLs = SIM_LS;
 const std::string kRm = SIM_RM;
 
-std::unique_ptr<Process> start_writer(const std::string& name, int frames, double rate, int linger_ms) {
+std::unique_ptr<Process> start_writer(const std::string& name, int frames, double rate,
+                                      int linger_ms) {
   auto child = std::make_unique<Process>(std::vector<std::string>{
       kPeer, "writer", name, std::to_string(frames), std::to_string(rate), "64", "1024",
       std::to_string(linger_ms)});
