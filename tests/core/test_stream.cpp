@@ -430,6 +430,15 @@ TEST(Placement, PinningLockingAndPrioritySayWhyTheyFail) {
   auto bad_priority = set_realtime_priority(0);
   ASSERT_TRUE(bad_priority);
   EXPECT_NE(bad_priority->message.find("1–99"), std::string::npos);
+  // The tools' --cpu/--rt-priority: nothing asked, nothing done; the first failure is reported.
+  EXPECT_EQ(apply_thread_placement({}), std::nullopt);
+  EXPECT_EQ(apply_thread_placement({.cpu = 0, .rt_priority = std::nullopt}), std::nullopt);
+  auto placed = apply_thread_placement({.cpu = 100000, .rt_priority = 0});
+  ASSERT_TRUE(placed);
+  EXPECT_NE(placed->message.find("CPU 100000"), std::string::npos) << placed->message;
+  placed = apply_thread_placement({.cpu = 0, .rt_priority = 100});
+  ASSERT_TRUE(placed);
+  EXPECT_NE(placed->message.find("1–99"), std::string::npos) << placed->message;
 
   StreamGuard g{unique_name("mlock")};
   auto locked = Writer::create({.name = g.name, .capacity = 1 << 20, .lock_memory = true});

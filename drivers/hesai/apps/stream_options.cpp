@@ -86,13 +86,10 @@ void add_stream_options(CLI::App& app, StreamOptions& o) {
 }
 
 std::optional<Error> apply_thread_placement(const StreamOptions& options) {
-  if (options.cpu >= 0) {
-    if (auto error = pin_current_thread(options.cpu)) return error;
-  }
-  if (options.rt_priority > 0) {
-    if (auto error = set_realtime_priority(options.rt_priority)) return error;
-  }
-  return std::nullopt;
+  ThreadPlacement placement;
+  if (options.cpu >= 0) placement.cpu = options.cpu;
+  if (options.rt_priority > 0) placement.rt_priority = options.rt_priority;
+  return sim::apply_thread_placement(placement);
 }
 
 }  // namespace sim::hesai

@@ -35,21 +35,13 @@ inline void add_placement_options(CLI::App& app, Placement& placement) {
                  "run under SCHED_FIFO at this priority (1-99; needs root or CAP_SYS_NICE)");
 }
 
-// Applies the placement; returns an exit code when it cannot be applied.
+// Applies the placement; returns an exit code when it cannot be applied: usage for a CPU or
+// priority that cannot be had, failure when the process lacks the right to use them.
 inline std::optional<int> apply_placement(const Placement& placement, const char* tool) {
-  if (placement.cpu) {
-    if (auto error = sim::pin_current_thread(*placement.cpu)) {
-      std::fprintf(stderr, "%s: %s\n", tool, error->message.c_str());
-      return kExitUsage;
-    }
-  }
-  if (placement.rt_priority) {
-    if (auto error = sim::set_realtime_priority(*placement.rt_priority)) {
-      std::fprintf(stderr, "%s: %s\n", tool, error->message.c_str());
-      return kExitFailure;
-    }
-  }
-  return std::nullopt;
+  const auto error = sim::apply_thread_placement(placement);
+  if (!error) return std::nullopt;
+  std::fprintf(stderr, "%s: %s\n", tool, error->message.c_str());
+  return error->code == sim::ErrorCode::permission_denied ? kExitFailure : kExitUsage;
 }
 
 }  // namespace sim::tools
