@@ -156,8 +156,8 @@ TEST(UnitreeDriver, L2OverLoopbackUdp) {
   const std::string record = temp_path("udp_record");
   guard.names = {stream, stream + ".imu"};
   Process driver({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", "0",
-                       "--bind-address", "127.0.0.1", "--lidar-ip", "127.0.0.1", "--stream",
-                       stream, "--scan-packets", "3", "--record", record, "-q"});
+                  "--bind-address", "127.0.0.1", "--lidar-ip", "127.0.0.1", "--stream",
+                  stream, "--scan-packets", "3", "--record", record, "-q"});
   const auto line = driver.next_line(kTimeout);
   ASSERT_TRUE(line.has_value());
   unsigned port = 0;
@@ -244,8 +244,8 @@ void run_serial_driver(sim::unitree::Model model, const Bytes& wire, std::size_t
   const std::string record = temp_path(model == sim::unitree::Model::l1 ? "l1_rec" : "l2_rec");
   guard.names = {stream, stream + ".imu"};
   Process driver({SIM_LIDAR_UNITREE_PATH, "--model", sim::unitree::to_string(model),
-                       "--serial", pty.path, "--stream", stream, "--scan-packets", "2",
-                       "--record", record, "-q"});
+                  "--serial", pty.path, "--stream", stream, "--scan-packets", "2",
+                  "--record", record, "-q"});
   const auto line = driver.next_line(kTimeout);
   ASSERT_TRUE(line.has_value());
   EXPECT_NE(line->find(baud_text), std::string::npos) << *line;
@@ -313,8 +313,8 @@ TEST(UnitreeDriver, L1BehindSerialToUdpBoard) {
   const std::string stream = unique_name("l1udp");
   guard.names = {stream, stream + ".imu"};
   Process driver({SIM_LIDAR_UNITREE_PATH, "--model", "L1", "--udp-port", "0",
-                       "--bind-address", "127.0.0.1", "--stream", stream, "--scan-packets", "4",
-                       "-q"});
+                  "--bind-address", "127.0.0.1", "--stream", stream, "--scan-packets", "4",
+                  "-q"});
   const auto line = driver.next_line(kTimeout);
   ASSERT_TRUE(line.has_value());
   unsigned port = 0;
@@ -340,13 +340,13 @@ TEST(UnitreeDriver, PortInUseIsARuntimeFailure) {
   const std::string second = unique_name("port2");
   guard.names = {first, first + ".imu", second, second + ".imu"};
   Process driver({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", "0",
-                       "--bind-address", "127.0.0.1", "--stream", first, "-q"});
+                  "--bind-address", "127.0.0.1", "--stream", first, "-q"});
   const auto line = driver.next_line(kTimeout);
   ASSERT_TRUE(line.has_value());
   unsigned port = 0;
   ASSERT_EQ(std::sscanf(line->c_str(), "listening on udp port %u", &port), 1) << *line;
   Process other({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", std::to_string(port),
-                      "--bind-address", "127.0.0.1", "--stream", second, "-q"});
+                 "--bind-address", "127.0.0.1", "--stream", second, "-q"});
   EXPECT_EQ(other.wait(kTimeout), 1);
   EXPECT_FALSE(sim::inspect(second).has_value());  // a failed start leaves no stream behind
   driver.signal(SIGTERM);
@@ -367,7 +367,7 @@ TEST(UnitreeDriver, BadOptionsExitWithUsageOrFailure) {
     const std::string stream = unique_name("nodev");
     guard.names = {stream, stream + ".imu"};
     Process p({SIM_LIDAR_UNITREE_PATH, "--model", "L1", "--serial", "/dev/does-not-exist-unitree",
-                    "--stream", stream, "-q"});
+               "--stream", stream, "-q"});
     EXPECT_EQ(p.wait(kTimeout), 1);
   }
   {
@@ -390,7 +390,7 @@ TEST(UnitreeReplaySerial, ReplaysARecordingThroughTheSameDecoder) {
   wire = concat({wire, l2_imu_packet(imu_spec()), noise});
   write_file(file, wire);
   Process replay({SIM_REPLAY_SERIAL_PATH, file, "--model", "L2", "--stream", stream,
-                       "--scan-packets", "3", "--rate-hz", "0", "-q"});
+                  "--scan-packets", "3", "--rate-hz", "0", "-q"});
   ASSERT_EQ(replay.wait(kTimeout), 0);
 
   const auto expected = expected_scans(sim::unitree::Model::l2, 3, wire);
@@ -419,7 +419,7 @@ TEST(UnitreeReplaySerial, BadInputIsReportedWithExitCodes) {
   }
   {
     Process p({SIM_REPLAY_SERIAL_PATH, "/nonexistent/unitree.bin", "--model", "L1",
-                    "--stream", stream, "-q"});
+               "--stream", stream, "-q"});
     EXPECT_EQ(p.wait(kTimeout), 1);
   }
   {
