@@ -317,16 +317,20 @@ class Driver {
         return;
       }
     }
-    if (last_packet_ns_ != 0 && now - last_packet_ns_ > silence_timeout_ns()) {
+    // Silence is measured between the kernel's arrival stamps, not between the times this
+    // process took the packets: a stall of the driver (packets waiting in the socket buffer)
+    // is no silence of the sensor.
+    if (last_arrival_ns_ != 0 && host_ns - last_arrival_ns_ > silence_timeout_ns()) {
       // The sensor was silent: the revolution in progress is stale. Readers kept the last
       // frame meanwhile (stale by its publish time); start over with fresh packets.
       stream_->reset();
       ++resumes_;
       if (!terminal_) {
         std::fprintf(stderr, "%s: packets resumed after %.1f s of silence\n", tool,
-                     static_cast<double>(now - last_packet_ns_) / 1e9);
+                     static_cast<double>(host_ns - last_arrival_ns_) / 1e9);
       }
     }
+    last_arrival_ns_ = host_ns;
     last_packet_ns_ = now;
     stream_->push(payload, host_ns);
   }
@@ -375,7 +379,8 @@ class Driver {
   bool terminal_;
   std::optional<asio::ip::address> source_;
   std::optional<sim::hesai::LidarStream> stream_;
-  std::int64_t last_packet_ns_ = 0;
+  std::int64_t last_packet_ns_ = 0;   // monotonic time the last packet was taken
+  std::int64_t last_arrival_ns_ = 0;  // kernel arrival stamp (realtime) of the last packet
   std::uint64_t datagrams_ = 0;
   std::uint64_t other_source_ = 0;
   std::uint64_t unrecognised_ = 0;
@@ -412,7 +417,7 @@ int main(int argc, char** argv) {
   app.add_option_function<int>("--port", [&](int v) { network.port = v; },
                                "UDP port the sensor sends to; 0 picks a free one [2368]")
       ->check(CLI::Range(0, 65535));
-  app.add_option_function<std::string>("--multicast", [&](const std::string& v) { network.multicast_group = v; },
+  app.add_option_function<std::string>("--multicast,--multicast-group", [&](const std::string& v) { network.multicast_group = v; },
                                         "join this multicast group")
       ->type_name("GROUP");
   app.add_option_function<std::string>("--source", [&](const std::string& v) { network.source = v; },
