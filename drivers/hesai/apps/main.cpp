@@ -25,6 +25,7 @@
 #include "config_file.hpp"
 #include "sim/clock.hpp"
 #include "sim/hesai/lidar_stream.hpp"
+#include "sim/hesai/ptc_client.hpp"
 #include "sim/hesai/stream_options.hpp"
 
 namespace asio = boost::asio;
@@ -98,6 +99,12 @@ struct ReceiveBatch {
 };
 
 volatile std::sig_atomic_t stop_requested = 0;
+
+// Messages joined from several parts end with exactly one full stop.
+std::string sentence(std::string text) {
+  while (!text.empty() && (text.back() == '.' || text.back() == ' ')) text.pop_back();
+  return text + ".";
+}
 
 class Driver {
  public:
@@ -432,6 +439,25 @@ int main(int argc, char** argv) {
   app.add_option_function<double>("--silence-timeout", [&](double v) { network.silence_timeout_s = v; },
                                   "a gap this long (s) means the sensor stopped: the next packet starts a new frame [0.5]")
       ->check(CLI::PositiveNumber);
+  bool calibration_from_sensor = false;
+  sim::hesai::PtcEndpoint sensor;
+  bool sensor_ip_given = false;
+  app.add_flag("--calibration-from-sensor", calibration_from_sensor,
+               "fetch the unit's angle-correction file from the sensor over PTC (TCP) at start, "
+               "check it and cache it in the --calibration file [~/.cache/sim/hesai-<ip>.csv]; "
+               "when the sensor does not deliver it, the cached file is used with a warning");
+  app.add_option_function<std::string>(
+         "--sensor-ip", [&](const std::string& v) { sensor.host = v; sensor_ip_given = true; },
+         "the sensor's address for --calibration-from-sensor [--source, else 192.168.1.201]")
+      ->type_name("IP");
+  app.add_option_function<int>("--ptc-port", [&](int v) { sensor.port = static_cast<std::uint16_t>(v); },
+                               "the sensor's PTC port [9347]")
+      ->check(CLI::Range(1, 65535));
+  app.add_option_function<double>(
+         "--ptc-timeout",
+         [&](double v) { sensor.timeout = std::chrono::milliseconds(static_cast<long>(v * 1000)); },
+         "seconds the whole calibration download may take [3]")
+      ->check(CLI::Range(0.01, 60.0));
   app.add_flag("--summary", summary, "print one line of counters on exit: summary frames=… packets=… lost=… malformed=…");
   try {
     app.parse(argc, argv);
@@ -442,9 +468,34 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: %s\n", tool, config_error->message.c_str());
     return 2;
   }
+  if (calibration_from_sensor) {
+    if (!sensor_ip_given && !network.source.empty()) sensor.host = network.source;
+    in_addr ignored{};
+    if (inet_pton(AF_INET, sensor.host.c_str(), &ignored) != 1) {
+      std::fprintf(stderr, "%s: --sensor-ip '%s' is not an IPv4 address (e.g. 192.168.1.201).\n",
+                   tool, sensor.host.c_str());
+      return 2;
+    }
+    if (stream.config.calibration.empty()) {
+      stream.config.calibration = sim::hesai::default_calibration_cache(sensor.host);
+    }
+    auto fetched = sim::hesai::calibration_from_sensor(sensor, stream.config.calibration, stream.model);
+    if (!fetched) {
+      std::fprintf(stderr, "%s: %s\n", tool, sentence(fetched.error().message).c_str());
+      return 1;
+    }
+    if (fetched->from_cache) {
+      std::fprintf(stderr, "%s: warning: %s\n", tool, sentence(fetched->warning).c_str());
+    } else {
+      std::printf("%s: calibration of sensor %s (%zu channels) fetched and cached in %s\n", tool,
+                  sensor.host.c_str(), fetched->channels, stream.config.calibration.c_str());
+      std::fflush(stdout);
+    }
+  }
   if (stream.config.calibration.empty()) {
     std::fprintf(stderr, "%s: no calibration file given; pass the sensor's angle-correction CSV "
-                         "with --calibration or in the --config file (every unit has its own).\n", tool);
+                         "with --calibration or in the --config file (every unit has its own), or use "
+                         "--calibration-from-sensor.\n", tool);
     return 2;
   }
 
