@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -384,7 +385,16 @@ TEST(ReplayTool, BadInputGetsOneSentenceAndExitCode) {
 class UdpSender {
  public:
   // `from`: the loopback address to send from (all of 127/8 is local on Linux), 0 for any.
-  explicit UdpSender(int port, std::uint32_t from = 0) : fd_(::socket(AF_INET, SOCK_DGRAM, 0)) {
+  // `to`: the destination, loopback or a multicast group (sent out of the loopback device).
+  explicit UdpSender(int port, std::uint32_t from = 0, std::uint32_t to = INADDR_LOOPBACK)
+      : fd_(::socket(AF_INET, SOCK_DGRAM, 0)) {
+    if (IN_MULTICAST(to)) {
+      in_addr loopback{};
+      loopback.s_addr = htonl(INADDR_LOOPBACK);
+      ::setsockopt(fd_, IPPROTO_IP, IP_MULTICAST_IF, &loopback, sizeof loopback);
+      const unsigned char loop = 1;
+      ::setsockopt(fd_, IPPROTO_IP, IP_MULTICAST_LOOP, &loop, sizeof loop);
+    }
     if (from != 0) {
       sockaddr_in local{};
       local.sin_family = AF_INET;
@@ -393,7 +403,7 @@ class UdpSender {
     }
     to_.sin_family = AF_INET;
     to_.sin_port = htons(static_cast<std::uint16_t>(port));
-    to_.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    to_.sin_addr.s_addr = htonl(to);
   }
   ~UdpSender() { ::close(fd_); }
   void send(const std::vector<std::uint8_t>& bytes) {
@@ -612,6 +622,61 @@ TEST(LiveDriver, PandarQT128ReplayAndLiveUdpGiveIdenticalFrames) {
   EXPECT_EQ(summary_value(driver.out(), "lost"), 0);
   EXPECT_EQ(summary_value(driver.out(), "rpm"), 600);
   EXPECT_NE(driver.out().find("safety=initialization"), std::string::npos) << driver.out();
+}
+
+// Sensors are often set to send to a multicast group. A real group needs a multicast-capable
+// device with a route for 224.0.0.0/4, which the test gets in a private network namespace
+// (unshare --net): the test runs itself again inside one, with loopback up, multicast on and
+// the route added, and the inner run does the work.
+TEST(LiveDriver, MulticastGroupGivesTheSameFramesAsReplay) {
+  if (std::getenv("SIM_HESAI_IN_NETNS") == nullptr) {
+    const std::string self = fs::read_symlink("/proc/self/exe").string();
+    const std::string script =
+        "PATH=/usr/sbin:/sbin:$PATH; ip link set lo up && ip link set lo multicast on && "
+        "ip route add 224.0.0.0/4 dev lo && SIM_HESAI_IN_NETNS=1 exec \"$0\" "
+        "--gtest_filter=LiveDriver.MulticastGroupGivesTheSameFramesAsReplay";
+    ASSERT_TRUE(fs::exists("/usr/bin/unshare"))
+        << "unshare (util-linux) is needed; scripts/install-deps.sh installs it";
+    const auto inner = run({"/usr/bin/unshare", "--net", "--", "/bin/sh", "-c", script, self});
+    if (inner.code != 0 && inner.err.find("unshare failed") != std::string::npos) {
+      GTEST_SKIP() << "unshare --net is not permitted here (it needs root or CAP_SYS_ADMIN), so "
+                      "the multicast test cannot make its private network: "
+                   << inner.err;
+    }
+    ASSERT_EQ(inner.code, 0) << inner.out << inner.err;
+    EXPECT_NE(inner.out.find("[  PASSED  ] 1 test"), std::string::npos) << inner.out;
+    return;
+  }
+
+  const std::uint32_t group = 0xEFFF2A01;  // 239.255.42.1, administratively scoped
+  const auto payloads = payloads_of(p64_capture);
+  const auto expected = decode_directly(payloads, sim::hesai::Model::pandar64, p64_calibration);
+
+  StreamGuard replayed;
+  Process replay({replay_tool, p64_capture, "--stream", replayed.name, "--calibration",
+                  p64_calibration, "--rate", "0.5", "--summary"});
+  auto replay_reader = open_when_created(replayed.name);
+  ASSERT_TRUE(replay_reader) << replay_reader.error().message;
+  const auto from_replay = receive(*replay_reader, expected.size());
+  ASSERT_EQ(replay.wait(), 0) << replay.err();
+
+  StreamGuard live;
+  Process driver({live_tool, "--model", "Pandar64", "--port", "0", "--bind", "0.0.0.0",
+                  "--multicast-group", "239.255.42.1", "--stream", live.name, "--calibration",
+                  p64_calibration, "--status-interval", "0", "--summary"});
+  const int port = listening_port(driver);
+  ASSERT_GT(port, 0) << driver.err();
+  auto reader = open_when_created(live.name);
+  ASSERT_TRUE(reader) << reader.error().message;
+  UdpSender sender(port, 0, group);
+  const auto from_live = send_revolution_by_revolution(sender, *reader, payloads,
+                                                       sim::hesai::Model::pandar64, p64_calibration);
+  driver.signal(SIGTERM);
+  ASSERT_EQ(driver.wait(), 0) << driver.err();
+  expect_same_frames(from_replay, expected, 1);
+  expect_same_frames(from_live, from_replay, 1);
+  EXPECT_EQ(summary_value(driver.out(), "packets"), 2400);
+  EXPECT_EQ(summary_value(driver.out(), "lost"), 0);
 }
 
 TEST(LiveDriver, SourceFilterIgnoresOtherSenders) {
