@@ -62,9 +62,10 @@ constexpr std::array<std::int32_t, 128> pandar_qt128_loop2_ns{
 
 // CRC-32/MPEG-2 (polynomial 0x04C11DB7, not reflected, initial value 0xFFFFFFFF, no final
 // xor), the CRC of the QT128's body, functional-safety and tail sections: established on the
-// real capture, whose every packet it matches. Slicing by 4 keeps it off the decode's profile.
+// real capture, whose every packet it matches. Slicing by 8 (eight 1 KiB tables, 8 bytes per
+// step) keeps the 1,071 checked bytes of a packet to a small part of its decode time.
 struct CrcTables {
-  std::array<std::array<std::uint32_t, 256>, 4> t{};
+  std::array<std::array<std::uint32_t, 256>, 8> t{};
   constexpr CrcTables() {
     for (std::uint32_t i = 0; i < 256; ++i) {
       std::uint32_t c = i << 24;
@@ -72,7 +73,7 @@ struct CrcTables {
       t[0][i] = c;
     }
     for (std::uint32_t i = 0; i < 256; ++i) {
-      for (std::size_t k = 1; k < 4; ++k) t[k][i] = (t[k - 1][i] << 8) ^ t[0][t[k - 1][i] >> 24];
+      for (std::size_t k = 1; k < 8; ++k) t[k][i] = (t[k - 1][i] << 8) ^ t[0][t[k - 1][i] >> 24];
     }
   }
 };
@@ -81,10 +82,11 @@ constexpr CrcTables crc_tables{};
 std::uint32_t crc32_mpeg2(const std::uint8_t* p, std::size_t n) noexcept {
   const auto& t = crc_tables.t;
   std::uint32_t c = 0xFFFF'FFFFu;
-  for (; n >= 4; n -= 4, p += 4) {
-    c ^= (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) |
-         std::uint32_t{p[3]};
-    c = t[3][c >> 24] ^ t[2][(c >> 16) & 0xFF] ^ t[1][(c >> 8) & 0xFF] ^ t[0][c & 0xFF];
+  for (; n >= 8; n -= 8, p += 8) {
+    const std::uint32_t hi = c ^ ((std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) |
+                                  (std::uint32_t{p[2]} << 8) | std::uint32_t{p[3]});
+    c = t[7][hi >> 24] ^ t[6][(hi >> 16) & 0xFF] ^ t[5][(hi >> 8) & 0xFF] ^ t[4][hi & 0xFF] ^
+        t[3][p[4]] ^ t[2][p[5]] ^ t[1][p[6]] ^ t[0][p[7]];
   }
   for (; n > 0; --n, ++p) c = (c << 8) ^ t[0][((c >> 24) ^ *p) & 0xFF];
   return c;
