@@ -742,7 +742,8 @@ TEST(LiveDriver, ShippedConfigFilesStartTheDriver) {
   const std::vector<std::pair<std::string, std::string>> configs = {
       {"pandar64.yaml", "pandar64.calibration.csv"},
       {"pandar40p.yaml", "pandar40p.example-calibration.csv"},
-      {"pandarxt32.yaml", "pandarxt32.calibration.csv"}};
+      {"pandarxt32.yaml", "pandarxt32.calibration.csv"},
+      {"pandarqt128.yaml", "pandarqt128.calibration.csv"}};
   for (const auto& [config, calibration] : configs) {
     StreamGuard stream;
     Process driver({live_tool, "--config", (fs::path(SIM_CONFIG_DIR) / "hesai" / config).string(),
