@@ -41,7 +41,7 @@ int run_writer(const std::string& name, std::uint64_t frames, double rate_hz, st
     Loan loan = writer->loan();
     const std::size_t size = test::frame_size(seq, min_bytes, max_bytes);
     test::fill_frame(loan.bytes().first(size), seq);
-    loan.commit(size, realtime_ns());
+    if (std::move(loan).commit(size, realtime_ns()) != WriteStatus::ok) return 1;
     if (period_ns > 0) {
       next += period_ns;  // absolute schedule: no drift
       timespec ts{next / 1'000'000'000, next % 1'000'000'000};
