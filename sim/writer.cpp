@@ -12,48 +12,13 @@
 #include <thread>
 
 #include "futex.hpp"
+#include "period_estimate.hpp"
 #include "region_file.hpp"
 #include "sim/clock.hpp"
 
 namespace sim {
 
 using namespace detail;
-
-// The writer's publish period, robust to jitter and to missed frames: a gap of about k periods
-// counts as k intervals of gap/k, unless gaps keep coming (then the sensor really slowed down).
-class PeriodEstimate {
- public:
-  void add(std::int64_t interval_ns) noexcept {
-    if (interval_ns <= 0) return;
-    if (period_ns_ == 0) {
-      period_ns_ = interval_ns;
-      return;
-    }
-    std::int64_t sample = interval_ns;
-    if (interval_ns > period_ns_ + period_ns_ / 2 && ++gaps_in_a_row_ < kGapsBeforeRateChange) {
-      sample = interval_ns / ((interval_ns + period_ns_ / 2) / period_ns_);
-    } else if (interval_ns <= period_ns_ + period_ns_ / 2) {
-      gaps_in_a_row_ = 0;
-    } else {
-      period_ns_ = interval_ns;  // the rate changed: start again from the new interval
-      jitter_ns_ = 0;
-      gaps_in_a_row_ = 0;
-      return;
-    }
-    const std::int64_t deviation = sample > period_ns_ ? sample - period_ns_ : period_ns_ - sample;
-    period_ns_ += (sample - period_ns_) / kSmoothing;
-    jitter_ns_ += (deviation - jitter_ns_) / kSmoothing;
-  }
-  std::int64_t period_ns() const noexcept { return period_ns_; }
-  std::int64_t jitter_ns() const noexcept { return jitter_ns_; }
-
- private:
-  static constexpr std::int64_t kSmoothing = 8;  // each frame moves the estimate by 1/8
-  static constexpr int kGapsBeforeRateChange = 4;
-  std::int64_t period_ns_ = 0;
-  std::int64_t jitter_ns_ = 0;
-  int gaps_in_a_row_ = 0;
-};
 
 struct detail::WriterState {
   std::string name;
@@ -69,7 +34,7 @@ struct detail::WriterState {
   std::int64_t last_publish_ns = 0;
   std::int64_t max_interval_ns = 0;
   std::uint64_t frames_published = 0;  // by this writer
-  PeriodEstimate period;
+  detail::PeriodEstimate period;
   std::int64_t last_heal_ns = 0;  // last scan for sleepers that died asleep
   bool loan_open = false;
 

@@ -50,6 +50,7 @@ struct WriterState;
 // A Loan must not outlive its Writer.
 class Loan {
  public:
+  Loan() noexcept = default;  // empty: valid() is false, no bytes
   Loan(Loan&& other) noexcept;
   Loan& operator=(Loan&& other) noexcept;
   Loan(const Loan&) = delete;
