@@ -7,6 +7,12 @@ here=$(cd "$(dirname "$0")" && pwd)
 mapfile -t wanted < <(cat "$here"/deps/*.txt "$@" | sed 's/#.*//' | tr -s ' \t' '\n' | grep -v '^$' | sort -u)
 missing=()
 for pkg in "${wanted[@]}"; do
+  # Node.js from NodeSource (as on these machines) carries its own npm, which Debian's npm
+  # package conflicts with: a working node and npm on the PATH count as installed.
+  case $pkg in
+    nodejs) command -v node >/dev/null && continue ;;
+    npm) command -v npm >/dev/null && continue ;;
+  esac
   status=$(dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null || true)
   [[ "$status" == "install ok installed" ]] || missing+=("$pkg")
 done
