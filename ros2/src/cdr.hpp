@@ -51,6 +51,7 @@ class Writer {
     put(b, sizeof(T));
   }
   void put(const void* p, std::size_t n) noexcept {
+    if (n == 0) return;  // an empty string_view may hold a null pointer, which memcpy must not see
     if (overflow_ || n > out_.size() - pos_) {
       overflow_ = true;
       return;

@@ -49,7 +49,7 @@ struct PlanBuilder {
   MessagePlan finish(std::uint64_t payload, std::span<const std::byte> suffix) {
     plan.prefix_size_ = w.size();
     plan.payload_size_ = static_cast<std::size_t>(payload);
-    std::memcpy(plan.suffix_.data(), suffix.data(), suffix.size());
+    if (!suffix.empty()) std::memcpy(plan.suffix_.data(), suffix.data(), suffix.size());
     plan.suffix_size_ = suffix.size();
     return plan;
   }

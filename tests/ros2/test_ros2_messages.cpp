@@ -176,7 +176,8 @@ TEST(Ros2Messages, SmallPointTypesRoundTripAsTheirOwnLayouts) {
     const auto bytes = pattern(point_size(t) * 50);
     auto plan = plan_point_cloud2(PointLayout::of(t, 64), bytes.size(), {});
     ASSERT_TRUE(plan.has_value());
-    auto view = decode_point_cloud2(serialize(*plan, bytes));
+    const auto msg = serialize(*plan, bytes);  // the view borrows it
+    auto view = decode_point_cloud2(msg);
     ASSERT_TRUE(view.has_value());
     auto layout = sim_point_layout(*view);
     ASSERT_TRUE(layout.has_value());
@@ -193,7 +194,8 @@ TEST(Ros2Messages, MjpegFramesBecomeJpegCompressedImages) {
   auto plan = plan_frame(info, "cam");
   ASSERT_TRUE(plan.has_value()) << plan.error().message;
   EXPECT_EQ(plan->type(), MessageType::compressed_image);
-  auto view = decode_compressed_image(serialize(*plan, jpeg));
+  const auto msg = serialize(*plan, jpeg);
+  auto view = decode_compressed_image(msg);
   ASSERT_TRUE(view.has_value()) << view.error().message;
   EXPECT_EQ(view->format, "jpeg");
   EXPECT_EQ(view->header.stamp, (Time{5, 1}));
