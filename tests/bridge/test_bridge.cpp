@@ -344,10 +344,11 @@ TEST(Bridge, PublishesCameraFramesAsImagesAndJpegCompressedImages) {
       ASSERT_FALSE(decoded.empty()) << "OpenCV cannot decode the CompressedImage";
       ASSERT_EQ(decoded.cols, 320);
       ASSERT_EQ(decoded.rows, 240);
-      // The source is whichever picture is nearest; JPEG at quality 95 stays within ~35 dB.
+      // The source is whichever picture is nearest. JPEG at quality 95 with 4:2:0 chroma gives
+      // about 32 dB on these gradients; swapped channels or a wrong picture give under 15 dB.
       double best = 0;
       for (const cv::Mat& picture : pictures) best = std::max(best, cv::PSNR(decoded, picture));
-      EXPECT_GT(best, 35.0) << "the JPEG is not the image within JPEG error";
+      EXPECT_GT(best, 30.0) << "the JPEG is not the image within JPEG error";
     })) << bridge.err();
   }
   bridge.signal(SIGTERM);
@@ -422,9 +423,13 @@ TEST(Bridge, WritesRemoteImagesIntoASimStreamThatAnotherProcessReads) {
   for (int i = 0; i < 20; ++i) writer.write(&bad);
   const std::string line = wait_counter(bridge, topic, "malformed", 1);
   ASSERT_FALSE(line.empty()) << bridge.err();
+  // Whatever SIM holds now is a good frame (the good image may still be arriving), never the bad.
   std::vector<std::byte> buffer(reader->capacity());
   sim::FrameInfo after;
-  EXPECT_NE(reader->read(buffer, after), sim::ReadStatus::new_frame) << "a bad message was published";
+  if (reader->read(buffer, after) == sim::ReadStatus::new_frame) {
+    EXPECT_EQ(after.layout.image.stride, 64u * 3) << "a bad message was published";
+    EXPECT_EQ(std::memcmp(buffer.data(), pixels.data(), pixels.size()), 0);
+  }
   bridge.signal(SIGTERM);
   EXPECT_EQ(bridge.wait(), 0);
   EXPECT_NE(bridge.err().find("step × height"), std::string::npos) << bridge.err();
