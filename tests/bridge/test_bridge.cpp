@@ -513,6 +513,21 @@ TEST(Bridge, RefusesBadOptionsWithOneSentenceAndExitCode2) {
   EXPECT_EQ(sim::testing::run({bridge_tool, "--help"}).code, 0);
 }
 
+TEST(Bridge, ReadsItsTopicsFromTheExampleYamlConfig) {
+  SKIP_WITHOUT_NETWORK();  // it starts a DDS participant
+  Process bridge({bridge_tool, "--config", SIM_CONFIG_DIR "/bridge/vehicle.yaml", "--json",
+                  "--status-period", "0.1", "--quiet"});
+  const auto line = bridge.wait_for_line("\"topics\"");
+  ASSERT_TRUE(line) << bridge.err();
+  EXPECT_NE(line->find("\"stream\":\"/lidar_top\",\"topic\":\"/lidar_top\""), std::string::npos);
+  EXPECT_NE(line->find("\"topic\":\"/camera_front/compressed\""), std::string::npos);
+  EXPECT_NE(line->find("\"direction\":\"subscribe\",\"stream\":\"/camera_remote\",\"topic\":\"/remote_camera\""),
+            std::string::npos)
+      << *line;
+  bridge.signal(SIGINT);
+  EXPECT_EQ(bridge.wait(), 0) << bridge.err();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
