@@ -26,19 +26,22 @@ struct Counters {
 
   void count(std::atomic<std::uint64_t>& c) { c.fetch_add(1, std::memory_order_relaxed); }
 
-  // The last problem worth telling the user, shown once by the main thread.
+  // The last problem worth telling the user, shown once by the main thread; a problem that
+  // repeats (a stream that stays unusable, a flood of the same bad message) is told only once.
   void problem(std::string sentence) {
     std::lock_guard lock(mutex_);
-    problem_ = std::move(sentence);
+    if (sentence != told_) problem_ = std::move(sentence);
   }
   std::string take_problem() {
     std::lock_guard lock(mutex_);
+    if (!problem_.empty()) told_ = problem_;
     return std::exchange(problem_, {});
   }
 
  private:
   std::mutex mutex_;
   std::string problem_;
+  std::string told_;
 };
 
 }  // namespace sim::bridge

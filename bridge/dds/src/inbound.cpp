@@ -20,6 +20,9 @@ namespace {
 constexpr auto discovery_poll = 100ms;
 constexpr std::uint64_t min_point_capacity = 4096;     // points, before growth
 constexpr std::uint64_t min_jpeg_capacity = 1 << 20;   // bytes, before growth
+// More points than any LiDAR makes in one frame (a 128-channel dual-return sensor at 10 Hz makes
+// under 1 M): a cloud claiming more is refused rather than sizing a huge region for it.
+constexpr std::uint64_t max_cloud_points = 8'000'000;
 
 bool is_jpeg_format(std::string_view format) {
   // "jpeg", "bgr8; jpeg compressed bgr8" (image_transport), "jpg".
@@ -148,6 +151,10 @@ void Inbound::deliver_cloud(std::span<const std::byte> message) {
   auto exact = ros2::sim_point_layout(*view);
   const PointType type = exact ? exact->type : PointType::lidar_point;
   const std::uint64_t points = view->point_count();
+  if (points > max_cloud_points) {
+    return drop("a cloud of " + std::to_string(points) + " points is more than the " +
+                std::to_string(max_cloud_points) + " a SIM stream takes");
+  }
   const std::uint64_t bytes = points * point_size(type);
   // The point count varies per revolution: size the slots for twice the largest cloud so far.
   std::uint64_t max_points = std::max<std::uint64_t>(min_point_capacity, 2 * points);

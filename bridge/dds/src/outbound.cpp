@@ -140,7 +140,10 @@ void Outbound::run() {
       std::this_thread::sleep_for(reopen_period);
       continue;
     }
-    if (!raw.ensure(*type)) continue;
+    if (!raw.ensure(*type)) {  // told once through the counters; try again later
+      std::this_thread::sleep_for(reopen_period);
+      continue;
+    }
     const bool can_compress = compressed && *type == ros2::MessageType::image &&
                               jpeg_can_encode(reader->layout().image.format);
     if (compressed && !can_compress && !compress_refused) {
@@ -148,7 +151,10 @@ void Outbound::run() {
                           "or rgba8 image stream; no CompressedImage is published");
       compress_refused = true;
     }
-    if (can_compress && !compressed->ensure(ros2::MessageType::compressed_image)) continue;
+    if (can_compress && !compressed->ensure(ros2::MessageType::compressed_image)) {
+      std::this_thread::sleep_for(reopen_period);
+      continue;
+    }
     if (waited != ReadStatus::new_frame) {
       raw.matched();
       if (can_compress) compressed->matched();
