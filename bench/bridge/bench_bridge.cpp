@@ -165,14 +165,13 @@ Result run_case(const Case& c, const dds_topic_descriptor_t* type, const std::st
       // The producer's cost is not the bridge's: only the first byte changes per frame.
       sim::Loan loan = writer->loan();
       loan.bytes()[0] = static_cast<std::byte>(sent & 0xff);
-      std::move(loan).commit(c.layout.min_capacity(), stamp);
-      ++sent;
+      if (std::move(loan).commit(c.layout.min_capacity(), stamp) == sim::WriteStatus::ok) ++sent;
     });
     std::this_thread::sleep_for(500ms);  // the last messages in flight
     cpu = cpu_seconds(bridge.pid()) - cpu0;
     bridge.signal(SIGTERM);
     bridge.wait();
-    sim::destroy(name, true);
+    (void)sim::destroy(name, true);
   } else {
     std::vector<std::string> argv = {self, "--plain-publisher", name, "--case", c.name,
                                      "--seconds", std::to_string(seconds)};

@@ -93,7 +93,7 @@ std::string unique_name(const std::string& what) {
 struct StreamGuard {
   std::string name;
   explicit StreamGuard(const std::string& what) : name(unique_name(what)) {}
-  ~StreamGuard() { sim::destroy(name, true); }
+  ~StreamGuard() { (void)sim::destroy(name, true); }
 };
 
 struct TempDir {
