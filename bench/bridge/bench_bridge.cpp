@@ -134,10 +134,12 @@ Result summarize(std::vector<double> latencies, std::uint64_t bytes, std::uint64
 
 // Frames with a recognizable pattern, paced at the case's rate, stamped with the present.
 void pace(const Case& c, double seconds, const std::function<void(std::int64_t)>& send) {
-  const auto period_ns = static_cast<std::int64_t>(1e9 / c.rate_hz);
-  const std::int64_t start = sim::monotonic_ns();
-  for (std::int64_t next = start; next < start + static_cast<std::int64_t>(seconds * 1e9); next += period_ns) {
-    while (sim::monotonic_ns() < next) std::this_thread::sleep_for(100us);
+  // One sleep per frame, so the plain publisher's CPU is its sending, not its pacing.
+  const auto period = std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 / c.rate_hz));
+  const auto start = std::chrono::steady_clock::now();
+  const auto end = start + std::chrono::nanoseconds(static_cast<std::int64_t>(seconds * 1e9));
+  for (auto next = start; next < end; next += period) {
+    std::this_thread::sleep_until(next);
     send(sim::realtime_ns());
   }
 }
