@@ -93,7 +93,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->type_name("KIB");
   app.add_flag("--wait-for-streams", wait_for_streams,
-               "wait until every named stream has published a frame, then record");
+               "wait until every named stream exists, then record");
   app.add_flag("--json", json, "print the final counters as one JSON object");
   app.add_flag("--quiet", quiet, "no progress line");
   cli.add_config_file();
@@ -118,7 +118,7 @@ int main(int argc, char** argv) {
     for (const auto& name : streams) {
       while (!stop.requested()) {
         auto found = sim::inspect(name);
-        if (found ? found->frames_published > 0 : found.error().code != sim::ErrorCode::not_found) break;
+        if (found || found.error().code != sim::ErrorCode::not_found) break;  // start() says why
         stop.sleep_for(std::chrono::milliseconds(5));
       }
     }
