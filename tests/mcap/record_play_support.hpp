@@ -4,7 +4,11 @@
 // messages of an MCAP file decoded back into SIM frames.
 #pragma once
 
+#include <gtest/gtest.h>
 #include <unistd.h>
+
+#include <csignal>
+#include <regex>
 
 #include <atomic>
 #include <chrono>
@@ -17,6 +21,8 @@
 #include "sim/mcap/reader.hpp"
 #include "sim/reader.hpp"
 #include "sim/ros2/decode.hpp"
+#include "sim_test/process.hpp"
+#include "test_frames.hpp"
 
 namespace sim::testing {
 
@@ -135,6 +141,54 @@ inline std::map<std::string, std::vector<Recorded>> read_recording(const std::st
     out[channel.topic].push_back(std::move(r));
   }
   return out;
+}
+
+// The recording both test suites make (needs SIM_RECORD, SIM_REPLAY_PCAP, MCAP_TEST_CAMERA and
+// HESAI_DATA defined).
+constexpr std::uint32_t kWidth = 320;
+constexpr std::uint32_t kHeight = 200;
+constexpr std::uint64_t kCameraFrames = 20;
+
+inline std::uint64_t json_number(const std::string& json, const std::string& stream, const std::string& key) {
+  const auto at = json.find("\"name\":\"" + stream + "\"");
+  if (at == std::string::npos) return UINT64_MAX;
+  std::smatch m;
+  const std::string rest = json.substr(at);
+  if (!std::regex_search(rest, m, std::regex("\"" + key + "\":([0-9]+)"))) return UINT64_MAX;
+  return std::stoull(m[1]);
+}
+
+struct Recording {
+  std::string camera;
+  std::string lidar;
+  std::string json;  // sim_record --json
+  std::vector<sim::testing::Frame> live_lidar;
+};
+
+// Records the test camera and one pass of the Pandar64 capture into `path`.
+inline Recording record(const std::string& path, const std::string& compression,
+                 sim::testing::StreamCleanup& cleanup) {
+  Recording r{unique_stream("cam"), unique_stream("lidar"), {}, {}};
+  cleanup.names.insert(cleanup.names.end(), {r.camera, r.lidar});
+  Process camera({MCAP_TEST_CAMERA, "--stream", r.camera, "--width", std::to_string(kWidth),
+                  "--height", std::to_string(kHeight), "--frames", std::to_string(kCameraFrames),
+                  "--fps", "30", "--wait-for-reader"});
+  EXPECT_TRUE(camera.wait_for_line("ready"));
+  Process recorder({SIM_RECORD, "-o", path, r.camera, r.lidar, "--wait-for-streams", "--json",
+                    "--compression", compression});
+  FrameCollector live(r.lidar);
+  Process replay({SIM_REPLAY_PCAP, std::string(HESAI_DATA) + "/pandar64_dual.pcap", "--stream", r.lidar,
+                  "--calibration", std::string(HESAI_DATA) + "/pandar64.calibration.csv", "--quiet"});
+  EXPECT_TRUE(recorder.wait_for_line("recording")) << recorder.err();
+  EXPECT_EQ(camera.wait(), 0) << camera.err();
+  EXPECT_EQ(replay.wait(), 0) << replay.err();
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the last frames reach the file
+  recorder.signal(SIGINT);
+  EXPECT_EQ(recorder.wait(), 0) << recorder.err();
+  live.stop();
+  r.json = recorder.out();
+  r.live_lidar = live.frames();
+  return r;
 }
 
 }  // namespace sim::testing

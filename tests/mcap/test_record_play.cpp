@@ -5,10 +5,6 @@
 // Damaged recordings play as far as they are intact and say what was wrong.
 #include <gtest/gtest.h>
 
-#include <csignal>
-#include <filesystem>
-#include <regex>
-
 #include "mcap_test_files.hpp"
 #include "record_play_support.hpp"
 #include "sim_test/process.hpp"
@@ -17,54 +13,14 @@
 namespace {
 
 using sim::testing::FrameCollector;
+using sim::testing::kCameraFrames;
+using sim::testing::kHeight;
+using sim::testing::kWidth;
 using sim::testing::Process;
+using sim::testing::Recording;
 using sim::testing::unique_stream;
-
-constexpr std::uint32_t kWidth = 320;
-constexpr std::uint32_t kHeight = 200;
-constexpr std::uint64_t kCameraFrames = 20;
-
-std::uint64_t json_number(const std::string& json, const std::string& stream, const std::string& key) {
-  const auto at = json.find("\"name\":\"" + stream + "\"");
-  if (at == std::string::npos) return UINT64_MAX;
-  std::smatch m;
-  const std::string rest = json.substr(at);
-  if (!std::regex_search(rest, m, std::regex("\"" + key + "\":([0-9]+)"))) return UINT64_MAX;
-  return std::stoull(m[1]);
-}
-
-struct Recording {
-  std::string camera;
-  std::string lidar;
-  std::string json;  // sim_record --json
-  std::vector<sim::testing::Frame> live_lidar;
-};
-
-// Records the test camera and one pass of the Pandar64 capture into `path`.
-Recording record(const std::string& path, const std::string& compression,
-                 sim::testing::StreamCleanup& cleanup) {
-  Recording r{unique_stream("cam"), unique_stream("lidar"), {}, {}};
-  cleanup.names.insert(cleanup.names.end(), {r.camera, r.lidar});
-  Process camera({MCAP_TEST_CAMERA, "--stream", r.camera, "--width", std::to_string(kWidth),
-                  "--height", std::to_string(kHeight), "--frames", std::to_string(kCameraFrames),
-                  "--fps", "30", "--wait-for-reader"});
-  EXPECT_TRUE(camera.wait_for_line("ready"));
-  Process recorder({SIM_RECORD, "-o", path, r.camera, r.lidar, "--wait-for-streams", "--json",
-                    "--compression", compression});
-  FrameCollector live(r.lidar);
-  Process replay({SIM_REPLAY_PCAP, std::string(HESAI_DATA) + "/pandar64_dual.pcap", "--stream", r.lidar,
-                  "--calibration", std::string(HESAI_DATA) + "/pandar64.calibration.csv", "--quiet"});
-  EXPECT_TRUE(recorder.wait_for_line("recording")) << recorder.err();
-  EXPECT_EQ(camera.wait(), 0) << camera.err();
-  EXPECT_EQ(replay.wait(), 0) << replay.err();
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the last frames reach the file
-  recorder.signal(SIGINT);
-  EXPECT_EQ(recorder.wait(), 0) << recorder.err();
-  live.stop();
-  r.json = recorder.out();
-  r.live_lidar = live.frames();
-  return r;
-}
+using sim::testing::json_number;
+using sim::testing::record;
 
 class RecordAndPlay : public ::testing::TestWithParam<std::string> {};
 
