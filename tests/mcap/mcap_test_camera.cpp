@@ -2,7 +2,8 @@
 // A camera for the record/play tests and the keep-up measurement: writes --frames BGR images of
 // --width x --height at --fps into a SIM stream on an absolute schedule, each frame's bytes and
 // stamp given by its index (test_frames.hpp). With --wait-for-reader it creates the stream, says
-// "ready" and writes only once a reader waits on it (sim_record has opened it).
+// "ready" and writes only once a reader waits on it (sim_record has opened it). --noise writes
+// random pixels instead, the worst case for compression (tests/mcap/keep_up.sh).
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
@@ -20,12 +21,14 @@ int main(int argc, char** argv) {
   std::uint64_t frames = 10;
   double fps = 30;
   bool wait_for_reader = false;
+  bool noise = false;
   app.add_option("--stream", stream)->required();
   app.add_option("--width", width);
   app.add_option("--height", height);
   app.add_option("--frames", frames, "0: until killed");
   app.add_option("--fps", fps)->check(CLI::PositiveNumber);
   app.add_flag("--wait-for-reader", wait_for_reader);
+  app.add_flag("--noise", noise, "random pixels (incompressible) instead of the test pattern");
   CLI11_PARSE(app, argc, argv);
 
   const auto layout = sim::ImageLayout::packed(width, height, sim::PixelFormat::bgr8);
@@ -49,7 +52,11 @@ int main(int argc, char** argv) {
     const timespec ts{static_cast<time_t>(due / 1'000'000'000), static_cast<long>(due % 1'000'000'000)};
     clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
     sim::Loan loan = writer->loan();
-    sim::testing::fill_test_image(loan.bytes(), layout.stride, height, i);
+    if (noise) {
+      sim::testing::fill_noise(loan.bytes().first(layout.frame_bytes()), i);
+    } else {
+      sim::testing::fill_test_image(loan.bytes(), layout.stride, height, i);
+    }
     loan.commit(layout.frame_bytes(), sim::testing::test_image_stamp(i));
   }
   std::printf("done frames=%llu\n", static_cast<unsigned long long>(i));
