@@ -1,14 +1,17 @@
 // SPDX-License-Identifier: Apache-2.0
-// Files sim_record writes, read by Foxglove's own MCAP library (@mcap/core, npm) in a Node script
-// (node/read_mcap.mjs): header and profile, the summary's statistics, every channel with its
-// schema and encoding, the message counts per channel from the indexes and from a front-to-back
-// read with every CRC checked, and the data section CRC.
+// MCAP between SIM and Foxglove's own library (@mcap/core, npm), in Node scripts:
+// - files sim_record writes, read by node/read_mcap.mjs: header and profile, the summary's
+//   statistics, every channel with its schema and encoding, the message counts per channel from
+//   the indexes and from a front-to-back read with every CRC checked, and the data section CRC;
+// - a ROS 2 file node/write_ros2_mcap.mjs writes (no SIM metadata), played by sim_play.
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <sstream>
 
 #include "mcap_test_files.hpp"
 #include "record_play_support.hpp"
+#include "sim/lidar_point.hpp"
 
 namespace {
 
@@ -66,6 +69,65 @@ TEST(ReadByMcapCore, RejectsADamagedChunk) {
   const auto node = sim::testing::run({NODE, READ_MCAP_SCRIPT, file.path()});
   EXPECT_EQ(node.code, 1) << node.out;
   EXPECT_NE(node.err.find("CRC"), std::string::npos) << node.err;
+}
+
+}  // namespace
+
+namespace {
+
+// A ROS 2 recording made outside SIM (node/write_ros2_mcap.mjs: @mcap/core's writer and
+// Foxglove's CDR serializer) plays into SIM streams with every value where it belongs.
+TEST(PlayForeignRecording, PutsEveryPointAndPixelOfAnotherWritersFileIntoSim) {
+  sim::testing::TempFile file;
+  sim::testing::StreamCleanup cleanup;
+  const auto written = sim::testing::run({NODE, WRITE_ROS2_SCRIPT, file.path()});
+  ASSERT_EQ(written.code, 0) << written.err;
+  const std::string cloud_out = sim::testing::unique_stream("ext_cloud");
+  const std::string image_out = sim::testing::unique_stream("ext_image");
+  cleanup.names = {cloud_out, image_out};
+  sim::testing::FrameCollector clouds(cloud_out);
+  sim::testing::FrameCollector images(image_out);
+  const auto played = sim::testing::run({SIM_PLAY, file.path(), "--remap", "/ext/cloud=" + cloud_out,
+                                         "--remap", "/ext/image=" + image_out, "--wait-for-readers",
+                                         "--rate", "20"});
+  EXPECT_EQ(played.code, 0) << played.err;
+  clouds.wait_for(5);
+  images.wait_for(5);
+  clouds.stop();
+  images.stop();
+
+  const auto cloud_frames = clouds.frames();
+  ASSERT_FALSE(cloud_frames.empty());
+  EXPECT_EQ(cloud_frames.size() + clouds.skipped(), 5u);
+  for (const auto& f : cloud_frames) {
+    const std::uint64_t m = f.seq - 1;
+    EXPECT_EQ(f.stamp_ns, (1700000100 + static_cast<std::int64_t>(m)) * 1'000'000'000 + 5000);
+    ASSERT_EQ(f.layout.kind, sim::LayoutKind::points);
+    EXPECT_EQ(f.layout.points.type, sim::PointType::lidar_point);  // it has rings
+    ASSERT_EQ(f.bytes.size(), 100 * sizeof(sim::LidarPoint));
+    std::vector<sim::LidarPoint> points(100);
+    std::memcpy(points.data(), f.bytes.data(), f.bytes.size());
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      EXPECT_EQ(points[k].x, static_cast<float>(m) + static_cast<float>(k) / 2);
+      EXPECT_EQ(points[k].y, -static_cast<float>(k));
+      EXPECT_EQ(points[k].z, static_cast<float>(k) / 4);
+      EXPECT_EQ(points[k].intensity, static_cast<float>(k));
+      EXPECT_EQ(points[k].ring, k % 64);
+    }
+  }
+  const auto image_frames = images.frames();
+  ASSERT_FALSE(image_frames.empty());
+  EXPECT_EQ(image_frames.size() + images.skipped(), 5u);
+  for (const auto& f : image_frames) {
+    const std::uint64_t m = f.seq - 1;
+    auto layout = sim::ImageLayout::packed(4, 3, sim::PixelFormat::rgb8);
+    layout.stride = 16;  // the row padding is kept
+    EXPECT_EQ(f.layout, sim::Layout::of(layout)) << f.layout.describe();
+    ASSERT_EQ(f.bytes.size(), 48u);
+    for (std::size_t j = 0; j < f.bytes.size(); ++j) {
+      EXPECT_EQ(static_cast<std::uint8_t>(f.bytes[j]), (3 * m + j) % 256);
+    }
+  }
 }
 
 }  // namespace

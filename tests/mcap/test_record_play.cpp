@@ -2,11 +2,16 @@
 // sim_record and sim_play as real processes: a camera (mcap_test_camera) and the Pandar64
 // capture (sim_replay_pcap) are recorded; the file holds every frame byte for byte with its
 // stamps; sim_play puts them back into SIM streams that readers cannot tell from the originals.
-// Damaged recordings play as far as they are intact and say what was wrong.
+// Damaged recordings play as far as they are intact and say what was wrong; JPEG CompressedImage
+// files without SIM metadata play too.
 #include <gtest/gtest.h>
+#include <turbojpeg.h>
 
 #include "mcap_test_files.hpp"
 #include "record_play_support.hpp"
+#include "sim/mcap/writer.hpp"
+#include "sim/ros2/encode.hpp"
+#include "sim/ros2/message.hpp"
 #include "sim_test/process.hpp"
 #include "test_frames.hpp"
 
@@ -144,6 +149,70 @@ TEST(SimRecord, AnswersAWrongCommandLineWithExitCode2) {
   EXPECT_EQ(sim::testing::run({SIM_PLAY, "x.mcap", "--remap", "nonsense"}).code, 2);
   EXPECT_EQ(sim::testing::run({SIM_RECORD, "--help"}).code, 0);
   EXPECT_EQ(sim::testing::run({SIM_PLAY, "--help"}).code, 0);
+}
+
+}  // namespace
+
+namespace {
+
+// A 64x48 JPEG whose pixels follow from `index`.
+std::vector<std::byte> make_jpeg(std::uint64_t index) {
+  std::vector<unsigned char> rgb(64 * 48 * 3);
+  for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] = static_cast<unsigned char>((i / 3 + index * 40) & 0xff);
+  tjhandle handle = tjInitCompress();
+  unsigned char* jpeg = nullptr;
+  unsigned long size = 0;
+  tjCompress2(handle, rgb.data(), 64, 0, 48, TJPF_RGB, &jpeg, &size, TJSAMP_420, 90, 0);
+  std::vector<std::byte> out(reinterpret_cast<std::byte*>(jpeg), reinterpret_cast<std::byte*>(jpeg) + size);
+  tjFree(jpeg);
+  tjDestroy(handle);
+  return out;
+}
+
+TEST(SimPlay, PlaysJpegCompressedImagesOfAFileWithoutSimMetadata) {
+  sim::testing::TempFile file;
+  sim::testing::StreamCleanup cleanup;
+  std::vector<std::vector<std::byte>> jpegs;
+  {
+    auto writer = sim::mcap::Writer::create(file.path());
+    ASSERT_TRUE(writer);
+    const auto type = sim::ros2::MessageType::compressed_image;
+    const auto schema = writer->add_schema(sim::ros2::ros_type_name(type), "ros2msg",
+                                           sim::ros2::ros2msg_schema(type));
+    const auto channel = writer->add_channel(schema, "/front_jpeg", "cdr", {{"offered_qos_profiles", ""}});
+    for (std::uint64_t i = 0; i < 4; ++i) {
+      jpegs.push_back(make_jpeg(i));
+      const std::int64_t stamp = 1'700'000'200'000'000'000 + static_cast<std::int64_t>(i) * 50'000'000;
+      auto plan = sim::ros2::plan_compressed_image("jpeg", jpegs.back().size(),
+                                                   {sim::ros2::Time::from_ns(stamp), "front"});
+      ASSERT_TRUE(plan);
+      std::vector<std::byte> message(plan->size());
+      ASSERT_EQ(plan->write(jpegs.back(), message), message.size());
+      ASSERT_FALSE(writer->write({channel, static_cast<std::uint32_t>(i), static_cast<std::uint64_t>(stamp),
+                                  static_cast<std::uint64_t>(stamp)}, message));
+    }
+    ASSERT_FALSE(writer->close());
+  }
+  const std::string out = unique_stream("jpeg");
+  cleanup.names = {out};
+  FrameCollector frames(out);
+  const auto played = sim::testing::run({SIM_PLAY, file.path(), "--remap", "/front_jpeg=" + out,
+                                         "--wait-for-readers"});
+  EXPECT_EQ(played.code, 0) << played.err;
+  frames.wait_for(4);
+  frames.stop();
+  const auto got = frames.frames();
+  ASSERT_FALSE(got.empty());
+  EXPECT_EQ(got.size() + frames.skipped(), 4u);
+  for (const auto& f : got) {
+    ASSERT_LE(f.seq, 4u);
+    EXPECT_TRUE(f.bytes == jpegs[f.seq - 1]) << "jpeg " << f.seq << " differs";
+    EXPECT_EQ(f.layout.kind, sim::LayoutKind::image);
+    EXPECT_EQ(f.layout.image.format, sim::PixelFormat::mjpeg);
+    EXPECT_EQ(f.layout.image.width, 64u);
+    EXPECT_EQ(f.layout.image.height, 48u);
+    EXPECT_EQ(f.stamp_ns, 1'700'000'200'000'000'000 + static_cast<std::int64_t>(f.seq - 1) * 50'000'000);
+  }
 }
 
 }  // namespace
