@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
     } else {
       sim::testing::fill_test_image(loan.bytes(), layout.stride, height, i);
     }
-    loan.commit(layout.frame_bytes(), sim::testing::test_image_stamp(i));
+    (void)std::move(loan).commit(layout.frame_bytes(), sim::testing::test_image_stamp(i));
   }
   std::printf("done frames=%llu\n", static_cast<unsigned long long>(i));
   // Stay a moment so the last frame is not taken for a dead writer's while it is recorded.

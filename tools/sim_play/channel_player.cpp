@@ -133,25 +133,25 @@ std::optional<Error> ChannelPlayer::play(std::span<const std::byte> message, std
   if (!shape_) {
     if (auto error = learn_shape(message)) return error;
   }
-  if (auto error = ensure_writer(*shape_)) return error;
-  std::int64_t stamp = 0;
-  std::uint64_t size = 0;
-  Loan loan = writer_->loan();
+  // Decode first, settle the stream's shape, then loan the slot once and fill it.
+  auto does_not_fit = [&] { return bad("a frame of " + topic_ + " does not fit stream " + stream_); };
   switch (type_) {
     case ros2::MessageType::point_cloud2: {
       auto cloud = ros2::decode_point_cloud2(message);
       if (!cloud) return cloud.error();
-      stamp = cloud->header.stamp.to_ns();
-      const PointLayout& points = shape_->layout.points;
-      if (cloud->point_count() > points.max_points) {  // a larger cloud than any before: grow
-        mcap::StreamShape grown = *shape_;
-        grown.layout.points.max_points = room_for_points(cloud->point_count());
-        grown.capacity = grown.layout.min_capacity();
-        if (auto error = ensure_writer(grown)) return error;
-        loan = writer_->loan();
+      mcap::StreamShape wanted = *shape_;
+      if (cloud->point_count() > wanted.layout.points.max_points) {  // larger than any before: grow
+        wanted.layout.points.max_points = room_for_points(cloud->point_count());
+        wanted.capacity = wanted.layout.min_capacity();
       }
+      if (auto error = ensure_writer(wanted)) return error;
+      Loan loan = writer_->loan();
+      const PointLayout& points = wanted.layout.points;
+      std::uint64_t size = 0;
       auto as_is = ros2::sim_point_layout(*cloud);
+      if (!loan.valid()) return does_not_fit();
       if (as_is && as_is->type == points.type) {
+        if (loan.bytes().size() < cloud->data.size()) return does_not_fit();
         std::memcpy(loan.bytes().data(), cloud->data.data(), cloud->data.size());
         size = cloud->data.size();
       } else {
@@ -159,39 +159,41 @@ std::optional<Error> ChannelPlayer::play(std::span<const std::byte> message, std
         if (!n) return n.error();
         size = *n * points.point_size;
       }
-      break;
+      return commit(std::move(loan), size, cloud->header.stamp.to_ns() + stamp_shift_ns);
     }
     case ros2::MessageType::image: {
       auto image = ros2::decode_image(message);
       if (!image) return image.error();
-      stamp = image->header.stamp.to_ns();
       auto layout = ros2::sim_image_layout(*image);
       if (!layout) return layout.error();
-      if (!(*layout == shape_->layout.image)) {  // the camera changed its format: follow it
-        if (auto error = ensure_writer({Layout::of(*layout), layout->frame_bytes()})) return error;
-        loan = writer_->loan();
+      mcap::StreamShape wanted = *shape_;
+      if (!(*layout == wanted.layout.image)) {  // the camera changed its format: follow it
+        wanted = {Layout::of(*layout), layout->frame_bytes()};
       }
+      if (auto error = ensure_writer(wanted)) return error;
+      Loan loan = writer_->loan();
+      if (!loan.valid() || loan.bytes().size() < image->data.size()) return does_not_fit();
       std::memcpy(loan.bytes().data(), image->data.data(), image->data.size());
-      size = image->data.size();
-      break;
+      return commit(std::move(loan), image->data.size(), image->header.stamp.to_ns() + stamp_shift_ns);
     }
     case ros2::MessageType::compressed_image: {
       auto image = ros2::decode_compressed_image(message);
       if (!image) return image.error();
-      stamp = image->header.stamp.to_ns();
-      if (image->data.size() > writer_->capacity()) {
-        mcap::StreamShape grown = *shape_;
-        grown.capacity = image->data.size() * 2;
-        if (auto error = ensure_writer(grown)) return error;
-        loan = writer_->loan();
-      }
+      mcap::StreamShape wanted = *shape_;
+      if (image->data.size() > wanted.capacity) wanted.capacity = image->data.size() * 2;
+      if (auto error = ensure_writer(wanted)) return error;
+      Loan loan = writer_->loan();
+      if (!loan.valid() || loan.bytes().size() < image->data.size()) return does_not_fit();
       std::memcpy(loan.bytes().data(), image->data.data(), image->data.size());
-      size = image->data.size();
-      break;
+      return commit(std::move(loan), image->data.size(), image->header.stamp.to_ns() + stamp_shift_ns);
     }
   }
-  if (loan.commit(size, stamp + stamp_shift_ns) != WriteStatus::ok) {
-    return bad("a frame of " + topic_ + " does not fit stream " + stream_);
+  return bad("unknown message type");
+}
+
+std::optional<Error> ChannelPlayer::commit(Loan&& loan, std::uint64_t size, std::int64_t stamp_ns) {
+  if (std::move(loan).commit(size, stamp_ns) != WriteStatus::ok) {
+    return bad("a frame of " + topic_ + " could not be published to stream " + stream_);
   }
   ++frames_;
   return std::nullopt;

@@ -46,6 +46,7 @@ class ChannelPlayer {
                 std::optional<mcap::StreamShape> shape)
       : type_(type), topic_(std::move(topic)), stream_(std::move(stream)), shape_(shape) {}
   std::optional<Error> ensure_writer(const mcap::StreamShape& wanted);
+  std::optional<Error> commit(Loan&& loan, std::uint64_t size, std::int64_t stamp_ns);
 
   ros2::MessageType type_;
   std::string topic_;
