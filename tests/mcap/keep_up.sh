@@ -10,6 +10,7 @@ set -euo pipefail
 build=${1:?usage: keep_up.sh BUILD_DIR [SECONDS] [OUT_DIR]}
 seconds=${2:-10}
 out=${3:-$(mktemp -d)}
+mkdir -p "$out"
 root=$(cd "$(dirname "$0")/../.." && pwd)
 fps_list=${SIM_KEEP_UP_FPS:-"30 60 90 120"}
 patterns=${SIM_KEEP_UP_PATTERNS:-"ramp noise"}

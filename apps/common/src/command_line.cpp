@@ -107,10 +107,11 @@ int CommandLine::fail(const Error& error) const {
 }
 
 std::optional<int> CommandLine::apply_placement(const ThreadPlacement& placement) const {
-  const auto error = apply_thread_placement(placement);
-  if (!error) return std::nullopt;
-  return error->code == ErrorCode::permission_denied ? fail(std::string_view(error->message))
-                                                     : usage_error(error->message);
+  const auto placed = apply_thread_placement(placement);
+  if (placed) return std::nullopt;
+  return placed.error().code == ErrorCode::permission_denied
+             ? fail(std::string_view(placed.error().message))
+             : usage_error(placed.error().message);
 }
 
 bool stderr_is_terminal() noexcept { return ::isatty(STDERR_FILENO) != 0; }
