@@ -37,7 +37,7 @@ for pattern in $patterns; do
       camera_pid=$!
       sleep 1
       json=$("$build/tools/sim_record/sim_record" -o "$out/keep_up.mcap" "$cam" "$lidar" \
-        --compression "$compression" --duration "$seconds" --json --quiet)
+        --compression "$compression" --duration "$seconds" --json --quiet 2>/dev/null | tail -n 1)
       kill "$camera_pid"; wait "$camera_pid" 2>/dev/null || true
       rm -f "/dev/shm/sim.${cam#/}"
       python3 - "$json" "$pattern" "$compression" "$fps" "$cam" "$lidar" <<'PY'
