@@ -1,0 +1,202 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "channel_player.hpp"
+
+#include <turbojpeg.h>
+
+#include <algorithm>
+#include <cstring>
+
+#include "sim/ros2/decode.hpp"
+
+namespace sim::play {
+
+namespace {
+
+Error bad(const std::string& sentence) { return Error{ErrorCode::invalid_argument, sentence}; }
+
+bool is_jpeg(std::string_view format) {
+  return format.find("jpeg") != std::string_view::npos || format.find("jpg") != std::string_view::npos;
+}
+
+// Width and height from a JPEG's headers (libjpeg-turbo reads only the headers).
+std::optional<std::pair<std::uint32_t, std::uint32_t>> jpeg_size(std::span<const std::byte> data) {
+  tjhandle handle = tjInitDecompress();
+  if (handle == nullptr) return std::nullopt;
+  int width = 0, height = 0, subsampling = 0, colorspace = 0;
+  const int rc = tjDecompressHeader3(handle, reinterpret_cast<const unsigned char*>(data.data()),
+                                     static_cast<unsigned long>(data.size()), &width, &height,
+                                     &subsampling, &colorspace);
+  tjDestroy(handle);
+  if (rc != 0 || width <= 0 || height <= 0) return std::nullopt;
+  return std::make_pair(static_cast<std::uint32_t>(width), static_cast<std::uint32_t>(height));
+}
+
+// Room for clouds up to twice the first one, rounded to a whole 1024 points.
+std::uint64_t room_for_points(std::uint64_t points) { return std::max<std::uint64_t>(1024, (points * 2 + 1023) / 1024 * 1024); }
+
+// The SIM point type a foreign cloud becomes when its bytes are not already one: LiDAR points
+// when it has rings, else x y z intensity.
+PointType repack_type(const ros2::PointCloud2View& cloud) {
+  for (const auto& f : cloud.fields()) {
+    if (f.name == "ring" || f.name == "channel") return PointType::lidar_point;
+  }
+  return PointType::xyzi32;
+}
+
+}  // namespace
+
+Expected<ChannelPlayer> ChannelPlayer::for_channel(const mcap::Channel& channel,
+                                                   const mcap::Schema* schema, std::string stream) {
+  if (channel.message_encoding != "cdr") {
+    return bad("topic " + channel.topic + " is encoded as \"" + channel.message_encoding +
+               "\", not ROS 2 CDR; it is skipped");
+  }
+  const std::string name = schema != nullptr ? schema->name : "";
+  std::optional<ros2::MessageType> type;
+  for (const auto t : {ros2::MessageType::point_cloud2, ros2::MessageType::image,
+                       ros2::MessageType::compressed_image}) {
+    // "sensor_msgs/msg/Image" (ROS 2) or "sensor_msgs/Image" (older writers).
+    std::string shortened(ros2::ros_type_name(t));
+    shortened.erase(shortened.find("/msg/"), 4);
+    if (name == ros2::ros_type_name(t) || name == shortened) type = t;
+  }
+  if (!type) {
+    return bad("topic " + channel.topic + " carries " + (name.empty() ? "no schema" : name) +
+               ", which SIM cannot play (PointCloud2, Image or CompressedImage); it is skipped");
+  }
+  auto shape = mcap::stream_shape(channel.metadata);
+  return ChannelPlayer(*type, channel.topic, std::move(stream), shape);
+}
+
+std::optional<Error> ChannelPlayer::create_stream() {
+  if (!shape_) return bad("the shape of " + stream_ + " is not known yet");
+  return ensure_writer(*shape_);
+}
+
+std::optional<Error> ChannelPlayer::ensure_writer(const mcap::StreamShape& wanted) {
+  if (writer_ && writer_->layout() == wanted.layout && writer_->capacity() == wanted.capacity) {
+    return std::nullopt;
+  }
+  writer_.reset();  // a changed shape replaces the region; readers follow
+  StreamSpec spec;
+  spec.name = stream_;
+  spec.layout = wanted.layout;
+  spec.capacity = wanted.capacity;
+  spec.heartbeat_period = std::chrono::milliseconds(500);
+  auto created = Writer::create(spec);
+  if (!created) return created.error();
+  writer_.emplace(std::move(*created));
+  shape_ = wanted;
+  return std::nullopt;
+}
+
+std::optional<Error> ChannelPlayer::learn_shape(std::span<const std::byte> message) {
+  if (shape_) return std::nullopt;
+  mcap::StreamShape shape;
+  switch (type_) {
+    case ros2::MessageType::point_cloud2: {
+      auto cloud = ros2::decode_point_cloud2(message);
+      if (!cloud) return cloud.error();
+      auto as_is = ros2::sim_point_layout(*cloud);
+      const PointType type = as_is ? as_is->type : repack_type(*cloud);
+      shape.layout = Layout::of(PointLayout::of(type, room_for_points(cloud->point_count())));
+      break;
+    }
+    case ros2::MessageType::image: {
+      auto image = ros2::decode_image(message);
+      if (!image) return image.error();
+      auto layout = ros2::sim_image_layout(*image);
+      if (!layout) return layout.error();
+      shape.layout = Layout::of(*layout);
+      break;
+    }
+    case ros2::MessageType::compressed_image: {
+      auto image = ros2::decode_compressed_image(message);
+      if (!image) return image.error();
+      if (!is_jpeg(image->format)) {
+        return bad("topic " + topic_ + " holds \"" + std::string(image->format) +
+                   "\" images; SIM plays JPEG only");
+      }
+      const auto size = jpeg_size(image->data);
+      if (!size) return bad("the first image of " + topic_ + " is not a readable JPEG");
+      shape.layout = Layout::of(ImageLayout::packed(size->first, size->second, PixelFormat::mjpeg));
+      shape.capacity = std::max<std::uint64_t>(4u << 20, image->data.size() * 4);
+      break;
+    }
+  }
+  if (shape.capacity == 0) shape.capacity = shape.layout.min_capacity();
+  shape_ = shape;
+  return std::nullopt;
+}
+
+std::optional<Error> ChannelPlayer::play(std::span<const std::byte> message, std::int64_t stamp_shift_ns) {
+  if (!shape_) {
+    if (auto error = learn_shape(message)) return error;
+  }
+  // Decode first, settle the stream's shape, then loan the slot once and fill it.
+  auto does_not_fit = [&] { return bad("a frame of " + topic_ + " does not fit stream " + stream_); };
+  switch (type_) {
+    case ros2::MessageType::point_cloud2: {
+      auto cloud = ros2::decode_point_cloud2(message);
+      if (!cloud) return cloud.error();
+      mcap::StreamShape wanted = *shape_;
+      if (cloud->point_count() > wanted.layout.points.max_points) {  // larger than any before: grow
+        wanted.layout.points.max_points = room_for_points(cloud->point_count());
+        wanted.capacity = wanted.layout.min_capacity();
+      }
+      if (auto error = ensure_writer(wanted)) return error;
+      Loan loan = writer_->loan();
+      const PointLayout& points = wanted.layout.points;
+      std::uint64_t size = 0;
+      auto as_is = ros2::sim_point_layout(*cloud);
+      if (!loan.valid()) return does_not_fit();
+      if (as_is && as_is->type == points.type) {
+        if (loan.bytes().size() < cloud->data.size()) return does_not_fit();
+        std::memcpy(loan.bytes().data(), cloud->data.data(), cloud->data.size());
+        size = cloud->data.size();
+      } else {
+        auto n = ros2::repack_points(*cloud, points.type, loan.bytes());
+        if (!n) return n.error();
+        size = *n * points.point_size;
+      }
+      return commit(std::move(loan), size, cloud->header.stamp.to_ns() + stamp_shift_ns);
+    }
+    case ros2::MessageType::image: {
+      auto image = ros2::decode_image(message);
+      if (!image) return image.error();
+      auto layout = ros2::sim_image_layout(*image);
+      if (!layout) return layout.error();
+      mcap::StreamShape wanted = *shape_;
+      if (!(*layout == wanted.layout.image)) {  // the camera changed its format: follow it
+        wanted = {Layout::of(*layout), layout->frame_bytes()};
+      }
+      if (auto error = ensure_writer(wanted)) return error;
+      Loan loan = writer_->loan();
+      if (!loan.valid() || loan.bytes().size() < image->data.size()) return does_not_fit();
+      std::memcpy(loan.bytes().data(), image->data.data(), image->data.size());
+      return commit(std::move(loan), image->data.size(), image->header.stamp.to_ns() + stamp_shift_ns);
+    }
+    case ros2::MessageType::compressed_image: {
+      auto image = ros2::decode_compressed_image(message);
+      if (!image) return image.error();
+      mcap::StreamShape wanted = *shape_;
+      if (image->data.size() > wanted.capacity) wanted.capacity = image->data.size() * 2;
+      if (auto error = ensure_writer(wanted)) return error;
+      Loan loan = writer_->loan();
+      if (!loan.valid() || loan.bytes().size() < image->data.size()) return does_not_fit();
+      std::memcpy(loan.bytes().data(), image->data.data(), image->data.size());
+      return commit(std::move(loan), image->data.size(), image->header.stamp.to_ns() + stamp_shift_ns);
+    }
+  }
+  return bad("unknown message type");
+}
+
+std::optional<Error> ChannelPlayer::commit(Loan&& loan, std::uint64_t size, std::int64_t stamp_ns) {
+  if (std::move(loan).commit(size, stamp_ns) != WriteStatus::ok) {
+    return bad("a frame of " + topic_ + " could not be published to stream " + stream_);
+  }
+  ++frames_;
+  return std::nullopt;
+}
+
+}  // namespace sim::play

@@ -1,0 +1,59 @@
+// SPDX-License-Identifier: Apache-2.0
+// Plays the messages of one MCAP channel into one SIM stream: decodes each ROS 2 message
+// (sim::ros2) straight into a loaned slot and commits it with the message's sensor stamp.
+// The stream's layout comes from the channel's "sim.*" metadata when SIM recorded it (so it is
+// recreated exactly), else from the first message (PointCloud2, Image or CompressedImage
+// recorded elsewhere); a later message that does not fit makes the stream grow.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+
+#include "sim/layout.hpp"
+#include "sim/mcap/format.hpp"
+#include "sim/mcap/layout_metadata.hpp"
+#include "sim/result.hpp"
+#include "sim/ros2/message.hpp"
+#include "sim/writer.hpp"
+
+namespace sim::play {
+
+class ChannelPlayer {
+ public:
+  // Checks the channel can be played (ROS 2 CDR of a type SIM has) without creating anything.
+  static Expected<ChannelPlayer> for_channel(const mcap::Channel& channel, const mcap::Schema* schema,
+                                             std::string stream);
+
+  const std::string& stream() const noexcept { return stream_; }
+  const std::string& topic() const noexcept { return topic_; }
+  // Whether the stream's shape is known before the first message (SIM recordings).
+  bool shape_known() const noexcept { return shape_.has_value(); }
+  // Creates the stream now (only when shape_known()).
+  std::optional<Error> create_stream();
+  // Learns the shape from a message when the metadata did not give it.
+  std::optional<Error> learn_shape(std::span<const std::byte> message);
+
+  // Decodes one message into the stream, stamped with its header stamp + stamp_shift_ns.
+  // An error for a message that cannot be decoded (nothing is published then).
+  std::optional<Error> play(std::span<const std::byte> message, std::int64_t stamp_shift_ns);
+
+  std::uint64_t frames() const noexcept { return frames_; }
+
+ private:
+  ChannelPlayer(ros2::MessageType type, std::string topic, std::string stream,
+                std::optional<mcap::StreamShape> shape)
+      : type_(type), topic_(std::move(topic)), stream_(std::move(stream)), shape_(shape) {}
+  std::optional<Error> ensure_writer(const mcap::StreamShape& wanted);
+  std::optional<Error> commit(Loan&& loan, std::uint64_t size, std::int64_t stamp_ns);
+
+  ros2::MessageType type_;
+  std::string topic_;
+  std::string stream_;
+  std::optional<mcap::StreamShape> shape_;
+  std::optional<Writer> writer_;
+  std::uint64_t frames_ = 0;
+};
+
+}  // namespace sim::play

@@ -1,0 +1,166 @@
+// SPDX-License-Identifier: Apache-2.0
+// sim_record: records SIM streams into an MCAP file (ROS 2 profile) that Foxglove, rosbag2 and
+// the mcap CLI read, and that sim_play replays into SIM exactly as recorded.
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "recorder.hpp"
+#include "sim/apps/command_line.hpp"
+#include "sim/apps/status_line.hpp"
+#include "sim/apps/stop_signal.hpp"
+#include "sim/clock.hpp"
+#include "sim/reader.hpp"
+#include "sim/ros2/message.hpp"
+
+namespace {
+
+using sim::record::RecorderProgress;
+using sim::record::StreamCounters;
+
+std::uint64_t total(const RecorderProgress& p, std::uint64_t StreamCounters::*field) {
+  std::uint64_t sum = 0;
+  for (const auto& s : p.streams) sum += s.*field;
+  return sum;
+}
+
+std::string json_string(const std::string& s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) >= 0x20) out += c;
+  }
+  return out + "\"";
+}
+
+void print_result(const RecorderProgress& p, const std::string& output, const std::string& compression,
+                  double seconds, const std::string& problem, bool json) {
+  if (json) {
+    std::printf("{\"file\":%s,\"bytes\":%llu,\"compression\":\"%s\",\"seconds\":%.3f,\"streams\":[",
+                json_string(output).c_str(), static_cast<unsigned long long>(p.file_bytes),
+                compression.c_str(), seconds);
+    for (std::size_t i = 0; i < p.streams.size(); ++i) {
+      const auto& s = p.streams[i];
+      std::printf("%s{\"name\":%s,\"frames\":%llu,\"missed\":%llu,\"bytes\":%llu,\"unrecordable\":%llu}",
+                  i ? "," : "", json_string(s.name).c_str(), static_cast<unsigned long long>(s.frames),
+                  static_cast<unsigned long long>(s.missed), static_cast<unsigned long long>(s.bytes),
+                  static_cast<unsigned long long>(s.unrecordable));
+    }
+    std::printf("],\"problem\":%s}\n", json_string(problem).c_str());
+  } else {
+    for (const auto& s : p.streams) {
+      std::printf("%s: %llu frames, %.1f MB, missed %llu\n", s.name.c_str(),
+                  static_cast<unsigned long long>(s.frames), static_cast<double>(s.bytes) / 1e6,
+                  static_cast<unsigned long long>(s.missed));
+    }
+    std::printf("%s: %.1f MB in %.1f s (%s)\n", output.c_str(),
+                static_cast<double>(p.file_bytes) / 1e6, seconds, compression.c_str());
+  }
+  std::fflush(stdout);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  sim::apps::CommandLine cli(
+      "sim_record",
+      "Record SIM streams into an MCAP file (ROS 2 profile: PointCloud2, Image and "
+      "CompressedImage in CDR) that Foxglove, rosbag2 and the mcap CLI read and sim_play "
+      "replays. Stop it with Ctrl-C or --duration.");
+  CLI::App& app = cli.app();
+  std::string output;
+  std::vector<std::string> streams;
+  bool all = false;
+  double duration_s = 0;
+  std::string compression = "zstd";
+  std::uint64_t chunk_kib = 4096;
+  bool wait_for_streams = false;
+  bool json = false;
+  bool quiet = false;
+  app.add_option("-o,--output", output, "the MCAP file to write")->required()->type_name("FILE");
+  app.add_option("streams", streams, "streams to record, like /lidar_top /camera_front")
+      ->check(sim::apps::stream_name_validator());
+  app.add_flag("--all", all, "record every image and point stream that exists now");
+  app.add_option("--duration", duration_s, "stop after this many seconds [until Ctrl-C]")
+      ->check(CLI::PositiveNumber)
+      ->type_name("S");
+  app.add_option("--compression", compression, "chunk compression: zstd, lz4 or none")
+      ->check(CLI::IsMember({"zstd", "lz4", "none"}))
+      ->capture_default_str();
+  app.add_option("--chunk-size", chunk_kib, "KiB of messages per chunk")
+      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 20))
+      ->capture_default_str()
+      ->type_name("KIB");
+  app.add_flag("--wait-for-streams", wait_for_streams,
+               "wait until every named stream exists, then record");
+  app.add_flag("--json", json, "print the final counters as one JSON object");
+  app.add_flag("--quiet", quiet, "no progress line");
+  cli.add_config_file();
+  if (auto code = cli.parse(argc, argv)) return *code;
+  if (all == !streams.empty()) return cli.usage_error("name the streams to record or pass --all (not both)");
+
+  auto& stop = sim::apps::StopSignal::install();
+  sim::apps::StatusLine status = sim::apps::StatusLine::for_stderr("sim_record", quiet);
+  if (all) {
+    for (const auto& name : sim::list_streams()) {
+      auto reader = sim::Reader::open(name);
+      if (reader && sim::ros2::message_type_for(reader->layout())) {
+        streams.push_back(name);
+      } else {
+        status.note("skipping " + name + " (" +
+                    (reader ? std::string("raw bytes have no ROS 2 message") : reader.error().message) + ")");
+      }
+    }
+    if (streams.empty()) return cli.fail("no image or point stream exists; start a driver or a replay first");
+  }
+  if (wait_for_streams) {
+    for (const auto& name : streams) {
+      while (!stop.requested()) {
+        auto found = sim::inspect(name);
+        if (found || found.error().code != sim::ErrorCode::not_found) break;  // start() says why
+        stop.sleep_for(std::chrono::milliseconds(5));
+      }
+    }
+    if (stop.requested()) return sim::apps::kExitOk;
+  }
+
+  sim::record::RecorderOptions options;
+  options.path = output;
+  options.streams = streams;
+  options.writer.library = "sim_record";
+  options.writer.compression = *sim::mcap::parse_compression(compression);
+  options.writer.chunk_size = chunk_kib * 1024;
+  auto recorder = sim::record::Recorder::start(options);
+  if (!recorder) return cli.fail(recorder.error());
+  std::printf("recording %zu stream%s to %s (%s)\n", streams.size(), streams.size() == 1 ? "" : "s",
+              output.c_str(), compression.c_str());
+  std::fflush(stdout);
+
+  const std::int64_t start = sim::monotonic_ns();
+  const std::int64_t end = duration_s > 0 ? start + static_cast<std::int64_t>(duration_s * 1e9) : INT64_MAX;
+  while (!stop.requested() && !recorder->failed() && sim::monotonic_ns() < end) {
+    stop.sleep_until(std::min(end, sim::monotonic_ns() + 100'000'000));
+    if (status.due()) {
+      const auto p = recorder->progress();
+      status.update(sim::apps::fields(
+          {{"recording", sim::apps::number(static_cast<double>(sim::monotonic_ns() - start) / 1e9) + " s"},
+           {"frames", std::to_string(total(p, &StreamCounters::frames))},
+           {"file", sim::apps::number(static_cast<double>(p.file_bytes) / 1e6) + " MB"},
+           {"missed", std::to_string(total(p, &StreamCounters::missed))},
+           {"queued", sim::apps::number(static_cast<double>(p.queued_bytes) / 1e6) + " MB"}}));
+    }
+  }
+  const double seconds = static_cast<double>(sim::monotonic_ns() - start) / 1e9;
+  const auto result = recorder->stop();
+  const std::string problem = recorder->problem();
+  status.finish(sim::apps::fields({{"frames", std::to_string(total(result, &StreamCounters::frames))},
+                                   {"missed", std::to_string(total(result, &StreamCounters::missed))}}));
+  print_result(result, output, compression, seconds, problem, json);
+  if (const auto missed = total(result, &StreamCounters::missed); missed > 0) {
+    status.note(std::to_string(missed) + " frames were missed because the recorder fell behind; "
+                "try --compression lz4 or none, or a faster disk");
+  }
+  if (!problem.empty()) status.note(problem);
+  return recorder->failed() ? sim::apps::kExitFailure : sim::apps::kExitOk;
+}
