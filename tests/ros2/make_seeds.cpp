@@ -1,0 +1,57 @@
+// SPDX-License-Identifier: Apache-2.0
+// Writes the fuzz seed corpus (corpus/<kind>/*.cdr): small well-formed messages made by the
+// encoder, so the fuzzers start from valid XCDR1. Rerun after a change of the wire format:
+//   ros2_make_seeds tests/ros2/corpus
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "sim/lidar_point.hpp"
+#include "sim/ros2/encode.hpp"
+
+namespace {
+
+using namespace sim;
+using namespace sim::ros2;
+
+void save(const std::filesystem::path& dir, const std::string& name, const MessagePlan& plan,
+          std::span<const std::byte> payload) {
+  std::filesystem::create_directories(dir);
+  std::vector<std::byte> out(plan.size());
+  plan.write(payload, out);
+  std::ofstream(dir / name, std::ios::binary)
+      .write(reinterpret_cast<const char*>(out.data()), static_cast<std::streamsize>(out.size()));
+}
+
+std::vector<std::byte> bytes(std::size_t n) {
+  std::vector<std::byte> v(n);
+  for (std::size_t i = 0; i < n; ++i) v[i] = std::byte(static_cast<unsigned char>(i * 13));
+  return v;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 2) {
+    std::fprintf(stderr, "usage: ros2_make_seeds <corpus folder>\n");
+    return 2;
+  }
+  const std::filesystem::path root = argv[1];
+  const Header header{Time{1700000000, 5}, "sensor"};
+  for (PixelFormat f : {PixelFormat::mono8, PixelFormat::mono16, PixelFormat::bgr8, PixelFormat::yuyv}) {
+    const ImageLayout layout = ImageLayout::packed(4, 3, f);
+    const auto pixels = bytes(layout.frame_bytes());
+    save(root / "image", std::string(to_string(f)) + ".cdr", plan_image(layout, pixels.size(), header).value(),
+         pixels);
+  }
+  const auto jpeg = bytes(40);
+  save(root / "compressed_image", "jpeg.cdr", plan_compressed_image("jpeg", jpeg.size(), header).value(), jpeg);
+  for (PointType t : {PointType::xyz32, PointType::xyzi32, PointType::lidar_point}) {
+    const auto points = bytes(point_size(t) * 5);
+    save(root / "point_cloud2", std::string(to_string(t)) + ".cdr",
+         plan_point_cloud2(PointLayout::of(t, 5), points.size(), header).value(), points);
+  }
+  return 0;
+}
