@@ -5,6 +5,7 @@
 #include "sim/clock.hpp"
 #include "sim/layout.hpp"
 #include "sim/lidar_point.hpp"
+#include "sim/names.hpp"
 #include "sim/os.hpp"
 #include "sim/reader.hpp"
 #include "sim/result.hpp"

@@ -1,0 +1,68 @@
+// SPDX-License-Identifier: Apache-2.0
+// The command line every SIM program shares (the way libcamera keeps src/apps/common): one
+// --help style with every default shown the same way, an optional YAML --config file whose keys
+// are the long option names (the command line wins over the file), stream names checked before
+// anything is opened, --cpu/--rt-priority, and one exit-code contract:
+//   0 done, 1 failed at run time, 2 the command line (or the config file) was wrong.
+// Every message is one sentence on stderr, prefixed with the program's name.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "sim/os.hpp"
+#include "sim/result.hpp"
+
+namespace sim::apps {
+
+enum ExitCode : int {
+  kExitOk = 0,       // done (also: stopped by SIGINT/SIGTERM, --help)
+  kExitFailure = 1,  // failed at run time (a device, a file, a stream)
+  kExitUsage = 2,    // wrong command line or config file
+};
+
+// CLI11 validator for stream names, using the core's naming rules (sim/names.hpp).
+CLI::Validator stream_name_validator();
+
+class CommandLine {
+ public:
+  // `tool` prefixes every message ("sim_echo"); `description` is the first paragraph of --help.
+  CommandLine(std::string tool, std::string description);
+
+  CLI::App& app() noexcept { return app_; }
+  const std::string& tool() const noexcept { return tool_; }
+
+  // A stream name option ("--stream") or positional ("stream"), checked by the core's rules.
+  CLI::Option* add_stream(std::string_view name, std::string& value, std::string_view help);
+  // --config FILE: YAML keys set the options of the same long name ("rt_priority" or
+  // "rt-priority" for --rt-priority); a map becomes a list of "key=value" items; options given on
+  // the command line override the file.
+  void add_config_file();
+  // --cpu N and --rt-priority P for the program's working thread.
+  void add_placement(ThreadPlacement& placement);
+
+  // Parses; an exit code when the program should end now (--help: 0; a bad argument: 2 after one
+  // sentence on stderr), nothing when it should run.
+  [[nodiscard]] std::optional<int> parse(int argc, char** argv);
+
+  // Prints "tool: message" and returns kExitFailure (run-time failure) or kExitUsage.
+  int fail(std::string_view message) const;
+  int usage_error(std::string_view message) const;
+  // An Error from the library: invalid names and arguments are usage errors, the rest failures.
+  int fail(const Error& error) const;
+
+  // Applies --cpu/--rt-priority; an exit code when it cannot (permission: 1, impossible value: 2).
+  [[nodiscard]] std::optional<int> apply_placement(const ThreadPlacement& placement) const;
+
+ private:
+  std::string tool_;
+  CLI::App app_;
+};
+
+// Whether a status line belongs on stderr: it is a terminal and the user did not ask for quiet.
+bool stderr_is_terminal() noexcept;
+
+}  // namespace sim::apps

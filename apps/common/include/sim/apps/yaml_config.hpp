@@ -1,0 +1,26 @@
+// SPDX-License-Identifier: Apache-2.0
+// Reads a YAML config file into CLI11's option values, so a file and the command line are merged
+// by one mechanism: CLI11 sets from the file only the options the command line left unset.
+//   stream: /camera_front     -> --stream /camera_front
+//   rt_priority: 20           -> --rt-priority 20   ('_' and '-' are the same in keys)
+//   roi: [0, 0, 640, 480]     -> --roi 0 0 640 480
+//   controls: {gain: 3}       -> --controls gain=3  (a map becomes "key=value" items, in order)
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <istream>
+#include <string>
+#include <vector>
+
+namespace sim::apps {
+
+class YamlConfig final : public CLI::Config {
+ public:
+  // Writing a config file back (--write-config) is not offered.
+  std::string to_config(const CLI::App*, bool, bool, std::string) const override { return {}; }
+  // Throws CLI::ConfigError with one sentence for a file that is not a YAML map of options.
+  std::vector<CLI::ConfigItem> from_config(std::istream& input) const override;
+};
+
+}  // namespace sim::apps

@@ -1,0 +1,118 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "sim/apps/command_line.hpp"
+
+#include <unistd.h>
+
+#include <cstdio>
+
+#include "sim/apps/yaml_config.hpp"
+#include "sim/names.hpp"
+
+namespace sim::apps {
+namespace {
+
+// CLI11 messages are fragments ("The following argument was not expected: --x"); close them as
+// one sentence that says where to look.
+std::string as_sentence(std::string text) {
+  while (!text.empty() && (text.back() == '\n' || text.back() == ' ' || text.back() == '.')) {
+    text.pop_back();
+  }
+  for (char& c : text) {
+    if (c == '\n') c = ' ';
+  }
+  return text;
+}
+
+}  // namespace
+
+CLI::Validator stream_name_validator() {
+  return CLI::Validator([](std::string& name) { return stream_name_problem(name); }, "", "stream name");
+}
+
+CommandLine::CommandLine(std::string tool, std::string description)
+    : tool_(std::move(tool)), app_(std::move(description), tool_) {
+  // One style of --help: every option shows its default the same way, "--count INT=5".
+  app_.option_defaults()->always_capture_default();
+  app_.get_formatter()->column_width(36);
+  app_.footer("Exit codes: 0 done (or stopped by SIGINT/SIGTERM), 1 failed at run time, "
+              "2 wrong command line or config file.");
+}
+
+CLI::Option* CommandLine::add_stream(std::string_view name, std::string& value,
+                                     std::string_view help) {
+  return app_.add_option(std::string(name), value, std::string(help))
+      ->type_name("NAME")
+      ->check(stream_name_validator());
+}
+
+void CommandLine::add_config_file() {
+  app_.config_formatter(std::make_shared<YamlConfig>());
+  app_.allow_config_extras(CLI::config_extras_mode::error);  // a typo in the file is an error
+  app_.set_config("--config", "",
+                  "YAML file of options (keys are the long option names; the command line "
+                  "overrides the file)")
+      ->type_name("FILE");
+}
+
+void CommandLine::add_placement(ThreadPlacement& placement) {
+  app_.add_option("--cpu", placement.cpu, "pin the working thread to this CPU")
+      ->type_name("N")
+      ->check(CLI::NonNegativeNumber);
+  app_.add_option("--rt-priority", placement.rt_priority,
+                  "run the working thread under SCHED_FIFO at this priority (needs root or "
+                  "CAP_SYS_NICE)")
+      ->type_name("1-99")
+      ->check(CLI::Range(1, 99));
+}
+
+std::optional<int> CommandLine::parse(int argc, char** argv) {
+  try {
+    app_.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app_.exit(e) == 0 ? kExitOk : kExitUsage;
+  } catch (const CLI::CallForAllHelp& e) {
+    return app_.exit(e) == 0 ? kExitOk : kExitUsage;
+  } catch (const CLI::CallForVersion& e) {
+    return app_.exit(e) == 0 ? kExitOk : kExitUsage;
+  } catch (const CLI::ConfigError& e) {
+    std::string what = as_sentence(e.what());
+    // CLI11 calls every config file "INI"; say what the user gave.
+    const std::string ini = "INI was not able to parse ";
+    if (what.rfind(ini, 0) == 0) {
+      what = "the config file has no option named '" + what.substr(ini.size()) + "'";
+    }
+    return usage_error(what + "; see --help for the option names");
+  } catch (const CLI::ParseError& e) {
+    return usage_error(as_sentence(e.what()) + "; see " + tool_ + " --help");
+  }
+  return std::nullopt;
+}
+
+int CommandLine::fail(std::string_view message) const {
+  std::fprintf(stderr, "%s: %.*s\n", tool_.c_str(), static_cast<int>(message.size()),
+               message.data());
+  return kExitFailure;
+}
+
+int CommandLine::usage_error(std::string_view message) const {
+  std::fprintf(stderr, "%s: %.*s\n", tool_.c_str(), static_cast<int>(message.size()),
+               message.data());
+  return kExitUsage;
+}
+
+int CommandLine::fail(const Error& error) const {
+  const bool usage =
+      error.code == ErrorCode::invalid_name || error.code == ErrorCode::invalid_argument;
+  return usage ? usage_error(error.message) : fail(std::string_view(error.message));
+}
+
+std::optional<int> CommandLine::apply_placement(const ThreadPlacement& placement) const {
+  const auto error = apply_thread_placement(placement);
+  if (!error) return std::nullopt;
+  return error->code == ErrorCode::permission_denied ? fail(std::string_view(error->message))
+                                                     : usage_error(error->message);
+}
+
+bool stderr_is_terminal() noexcept { return ::isatty(STDERR_FILENO) != 0; }
+
+}  // namespace sim::apps

@@ -1,0 +1,55 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "sim/apps/yaml_config.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+
+namespace sim::apps {
+namespace {
+
+std::string line_of(const YAML::Mark& mark) { return std::to_string(mark.line + 1); }
+
+std::string scalar(const YAML::Node& node, const std::string& key) {
+  if (!node.IsScalar()) {
+    throw CLI::ConfigError("the config file's '" + key + "' (line " + line_of(node.Mark()) +
+                           ") nests too deep; give a value, a list or a map of values");
+  }
+  return node.Scalar();
+}
+
+}  // namespace
+
+std::vector<CLI::ConfigItem> YamlConfig::from_config(std::istream& input) const {
+  YAML::Node root;
+  try {
+    root = YAML::Load(input);
+  } catch (const YAML::Exception& e) {
+    throw CLI::ConfigError("the config file is not valid YAML (" + e.msg + " at line " +
+                           line_of(e.mark) + "); fix the file");
+  }
+  std::vector<CLI::ConfigItem> result;
+  if (root.IsNull()) return result;
+  if (!root.IsMap()) throw CLI::ConfigError("the config file must be a map of option: value");
+  for (const auto& entry : root) {
+    CLI::ConfigItem item;
+    item.name = entry.first.Scalar();
+    std::replace(item.name.begin(), item.name.end(), '_', '-');
+    const YAML::Node& value = entry.second;
+    if (value.IsMap()) {
+      for (const auto& pair : value) {
+        item.inputs.push_back(pair.first.Scalar() + "=" + scalar(pair.second, item.name));
+      }
+    } else if (value.IsSequence()) {
+      for (const auto& element : value) item.inputs.push_back(scalar(element, item.name));
+    } else if (value.IsScalar()) {
+      item.inputs.push_back(value.Scalar());
+    } else {
+      continue;  // "key:" with no value leaves the option at its default
+    }
+    result.push_back(std::move(item));
+  }
+  return result;
+}
+
+}  // namespace sim::apps
