@@ -1,80 +1,72 @@
 // SPDX-License-Identifier: Apache-2.0
 // sim_foxglove: SIM streams live in Foxglove / Lichtblick (Foxglove WebSocket protocol) and in a
-// browser (the built-in page), from one port. The work is in the sim_foxglove library.
-#include <signal.h>
+// browser (the built-in page), from one port. The work is in the sim_foxglove library; options,
+// stop signals and exit codes are the programs' shared ones (apps/common).
+#include <poll.h>
 
 #include <cstdio>
 #include <string>
 
+#include "sim/apps/command_line.hpp"
+#include "sim/apps/stop_signal.hpp"
 #include "sim/foxglove/server.hpp"
-#include "sim_tools/cli.hpp"
+
+namespace {
+
+// "none", "jpeg" or "jpeg:Q"; false when it is none of these.
+bool parse_compress(const std::string& text, sim::foxglove::ServerOptions& options) {
+  if (text == "none") return true;
+  if (text.rfind("jpeg", 0) != 0) return false;
+  options.compress_jpeg = true;
+  if (text.size() == 4) return true;
+  if (text[4] != ':' || text.size() == 5 || text.size() > 8) return false;
+  int quality = 0;
+  for (const char c : text.substr(5)) {
+    if (c < '0' || c > '9') return false;
+    quality = quality * 10 + (c - '0');
+  }
+  options.jpeg_quality = quality;
+  return quality >= 1 && quality <= 100;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{
+  sim::apps::CommandLine cli(
+      "sim_foxglove",
       "Serve SIM streams to Foxglove or Lichtblick over the Foxglove WebSocket protocol "
-      "(ws://HOST:PORT) and as a live page in a browser (http://HOST:PORT/)."};
+      "(ws://HOST:PORT) and as a live page in a browser (http://HOST:PORT/). Images go out as "
+      "sensor_msgs/msg/Image (or CompressedImage), LiDAR frames as PointCloud2, in CDR.");
+  CLI::App& app = cli.app();
   sim::foxglove::ServerOptions options;
   std::string compress = "none";
   bool json = false;
-  app.add_option("streams", options.streams, "only these streams (default: every stream, and "
-                                             "new ones as they appear)");
-  app.add_option("--port", options.port, "TCP port for WebSocket and page; 0 picks a free one")
+  app.add_option("streams", options.streams,
+                 "only these streams (default: every stream, and new ones as they appear)")
+      ->check(sim::apps::stream_name_validator());
+  app.add_option("--port", options.port, "TCP port of the WebSocket and the page; 0 picks a free one")
       ->capture_default_str();
   app.add_option("--bind", options.bind,
                  "address to listen on; 0.0.0.0 opens it to the network (no authentication)")
       ->capture_default_str();
   app.add_option("--max-rate", options.max_rate_hz,
                  "at most this many messages per second per channel and client (0: every frame)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   app.add_option("--compress", compress,
-                 "images as JPEG sensor_msgs/msg/CompressedImage: jpeg or jpeg:QUALITY (1-100)")
+                 "images as JPEG sensor_msgs/msg/CompressedImage: none, jpeg or jpeg:QUALITY (1-100)")
       ->capture_default_str();
   app.add_flag("--json", json, "print the listening line as JSON");
-  if (auto code = sim::tools::parse(app, argc, argv)) return *code;
-
-  if (compress.rfind("jpeg", 0) == 0) {
-    options.compress_jpeg = true;
-    if (compress.size() > 4) {
-      if (compress[4] != ':') {
-        std::fprintf(stderr, "sim_foxglove: --compress takes none, jpeg or jpeg:QUALITY.\n");
-        return sim::tools::kExitUsage;
-      }
-      try {
-        std::size_t used = 0;
-        options.jpeg_quality = std::stoi(compress.substr(5), &used);
-        if (used != compress.size() - 5) throw std::invalid_argument("trailing");
-      } catch (const std::exception&) {
-        options.jpeg_quality = 0;
-      }
-      if (options.jpeg_quality < 1 || options.jpeg_quality > 100) {
-        std::fprintf(stderr, "sim_foxglove: the JPEG quality in --compress jpeg:Q is 1 to 100.\n");
-        return sim::tools::kExitUsage;
-      }
-    }
-  } else if (compress != "none") {
-    std::fprintf(stderr, "sim_foxglove: --compress takes none, jpeg or jpeg:QUALITY.\n");
-    return sim::tools::kExitUsage;
-  }
-  for (const auto& name : options.streams) {
-    if (name.empty() || name.front() != '/') {
-      std::fprintf(stderr, "sim_foxglove: stream names start with '/', e.g. /lidar_top.\n");
-      return sim::tools::kExitUsage;
-    }
+  cli.add_config_file();
+  if (auto code = cli.parse(argc, argv)) return *code;
+  if (!parse_compress(compress, options)) {
+    return cli.usage_error("--compress takes none, jpeg or jpeg:QUALITY with QUALITY from 1 to 100.");
   }
 
-  // Signals are taken synchronously by this thread; the server's threads never see them.
-  sigset_t stop_signals;
-  sigemptyset(&stop_signals);
-  sigaddset(&stop_signals, SIGINT);
-  sigaddset(&stop_signals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
-
+  auto& stop = sim::apps::StopSignal::install();
   auto server = sim::foxglove::Server::start(options);
-  if (!server) {
-    std::fprintf(stderr, "sim_foxglove: %s\n", server.error().message.c_str());
-    return server.error().code == sim::ErrorCode::invalid_argument ? sim::tools::kExitUsage
-                                                                   : sim::tools::kExitFailure;
-  }
+  if (!server) return cli.fail(server.error());
+
   const std::string host = options.bind == "0.0.0.0" ? "localhost" : options.bind;
   const unsigned port = server->port();
   if (json) {
@@ -88,8 +80,8 @@ int main(int argc, char** argv) {
   }
   std::fflush(stdout);
 
-  int received = 0;
-  sigwait(&stop_signals, &received);
+  pollfd stop_fd{stop.fd(), POLLIN, 0};
+  while (!stop.requested()) ::poll(&stop_fd, 1, 1000);
   server->stop();
-  return sim::tools::kExitOk;
+  return sim::apps::kExitOk;
 }

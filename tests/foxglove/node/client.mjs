@@ -6,12 +6,17 @@
 // frames (sim_replay_video); sim_echo reports what SIM itself holds, to compare with.
 import assert from "node:assert/strict";
 import { spawnSync } from "node:child_process";
-import { FoxgloveClient } from "@foxglove/ws-protocol";
-import { parse } from "@foxglove/rosmsg";
-import { MessageReader } from "@foxglove/rosmsg2-serialization";
+import wsProtocol from "@foxglove/ws-protocol";
+import rosmsg from "@foxglove/rosmsg";
+import serialization from "@foxglove/rosmsg2-serialization";
 import WebSocket from "ws";
 
 import * as h from "./harness.mjs";
+
+// CommonJS packages: named exports through their default export.
+const { FoxgloveClient } = wsProtocol;
+const { parse } = rosmsg;
+const { MessageReader } = serialization;
 
 h.deadline(150, "the Foxglove client test");
 
