@@ -81,8 +81,9 @@ h.startLidar(lidar);
 const echo = h.startEcho(lidar);
 const simSizes = new Map();  // stamp -> frame bytes, from SIM itself
 echo.onLine((line) => {
-  const f = JSON.parse(line);
-  simSizes.set(BigInt(f.stamp_ns), f.size);
+  // Read the stamp as text: nanoseconds since the epoch do not fit a JSON (double) number.
+  const stamp = /"stamp_ns":(-?\d+)/.exec(line);
+  if (stamp) simSizes.set(BigInt(stamp[1]), JSON.parse(line).size);
 });
 const server = await h.startFoxglove([], [lidar, camera]);
 const { client, state } = connect(server.port);

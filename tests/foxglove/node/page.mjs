@@ -86,7 +86,7 @@ try {
   await page.select(`.view[data-stream="${lidar}"] select`, "intensity");
   await page.waitForFunction((n) => {
     const img = document.querySelector(`.view[data-stream="${n}"] img`);
-    return img.complete && /color=intensity/.test(img.src);
+    return img.complete && /color=intensity/.test(img.dataset.url || "");
   }, { timeout: 30_000 }, lidar);
 
   fs.mkdirSync(artifacts, { recursive: true });

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "page_frames.hpp"
 
+#include <cstdio>
+
 namespace sim::foxglove {
 
 std::shared_ptr<PageFrames::Entry> PageFrames::entry(const std::string& stream) {
@@ -41,7 +43,7 @@ std::optional<Error> PageFrames::refresh(Entry& e, const std::string& stream) {
   return std::nullopt;
 }
 
-Expected<Jpeg> PageFrames::image(const std::string& stream) {
+Expected<Picture> PageFrames::image(const std::string& stream) {
   const auto e = entry(stream);
   std::lock_guard lock(e->mutex);
   if (auto error = refresh(*e, stream)) return *error;
@@ -52,7 +54,7 @@ Expected<Jpeg> PageFrames::image(const std::string& stream) {
     return Error{ErrorCode::invalid_argument, "the stream does not hold images."};
   }
   const std::string key = "image " + std::to_string(e->info.seq);
-  if (e->picture && e->picture_key == key) return e->picture;
+  if (e->picture.jpeg && e->picture_key == key) return e->picture;
   if (!e->jpeg) {
     auto jpeg = JpegEncoder::create();
     if (!jpeg) return jpeg.error();
@@ -61,12 +63,14 @@ Expected<Jpeg> PageFrames::image(const std::string& stream) {
   auto out = std::make_shared<std::vector<std::byte>>();
   const auto bytes = std::span<const std::byte>(e->frame.data(), e->info.size);
   if (auto error = e->jpeg->encode(e->info.layout.image, bytes, quality_, *out)) return *error;
-  e->picture = out;
+  const ImageLayout& l = e->info.layout.image;
+  e->picture = {out, std::to_string(l.width) + "x" + std::to_string(l.height) + " " +
+                         to_string(l.format) + ", frame " + std::to_string(e->info.seq)};
   e->picture_key = key;
   return e->picture;
 }
 
-Expected<Jpeg> PageFrames::top_down(const std::string& stream, const TopDownOptions& options) {
+Expected<Picture> PageFrames::top_down(const std::string& stream, const TopDownOptions& options) {
   const auto e = entry(stream);
   std::lock_guard lock(e->mutex);
   if (auto error = refresh(*e, stream)) return *error;
@@ -79,7 +83,7 @@ Expected<Jpeg> PageFrames::top_down(const std::string& stream, const TopDownOpti
   const std::string key = "top " + std::to_string(e->info.seq) + " " +
                           std::to_string(static_cast<int>(options.color)) + " " +
                           std::to_string(options.range_m) + " " + std::to_string(options.size_px);
-  if (e->picture && e->picture_key == key) return e->picture;
+  if (e->picture.jpeg && e->picture_key == key) return e->picture;
   if (!e->jpeg) {
     auto jpeg = JpegEncoder::create();
     if (!jpeg) return jpeg.error();
@@ -92,7 +96,12 @@ Expected<Jpeg> PageFrames::top_down(const std::string& stream, const TopDownOpti
   if (auto error = e->jpeg->encode_rgb(raster.width, raster.height, raster.rgb, quality_, *out)) {
     return *error;
   }
-  e->picture = out;
+  char caption[160];
+  std::snprintf(caption, sizeof caption,
+                "%llu points, view %.0f m each way, rings every %.0f m, frame %llu",
+                static_cast<unsigned long long>(raster.points_drawn), raster.range_m,
+                raster.ring_step_m, static_cast<unsigned long long>(e->info.seq));
+  e->picture = {out, caption};
   e->picture_key = key;
   return e->picture;
 }

@@ -22,13 +22,19 @@ namespace sim::foxglove {
 
 using Jpeg = std::shared_ptr<const std::vector<std::byte>>;
 
+// A picture for the page and one line that says what it shows (size, scale, frame).
+struct Picture {
+  Jpeg jpeg;
+  std::string caption;
+};
+
 class PageFrames {
  public:
   explicit PageFrames(int jpeg_quality) : quality_(jpeg_quality) {}
 
   // The error is one sentence (no frame yet, not an image stream, …).
-  Expected<Jpeg> image(const std::string& stream);
-  Expected<Jpeg> top_down(const std::string& stream, const TopDownOptions& options);
+  Expected<Picture> image(const std::string& stream);
+  Expected<Picture> top_down(const std::string& stream, const TopDownOptions& options);
   // Closes the readers of streams that are not in `names` any more.
   void keep_only(const std::set<std::string>& names);
 
@@ -41,7 +47,7 @@ class PageFrames {
     bool have_frame = false;
     std::optional<JpegEncoder> jpeg;
     std::string picture_key;  // what `picture` shows: seq and options
-    Jpeg picture;
+    Picture picture;
   };
   std::shared_ptr<Entry> entry(const std::string& stream);
   // Copies the newest frame into the entry, if there is a newer one; the error is one sentence.

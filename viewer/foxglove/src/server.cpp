@@ -167,7 +167,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
                            "No such stream here; /api/streams lists the streams.", version,
                            keep_alive);
       }
-      Expected<Jpeg> picture = Error{ErrorCode::invalid_argument, ""};
+      Expected<Picture> picture = Error{ErrorCode::invalid_argument, ""};
       if (target->path == "/api/image") {
         picture = server_.frames.image(it->second);
       } else {
@@ -208,14 +208,16 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     send(response, keep_alive);
   }
 
-  void reply_bytes(const char* type, const Jpeg& bytes, unsigned version, bool keep_alive,
+  void reply_bytes(const char* type, const Picture& picture, unsigned version, bool keep_alive,
                    bool head) {
+    const Jpeg& bytes = picture.jpeg;
     auto response =
         std::make_shared<http::response<http::buffer_body>>(http::status::ok, version);
     response->set(http::field::server, "sim_foxglove");
     response->set(http::field::content_type, type);
     response->set(http::field::cache_control, "no-store");
     response->keep_alive(keep_alive);
+    response->set("X-Sim-View", picture.caption);
     response->content_length(bytes->size());
     response->body().data = head ? nullptr : const_cast<std::byte*>(bytes->data());
     response->body().size = head ? 0 : bytes->size();

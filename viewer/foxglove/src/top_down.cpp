@@ -69,9 +69,41 @@ void render_top_down(const PointLayout& layout, std::span<const std::byte> frame
   for (std::size_t i = 0; i < out.rgb.size(); i += 3) {
     out.rgb[i] = out.rgb[i + 1] = out.rgb[i + 2] = 17;
   }
-  const float range = options.range_m > 1.0f ? options.range_m : 1.0f;
+  const std::uint32_t stride = layout.point_size;
+  const bool readable = stride >= 16 || (stride >= 12 && layout.type == PointType::xyz32);
+  const std::size_t count = readable ? frame.size() / stride : 0;
+  const std::size_t step = std::max<std::size_t>(1, count / 4096);
+  PointView v{};
+
+  // Automatic range: the 95th percentile of horizontal distance, rounded up to a nice number,
+  // so an indoor scan and a highway scan both fill the view.
+  float range = options.range_m;
+  if (!(range >= 1.0f)) {
+    std::vector<float> distances;
+    for (std::size_t i = 0; i < count; i += step) {
+      if (read_point(layout, frame.data() + i * stride, ColorBy::height, v)) {
+        distances.push_back(std::hypot(v.x, v.y));
+      }
+    }
+    float far = 50.0f;
+    if (!distances.empty()) {
+      const auto at = distances.begin() + static_cast<std::ptrdiff_t>(distances.size() * 95 / 100);
+      std::nth_element(distances.begin(), at, distances.end());
+      far = *at;
+    }
+    range = 5.0f;
+    for (const float nice : {5.0f, 10.0f, 20.0f, 30.0f, 50.0f, 75.0f, 100.0f, 150.0f, 200.0f}) {
+      range = nice;
+      if (nice >= far) break;
+    }
+  }
+  const float ring_step = range <= 10.0f ? 2.0f : range <= 30.0f ? 5.0f : range <= 100.0f ? 10.0f : 50.0f;
+  out.range_m = range;
+  out.ring_step_m = ring_step;
   const float scale = static_cast<float>(size) / (2.0f * range);  // pixels per metre
   const float centre = static_cast<float>(size) / 2.0f;
+  // Points are drawn as 2×2 squares on large views so sparse scans stay visible.
+  const int dot = size >= 480 ? 2 : 1;
 
   auto put = [&](int px, int py, Rgb c) {
     if (px < 0 || py < 0 || px >= static_cast<int>(size) || py >= static_cast<int>(size)) return;
@@ -80,8 +112,8 @@ void render_top_down(const PointLayout& layout, std::span<const std::byte> frame
     p[1] = c.g;
     p[2] = c.b;
   };
-  // Range rings every 10 m and the sensor's forward axis, in dark grey.
-  for (float ring = 10.0f; ring <= range * 1.42f; ring += 10.0f) {
+  // Range rings and the sensor's forward axis, in dark grey.
+  for (float ring = ring_step; ring <= range * 1.42f; ring += ring_step) {
     const int steps = static_cast<int>(ring * scale * 7.0f) + 16;
     for (int k = 0; k < steps; ++k) {
       const float a = 6.2831853f * static_cast<float>(k) / static_cast<float>(steps);
@@ -92,15 +124,10 @@ void render_top_down(const PointLayout& layout, std::span<const std::byte> frame
   for (int py = 0; py < static_cast<int>(centre); ++py) {
     put(static_cast<int>(centre), py, {45, 45, 45});
   }
-
-  const std::uint32_t stride = layout.point_size;
-  if (stride < 12 || (stride < 16 && layout.type != PointType::xyz32)) return;
-  const std::size_t count = frame.size() / stride;
+  if (count == 0) return;
 
   std::vector<float> values;
   values.reserve(std::min<std::size_t>(count, 4096));
-  const std::size_t step = std::max<std::size_t>(1, count / 4096);
-  PointView v{};
   for (std::size_t i = 0; i < count; i += step) {
     if (read_point(layout, frame.data() + i * stride, options.color, v)) values.push_back(v.value);
   }
@@ -113,7 +140,12 @@ void render_top_down(const PointLayout& layout, std::span<const std::byte> frame
     if (!(fx >= 0 && fy >= 0 && fx < static_cast<float>(size) && fy < static_cast<float>(size))) {
       continue;
     }
-    put(static_cast<int>(fx), static_cast<int>(fy), turbo((v.value - low) / (high - low)));
+    const Rgb colour = turbo((v.value - low) / (high - low));
+    for (int dy = 0; dy < dot; ++dy) {
+      for (int dx = 0; dx < dot; ++dx) {
+        put(static_cast<int>(fx) + dx, static_cast<int>(fy) + dy, colour);
+      }
+    }
     ++out.points_drawn;
   }
   // The sensor itself: a small white cross.

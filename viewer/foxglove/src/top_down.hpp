@@ -18,7 +18,7 @@ enum class ColorBy { height, intensity };
 
 struct TopDownOptions {
   ColorBy color = ColorBy::height;
-  float range_m = 50.0f;     // half the width of the view
+  float range_m = 0.0f;      // half the width of the view; 0: fit 95 % of the points
   std::uint32_t size_px = 640;
 };
 
@@ -27,6 +27,8 @@ struct TopDownImage {
   std::uint32_t height = 0;
   std::vector<std::uint8_t> rgb;  // width × height × 3
   std::uint64_t points_drawn = 0;
+  float range_m = 0;       // half the width of the view as drawn
+  float ring_step_m = 0;   // distance between range rings
 };
 
 // Draws the frame; points outside the view or with non-finite coordinates are left out.
