@@ -67,7 +67,7 @@ class RawClient {
     std::size_t done = 0;
     while (done < bytes.size()) {
       pollfd p{fd_, POLLOUT, 0};
-      if (::poll(&p, 1, 2000) <= 0) return false;  // the server stopped reading us
+      if (::poll(&p, 1, 10'000) <= 0) return false;  // the server stopped reading us
       const ssize_t n = ::send(fd_, bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL);
       if (n <= 0) return false;
       done += static_cast<std::size_t>(n);
@@ -428,7 +428,7 @@ TEST_F(FoxgloveBadInput, AClientThatNeverReadsIsClosedAndOthersKeepGettingFrames
   // The stuck client's 900 KB frames cannot be delivered; once a write has waited longer than
   // the send timeout (1 s here) the server closes it. Reading earlier would unblock the server,
   // so the test first lets that happen, then drains what fitted in the buffers up to the end.
-  std::this_thread::sleep_for(4s);
+  std::this_thread::sleep_for(5s);
   EXPECT_TRUE(stuck.closed_by_server());
   EXPECT_GT(published_.load(), before) << "the writer stopped publishing";
 }
