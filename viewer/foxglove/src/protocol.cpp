@@ -141,10 +141,10 @@ std::array<std::byte, kMessageHeaderSize> message_header(std::uint32_t subscript
   std::array<std::byte, kMessageHeaderSize> header{};
   header[0] = std::byte{0x01};
   for (int i = 0; i < 4; ++i) {
-    header[static_cast<std::size_t>(1 + i)] = std::byte(subscription_id >> (8 * i));
+    header[static_cast<std::size_t>(1 + i)] = std::byte((subscription_id >> (8 * i)) & 0xFFu);
   }
   for (int i = 0; i < 8; ++i) {
-    header[static_cast<std::size_t>(5 + i)] = std::byte(timestamp_ns >> (8 * i));
+    header[static_cast<std::size_t>(5 + i)] = std::byte((timestamp_ns >> (8 * i)) & 0xFFu);
   }
   return header;
 }
