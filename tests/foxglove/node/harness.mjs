@@ -144,9 +144,12 @@ export function startVideo(stream, dir) {
                { streamNames: [stream] });
 }
 
-// sim_echo's JSON lines: what SIM itself holds, to compare the server's messages with.
+// sim_echo's JSON lines: what SIM itself holds, to compare the server's messages with. Newer
+// sim_echo prints readable lines unless given --json; older ones print JSON and lack the flag.
 export function startEcho(stream) {
-  return start(bin.echo, [stream, "--wait-for-stream"]);
+  const help = spawnSync(bin.echo, ["--help"], { encoding: "utf8" }).stdout || "";
+  const json = help.includes("--json") ? ["--json"] : [];
+  return start(bin.echo, [stream, "--wait-for-stream", ...json]);
 }
 
 const crcTable = Array.from({ length: 256 }, (_, n) => {
