@@ -45,6 +45,13 @@ CLI::Option* CommandLine::add_stream(std::string_view name, std::string& value,
       ->check(stream_name_validator());
 }
 
+CLI::Option* CommandLine::add_streams(std::string_view name, std::vector<std::string>& values,
+                                      std::string_view help) {
+  return app_.add_option(std::string(name), values, std::string(help))
+      ->type_name("NAME")
+      ->check(stream_name_validator());
+}
+
 void CommandLine::add_config_file() {
   app_.config_formatter(std::make_shared<YamlConfig>());
   app_.allow_config_extras(CLI::config_extras_mode::error);  // a typo in the file is an error

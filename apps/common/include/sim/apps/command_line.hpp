@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "sim/os.hpp"
 #include "sim/result.hpp"
@@ -37,6 +38,9 @@ class CommandLine {
 
   // A stream name option ("--stream") or positional ("stream"), checked by the core's rules.
   CLI::Option* add_stream(std::string_view name, std::string& value, std::string_view help);
+  // Several stream names (a positional list), each checked the same way.
+  CLI::Option* add_streams(std::string_view name, std::vector<std::string>& values,
+                           std::string_view help);
   // --config FILE: YAML keys set the options of the same long name ("rt_priority" or
   // "rt-priority" for --rt-priority); a map becomes a list of "key=value" items; options given on
   // the command line override the file.
