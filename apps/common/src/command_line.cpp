@@ -29,6 +29,12 @@ CLI::Validator stream_name_validator() {
   return CLI::Validator([](std::string& name) { return stream_name_problem(name); }, "", "stream name");
 }
 
+CLI::Validator validator(std::function<std::string(const std::string&)> problem,
+                         std::string type_name) {
+  return CLI::Validator([problem = std::move(problem)](std::string& value) { return problem(value); },
+                        "", std::move(type_name));
+}
+
 CommandLine::CommandLine(std::string tool, std::string description)
     : tool_(std::move(tool)), app_(std::move(description), tool_) {
   // One style of --help: every option shows its default the same way, "--count INT=5".

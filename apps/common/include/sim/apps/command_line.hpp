@@ -9,6 +9,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -27,6 +28,10 @@ enum ExitCode : int {
 
 // CLI11 validator for stream names, using the core's naming rules (sim/names.hpp).
 CLI::Validator stream_name_validator();
+// A CLI11 validator from a function that returns the problem with a value (empty: none), so
+// libraries can check values without knowing CLI11.
+CLI::Validator validator(std::function<std::string(const std::string&)> problem,
+                         std::string type_name);
 
 class CommandLine {
  public:
