@@ -42,11 +42,11 @@ std::optional<Error> FrameEncoder::encode(std::span<const std::byte> frame, cons
     return std::nullopt;
   }
   if (!jpeg_) {
-    auto jpeg = JpegEncoder::create();
+    auto jpeg = ImageToJpeg::create(options_.jpeg_quality);
     if (!jpeg) return jpeg.error();
     jpeg_.emplace(std::move(jpeg.value()));
   }
-  if (auto error = jpeg_->encode(info.layout.image, frame, options_.jpeg_quality, compressed_)) {
+  if (auto error = jpeg_->encode(info.layout.image, frame, compressed_)) {
     return error;
   }
   const ros2::Header header{ros2::Time::from_ns(info.stamp_ns), frame_id_};

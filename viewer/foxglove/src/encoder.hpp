@@ -50,7 +50,7 @@ class FrameEncoder {
   Layout layout_;
   EncodeOptions options_;
   std::string frame_id_;
-  std::optional<JpegEncoder> jpeg_;
+  std::optional<ImageToJpeg> jpeg_;
   std::vector<std::byte> compressed_;
 };
 

@@ -56,13 +56,13 @@ Expected<Picture> PageFrames::image(const std::string& stream) {
   const std::string key = "image " + std::to_string(e->info.seq);
   if (e->picture.jpeg && e->picture_key == key) return e->picture;
   if (!e->jpeg) {
-    auto jpeg = JpegEncoder::create();
+    auto jpeg = ImageToJpeg::create(quality_);
     if (!jpeg) return jpeg.error();
     e->jpeg.emplace(std::move(jpeg.value()));
   }
   auto out = std::make_shared<std::vector<std::byte>>();
   const auto bytes = std::span<const std::byte>(e->frame.data(), e->info.size);
-  if (auto error = e->jpeg->encode(e->info.layout.image, bytes, quality_, *out)) return *error;
+  if (auto error = e->jpeg->encode(e->info.layout.image, bytes, *out)) return *error;
   const ImageLayout& l = e->info.layout.image;
   e->picture = {out, std::to_string(l.width) + "x" + std::to_string(l.height) + " " +
                          to_string(l.format) + ", frame " + std::to_string(e->info.seq)};
@@ -85,7 +85,7 @@ Expected<Picture> PageFrames::top_down(const std::string& stream, const TopDownO
                           std::to_string(options.range_m) + " " + std::to_string(options.size_px);
   if (e->picture.jpeg && e->picture_key == key) return e->picture;
   if (!e->jpeg) {
-    auto jpeg = JpegEncoder::create();
+    auto jpeg = ImageToJpeg::create(quality_);
     if (!jpeg) return jpeg.error();
     e->jpeg.emplace(std::move(jpeg.value()));
   }
@@ -93,7 +93,7 @@ Expected<Picture> PageFrames::top_down(const std::string& stream, const TopDownO
   render_top_down(e->info.layout.points,
                   std::span<const std::byte>(e->frame.data(), e->info.size), options, raster);
   auto out = std::make_shared<std::vector<std::byte>>();
-  if (auto error = e->jpeg->encode_rgb(raster.width, raster.height, raster.rgb, quality_, *out)) {
+  if (auto error = e->jpeg->encode_rgb(raster.width, raster.height, raster.rgb, *out)) {
     return *error;
   }
   char caption[160];

@@ -45,7 +45,7 @@ class PageFrames {
     std::vector<std::byte> frame;
     FrameInfo info{};
     bool have_frame = false;
-    std::optional<JpegEncoder> jpeg;
+    std::optional<ImageToJpeg> jpeg;
     std::string picture_key;  // what `picture` shows: seq and options
     Picture picture;
   };
