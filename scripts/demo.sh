@@ -16,6 +16,7 @@ if [[ ${1:-} == --help || ${1:-} == -h ]]; then sed -n '2,8p' "$0"; exit 0; fi
 mkdir -p build
 cmake -S . -B build/release -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSIM_BUILD_BENCH=OFF >build/release.configure.log
 cmake --build build/release -j"${SIM_JOBS:-2}" --target sim_replay_pcap sim_replay_video sim_echo sim_ls sim_rm
+cmake --build build/release -j"${SIM_JOBS:-2}" --target sim_foxglove  # the live view
 bin=build/release
 data=tests/hesai/data
 
@@ -42,7 +43,13 @@ else
   echo "demo: no video found (opencv-doc not installed); showing the LiDAR stream only"
 fi
 
+port=${SIM_FOXGLOVE_PORT:-8765}
+"$bin/viewer/foxglove/sim_foxglove" --port "$port" >/dev/null &
+pids+=($!)
+
 sleep 2
+echo "demo: open http://127.0.0.1:$port/ in a browser to see the streams live"
+echo "      (or connect Foxglove / Lichtblick to ws://127.0.0.1:$port)"
 "$bin/tools/sim_ls"
 echo
 echo "Live statistics, one line per stream per second (Ctrl-C to stop):"

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // Camera decode cost, ours against OpenCV's, side by side at 640×480 and 1920×1200:
-//   YUYV → BGR   sim::camera::FrameDecoder into the loaned slot, then commit (the full "dequeued
+//   YUYV → BGR   sim::imaging::FrameDecoder into the loaned slot, then commit (the full "dequeued
 //                buffer to visible to readers" path)  vs  cv::cvtColor into a fresh cv::Mat;
 //   MJPEG → BGR  tjDecompress2 into the loaned slot, then commit  vs  cv::imdecode + copy into
 //                the slot.
@@ -19,13 +19,13 @@
 #include <string>
 #include <vector>
 
-#include "sim/camera/decoder.hpp"
+#include "sim/imaging/decoder.hpp"
 #include "sim/sim.hpp"
 
 namespace {
 
-using sim::camera::FrameDecoder;
-using sim::camera::make_layout;
+using sim::imaging::FrameDecoder;
+using sim::imaging::make_layout;
 
 // A camera-like scene (gradients, discs, text, sensor noise) so JPEG sizes are realistic.
 cv::Mat scene(int width, int height) {
@@ -74,7 +74,7 @@ struct Stream {
   }
   ~Stream() {
     writer.reset();
-    (void)sim::destroy(name, true);
+    sim::destroy(name, true);
   }
   static inline int counter = 0;
   std::string name;
@@ -92,14 +92,14 @@ void YuyvToBgr_Sim(benchmark::State& state) {
   cv::randu(yuyv, 0, 255);
   auto decoder = FrameDecoder::create(make_layout(static_cast<std::uint32_t>(w),
                                                   static_cast<std::uint32_t>(h), sim::PixelFormat::yuyv),
-                                      sim::camera::OutputFormat::bgr8);
+                                      sim::imaging::OutputFormat::bgr8);
   Stream stream(decoder->output_layout());
   if (!stream.writer) return state.SkipWithError("cannot create the stream");
   std::int64_t stamp = 0;
   for (auto _ : state) {
     sim::Loan loan = stream.writer->loan();
     const auto result = decoder->decode(bytes_of(yuyv), loan.bytes());
-    benchmark::DoNotOptimize(std::move(loan).commit(result.size, ++stamp));
+    benchmark::DoNotOptimize(loan.commit(result.size, ++stamp));
   }
 }
 
@@ -111,7 +111,7 @@ void YuyvToBgr_SimDecoderIntoHeap(benchmark::State& state) {
   cv::randu(yuyv, 0, 255);
   auto decoder = FrameDecoder::create(make_layout(static_cast<std::uint32_t>(w),
                                                   static_cast<std::uint32_t>(h), sim::PixelFormat::yuyv),
-                                      sim::camera::OutputFormat::bgr8);
+                                      sim::imaging::OutputFormat::bgr8);
   std::vector<std::byte> heap(decoder->output_layout().frame_bytes());
   for (auto _ : state) {
     benchmark::DoNotOptimize(decoder->decode(bytes_of(yuyv), heap));
@@ -136,7 +136,7 @@ void MjpegToBgr_Sim(benchmark::State& state) {
   const auto jpeg = jpeg_422(scene(w, h));
   auto decoder = FrameDecoder::create(make_layout(static_cast<std::uint32_t>(w),
                                                   static_cast<std::uint32_t>(h), sim::PixelFormat::mjpeg),
-                                      sim::camera::OutputFormat::bgr8);
+                                      sim::imaging::OutputFormat::bgr8);
   Stream stream(decoder->output_layout());
   if (!stream.writer) return state.SkipWithError("cannot create the stream");
   const std::span<const std::byte> input(reinterpret_cast<const std::byte*>(jpeg.data()), jpeg.size());
@@ -144,8 +144,8 @@ void MjpegToBgr_Sim(benchmark::State& state) {
   for (auto _ : state) {
     sim::Loan loan = stream.writer->loan();
     const auto result = decoder->decode(input, loan.bytes());
-    if (result.status != sim::camera::DecodeStatus::ok) return state.SkipWithError("decode failed");
-    benchmark::DoNotOptimize(std::move(loan).commit(result.size, ++stamp));
+    if (result.status != sim::imaging::DecodeStatus::ok) return state.SkipWithError("decode failed");
+    benchmark::DoNotOptimize(loan.commit(result.size, ++stamp));
   }
   state.counters["jpeg_kB"] = static_cast<double>(jpeg.size()) / 1000.0;
 }
@@ -163,7 +163,7 @@ void MjpegToBgr_ImdecodeCopy(benchmark::State& state) {
     const cv::Mat bgr = cv::imdecode(encoded, cv::IMREAD_COLOR);
     sim::Loan loan = stream.writer->loan();
     std::memcpy(loan.bytes().data(), bgr.data, bgr.total() * bgr.elemSize());
-    benchmark::DoNotOptimize(std::move(loan).commit(bgr.total() * bgr.elemSize(), ++stamp));
+    benchmark::DoNotOptimize(loan.commit(bgr.total() * bgr.elemSize(), ++stamp));
   }
 }
 

@@ -28,7 +28,10 @@ std::string_view dds_type_name(MessageType type) noexcept {
 
 namespace {
 
-// The .msg texts of ros2/common_interfaces and ros2/rcl_interfaces without their comments.
+// The .msg texts of ros2/common_interfaces and ros2/rcl_interfaces without their comments. The
+// header field is written fully qualified (std_msgs/msg/Header, as its MSG: line): Foxglove's
+// and Lichtblick's ros2msg parser (@foxglove/rosmsg) matches qualified names exactly and
+// rejects the short "std_msgs/Header" against "MSG: std_msgs/msg/Header".
 #define SIM_ROS2_SEPARATOR \
   "================================================================================\n"
 #define SIM_ROS2_HEADER_DEPS                   \
@@ -41,7 +44,7 @@ namespace {
   "uint32 nanosec\n"
 
 constexpr std::string_view point_cloud2_schema =
-    "std_msgs/Header header\n"
+    "std_msgs/msg/Header header\n"
     "uint32 height\n"
     "uint32 width\n"
     "PointField[] fields\n"
@@ -65,7 +68,7 @@ constexpr std::string_view point_cloud2_schema =
     "uint32 count\n";
 
 constexpr std::string_view image_schema =
-    "std_msgs/Header header\n"
+    "std_msgs/msg/Header header\n"
     "uint32 height\n"
     "uint32 width\n"
     "string encoding\n"
@@ -74,7 +77,7 @@ constexpr std::string_view image_schema =
     "uint8[] data\n" SIM_ROS2_HEADER_DEPS;
 
 constexpr std::string_view compressed_image_schema =
-    "std_msgs/Header header\n"
+    "std_msgs/msg/Header header\n"
     "string format\n"
     "uint8[] data\n" SIM_ROS2_HEADER_DEPS;
 

@@ -9,7 +9,7 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "sim/camera/image_format.hpp"
+#include "sim/imaging/image_format.hpp"
 #include "sim/clock.hpp"
 
 namespace sim::camera::testing {
@@ -55,12 +55,12 @@ void FakeV4l2Device::plug() { unplugged_ = false; }
 
 std::uint32_t FakeV4l2Device::bytes_per_line() const {
   const PixelFormat pixel = pixel_format_of(FourCc{pixelformat_});
-  if (is_compressed(pixel)) return 0;
-  return static_cast<std::uint32_t>(row_bytes(width_, pixel)) + row_padding_;
+  if (imaging::is_compressed(pixel)) return 0;
+  return static_cast<std::uint32_t>(imaging::row_bytes(width_, pixel)) + row_padding_;
 }
 
 std::uint32_t FakeV4l2Device::size_image() const {
-  if (is_compressed(pixel_format_of(FourCc{pixelformat_}))) return width_ * height_ * 2;
+  if (imaging::is_compressed(pixel_format_of(FourCc{pixelformat_}))) return width_ * height_ * 2;
   return bytes_per_line() * height_;
 }
 
@@ -202,7 +202,7 @@ int FakeV4l2Device::ioctl(int fd, unsigned long request, void* arg) {
       const FakeFormat& f = formats_[desc->index];
       desc->pixelformat = f.fourcc.code;
       copy_name(desc->description, sizeof desc->description, f.description);
-      desc->flags = is_compressed(pixel_format_of(f.fourcc)) ? V4L2_FMT_FLAG_COMPRESSED : 0;
+      desc->flags = imaging::is_compressed(pixel_format_of(f.fourcc)) ? V4L2_FMT_FLAG_COMPRESSED : 0;
       return 0;
     }
     case VIDIOC_ENUM_FRAMESIZES: {

@@ -6,19 +6,19 @@
 #include <span>
 #include <vector>
 
-#include "sim/camera/decoder.hpp"
+#include "sim/imaging/decoder.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace sim::camera;
-  static auto decode = FrameDecoder::create(make_layout(64, 48, sim::PixelFormat::mjpeg),
-                                            OutputFormat::bgr8);
-  static auto pass = FrameDecoder::create(make_layout(64, 48, sim::PixelFormat::mjpeg),
-                                          OutputFormat::raw);
+  static auto decode = imaging::FrameDecoder::create(imaging::make_layout(64, 48, sim::PixelFormat::mjpeg),
+                                            imaging::OutputFormat::bgr8);
+  static auto pass = imaging::FrameDecoder::create(imaging::make_layout(64, 48, sim::PixelFormat::mjpeg),
+                                          imaging::OutputFormat::raw);
   static std::vector<std::byte> slot(64 * 48 * 3);
   const std::span<const std::byte> input(reinterpret_cast<const std::byte*>(data), size);
-  const DecodeResult decoded = decode->decode(input, slot);
-  if (decoded.status == DecodeStatus::ok && decoded.size != slot.size()) __builtin_trap();
-  const DecodeResult passed = pass->decode(input, slot);
-  if (passed.status == DecodeStatus::ok && passed.size != size) __builtin_trap();
+  const imaging::DecodeResult decoded = decode->decode(input, slot);
+  if (decoded.status == imaging::DecodeStatus::ok && decoded.size != slot.size()) __builtin_trap();
+  const imaging::DecodeResult passed = pass->decode(input, slot);
+  if (passed.status == imaging::DecodeStatus::ok && passed.size != size) __builtin_trap();
   return 0;
 }

@@ -9,7 +9,7 @@
 #include <opencv2/core.hpp>
 #include <thread>
 
-#include "sim/camera/image_format.hpp"
+#include "sim/imaging/image_format.hpp"
 #include "sim/opencv.hpp"
 #include "sim/sim.hpp"
 
@@ -46,7 +46,7 @@ struct Stream {
 };
 
 TEST(OpenCv, LoanMatIsTheSlotAndBorrowMatIsTheFrame) {
-  const ImageLayout layout = camera::make_layout(64, 48, PixelFormat::bgr8);
+  const ImageLayout layout = imaging::make_layout(64, 48, PixelFormat::bgr8);
   Stream stream(layout);
   Loan loan = stream.writer->loan();
   cv::Mat slot = as_mat(loan, layout);
@@ -73,7 +73,7 @@ TEST(OpenCv, LoanMatIsTheSlotAndBorrowMatIsTheFrame) {
 }
 
 TEST(OpenCv, ReadMatKeepsAPaddedStrideAndReusesItsBuffer) {
-  const ImageLayout layout = camera::make_layout(64, 48, PixelFormat::yuyv, 160);
+  const ImageLayout layout = imaging::make_layout(64, 48, PixelFormat::yuyv, 160);
   Stream stream(layout);
   Loan loan = stream.writer->loan();
   cv::Mat slot = as_mat(loan, layout);
@@ -102,20 +102,20 @@ TEST(OpenCv, ReadMatKeepsAPaddedStrideAndReusesItsBuffer) {
 }
 
 TEST(OpenCv, NoMatrixForCompressedOrShortFrames) {
-  const ImageLayout jpeg = camera::make_layout(64, 48, PixelFormat::mjpeg);
+  const ImageLayout jpeg = imaging::make_layout(64, 48, PixelFormat::mjpeg);
   std::vector<std::byte> bytes(64 * 48 * 3);
   EXPECT_TRUE(as_mat(jpeg, std::span<std::byte>(bytes)).empty());
   EXPECT_EQ(cv_type(jpeg), -1);
-  const ImageLayout bgr = camera::make_layout(64, 48, PixelFormat::bgr8);
+  const ImageLayout bgr = imaging::make_layout(64, 48, PixelFormat::bgr8);
   EXPECT_FALSE(as_mat(bgr, std::span<std::byte>(bytes)).empty());
   EXPECT_TRUE(as_mat(bgr, std::span<std::byte>(bytes).first(bytes.size() - 1)).empty());
-  EXPECT_EQ(cv_type(camera::make_layout(4, 4, PixelFormat::mono16)), CV_16UC1);
+  EXPECT_EQ(cv_type(imaging::make_layout(4, 4, PixelFormat::mono16)), CV_16UC1);
 }
 
 // A reader copying frames while the writer rewrites the slots never keeps a torn copy: every
 // copy that copy_to() vouches for is one uniform frame.
 TEST(OpenCv, CopiesUnderConcurrentWritesAreWholeFrames) {
-  const ImageLayout layout = camera::make_layout(320, 240, PixelFormat::mono8);
+  const ImageLayout layout = imaging::make_layout(320, 240, PixelFormat::mono8);
   Stream stream(layout);
   std::atomic<bool> stop{false};
   std::thread writer([&] {

@@ -14,7 +14,7 @@
 #include <thread>
 
 #include "fake_v4l2_device.hpp"
-#include "sim/camera/config.hpp"
+#include "camera_options.hpp"
 #include "sim/camera/v4l2_capture.hpp"
 #include "sim/clock.hpp"
 #include "sim/reader.hpp"
@@ -101,12 +101,12 @@ TEST_F(V4l2CaptureTest, AutoPrefersYuyvAndKeepsTheRequestedSize) {
   EXPECT_EQ(capture->format().fourcc, kYuyv);
   EXPECT_EQ(fake.fourcc(), kYuyv);
   EXPECT_EQ(fake.width(), 160u);
-  EXPECT_EQ(capture->output_layout(), make_layout(160, 120, PixelFormat::bgr8));
+  EXPECT_EQ(capture->output_layout(), imaging::make_layout(160, 120, PixelFormat::bgr8));
   EXPECT_TRUE(fake.streaming());
   EXPECT_EQ(fake.buffer_count(), 4u);
   EXPECT_EQ(fake.queued_buffers(), 4u);
   auto reader = open_reader();
-  EXPECT_EQ(reader.layout(), Layout::of(make_layout(160, 120, PixelFormat::bgr8)));
+  EXPECT_EQ(reader.layout(), Layout::of(imaging::make_layout(160, 120, PixelFormat::bgr8)));
 }
 
 TEST_F(V4l2CaptureTest, AutoTakesMjpegWhenOnlyItReachesTheRate) {
@@ -121,7 +121,7 @@ TEST_F(V4l2CaptureTest, AutoTakesMjpegWhenOnlyItReachesTheRate) {
 }
 
 TEST_F(V4l2CaptureTest, AutoPrefersGreyForMonoOutput) {
-  config.format.output = OutputFormat::mono8;
+  config.format.output = imaging::OutputFormat::mono8;
   auto capture = start();
   ASSERT_TRUE(capture) << capture.error().message;
   EXPECT_EQ(capture->format().fourcc, kGrey);
@@ -196,7 +196,7 @@ TEST_F(V4l2CaptureTest, ControlsBySpelledNameNumberOrMenuEntry) {
 
 struct PathCase {
   FourCc fourcc;
-  OutputFormat output;
+  imaging::OutputFormat output;
   std::uint32_t row_padding;
 };
 
@@ -213,7 +213,7 @@ TEST_P(V4l2DecodePath, ReaderGetsOpenCvsConversion) {
   auto capture = start();
   ASSERT_TRUE(capture) << capture.error().message;
   const ImageLayout input = capture->format().layout;
-  EXPECT_EQ(input.stride, row_bytes(64, input.format) + c.row_padding);
+  EXPECT_EQ(input.stride, imaging::row_bytes(64, input.format) + c.row_padding);
 
   const Bytes frame = c.fourcc == kMjpg
                           ? testing::encode_jpeg(testing::scene_bgr(64, 48, 4), 64, 48)
@@ -227,7 +227,7 @@ TEST_P(V4l2DecodePath, ReaderGetsOpenCvsConversion) {
   ASSERT_EQ(reader.read(got, info), ReadStatus::new_frame);
   EXPECT_EQ(info.layout.image, capture->output_layout());
   got.resize(info.size);
-  if (c.output == OutputFormat::raw) {
+  if (c.output == imaging::OutputFormat::raw) {
     EXPECT_EQ(got, frame);
     EXPECT_EQ(info.layout.image.format, input.format);
   } else {
@@ -239,12 +239,12 @@ TEST_P(V4l2DecodePath, ReaderGetsOpenCvsConversion) {
 
 INSTANTIATE_TEST_SUITE_P(
     EveryFormat, V4l2DecodePath,
-    ::testing::Values(PathCase{kYuyv, OutputFormat::bgr8, 0}, PathCase{kYuyv, OutputFormat::rgb8, 64},
-                      PathCase{kYuyv, OutputFormat::mono8, 0}, PathCase{kYuyv, OutputFormat::raw, 32},
-                      PathCase{kUyvy, OutputFormat::bgr8, 0}, PathCase{kMjpg, OutputFormat::bgr8, 0},
-                      PathCase{kMjpg, OutputFormat::rgb8, 0}, PathCase{kMjpg, OutputFormat::mono8, 0},
-                      PathCase{kMjpg, OutputFormat::raw, 0}, PathCase{kGrey, OutputFormat::mono8, 16},
-                      PathCase{kGrey, OutputFormat::bgr8, 0}, PathCase{kY16, OutputFormat::mono8, 0}));
+    ::testing::Values(PathCase{kYuyv, imaging::OutputFormat::bgr8, 0}, PathCase{kYuyv, imaging::OutputFormat::rgb8, 64},
+                      PathCase{kYuyv, imaging::OutputFormat::mono8, 0}, PathCase{kYuyv, imaging::OutputFormat::raw, 32},
+                      PathCase{kUyvy, imaging::OutputFormat::bgr8, 0}, PathCase{kMjpg, imaging::OutputFormat::bgr8, 0},
+                      PathCase{kMjpg, imaging::OutputFormat::rgb8, 0}, PathCase{kMjpg, imaging::OutputFormat::mono8, 0},
+                      PathCase{kMjpg, imaging::OutputFormat::raw, 0}, PathCase{kGrey, imaging::OutputFormat::mono8, 16},
+                      PathCase{kGrey, imaging::OutputFormat::bgr8, 0}, PathCase{kY16, imaging::OutputFormat::mono8, 0}));
 
 // --- timestamps and sequence ----------------------------------------------------------------
 
@@ -451,7 +451,24 @@ TEST_F(V4l2CaptureTest, StoppingReleasesEverything) {
 
 // --- configuration file and tool --------------------------------------------------------------
 
-TEST(V4l2Config, YamlFillsTheConfigAndReportsBadKeys) {
+// Parses a camera program's command line (the program name first) as the tool would.
+template <typename Options, typename Add, typename Finish>
+std::optional<int> parse_options(std::vector<std::string> words, Options& options, Add add,
+                                 Finish finish) {
+  sim::apps::CommandLine cli("sim_camera_test", "test");
+  add(cli, options);
+  std::vector<char*> argv;
+  for (auto& w : words) argv.push_back(w.data());
+  if (auto code = cli.parse(static_cast<int>(argv.size()), argv.data())) return code;
+  if (auto problem = finish(options)) return cli.usage_error(*problem);
+  return std::nullopt;
+}
+
+std::optional<int> parse_v4l2(std::vector<std::string> words, V4l2Options& options) {
+  return parse_options(std::move(words), options, add_v4l2_options, finish_v4l2_options);
+}
+
+TEST(V4l2Config, YamlFillsTheConfigUnderTheCommandLineAndRefusesBadKeys) {
   const std::string path = "/tmp/test_camera_config_" + std::to_string(getpid()) + ".yaml";
   {
     FILE* file = std::fopen(path.c_str(), "w");
@@ -462,17 +479,18 @@ TEST(V4l2Config, YamlFillsTheConfigAndReportsBadKeys) {
                file);
     std::fclose(file);
   }
-  V4l2CaptureConfig config;
-  Placement placement;
-  EXPECT_FALSE(load_v4l2_config(path, config, placement));
+  V4l2Options options;
+  EXPECT_FALSE(parse_v4l2({"t", "--config", path, "--width", "640"}, options));
+  const V4l2CaptureConfig& config = options.config;
   EXPECT_EQ(config.device, "/dev/video3");
   EXPECT_EQ(config.stream, "/cam_left");
   EXPECT_EQ(config.format.fourcc, FourCc::of('M', 'J', 'P', 'G'));
-  EXPECT_EQ(config.format.width, 1280u);
-  EXPECT_EQ(config.format.output, OutputFormat::rgb8);
+  EXPECT_EQ(config.format.width, 640u);  // the command line wins
+  EXPECT_EQ(config.format.height, 720u);
+  EXPECT_EQ(config.format.output, imaging::OutputFormat::rgb8);
   ASSERT_EQ(config.controls.size(), 2u);
   EXPECT_EQ(config.controls[1].key, "exposure_auto");
-  EXPECT_EQ(placement.cpu, 1);
+  EXPECT_EQ(options.placement.cpu, 1);
   EXPECT_EQ(config.timestamps, TimestampSource::receive);
 
   {
@@ -480,39 +498,43 @@ TEST(V4l2Config, YamlFillsTheConfigAndReportsBadKeys) {
     std::fputs("widht: 640\n", file);
     std::fclose(file);
   }
-  auto error = load_v4l2_config(path, config, placement);
-  ASSERT_TRUE(error);
-  EXPECT_NE(error->message.find("unknown key 'widht'"), std::string::npos);
+  V4l2Options typo;
+  ::testing::internal::CaptureStderr();
+  EXPECT_EQ(parse_v4l2({"t", "--config", path}, typo), std::optional<int>(2));
+  EXPECT_NE(::testing::internal::GetCapturedStderr().find("widht"), std::string::npos);
   {
     FILE* file = std::fopen(path.c_str(), "w");
     std::fputs("width: wide\n", file);
     std::fclose(file);
   }
-  error = load_v4l2_config(path, config, placement);
-  ASSERT_TRUE(error);
-  EXPECT_NE(error->message.find("'width'"), std::string::npos);
+  V4l2Options wrong_type;
+  ::testing::internal::CaptureStderr();
+  EXPECT_EQ(parse_v4l2({"t", "--config", path}, wrong_type), std::optional<int>(2));
+  EXPECT_NE(::testing::internal::GetCapturedStderr().find("width"), std::string::npos);
   std::remove(path.c_str());
-  EXPECT_TRUE(load_v4l2_config(path, config, placement));
+  V4l2Options missing;
+  ::testing::internal::CaptureStderr();
+  EXPECT_EQ(parse_v4l2({"t", "--config", path}, missing), std::optional<int>(2));
+  ::testing::internal::GetCapturedStderr();
 }
 
 TEST(CameraConfig, ShippedExamplesParse) {
-  V4l2CaptureConfig v4l2;
-  Placement placement;
-  const auto v4l2_error =
-      load_v4l2_config(std::string(SIM_CAMERA_CONFIG_DIR) + "/v4l2_usb.yaml", v4l2, placement);
-  EXPECT_FALSE(v4l2_error) << v4l2_error->message;
-  EXPECT_EQ(v4l2.format.width, 1280u);
-  EXPECT_EQ(v4l2.controls.size(), 3u);
+  V4l2Options v4l2;
+  EXPECT_FALSE(parse_v4l2({"t", "--config", std::string(SIM_CAMERA_CONFIG_DIR) + "/v4l2_usb.yaml"},
+                          v4l2));
+  EXPECT_EQ(v4l2.config.format.width, 1280u);
+  EXPECT_EQ(v4l2.config.controls.size(), 3u);
 
-  AravisCaptureConfig aravis;
-  const auto aravis_error =
-      load_aravis_config(std::string(SIM_CAMERA_CONFIG_DIR) + "/aravis_gige.yaml", aravis, placement);
-  EXPECT_FALSE(aravis_error) << aravis_error->message;
-  EXPECT_EQ(aravis.pixel_format, "BayerRG8");
-  EXPECT_EQ(aravis.width, 1920);
-  ASSERT_EQ(aravis.features.size(), 2u);
-  EXPECT_EQ(aravis.features[0].first, "ExposureAuto");
-  EXPECT_EQ(aravis.features[0].second, "Off");
+  AravisOptions aravis;
+  EXPECT_FALSE(parse_options(
+      {"t", "--config", std::string(SIM_CAMERA_CONFIG_DIR) + "/aravis_gige.yaml"}, aravis,
+      add_aravis_options, finish_aravis_options));
+  EXPECT_EQ(aravis.config.pixel_format, "BayerRG8");
+  EXPECT_EQ(aravis.config.width, 1920);
+  EXPECT_TRUE(aravis.config.packet_socket);
+  ASSERT_EQ(aravis.config.features.size(), 2u);
+  EXPECT_EQ(aravis.config.features[0].first, "ExposureAuto");
+  EXPECT_EQ(aravis.config.features[0].second, "Off");
 }
 
 // Opt-in, for developer machines with a camera: SIM_CAMERA_DEVICE=/dev/video0 runs the real

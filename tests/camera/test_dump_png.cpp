@@ -19,7 +19,7 @@ namespace {
 namespace fs = std::filesystem;
 using sim::ImageLayout;
 using sim::PixelFormat;
-using sim::camera::OutputFormat;
+using sim::imaging::OutputFormat;
 using sim::camera::testing::Bytes;
 using sim::testing::run;
 

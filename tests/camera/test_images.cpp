@@ -55,17 +55,17 @@ Bytes encode_jpeg(std::span<const std::byte> bgr, std::uint32_t width, std::uint
   return bytes;
 }
 
-Bytes reference(const ImageLayout& layout, std::span<const std::byte> input, OutputFormat output) {
+Bytes reference(const ImageLayout& layout, std::span<const std::byte> input, imaging::OutputFormat output) {
   cv::Mat result;
   const int rows = static_cast<int>(layout.height);
   const int cols = static_cast<int>(layout.width);
   auto* data = const_cast<std::byte*>(input.data());
-  const bool bgr = output == OutputFormat::bgr8;
-  const bool rgb = output == OutputFormat::rgb8;
+  const bool bgr = output == imaging::OutputFormat::bgr8;
+  const bool rgb = output == imaging::OutputFormat::rgb8;
   switch (layout.format) {
     case PixelFormat::mjpeg: {
       const cv::Mat encoded(1, static_cast<int>(input.size()), CV_8UC1, data);
-      result = cv::imdecode(encoded, output == OutputFormat::mono8 ? cv::IMREAD_GRAYSCALE
+      result = cv::imdecode(encoded, output == imaging::OutputFormat::mono8 ? cv::IMREAD_GRAYSCALE
                                                                    : cv::IMREAD_COLOR);
       if (rgb) cv::cvtColor(result, result, cv::COLOR_BGR2RGB);
       break;
@@ -103,14 +103,14 @@ Bytes reference(const ImageLayout& layout, std::span<const std::byte> input, Out
       const cv::Mat image(rows, cols, CV_8UC3, data, layout.stride);
       if (bgr) result = image.clone();
       if (rgb) cv::cvtColor(image, result, cv::COLOR_BGR2RGB);
-      if (output == OutputFormat::mono8) cv::cvtColor(image, result, cv::COLOR_BGR2GRAY);
+      if (output == imaging::OutputFormat::mono8) cv::cvtColor(image, result, cv::COLOR_BGR2GRAY);
       break;
     }
     case PixelFormat::rgb8: {
       const cv::Mat image(rows, cols, CV_8UC3, data, layout.stride);
       if (bgr) cv::cvtColor(image, result, cv::COLOR_RGB2BGR);
       if (rgb) result = image.clone();
-      if (output == OutputFormat::mono8) cv::cvtColor(image, result, cv::COLOR_RGB2GRAY);
+      if (output == imaging::OutputFormat::mono8) cv::cvtColor(image, result, cv::COLOR_RGB2GRAY);
       break;
     }
     case PixelFormat::bayer_rggb8: {
@@ -118,7 +118,7 @@ Bytes reference(const ImageLayout& layout, std::span<const std::byte> input, Out
       const cv::Mat mosaic(rows, cols, CV_8UC1, data, layout.stride);
       if (bgr) cv::cvtColor(mosaic, result, cv::COLOR_BayerBG2BGR);
       if (rgb) cv::cvtColor(mosaic, result, cv::COLOR_BayerBG2RGB);
-      if (output == OutputFormat::mono8) cv::cvtColor(mosaic, result, cv::COLOR_BayerBG2GRAY);
+      if (output == imaging::OutputFormat::mono8) cv::cvtColor(mosaic, result, cv::COLOR_BayerBG2GRAY);
       break;
     }
     default:

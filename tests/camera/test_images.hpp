@@ -8,7 +8,7 @@
 #include <span>
 #include <vector>
 
-#include "sim/camera/image_format.hpp"
+#include "sim/imaging/image_format.hpp"
 #include "sim/layout.hpp"
 
 namespace sim::camera::testing {
@@ -24,7 +24,7 @@ Bytes encode_jpeg(std::span<const std::byte> bgr, std::uint32_t width, std::uint
                   int quality = 85, bool subsample_422 = true);
 // OpenCV's own conversion of `input` (laid out as `layout`) to `output`, tightly packed:
 // cv::cvtColor for packed formats, cv::imdecode for MJPEG. Empty if OpenCV cannot.
-Bytes reference(const ImageLayout& layout, std::span<const std::byte> input, OutputFormat output);
+Bytes reference(const ImageLayout& layout, std::span<const std::byte> input, imaging::OutputFormat output);
 // Largest absolute difference of two byte images of the same size (255 if sizes differ).
 int max_difference(std::span<const std::byte> a, std::span<const std::byte> b);
 

@@ -382,7 +382,7 @@ TEST(Ros2Messages, SchemasNameEveryNestedTypeOnceAfterASeparator) {
   const std::string separator = std::string(80, '=') + "\n";
   for (MessageType t : {MessageType::image, MessageType::compressed_image, MessageType::point_cloud2}) {
     const std::string schema(ros2msg_schema(t));
-    EXPECT_EQ(schema.rfind("std_msgs/Header header\n", 0), 0u);
+    EXPECT_EQ(schema.rfind("std_msgs/msg/Header header\n", 0), 0u);
     EXPECT_NE(schema.find(separator + "MSG: std_msgs/msg/Header\nbuiltin_interfaces/Time stamp\n"),
               std::string::npos);
     EXPECT_NE(schema.find(separator + "MSG: builtin_interfaces/msg/Time\nint32 sec\nuint32 nanosec\n"),

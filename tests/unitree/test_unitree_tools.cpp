@@ -6,6 +6,9 @@
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <pty.h>
+#ifdef SIM_REPLAY_PCAP_PATH
+#include <pcap/pcap.h>
+#endif
 #include <sys/socket.h>
 #include <termios.h>
 #include <unistd.h>
@@ -428,5 +431,120 @@ TEST(UnitreeReplaySerial, BadInputIsReportedWithExitCodes) {
   }
   std::filesystem::remove(garbage);
 }
+
+#ifdef SIM_REPLAY_PCAP_PATH
+// A capture of the L2's UDP stream as tcpdump would write it (raw IP link type): one datagram
+// per packet, 4 ms apart.
+void write_udp_capture(const std::string& path, const std::vector<Bytes>& payloads) {
+  pcap_t* dead = pcap_open_dead(DLT_RAW, 65535);
+  pcap_dumper_t* dumper = pcap_dump_open(dead, path.c_str());
+  ASSERT_NE(dumper, nullptr) << pcap_geterr(dead);
+  for (std::size_t i = 0; i < payloads.size(); ++i) {
+    const Bytes& payload = payloads[i];
+    std::vector<std::uint8_t> packet(28 + payload.size(), 0);
+    const auto total = static_cast<std::uint16_t>(packet.size());
+    packet[0] = 0x45;  // IPv4, 20-byte header
+    packet[2] = static_cast<std::uint8_t>(total >> 8);
+    packet[3] = static_cast<std::uint8_t>(total);
+    packet[8] = 64;   // TTL
+    packet[9] = 17;   // UDP
+    const std::uint8_t source[4] = {192, 168, 1, 62};
+    const std::uint8_t destination[4] = {192, 168, 1, 2};
+    std::memcpy(&packet[12], source, 4);
+    std::memcpy(&packet[16], destination, 4);
+    const auto udp_length = static_cast<std::uint16_t>(8 + payload.size());
+    packet[20] = 6201 >> 8;  // source port
+    packet[21] = 6201 & 0xFF;
+    packet[22] = 6201 >> 8;  // destination port
+    packet[23] = 6201 & 0xFF;
+    packet[24] = static_cast<std::uint8_t>(udp_length >> 8);
+    packet[25] = static_cast<std::uint8_t>(udp_length);
+    std::memcpy(&packet[28], payload.data(), payload.size());
+    pcap_pkthdr header{};
+    header.ts.tv_sec = 1'700'000'000;
+    header.ts.tv_usec = static_cast<suseconds_t>(i * 4000);
+    header.caplen = header.len = static_cast<bpf_u_int32>(packet.size());
+    pcap_dump(reinterpret_cast<u_char*>(dumper), &header, packet.data());
+  }
+  pcap_dump_close(dumper);
+  pcap_close(dead);
+}
+
+TEST(UnitreeReplayPcap, PublishesTheScansOfAnL2CaptureAsTheLibraryDecodesThem) {
+  StreamGuard guard;
+  const std::string stream = unique_name("pcap");
+  guard.names = {stream, stream + ".imu"};
+  const std::string file = temp_path("capture") + ".pcap";
+  std::vector<Bytes> payloads;
+  for (std::uint32_t i = 0; i < 9; ++i) payloads.push_back(l2_point_packet(l2_packet_spec(i)));
+  payloads.push_back(l2_imu_packet(imu_spec()));
+  write_udp_capture(file, payloads);
+  Bytes wire;
+  for (const auto& p : payloads) wire = concat({wire, p});
+  const auto expected = expected_scans(sim::unitree::Model::l2, 3, wire);
+  ASSERT_EQ(expected.size(), 3U);
+
+  Process replay({SIM_REPLAY_PCAP_PATH, file, "--model", "unitree-l2", "--stream", stream,
+                  "--scan-packets", "3", "--max-rate", "--summary", "-q"});
+  ASSERT_EQ(replay.wait(kTimeout), 0) << replay.err();
+  EXPECT_NE(replay.out().find("summary frames=3 packets=10"), std::string::npos) << replay.out();
+  auto status = sim::inspect(stream);
+  ASSERT_TRUE(status.has_value());
+  EXPECT_EQ(status->frames_published, 3U);
+  auto points = open_reader(stream);
+  ASSERT_TRUE(points);
+  expect_frame(*points, expected[2], 3);  // the newest frame is the third scan
+  auto imu_status = sim::inspect(stream + ".imu");
+  ASSERT_TRUE(imu_status.has_value());
+  EXPECT_EQ(imu_status->frames_published, 1U);
+  std::filesystem::remove(file);
+}
+
+TEST(UnitreeReplayPcap, ALoopingReplayKeepsWholeScansAndIncreasingStamps) {
+  StreamGuard guard;
+  const std::string stream = unique_name("pcaploop");
+  guard.names = {stream, stream + ".imu"};
+  const std::string file = temp_path("loop") + ".pcap";
+  std::vector<Bytes> payloads;
+  for (std::uint32_t i = 0; i < 9; ++i) payloads.push_back(l2_point_packet(l2_packet_spec(i)));
+  write_udp_capture(file, payloads);
+  Process replay({SIM_REPLAY_PCAP_PATH, file, "--model", "unitree-l2", "--stream", stream,
+                  "--scan-packets", "3", "--rate", "4", "--loop", "--summary", "-q"});
+  std::optional<sim::Reader> reader;
+  for (int i = 0; i < 2000 && !reader; ++i) {
+    if (auto r = sim::Reader::open(stream)) reader.emplace(std::move(*r));
+    else std::this_thread::sleep_for(5ms);
+  }
+  ASSERT_TRUE(reader);
+  std::vector<std::byte> buffer(reader->capacity());
+  sim::FrameInfo info;
+  std::int64_t last_stamp = 0;
+  // Seven scans is more than two passes of three: stamps increase across the wraps.
+  while (info.seq < 7) {
+    ASSERT_EQ(reader->read_next(buffer, info, kTimeout), sim::ReadStatus::new_frame);
+    EXPECT_GT(info.stamp_ns, last_stamp) << "seq " << info.seq;
+    EXPECT_EQ(info.size, expected_scans(sim::unitree::Model::l2, 3,
+                                        concat({payloads[0], payloads[1], payloads[2]}))[0]
+                                 .points.size() * sizeof(sim::LidarPoint));
+    last_stamp = info.stamp_ns;
+  }
+  replay.signal(SIGINT);
+  EXPECT_EQ(replay.wait(kTimeout), 0) << replay.err();
+  std::filesystem::remove(file);
+}
+
+TEST(UnitreeReplayPcap, BadArgumentsAreRefusedBeforeAnythingIsOpened) {
+  Process bad_stream({SIM_REPLAY_PCAP_PATH, "/nonexistent.pcap", "--model", "unitree-l2",
+                      "--stream", "no_slash"});
+  EXPECT_EQ(bad_stream.wait(kTimeout), 2);
+  EXPECT_NE(bad_stream.err().find("must start with '/'"), std::string::npos) << bad_stream.err();
+  Process missing({SIM_REPLAY_PCAP_PATH, "/nonexistent.pcap", "--model", "unitree-l2",
+                   "--stream", unique_name("missing")});
+  EXPECT_EQ(missing.wait(kTimeout), 1);
+  Process help({SIM_REPLAY_PCAP_PATH, "--model", "unitree-l2", "--help"});
+  EXPECT_EQ(help.wait(kTimeout), 0);
+  EXPECT_NE(help.out().find("--scan-packets"), std::string::npos);
+}
+#endif
 
 }  // namespace

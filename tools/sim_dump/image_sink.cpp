@@ -6,7 +6,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "frame_sink.hpp"
-#include "sim/camera/decoder.hpp"
+#include "sim/imaging/decoder.hpp"
 #include "sim/opencv.hpp"
 
 namespace sim::dump {
@@ -19,7 +19,7 @@ bool png_holds_as_is(PixelFormat format) {
 
 class PngSink final : public FrameSink {
  public:
-  PngSink(const ImageLayout& layout, std::optional<camera::FrameDecoder> decoder)
+  PngSink(const ImageLayout& layout, std::optional<imaging::FrameDecoder> decoder)
       : layout_(layout), decoder_(std::move(decoder)) {
     if (decoder_) {
       const ImageLayout& out = decoder_->output_layout();
@@ -34,11 +34,11 @@ class PngSink final : public FrameSink {
     if (decoder_) {
       const auto out = std::span<std::byte>(reinterpret_cast<std::byte*>(converted_.data),
                                             converted_.total() * converted_.elemSize());
-      const camera::DecodeResult decoded = decoder_->decode(frame, out);
-      if (decoded.status != camera::DecodeStatus::ok) {
+      const imaging::DecodeResult decoded = decoder_->decode(frame, out);
+      if (decoded.status != imaging::DecodeStatus::ok) {
         return Error{ErrorCode::invalid_argument,
                      "frame " + std::to_string(info.seq) + " (" + sim::to_string(layout_.format) +
-                         ") does not decode: " + camera::to_string(decoded.status) +
+                         ") does not decode: " + imaging::to_string(decoded.status) +
                          "; nothing was written."};
       }
       image = converted_;
@@ -66,7 +66,7 @@ class PngSink final : public FrameSink {
 
  private:
   ImageLayout layout_;
-  std::optional<camera::FrameDecoder> decoder_;
+  std::optional<imaging::FrameDecoder> decoder_;
   cv::Mat converted_;  // kept between frames: BGR pixels of a converted frame
 };
 
@@ -82,7 +82,7 @@ Expected<std::unique_ptr<FrameSink>> make_image_sink(const ImageLayout& layout,
     }
     return std::unique_ptr<FrameSink>(new PngSink(layout, std::nullopt));
   }
-  auto decoder = camera::FrameDecoder::create(layout, camera::OutputFormat::bgr8);
+  auto decoder = imaging::FrameDecoder::create(layout, imaging::OutputFormat::bgr8);
   if (!decoder) {
     return Error{ErrorCode::invalid_argument,
                  "cannot write this stream's images as PNG: " + decoder.error().message + "."};

@@ -2,12 +2,6 @@
 // sim_dump: writes frames of a SIM stream to files, one frame file plus a JSON sidecar of its
 // metadata per frame: LiDAR streams as PCD (through PCL), image streams as PNG (through OpenCV),
 // raw streams as .bin.
-#include <signal.h>
-#include <unistd.h>
-
-#include <CLI/CLI.hpp>
-
-#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -16,18 +10,12 @@
 #include <vector>
 
 #include "frame_sink.hpp"
+#include "sim/apps/command_line.hpp"
+#include "sim/apps/status_line.hpp"
+#include "sim/apps/stop_signal.hpp"
 #include "sim/reader.hpp"
 
 namespace {
-
-constexpr char tool[] = "sim_dump";
-std::atomic<bool> stop_requested{false};
-void on_signal(int) { stop_requested.store(true); }
-
-int fail(const std::string& message) {
-  std::fprintf(stderr, "%s: %s\n", tool, message.c_str());
-  return 1;
-}
 
 // "/lidar_top" → "lidar_top": file names carry the stream name without its slash.
 std::string file_stem(const std::string& stream, std::uint64_t seq) {
@@ -40,45 +28,41 @@ std::string file_stem(const std::string& stream, std::uint64_t seq) {
 
 int main(int argc, char** argv) {
   std::string stream;
-  std::uint64_t count = 1;
+  std::int64_t count = 1;
   std::string out_dir = ".";
   double timeout_s = 5.0;
   bool include_current = false;
+  bool quiet = false;
   sim::dump::SinkOptions sink_options;
-  CLI::App app{
+  sim::apps::CommandLine cli(
+      "sim_dump",
       "Writes frames of a SIM stream to files: LiDAR frames as PCD (binary, or --ascii) through "
-      "PCL, raw streams as .bin, each with a JSON sidecar (seq, stamp_ns, publish_ns, size, "
-      "layout).\nExit codes: 0 all frames written, 1 failure or too few frames arrived, "
-      "2 usage error.",
-      tool};
-  app.add_option("stream", stream, "stream name, e.g. /lidar_top (see sim_ls)")->required();
-  app.add_option("--count,-n", count, "frames to write; 0 until stopped with Ctrl-C [1]");
-  app.add_option("--out,-o", out_dir, "folder for the files (created if missing) [.]")
+      "PCL, image frames as PNG, raw streams as .bin, each with a JSON sidecar (seq, stamp_ns, "
+      "publish_ns, size, layout). Exit code 1 also when fewer frames than --count arrived.");
+  auto& app = cli.app();
+  cli.add_stream("stream", stream, "stream name, e.g. /lidar_top (see sim_ls)")->required();
+  app.add_option("--count,-n", count, "frames to write; 0 until stopped with Ctrl-C")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--out,-o", out_dir, "folder for the files (created if missing)")
       ->type_name("DIR");
   app.add_flag("--ascii", sink_options.ascii, "PCD in ASCII instead of binary");
-  app.add_flag("--xyz", sink_options.xyz_only, "PCD with x y z only (pcl::PointXYZ) instead of x y z intensity");
+  app.add_flag("--xyz", sink_options.xyz_only,
+               "PCD with x y z only (pcl::PointXYZ) instead of x y z intensity");
   app.add_flag("--current", include_current,
                "start with the newest frame already published instead of waiting for the next");
-  app.add_option("--timeout", timeout_s, "give up when no new frame arrives for this many seconds [5]")
+  app.add_option("--timeout", timeout_s, "give up when no new frame arrives for this many seconds")
       ->check(CLI::PositiveNumber);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
+  app.add_flag("-q,--quiet", quiet, "no progress line and no summary");
+  if (auto code = cli.parse(argc, argv)) return *code;
+  const auto& stop = sim::apps::StopSignal::install();
 
   auto reader = sim::Reader::open(stream);
-  if (!reader) return fail(reader.error().message);
+  if (!reader) return cli.fail(std::string_view(reader.error().message));
   auto sink = sim::dump::make_sink(reader->layout(), sink_options);
-  if (!sink) return fail(sink.error().message);
+  if (!sink) return cli.fail(std::string_view(sink.error().message));
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
-  if (ec) return fail("cannot create the folder " + out_dir + ": " + ec.message() + ".");
-
-  struct sigaction action {};
-  action.sa_handler = on_signal;
-  sigaction(SIGINT, &action, nullptr);
-  sigaction(SIGTERM, &action, nullptr);
+  if (ec) return cli.fail("cannot create the folder " + out_dir + ": " + ec.message());
 
   std::vector<std::byte> buffer(reader->capacity());
   if (!include_current) {
@@ -86,22 +70,27 @@ int main(int argc, char** argv) {
     sim::FrameInfo ignored;
     (void)reader->read(buffer, ignored);
   }
-  const bool terminal = isatty(STDERR_FILENO) != 0;
+  auto status_line = sim::apps::StatusLine::for_stderr("sim_dump", quiet);
+  const auto wanted = static_cast<std::uint64_t>(count);
   const auto timeout = std::chrono::duration<double>(timeout_s);
   std::uint64_t written = 0;
   auto last_frame = std::chrono::steady_clock::now();
-  while ((count == 0 || written < count) && !stop_requested.load()) {
+  while ((wanted == 0 || written < wanted) && !stop.requested()) {
     sim::FrameInfo info;
     const sim::ReadStatus status = reader->read_next(buffer, info, std::chrono::milliseconds(100));
+    if (status == sim::ReadStatus::buffer_too_small) {
+      buffer.resize(reader->capacity());
+      continue;
+    }
     if (status == sim::ReadStatus::region_invalid) {
-      return fail("the stream " + stream + " was removed or damaged while reading; " +
-                  std::to_string(written) + " frames were written.");
+      return cli.fail("the stream " + stream + " was removed or damaged while reading; " +
+                      std::to_string(written) + " frames were written");
     }
     if (status != sim::ReadStatus::new_frame) {
       if (std::chrono::steady_clock::now() - last_frame > timeout) {
-        return fail("no new frame on " + stream + " for " + std::to_string(static_cast<int>(timeout_s)) +
-                    " s (" + sim::to_string(status) + "); " + std::to_string(written) +
-                    " frames were written. Is its writer running?");
+        status_line.finish(std::to_string(written) + " frames written to " + out_dir);
+        return cli.fail("no new frame on " + stream + " for " + sim::apps::number(timeout_s) +
+                        " s (" + sim::to_string(status) + "); is its writer running?");
       }
       continue;
     }
@@ -110,20 +99,16 @@ int main(int argc, char** argv) {
     const std::string file_name = stem + (*sink)->extension();
     const std::filesystem::path folder(out_dir);
     if (auto error = (*sink)->write(folder / file_name, std::span(buffer).first(info.size), info)) {
-      return fail(error->message);
+      return cli.fail(std::string_view(error->message));
     }
     std::ofstream sidecar(folder / (stem + ".json"));
     sidecar << sim::dump::sidecar_json(stream, info, file_name);
-    if (!sidecar.flush()) return fail("cannot write " + (folder / (stem + ".json")).string() + ".");
+    if (!sidecar.flush()) return cli.fail("cannot write " + (folder / (stem + ".json")).string());
     ++written;
-    if (terminal) {
-      std::fprintf(stderr, "\r\033[K%llu%s frames written, last seq %llu",
-                   static_cast<unsigned long long>(written),
-                   count != 0 ? ("/" + std::to_string(count)).c_str() : "",
-                   static_cast<unsigned long long>(info.seq));
-    }
+    status_line.update(sim::apps::fields(
+        {{"frames", std::to_string(written) + (wanted != 0 ? "/" + std::to_string(wanted) : "")},
+         {"last seq", std::to_string(info.seq)}}));
   }
-  if (terminal) std::fprintf(stderr, "\n");
-  std::printf("%llu frames written to %s\n", static_cast<unsigned long long>(written), out_dir.c_str());
-  return 0;
+  status_line.finish(std::to_string(written) + " frames written to " + out_dir);
+  return sim::apps::kExitOk;
 }

@@ -1,177 +1,158 @@
 // SPDX-License-Identifier: Apache-2.0
-// sim_echo: prints the frames of a stream as JSON lines, or their rate and latency (--stats).
-#include <algorithm>
-#include <atomic>
-#include <chrono>
-#include <csignal>
+// sim_echo: prints the frames of a stream (one readable line each, or JSON with --json), or with
+// --stats their rate, interval spread, latency, delay, bandwidth and skips.
 #include <cstdio>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "frame_stats.hpp"
+#include "sim/apps/command_line.hpp"
+#include "sim/apps/stop_signal.hpp"
 #include "sim/clock.hpp"
 #include "sim/reader.hpp"
-#include "sim_tools/cli.hpp"
 
 namespace {
 
-std::atomic<bool> stop_requested{false};
-void on_signal(int) { stop_requested.store(true); }
-
-// Rate, latency and skips over one reporting interval (and over the whole run).
-struct Window {
-  std::uint64_t frames = 0;
-  std::uint64_t skipped = 0;
-  std::vector<double> latencies_us;
-  std::uint64_t last_size = 0;
-
-  void add(double latency_us, std::uint64_t size) {
-    ++frames;
-    latencies_us.push_back(latency_us);
-    last_size = size;
-  }
-  double percentile(double p) {
-    if (latencies_us.empty()) return 0;
-    const auto k = static_cast<std::size_t>(p * static_cast<double>(latencies_us.size() - 1));
-    std::nth_element(latencies_us.begin(), latencies_us.begin() + static_cast<long>(k),
-                     latencies_us.end());
-    return latencies_us[k];
-  }
-  double mean() const {
-    double sum = 0;
-    for (const double v : latencies_us) sum += v;
-    return latencies_us.empty() ? 0 : sum / static_cast<double>(latencies_us.size());
-  }
-  double max() const {
-    return latencies_us.empty() ? 0 : *std::max_element(latencies_us.begin(), latencies_us.end());
-  }
-  double min() const {
-    return latencies_us.empty() ? 0 : *std::min_element(latencies_us.begin(), latencies_us.end());
-  }
-};
-
-void print_stats(const char* label, const std::string& name, Window& w, double rate) {
-  std::printf(
-      "{\"%s\":\"%s\",\"frames\":%llu,\"skipped\":%llu,\"rate_hz\":%.2f,\"size\":%llu,"
-      "\"latency_us\":{\"min\":%.1f,\"mean\":%.1f,\"p50\":%.1f,\"p99\":%.1f,\"max\":%.1f}}\n",
-      label, name.c_str(), static_cast<unsigned long long>(w.frames),
-      static_cast<unsigned long long>(w.skipped), rate,
-      static_cast<unsigned long long>(w.last_size), w.min(), w.mean(), w.percentile(0.5),
-      w.percentile(0.99), w.max());
-  std::fflush(stdout);
-}
-
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"Print the frames of a SIM stream, one JSON line each (seq, stamp, size, latency, "
-               "layout), or with --stats its rate, latency and skipped frames."};
-  std::string name;
+struct Options {
+  std::string stream;
   std::uint64_t count = 0;
+  bool json = false;
   bool stats = false;
   double interval_s = 1.0;
   double timeout_s = 0;
   double duration_s = 0;
   bool wait_for_stream = false;
   bool poll = false;
-  app.add_option("stream", name, "stream name, like /lidar_top")->required();
-  app.add_option("--count,-n", count, "exit after this many frames");
-  app.add_flag("--stats", stats, "print rate, latency and skips every --interval instead of frames");
-  app.add_option("--interval", interval_s, "seconds between --stats lines")->check(CLI::PositiveNumber);
-  app.add_option("--timeout", timeout_s, "fail (exit 1) when no frame arrives for this many seconds");
-  app.add_option("--duration", duration_s, "stop after this many seconds");
-  app.add_flag("--wait-for-stream", wait_for_stream, "wait until the stream exists");
-  app.add_flag("--poll", poll, "busy-poll instead of sleeping until each frame (uses a core)");
-  sim::tools::Placement placement;
-  sim::tools::add_placement_options(app, placement);
-  if (auto code = sim::tools::parse(app, argc, argv)) return *code;
-  if (auto code = sim::tools::apply_placement(placement, "sim_echo")) return *code;
+  sim::ThreadPlacement placement;
+};
 
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+void print_frame(const Options& o, const sim::FrameInfo& info, std::int64_t read_ns,
+                 std::int64_t read_realtime_ns, std::uint64_t skipped) {
+  const double latency_us = static_cast<double>(read_ns - info.publish_ns) / 1e3;
+  const double delay_us =
+      info.stamp_ns != 0 ? static_cast<double>(read_realtime_ns - info.stamp_ns) / 1e3 : 0.0;
+  if (o.json) {
+    std::printf(
+        "{\"seq\":%llu,\"stamp_ns\":%lld,\"receive_ns\":%lld,\"publish_ns\":%lld,"
+        "\"size\":%llu,\"latency_us\":%.1f,\"delay_us\":%.1f,\"skipped\":%llu,\"layout\":\"%s\"}\n",
+        static_cast<unsigned long long>(info.seq), static_cast<long long>(info.stamp_ns),
+        static_cast<long long>(info.receive_ns), static_cast<long long>(info.publish_ns),
+        static_cast<unsigned long long>(info.size), latency_us, delay_us,
+        static_cast<unsigned long long>(skipped), info.layout.describe().c_str());
+  } else {
+    std::printf("seq %llu  size %llu B  latency %.1f us  delay %.1f us  skipped %llu  %s\n",
+                static_cast<unsigned long long>(info.seq),
+                static_cast<unsigned long long>(info.size), latency_us, delay_us,
+                static_cast<unsigned long long>(skipped), info.layout.describe().c_str());
+  }
+  std::fflush(stdout);
+}
+
+void print_stats(const Options& o, const char* label, const sim::echo::FrameStats& stats) {
+  if (o.json) {
+    std::printf("{\"%s\":\"%s\",%s}\n", label, o.stream.c_str(), stats.json_fields().c_str());
+  } else {
+    std::printf("%s %s  %s\n", label, o.stream.c_str(), stats.describe().c_str());
+  }
+  std::fflush(stdout);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  sim::apps::CommandLine cli(
+      "sim_echo",
+      "Print the frames of a SIM stream, one line each (seq, size, latency = publish to read, "
+      "delay = sensor stamp to read, layout), or with --stats its rate (with the spread of the "
+      "intervals), latency, delay, bandwidth and skipped frames. Frames published before "
+      "sim_echo started are not counted.");
+  auto& app = cli.app();
+  cli.add_stream("stream", o.stream, "stream name, like /lidar_top")->required();
+  app.add_option("--count,-n", o.count, "exit after this many frames (0: until stopped)");
+  app.add_flag("--json", o.json, "JSON lines for scripts instead of readable lines");
+  app.add_flag("--stats", o.stats, "print statistics every --interval instead of frames");
+  app.add_option("--interval", o.interval_s, "seconds between --stats lines")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--timeout", o.timeout_s,
+                 "fail (exit 1) when no frame arrives for this many seconds (0: never)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--duration", o.duration_s, "stop after this many seconds (0: never)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_flag("--wait-for-stream", o.wait_for_stream, "wait until the stream exists");
+  app.add_flag("--poll", o.poll, "busy-poll instead of sleeping until each frame (uses a core)");
+  cli.add_placement(o.placement);
+  if (auto code = cli.parse(argc, argv)) return *code;
+  if (auto code = cli.apply_placement(o.placement)) return *code;
+
+  const auto& stop = sim::apps::StopSignal::install();
   const std::int64_t start = sim::monotonic_ns();
-  auto elapsed_s = [&] { return static_cast<double>(sim::monotonic_ns() - start) / 1e9; };
+  const auto past = [&](double seconds) {
+    return seconds > 0 && static_cast<double>(sim::monotonic_ns() - start) / 1e9 >= seconds;
+  };
 
-  auto reader = sim::Reader::open(name);
-  while (!reader && wait_for_stream && reader.error().code == sim::ErrorCode::not_found &&
-         !stop_requested.load() && (duration_s <= 0 || elapsed_s() < duration_s)) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    reader = sim::Reader::open(name);
+  auto reader = sim::Reader::open(o.stream);
+  while (!reader && o.wait_for_stream && reader.error().code == sim::ErrorCode::not_found &&
+         !past(o.duration_s) && stop.sleep_for(std::chrono::milliseconds(100))) {
+    reader = sim::Reader::open(o.stream);
   }
   if (!reader) {
-    std::fprintf(stderr, "sim_echo: %s\n", reader.error().message.c_str());
-    return 1;
+    if (stop.requested() || past(o.duration_s)) return sim::apps::kExitOk;
+    return cli.fail(std::string_view(reader.error().message));
   }
+  // Frames published before this moment are the past: not counted, not printed.
+  const std::int64_t opened_ns = sim::monotonic_ns();
 
   std::vector<std::byte> buffer(reader->capacity());
-  Window window;
-  Window total;
+  sim::echo::FrameStats window;
+  sim::echo::FrameStats total;
   std::int64_t window_start = sim::monotonic_ns();
-  std::uint64_t skipped_before_window = 0;
-  std::int64_t first_frame_at = 0;
-  std::int64_t last_frame_at = sim::monotonic_ns();
-  int exit_code = 0;
+  std::int64_t last_frame_at = window_start;
+  int exit_code = sim::apps::kExitOk;
   const auto slice = std::chrono::milliseconds(100);
 
-  while (!stop_requested.load()) {
-    if (duration_s > 0 && elapsed_s() >= duration_s) break;
+  while (!stop.requested() && !past(o.duration_s)) {
     sim::FrameInfo info;
-    sim::ReadStatus status = poll ? reader->read(buffer, info) : reader->read_next(buffer, info, slice);
+    const sim::ReadStatus status =
+        o.poll ? reader->read(buffer, info) : reader->read_next(buffer, info, slice);
     if (status == sim::ReadStatus::buffer_too_small) {
       buffer.resize(reader->capacity());  // the writer recreated the stream with a larger layout
       continue;
     }
     const std::int64_t now = sim::monotonic_ns();
-    if (status == sim::ReadStatus::new_frame) {
+    if (status == sim::ReadStatus::new_frame && info.publish_ns >= opened_ns) {
       last_frame_at = now;
-      if (first_frame_at == 0) first_frame_at = now;
-      const double latency_us = static_cast<double>(now - info.publish_ns) / 1e3;
-      const sim::ReaderStats rs = reader->stats();
-      window.skipped = rs.skipped - skipped_before_window;
-      if (stats) {
-        window.add(latency_us, info.size);
+      const sim::echo::Frame frame{info.seq, info.size, info.publish_ns, now, info.stamp_ns,
+                                   sim::realtime_ns()};
+      total.add(frame);
+      if (o.stats) {
+        window.add(frame);
       } else {
-        std::printf(
-            "{\"seq\":%llu,\"stamp_ns\":%lld,\"receive_ns\":%lld,\"publish_ns\":%lld,"
-            "\"size\":%llu,\"latency_us\":%.1f,\"skipped\":%llu,\"layout\":\"%s\"}\n",
-            static_cast<unsigned long long>(info.seq), static_cast<long long>(info.stamp_ns),
-            static_cast<long long>(info.receive_ns), static_cast<long long>(info.publish_ns),
-            static_cast<unsigned long long>(info.size),
-            latency_us, static_cast<unsigned long long>(rs.skipped),
-            info.layout.describe().c_str());
-        std::fflush(stdout);
+        print_frame(o, info, frame.read_ns, frame.read_realtime_ns, total.skipped());
       }
-      total.add(latency_us, info.size);
-      total.skipped = rs.skipped;
-      if (count != 0 && total.frames >= count) break;
+      if (o.count != 0 && total.frames() >= o.count) break;
     } else if (status == sim::ReadStatus::region_invalid) {
-      std::fprintf(stderr, "sim_echo: stream %s failed validation; restart its writer\n",
-                   name.c_str());
-      exit_code = 1;
+      cli.fail("stream " + o.stream + " failed validation; restart its writer");
+      exit_code = sim::apps::kExitFailure;
       break;
-    } else if (poll) {
+    } else if (o.poll && status != sim::ReadStatus::new_frame) {
       std::this_thread::yield();
     }
-    if (timeout_s > 0 && static_cast<double>(now - last_frame_at) / 1e9 > timeout_s) {
-      std::fprintf(stderr, "sim_echo: no frame on %s for %.1f s (writer %s)\n", name.c_str(),
-                   timeout_s, reader->writer_alive() ? "alive" : "gone");
-      exit_code = 1;
+    if (o.timeout_s > 0 && static_cast<double>(now - last_frame_at) / 1e9 > o.timeout_s) {
+      char message[256];
+      std::snprintf(message, sizeof message, "no frame on %s for %.1f s (its writer is %s)",
+                    o.stream.c_str(), o.timeout_s, reader->writer_alive() ? "alive" : "gone");
+      cli.fail(message);
+      exit_code = sim::apps::kExitFailure;
       break;
     }
-    if (stats && static_cast<double>(now - window_start) / 1e9 >= interval_s) {
-      const double window_s = static_cast<double>(now - window_start) / 1e9;
-      print_stats("stream", name, window, static_cast<double>(window.frames) / window_s);
-      window = Window{};
-      skipped_before_window = reader->stats().skipped;
+    if (o.stats && static_cast<double>(now - window_start) / 1e9 >= o.interval_s) {
+      print_stats(o, "stream", window);
+      window = sim::echo::FrameStats{};
       window_start = now;
     }
   }
-  if (stats) {
-    // The rate of the whole run counts from the first frame, not from when the tool started.
-    const double span_s = static_cast<double>(last_frame_at - first_frame_at) / 1e9;
-    const double rate_hz =
-        (total.frames > 1 && span_s > 0) ? static_cast<double>(total.frames - 1) / span_s : 0.0;
-    print_stats("summary", name, total, rate_hz);
-  }
+  if (o.stats) print_stats(o, "summary", total);
   return exit_code;
 }

@@ -1,91 +1,290 @@
 // SPDX-License-Identifier: Apache-2.0
-// sim_ls: every SIM stream on this machine, with its layout, rate, age and writer.
-#include <cstdio>
-#include <string>
+// sim_ls: every SIM stream on this machine, with its layout, rate, age and writer; --watch
+// keeps a live view of them all (rate, bandwidth, age, latency, skips, sleeping readers, writer),
+// refreshed in place.
+#include <fcntl.h>
+#include <unistd.h>
 
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sim/apps/command_line.hpp"
+#include "sim/apps/stop_signal.hpp"
 #include "sim/clock.hpp"
 #include "sim/reader.hpp"
-#include "sim_tools/cli.hpp"
+#include "stream_watch.hpp"
 
 namespace {
+
+struct Options {
+  bool json = false;
+  bool watch = false;
+  double interval_s = 1.0;
+  double window_s = 0.5;
+};
+
+std::string json_escape(const std::string& in) {
+  std::string out;
+  for (const char c : in) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char code[8];
+      std::snprintf(code, sizeof code, "\\u%04x", c);
+      out += code;
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+// The writer's program name as the core stored it (the kernel keeps 15 characters of it); while
+// the writer lives, the full name from its command line when it starts with the stored one.
+std::string writer_name(const sim::StreamStatus& s) {
+  if (!s.writer_alive || s.writer_pid <= 0) return s.writer_command;
+  const std::string path = "/proc/" + std::to_string(s.writer_pid) + "/cmdline";
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return s.writer_command;
+  char buffer[512];
+  const ssize_t n = ::read(fd, buffer, sizeof buffer - 1);
+  ::close(fd);
+  if (n <= 0) return s.writer_command;
+  buffer[n] = '\0';
+  std::string argv0(buffer);  // up to the first NUL
+  const auto slash = argv0.rfind('/');
+  if (slash != std::string::npos) argv0 = argv0.substr(slash + 1);
+  return argv0.rfind(s.writer_command, 0) == 0 ? argv0 : s.writer_command;
+}
 
 std::string age_text(std::int64_t now, std::int64_t then) {
   if (then == 0) return "never";
   const double seconds = static_cast<double>(now - then) / 1e9;
   char text[32];
-  std::snprintf(text, sizeof(text), seconds < 1 ? "%.0f ms" : "%.1f s",
+  std::snprintf(text, sizeof text, seconds < 1 ? "%.0f ms" : "%.1f s",
                 seconds < 1 ? seconds * 1e3 : seconds);
   return text;
 }
 
-std::string json_escape(const std::string& in) {
-  std::string out;
-  for (const char c : in) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
+std::string bandwidth_text(double bytes_per_s) {
+  char text[32];
+  if (bytes_per_s >= 1e6) {
+    std::snprintf(text, sizeof text, "%.1f MB/s", bytes_per_s / 1e6);
+  } else if (bytes_per_s >= 1e3) {
+    std::snprintf(text, sizeof text, "%.1f kB/s", bytes_per_s / 1e3);
+  } else {
+    std::snprintf(text, sizeof text, "%.0f B/s", bytes_per_s);
   }
-  return out;
+  return text;
+}
+
+// One stream at one refresh.
+struct Row {
+  std::string name;
+  std::optional<sim::StreamStatus> status;
+  std::string error;
+  double rate_hz = 0;                     // frames published per second over the recent window
+  std::optional<sim::ls::WatchSample> seen;  // --watch: what the view's reader counted
+  double seen_span_s = 0;
+};
+
+// Rates are measured over a recent window on CLOCK_MONOTONIC: the frames the same writer
+// published between two looks, so a restart or a clock step cannot make them up.
+class RateMeter {
+ public:
+  double update(const sim::StreamStatus& s, std::int64_t now) {
+    Sample& last = samples_[s.name];
+    double rate = 0;
+    if (last.at != 0 && last.pid == s.writer_pid && last.start == s.writer_start_realtime_ns &&
+        s.frames_published >= last.frames && now > last.at) {
+      rate = static_cast<double>(s.frames_published - last.frames) /
+             (static_cast<double>(now - last.at) / 1e9);
+    }
+    last = {now, s.writer_pid, s.writer_start_realtime_ns, s.frames_published};
+    return rate;
+  }
+
+ private:
+  struct Sample {
+    std::int64_t at = 0;
+    std::int32_t pid = 0;
+    std::int64_t start = 0;
+    std::uint64_t frames = 0;
+  };
+  std::map<std::string, Sample> samples_;
+};
+
+void print_json(const Row& row, std::int64_t now) {
+  if (!row.status) {
+    std::printf("{\"name\":\"%s\",\"error\":\"%s\"}\n", json_escape(row.name).c_str(),
+                json_escape(row.error).c_str());
+    return;
+  }
+  const sim::StreamStatus& s = *row.status;
+  std::string watched;
+  if (row.seen) {
+    const auto& w = *row.seen;
+    char text[256];
+    std::snprintf(text, sizeof text,
+                  ",\"bandwidth_bytes_per_s\":%.0f,\"latency_us\":{\"mean\":%.1f,\"max\":%.1f},"
+                  "\"skipped\":%llu",
+                  row.seen_span_s > 0 ? static_cast<double>(w.bytes) / row.seen_span_s : 0.0,
+                  w.frames ? w.latency_us_sum / static_cast<double>(w.frames) : 0.0,
+                  w.latency_us_max, static_cast<unsigned long long>(w.skipped));
+    watched = text;
+  }
+  std::printf(
+      "{\"name\":\"%s\",\"layout\":\"%s\",\"capacity\":%llu,\"frames\":%llu,\"latest_seq\":%llu,"
+      "\"rate_hz\":%.2f,\"age_ns\":%lld,\"max_interval_ns\":%lld,\"writer_alive\":%s,"
+      "\"writer_pid\":%d,\"writer\":\"%s\",\"checksum\":%s,\"sleeping_readers\":%u%s}\n",
+      json_escape(s.name).c_str(), json_escape(s.layout.describe()).c_str(),
+      static_cast<unsigned long long>(s.capacity),
+      static_cast<unsigned long long>(s.frames_published),
+      static_cast<unsigned long long>(s.latest_seq), row.rate_hz,
+      static_cast<long long>(s.latest_publish_ns == 0 ? -1 : now - s.latest_publish_ns),
+      static_cast<long long>(s.max_publish_interval_ns), s.writer_alive ? "true" : "false",
+      s.writer_pid, json_escape(writer_name(s)).c_str(), s.checksum ? "true" : "false",
+      s.sleeping_readers, watched.c_str());
+}
+
+std::string writer_text(const sim::StreamStatus& s) {
+  return s.writer_alive ? "pid " + std::to_string(s.writer_pid) + " " + writer_name(s)
+                        : "gone (was " + s.writer_command + ")";
+}
+
+void print_table(const std::vector<Row>& rows, std::int64_t now, bool watch) {
+  std::size_t width = 6;
+  for (const auto& row : rows) width = std::max(width, row.name.size());
+  const int w = static_cast<int>(width);
+  if (watch) {
+    std::printf("%-*s %9s %11s %9s %10s %7s %8s  %-28s %s\n", w, "STREAM", "RATE", "BANDWIDTH",
+                "AGE", "LATENCY", "SKIPPED", "SLEEPING", "WRITER", "LAYOUT");
+  } else {
+    std::printf("%-*s %-36s %12s %10s %9s %9s %8s  %-28s %s\n", w, "STREAM", "LAYOUT",
+                "CAPACITY", "FRAMES", "RATE", "AGE", "SLEEPING", "WRITER", "CHECKSUM");
+  }
+  for (const auto& row : rows) {
+    if (!row.status) {
+      std::printf("%-*s %s\n", w, row.name.c_str(), row.error.c_str());
+      continue;
+    }
+    const sim::StreamStatus& s = *row.status;
+    char rate[32];
+    std::snprintf(rate, sizeof rate, "%.1f Hz", row.rate_hz);
+    if (watch) {
+      const auto seen = row.seen.value_or(sim::ls::WatchSample{});
+      char latency[32] = "-";
+      if (seen.frames > 0) {
+        std::snprintf(latency, sizeof latency, "%.0f us",
+                      seen.latency_us_sum / static_cast<double>(seen.frames));
+      }
+      const double bandwidth =
+          row.seen_span_s > 0 ? static_cast<double>(seen.bytes) / row.seen_span_s : 0.0;
+      // The view's own reader is one of the sleepers: do not count it.
+      const unsigned sleeping = s.sleeping_readers > 0 ? s.sleeping_readers - 1 : 0;
+      std::printf("%-*s %9s %11s %9s %10s %7llu %8u  %-28s %s\n", w, s.name.c_str(), rate,
+                  bandwidth_text(bandwidth).c_str(), age_text(now, s.latest_publish_ns).c_str(),
+                  latency, static_cast<unsigned long long>(seen.skipped), sleeping,
+                  writer_text(s).c_str(), s.layout.describe().c_str());
+    } else {
+      std::printf("%-*s %-36s %12llu %10llu %9s %9s %8u  %-28s %s\n", w, s.name.c_str(),
+                  s.layout.describe().c_str(), static_cast<unsigned long long>(s.capacity),
+                  static_cast<unsigned long long>(s.frames_published), rate,
+                  age_text(now, s.latest_publish_ns).c_str(), s.sleeping_readers,
+                  writer_text(s).c_str(), s.checksum ? "xxh3" : "off");
+    }
+  }
+}
+
+std::vector<Row> look(RateMeter& rates) {
+  std::vector<Row> rows;
+  const std::int64_t now = sim::monotonic_ns();
+  for (const auto& name : sim::list_streams()) {
+    Row row;
+    row.name = name;
+    auto status = sim::inspect(name);
+    if (status) {
+      row.rate_hz = rates.update(*status, now);
+      row.status = std::move(*status);
+    } else {
+      row.error = status.error().message;
+    }
+    rows.push_back(std::move(row));
+  }
+  return rows;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"List every SIM stream on this machine: layout, capacity, frames, rate, age of the "
-               "newest frame, writer and checksum."};
-  bool json = false;
-  app.add_flag("--json", json, "one JSON object per stream instead of a table");
-  if (auto code = sim::tools::parse(app, argc, argv)) return *code;
+  Options o;
+  sim::apps::CommandLine cli(
+      "sim_ls",
+      "List every SIM stream on this machine: layout, capacity, frames, rate (over a recent "
+      "window), age of the newest frame, sleeping readers, writer and checksum. --watch keeps a "
+      "live view: rate, bandwidth, age, latency (publish to read), skipped frames, sleeping "
+      "readers and writer of every stream, refreshed in place until stopped.");
+  auto& app = cli.app();
+  app.add_flag("--json", o.json, "one JSON object per stream (per refresh with --watch)");
+  app.add_flag("--watch,-w", o.watch, "live view, refreshed every --interval until stopped");
+  app.add_option("--interval", o.interval_s, "seconds between --watch refreshes")
+      ->check(CLI::Range(0.05, 3600.0));
+  app.add_option("--window", o.window_s, "seconds over which a single listing measures rates")
+      ->check(CLI::Range(0.0, 60.0));
+  if (auto code = cli.parse(argc, argv)) return *code;
+  const auto& stop = sim::apps::StopSignal::install();
 
-  const auto names = sim::list_streams();
-  if (!json) {
-    std::printf("%-24s %-36s %12s %10s %8s %9s %-22s %s\n", "STREAM", "LAYOUT", "CAPACITY",
-                "FRAMES", "RATE", "AGE", "WRITER", "CHECKSUM");
-  }
-  int problems = 0;
-  for (const auto& name : names) {
-    auto status = sim::inspect(name);
-    if (!status) {
-      ++problems;
-      if (json) {
-        std::printf("{\"name\":\"%s\",\"error\":\"%s\"}\n", name.c_str(),
-                    json_escape(status.error().message).c_str());
-      } else {
-        std::printf("%-24s %s\n", name.c_str(), status.error().message.c_str());
-      }
-      continue;
-    }
-    const sim::StreamStatus& s = *status;
+  RateMeter rates;
+  if (!o.watch) {
+    look(rates);  // the first look of the rate window
+    if (o.window_s > 0 && !stop.sleep_for_seconds(o.window_s)) return 0;
+    const auto rows = look(rates);
     const std::int64_t now = sim::monotonic_ns();
-    // Rate over the writer's lifetime would mislead after a pause; max interval is what the
-    // header keeps, so show the average since the writer started only when it is alive.
-    const double uptime_s =
-        static_cast<double>(sim::realtime_ns() - s.writer_start_realtime_ns) / 1e9;
-    const double rate = (s.writer_alive && uptime_s > 0)
-                            ? static_cast<double>(s.frames_published) / uptime_s
-                            : 0.0;
-    const std::string writer = s.writer_alive ? "alive pid " + std::to_string(s.writer_pid) +
-                                                    " " + s.writer_command
-                                              : "gone";
-    if (json) {
-      std::printf(
-          "{\"name\":\"%s\",\"layout\":\"%s\",\"capacity\":%llu,\"frames\":%llu,\"latest_seq\":%llu,"
-          "\"rate_hz\":%.2f,\"age_ns\":%lld,\"max_interval_ns\":%lld,\"writer_alive\":%s,"
-          "\"writer_pid\":%d,\"writer\":\"%s\",\"checksum\":%s,\"sleeping_readers\":%u}\n",
-          s.name.c_str(), s.layout.describe().c_str(),
-          static_cast<unsigned long long>(s.capacity),
-          static_cast<unsigned long long>(s.frames_published),
-          static_cast<unsigned long long>(s.latest_seq), rate,
-          static_cast<long long>(s.latest_publish_ns == 0 ? -1 : now - s.latest_publish_ns),
-          static_cast<long long>(s.max_publish_interval_ns), s.writer_alive ? "true" : "false",
-          s.writer_pid, json_escape(s.writer_command).c_str(), s.checksum ? "true" : "false",
-          s.sleeping_readers);
+    int problems = 0;
+    if (o.json) {
+      for (const auto& row : rows) print_json(row, now);
     } else {
-      std::printf("%-24s %-36s %12llu %10llu %6.1fHz %9s %-22s %s\n", s.name.c_str(),
-                  s.layout.describe().c_str(), static_cast<unsigned long long>(s.capacity),
-                  static_cast<unsigned long long>(s.frames_published), rate,
-                  age_text(now, s.latest_publish_ns).c_str(), writer.c_str(),
-                  s.checksum ? "xxh3" : "off");
+      print_table(rows, now, false);
     }
+    for (const auto& row : rows) problems += row.status ? 0 : 1;
+    return problems == 0 ? sim::apps::kExitOk : sim::apps::kExitFailure;
   }
-  return problems == 0 ? 0 : 1;
+
+  const bool terminal = ::isatty(STDOUT_FILENO) != 0 && !o.json;
+  std::map<std::string, std::unique_ptr<sim::ls::StreamWatch>> watches;
+  std::int64_t last = sim::monotonic_ns();
+  look(rates);
+  while (stop.sleep_for_seconds(o.interval_s)) {
+    auto rows = look(rates);
+    const std::int64_t now = sim::monotonic_ns();
+    std::map<std::string, std::unique_ptr<sim::ls::StreamWatch>> kept;
+    for (auto& row : rows) {
+      auto found = watches.find(row.name);
+      if (found != watches.end()) {
+        row.seen = found->second->take();
+        row.seen_span_s = static_cast<double>(now - last) / 1e9;
+        kept.emplace(row.name, std::move(found->second));
+      } else if (row.status) {
+        if (auto reader = sim::Reader::open(row.name)) {
+          kept.emplace(row.name, std::make_unique<sim::ls::StreamWatch>(std::move(*reader)));
+        }
+      }
+    }
+    watches = std::move(kept);  // streams that went away: their watches end here
+    last = now;
+    if (terminal) std::printf("\033[H\033[J");  // redraw in place
+    if (o.json) {
+      for (const auto& row : rows) print_json(row, now);
+    } else {
+      print_table(rows, now, true);
+      if (!terminal) std::printf("\n");
+    }
+    std::fflush(stdout);
+  }
+  return sim::apps::kExitOk;
 }

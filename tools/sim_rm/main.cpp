@@ -4,50 +4,54 @@
 #include <string>
 #include <vector>
 
+#include "sim/apps/command_line.hpp"
+#include "sim/apps/stop_signal.hpp"
 #include "sim/reader.hpp"
-#include "sim_tools/cli.hpp"
 
 int main(int argc, char** argv) {
-  CLI::App app{"Remove SIM streams (their shared-memory regions). A stream whose writer is alive "
-               "is refused unless --force; --dead removes every stream whose writer is gone."};
+  sim::apps::CommandLine cli(
+      "sim_rm",
+      "Remove SIM streams (their shared-memory regions). A stream whose writer is alive is "
+      "refused unless --force; --dead removes every stream whose writer is gone.");
   std::vector<std::string> names;
   bool force = false;
   bool dead = false;
-  app.add_option("names", names, "stream names, like /lidar_top");
-  app.add_flag("--force", force, "remove even when the writer is alive (its readers keep their copy "
-                                 "of the region until they close it)");
-  app.add_flag("--dead", dead, "remove the named streams, or every stream if none is named, whose "
-                              "writer is gone");
-  if (auto code = sim::tools::parse(app, argc, argv)) return *code;
-  if (names.empty() && !dead) {
-    std::fprintf(stderr, "sim_rm: name a stream to remove, or pass --dead; see --help\n");
-    return 2;
-  }
+  cli.add_streams("names", names, "stream names, like /lidar_top");
+  cli.app().add_flag("--force", force,
+                     "remove even when the writer is alive (its readers keep their copy of the "
+                     "region until they close it)");
+  cli.app().add_flag("--dead", dead,
+                     "remove the named streams, or every stream if none is named, whose writer "
+                     "is gone");
+  if (auto code = cli.parse(argc, argv)) return *code;
+  if (names.empty() && !dead) return cli.usage_error("name a stream to remove, or pass --dead");
+  const auto& stop = sim::apps::StopSignal::install();
 
   int failures = 0;
+  const auto remove = [&](const std::string& name, bool forced) {
+    if (auto error = sim::destroy(name, forced)) {
+      cli.fail(std::string_view(error->message));
+      ++failures;
+    } else {
+      std::printf("removed %s\n", name.c_str());
+    }
+  };
   if (dead) {
     for (const auto& name : names.empty() ? sim::list_streams() : names) {
+      if (stop.requested()) break;
       auto status = sim::inspect(name);
       // A region that fails validation has no writer that could be using it either.
       if (status && status->writer_alive) {
         std::printf("kept %s: its writer is alive\n", name.c_str());
         continue;
       }
-      if (auto removed = sim::destroy(name); !removed) {
-        std::fprintf(stderr, "sim_rm: %s\n", removed.error().message.c_str());
-        ++failures;
-      } else {
-        std::printf("removed %s\n", name.c_str());
-      }
+      remove(name, false);
+    }
+  } else {
+    for (const auto& name : names) {
+      if (stop.requested()) break;
+      remove(name, force);
     }
   }
-  for (const auto& name : dead ? std::vector<std::string>{} : names) {
-    if (auto removed = sim::destroy(name, force); !removed) {
-      std::fprintf(stderr, "sim_rm: %s\n", removed.error().message.c_str());
-      ++failures;
-    } else {
-      std::printf("removed %s\n", name.c_str());
-    }
-  }
-  return failures == 0 ? 0 : 1;
+  return failures == 0 ? sim::apps::kExitOk : sim::apps::kExitFailure;
 }

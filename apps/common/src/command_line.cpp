@@ -29,6 +29,12 @@ CLI::Validator stream_name_validator() {
   return CLI::Validator([](std::string& name) { return stream_name_problem(name); }, "", "stream name");
 }
 
+CLI::Validator validator(std::function<std::string(const std::string&)> problem,
+                         std::string type_name) {
+  return CLI::Validator([problem = std::move(problem)](std::string& value) { return problem(value); },
+                        "", std::move(type_name));
+}
+
 CommandLine::CommandLine(std::string tool, std::string description)
     : tool_(std::move(tool)), app_(std::move(description), tool_) {
   // One style of --help: every option shows its default the same way, "--count INT=5".
@@ -41,6 +47,13 @@ CommandLine::CommandLine(std::string tool, std::string description)
 CLI::Option* CommandLine::add_stream(std::string_view name, std::string& value,
                                      std::string_view help) {
   return app_.add_option(std::string(name), value, std::string(help))
+      ->type_name("NAME")
+      ->check(stream_name_validator());
+}
+
+CLI::Option* CommandLine::add_streams(std::string_view name, std::vector<std::string>& values,
+                                      std::string_view help) {
+  return app_.add_option(std::string(name), values, std::string(help))
       ->type_name("NAME")
       ->check(stream_name_validator());
 }

@@ -81,4 +81,8 @@ bool StopSignal::sleep_for(std::chrono::nanoseconds duration) const noexcept {
   return sleep_until(monotonic_ns() + std::max<std::int64_t>(0, duration.count()));
 }
 
+bool StopSignal::sleep_for_seconds(double seconds) const noexcept {
+  return sleep_for(std::chrono::nanoseconds(static_cast<std::int64_t>(seconds * 1e9)));
+}
+
 }  // namespace sim::apps

@@ -6,7 +6,7 @@
 #include <optional>
 #include <thread>
 
-#include "sim/camera/decoder.hpp"
+#include "sim/imaging/decoder.hpp"
 #include "sim/clock.hpp"
 #include "sim/writer.hpp"
 
@@ -63,7 +63,7 @@ struct AravisCapture::Impl {
   ArvCamera* camera = nullptr;
   ArvStream* stream = nullptr;
   gulong control_lost_handler = 0;
-  std::optional<FrameDecoder> decoder;
+  std::optional<imaging::FrameDecoder> decoder;
   std::optional<Writer> writer;
   ImageLayout input{};
   std::string name;
@@ -128,9 +128,9 @@ struct AravisCapture::Impl {
     const std::int64_t stamp =
         device_time ? static_cast<std::int64_t>(arv_buffer_get_timestamp(buffer)) : received;
     Loan loan = writer->loan();
-    const DecodeResult decoded =
+    const imaging::DecodeResult decoded =
         decoder->decode({static_cast<const std::byte*>(data), size}, loan.bytes());
-    if (decoded.status != DecodeStatus::ok) {
+    if (decoded.status != imaging::DecodeStatus::ok) {
       bad_size.fetch_add(1, std::memory_order_relaxed);
       return;
     }
@@ -228,9 +228,9 @@ struct AravisCapture::Impl {
     if (format == PixelFormat::unknown) {
       return fail("the camera's pixel format cannot be decoded: choose one with --pixel-format");
     }
-    input = make_layout(static_cast<std::uint32_t>(width), static_cast<std::uint32_t>(height),
+    input = imaging::make_layout(static_cast<std::uint32_t>(width), static_cast<std::uint32_t>(height),
                         format);
-    auto created = FrameDecoder::create(input, config.output);
+    auto created = imaging::FrameDecoder::create(input, config.output);
     if (!created) return fail(created.error().message);
     decoder.emplace(std::move(created.value()));
 

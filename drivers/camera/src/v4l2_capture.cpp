@@ -48,7 +48,7 @@ std::optional<Error> V4l2Capture::connect(bool first) {
   }
   auto format = device->negotiate(config_.format);
   if (!format) return format.error();
-  auto decoder = FrameDecoder::create(format->layout, config_.format.output);
+  auto decoder = imaging::FrameDecoder::create(format->layout, config_.format.output);
   if (!decoder) return decoder.error();
 
   const Layout layout = Layout::of(decoder->output_layout());
@@ -157,20 +157,20 @@ StepResult V4l2Capture::handle(const DeviceFrame& frame) {
   stamp += config_.time_offset_ns;
 
   Loan loan = writer_->loan();
-  const DecodeResult decoded = decoder_->decode(frame.bytes, loan.bytes());
+  const imaging::DecodeResult decoded = decoder_->decode(frame.bytes, loan.bytes());
   switch (decoded.status) {
-    case DecodeStatus::ok:
+    case imaging::DecodeStatus::ok:
       // An uncommitted loan publishes nothing, so every failure below simply returns.
       if (std::move(loan).commit(decoded.size, stamp, received) != WriteStatus::ok) return StepResult::skipped;
       ++stats_.published;
       return StepResult::published;
-    case DecodeStatus::corrupt_input:
-    case DecodeStatus::failed:
+    case imaging::DecodeStatus::corrupt_input:
+    case imaging::DecodeStatus::failed:
       ++stats_.corrupt;
       return StepResult::skipped;
-    case DecodeStatus::short_input:
-    case DecodeStatus::wrong_size:
-    case DecodeStatus::output_too_small:
+    case imaging::DecodeStatus::short_input:
+    case imaging::DecodeStatus::wrong_size:
+    case imaging::DecodeStatus::output_too_small:
       ++stats_.bad_size;
       return StepResult::skipped;
   }

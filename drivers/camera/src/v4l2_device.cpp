@@ -360,7 +360,7 @@ Expected<StreamFormat> V4l2Device::negotiate(const FormatRequest& request) {
     // requested size and rate (USB 2 cameras give YUYV at full size only at low rates).
     std::vector<FourCc> preference = {kYuyv, kUyvy, kMjpg, kJpeg, kGrey, kY16, kBgr3, kRgb3,
                                       kRggb, kBa81, kGbrg, kGrbg};
-    if (request.output == OutputFormat::mono8) {
+    if (request.output == imaging::OutputFormat::mono8) {
       preference.insert(preference.begin(), {kGrey, kY16});
     }
     auto offers = [&](FourCc fourcc, bool need_size, bool need_rate) {
@@ -411,9 +411,9 @@ Expected<StreamFormat> V4l2Device::negotiate(const FormatRequest& request) {
                      " instead of " + chosen.str() + ": choose another --format"};
   }
   const PixelFormat pixel = pixel_format_of(chosen);
-  const std::uint64_t row = row_bytes(pix.width, pixel);
-  if (pix.width == 0 || pix.height == 0 || (!is_compressed(pixel) && pix.bytesperline < row) ||
-      (!is_compressed(pixel) && pix.sizeimage < std::uint64_t{pix.bytesperline} * pix.height)) {
+  const std::uint64_t row = imaging::row_bytes(pix.width, pixel);
+  if (pix.width == 0 || pix.height == 0 || (!imaging::is_compressed(pixel) && pix.bytesperline < row) ||
+      (!imaging::is_compressed(pixel) && pix.sizeimage < std::uint64_t{pix.bytesperline} * pix.height)) {
     return Error{ErrorCode::invalid_argument,
                  path_ + " reported an impossible format (" + std::to_string(pix.width) + "x" +
                      std::to_string(pix.height) + ", " + std::to_string(pix.bytesperline) +
@@ -421,7 +421,7 @@ Expected<StreamFormat> V4l2Device::negotiate(const FormatRequest& request) {
   }
   StreamFormat result;
   result.fourcc = chosen;
-  result.layout = make_layout(pix.width, pix.height, pixel, pix.bytesperline);
+  result.layout = imaging::make_layout(pix.width, pix.height, pixel, pix.bytesperline);
   result.size_image = pix.sizeimage;
 
   v4l2_streamparm parm{};

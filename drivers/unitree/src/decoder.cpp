@@ -35,6 +35,11 @@ std::optional<Model> parse_model(std::string_view text) noexcept {
   return std::nullopt;
 }
 
+std::string model_problem(std::string_view text) {
+  if (parse_model(text)) return {};
+  return "unknown model '" + std::string(text) + "'; use L1 or L2";
+}
+
 // ---------------------------------------------------------------------------------------------
 
 ScanAssembler::ScanAssembler(ScanSink& sink, std::uint32_t packets_per_scan) noexcept

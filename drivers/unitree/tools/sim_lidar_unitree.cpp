@@ -17,8 +17,9 @@
 #include <optional>
 #include <string>
 
-#include <sim_tools/cli.hpp>
-
+#include "sim/apps/command_line.hpp"
+#include "sim/apps/status_line.hpp"
+#include "sim/apps/stop_signal.hpp"
 #include "sim/clock.hpp"
 #include "sim/unitree/decoder.hpp"
 #include "sim/unitree/sim_sink.hpp"
@@ -44,6 +45,8 @@ struct Options {
   std::string record_path;
   bool checksum = false;
   bool quiet = false;
+  bool udp_port_given = false;
+  sim::ThreadPlacement placement;
 };
 
 // Everything read off the wire goes to the decoder, and to the recording when there is one.
@@ -143,33 +146,34 @@ class SerialSource {
   std::array<std::byte, 16384> buffer_{};
 };
 
-int run(const Options& opt) {
-  const std::optional<sim::unitree::Model> model = sim::unitree::parse_model(opt.model_text);
-  if (!model) {
-    std::cerr << "sim_lidar_unitree: unknown model '" << opt.model_text
-              << "'; use --model L1 or --model L2.\n";
-    return sim::tools::kExitUsage;
+int run(const Options& opt, const sim::apps::CommandLine& cli) {
+  const sim::unitree::Model model = *sim::unitree::parse_model(opt.model_text);
+  if (model == sim::unitree::Model::l1 && opt.serial_device.empty() && !opt.udp_port_given) {
+    return cli.usage_error(
+        "the L1 speaks over a serial port: give --serial /dev/ttyUSB0, or --udp-port N when it "
+        "sits behind a serial-to-UDP board");
   }
   std::optional<asio::ip::address> lidar;
   if (!opt.lidar_ip.empty()) {
     boost::system::error_code ec;
     lidar = asio::ip::make_address(opt.lidar_ip, ec);
     if (ec) {
-      std::cerr << "sim_lidar_unitree: --lidar-ip '" << opt.lidar_ip
-                << "' is not an IP address; give one like 192.168.1.62.\n";
-      return sim::tools::kExitUsage;
+      return cli.usage_error("--lidar-ip '" + opt.lidar_ip +
+                             "' is not an IP address; give one like 192.168.1.62");
     }
   }
   boost::system::error_code addr_ec;
   const asio::ip::address bind_address = asio::ip::make_address(opt.bind_address, addr_ec);
   if (addr_ec) {
-    std::cerr << "sim_lidar_unitree: --bind-address '" << opt.bind_address
-              << "' is not an IP address; give one like 0.0.0.0.\n";
-    return sim::tools::kExitUsage;
+    return cli.usage_error("--bind-address '" + opt.bind_address +
+                           "' is not an IP address; give one like 0.0.0.0");
   }
+  // Before any port or stream is opened: a stop request ends the program cleanly from here on.
+  const auto& stop = sim::apps::StopSignal::install();
+  if (auto code = cli.apply_placement(opt.placement)) return *code;
 
   sim::unitree::DecoderOptions decoder_options;
-  decoder_options.model = *model;
+  decoder_options.model = model;
   decoder_options.packets_per_scan = opt.scan_packets;
   decoder_options.time_source =
       opt.sensor_time ? sim::unitree::TimeSource::sensor : sim::unitree::TimeSource::host;
@@ -186,47 +190,40 @@ int run(const Options& opt) {
   Pipeline pipeline;
 
   asio::io_context io;
-  int exit_code = sim::tools::kExitOk;
+  int exit_code = sim::apps::kExitOk;
   std::optional<UdpSource> udp;
   std::optional<SerialSource> serial;
   const unsigned baud =
-      opt.baud != 0 ? opt.baud : (*model == sim::unitree::Model::l1 ? 2'000'000U : 4'000'000U);
+      opt.baud != 0 ? opt.baud : (model == sim::unitree::Model::l1 ? 2'000'000U : 4'000'000U);
   if (!opt.serial_device.empty()) {
     serial.emplace(io, pipeline);
     try {
       serial->open(opt.serial_device, baud);
     } catch (const boost::system::system_error& e) {
-      std::cerr << "sim_lidar_unitree: cannot open serial port " << opt.serial_device << " at "
-                << baud << " baud (" << e.code().message()
-                << "); check the device path and that you may use it (group dialout).\n";
-      return sim::tools::kExitFailure;
+      return cli.fail("cannot open serial port " + opt.serial_device + " at " +
+                      std::to_string(baud) + " baud (" + e.code().message() +
+                      "); check the device path and that you may use it (group dialout)");
     }
   } else {
     udp.emplace(io, pipeline, lidar);
     try {
       udp->open(asio::ip::udp::endpoint(bind_address, opt.udp_port));
     } catch (const boost::system::system_error& e) {
-      std::cerr << "sim_lidar_unitree: cannot listen on UDP " << opt.bind_address << ":"
-                << opt.udp_port << " (" << e.code().message()
-                << "); pick a free port with --udp-port or stop the other listener.\n";
-      return sim::tools::kExitFailure;
+      return cli.fail("cannot listen on UDP " + opt.bind_address + ":" +
+                      std::to_string(opt.udp_port) + " (" + e.code().message() +
+                      "); pick a free port with --udp-port or stop the other listener");
     }
   }
 
   auto stream = sim::unitree::UnitreeStream::create(stream_options);
-  if (!stream) {
-    std::cerr << "sim_lidar_unitree: " << stream.error().message << "\n";
-    return stream.error().code == sim::ErrorCode::invalid_name ? sim::tools::kExitUsage
-                                                               : sim::tools::kExitFailure;
-  }
+  if (!stream) return cli.fail(stream.error());
 
   std::ofstream record;
   if (!opt.record_path.empty()) {
     record.open(opt.record_path, std::ios::binary | std::ios::trunc);
     if (!record) {
-      std::cerr << "sim_lidar_unitree: cannot write the recording '" << opt.record_path
-                << "'; check the folder exists and is writable.\n";
-      return sim::tools::kExitFailure;
+      return cli.fail("cannot write the recording '" + opt.record_path +
+                      "'; check the folder exists and is writable");
     }
   }
   pipeline.attach(**stream, record.is_open() ? &record : nullptr);
@@ -234,9 +231,9 @@ int run(const Options& opt) {
   if (serial) {
     std::cout << "reading " << opt.serial_device << " at " << baud << " baud" << std::endl;
     serial->start([&](const boost::system::error_code& ec) {
-      std::cerr << "\nsim_lidar_unitree: serial port " << opt.serial_device
-                << " failed (" << ec.message() << "); check the cable and restart.\n";
-      exit_code = sim::tools::kExitFailure;
+      cli.fail("serial port " + opt.serial_device + " failed (" + ec.message() +
+               "); check the cable and restart");
+      exit_code = sim::apps::kExitFailure;
       io.stop();
     });
   } else {
@@ -245,13 +242,15 @@ int run(const Options& opt) {
     udp->start();
   }
 
-  asio::signal_set signals(io, SIGINT, SIGTERM);
-  signals.async_wait([&](const boost::system::error_code& ec, int) {
-    if (!ec) io.stop();
-  });
+  // The stop signal's descriptor ends io.run() like any other event.
+  asio::posix::stream_descriptor stop_events(io, ::dup(stop.fd()));
+  stop_events.async_wait(asio::posix::stream_descriptor::wait_read,
+                         [&](const boost::system::error_code& ec) {
+                           if (!ec) io.stop();
+                         });
 
-  const bool show_status = !opt.quiet && ::isatty(STDERR_FILENO) != 0;
-  auto status_line = [&] {
+  auto status = sim::apps::StatusLine::for_stderr("sim_lidar_unitree", opt.quiet);
+  auto status_text = [&] {
     std::string line = (*stream)->status();
     if (udp && udp->ignored_datagrams() > 0) {
       line += "  other_senders " + std::to_string(udp->ignored_datagrams());
@@ -263,20 +262,17 @@ int run(const Options& opt) {
     status_timer.expires_after(std::chrono::seconds(1));
     status_timer.async_wait([&](const boost::system::error_code& ec) {
       if (ec) return;
-      std::cerr << "\r" << status_line() << "\x1b[K" << std::flush;
+      status.update(status_text());
       if (record.is_open()) record.flush();
       tick();
     });
   };
-  if (show_status) tick();
+  tick();
 
-  io.run();
+  if (!stop.requested()) io.run();
   (*stream)->finish();
   if (record.is_open()) record.flush();
-  if (!opt.quiet) {
-    std::cerr << (show_status ? "\r" : "") << status_line()
-              << (show_status ? "\x1b[K\n" : "\n");
-  }
+  status.finish(status_text());
   return exit_code;
 }
 
@@ -284,26 +280,28 @@ int run(const Options& opt) {
 
 int main(int argc, char** argv) {
   Options opt;
-  CLI::App app{
+  sim::apps::CommandLine cli(
+      "sim_lidar_unitree",
       "Decode a Unitree L1 or L2 LiDAR into a SIM point stream (and its IMU into a second "
-      "stream).\nL2: UDP (default port 6201) or --serial /dev/ttyACM0 (4,000,000 baud). "
-      "L1: --serial /dev/ttyUSB0 (2,000,000 baud)."};
-  app.add_option("--model", opt.model_text, "L1 or L2")->required();
-  app.add_option("--udp-port,--bind-port", opt.udp_port,
-                 "local UDP port the lidar sends to (0: any free port, printed on stdout)")
-      ->capture_default_str();
-  app.add_option("--bind-address", opt.bind_address, "local address to listen on")
-      ->capture_default_str();
+      "stream). L2: UDP (default port 6201) or --serial /dev/ttyACM0 (4,000,000 baud). "
+      "L1: --serial /dev/ttyUSB0 (2,000,000 baud).");
+  auto& app = cli.app();
+  app.add_option("--model", opt.model_text, "L1 or L2")
+      ->required()
+      ->check(sim::apps::validator(sim::unitree::model_problem, "Unitree model"));
+  auto* udp_port = app.add_option("--udp-port,--bind-port", opt.udp_port,
+                                  "local UDP port the lidar sends to (0: any free port, printed "
+                                  "on stdout)");
+  app.add_option("--bind-address", opt.bind_address, "local address to listen on");
   app.add_option("--lidar-ip", opt.lidar_ip,
                  "accept datagrams only from this address (L2 factory default 192.168.1.62)");
   app.add_option("--serial", opt.serial_device, "serial device instead of UDP");
-  app.add_option("--baud", opt.baud, "serial baud rate (default 2000000 for L1, 4000000 for L2)");
-  app.add_option("--stream", opt.stream, "SIM point stream, e.g. /lidar_top")->required();
-  app.add_option("--imu-stream", opt.imu_stream, "SIM IMU stream (default: <stream>.imu)");
+  app.add_option("--baud", opt.baud, "serial baud rate (0: 2000000 for L1, 4000000 for L2)");
+  cli.add_stream("--stream", opt.stream, "SIM point stream, e.g. /lidar_top")->required();
+  cli.add_stream("--imu-stream", opt.imu_stream, "SIM IMU stream (empty: <stream>.imu)");
   app.add_flag("--no-imu", opt.no_imu, "do not publish IMU samples");
   app.add_option("--scan-packets", opt.scan_packets,
                  "packets per published scan (the SDKs' cloud_scan_num)")
-      ->capture_default_str()
       ->check(CLI::Range(1U, 1000U));
   app.add_flag("--sensor-time", opt.sensor_time,
                "stamp frames with the L2's own clock instead of host receive time");
@@ -313,15 +311,13 @@ int main(int argc, char** argv) {
                  "also write every byte received, as received, to FILE (replay it with "
                  "sim_replay_serial)");
   app.add_flag("--checksum", opt.checksum, "publish frames with an XXH3 checksum");
-  app.add_flag("-q,--quiet", opt.quiet, "no status line");
-  sim::tools::Placement placement;
-  sim::tools::add_placement_options(app, placement);
-  if (auto code = sim::tools::parse(app, argc, argv)) return *code;
-  if (auto code = sim::tools::apply_placement(placement, "sim_lidar_unitree")) return *code;
+  app.add_flag("-q,--quiet", opt.quiet, "no status line and no summary");
+  cli.add_placement(opt.placement);
+  if (auto code = cli.parse(argc, argv)) return *code;
+  opt.udp_port_given = udp_port->count() > 0;
   try {
-    return run(opt);
+    return run(opt, cli);
   } catch (const std::exception& e) {
-    std::cerr << "sim_lidar_unitree: " << e.what() << "\n";
-    return sim::tools::kExitFailure;
+    return cli.fail(e.what());
   }
 }

@@ -9,9 +9,11 @@
 
 #include <CLI/CLI.hpp>
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "sim/os.hpp"
 #include "sim/result.hpp"
@@ -26,6 +28,10 @@ enum ExitCode : int {
 
 // CLI11 validator for stream names, using the core's naming rules (sim/names.hpp).
 CLI::Validator stream_name_validator();
+// A CLI11 validator from a function that returns the problem with a value (empty: none), so
+// libraries can check values without knowing CLI11.
+CLI::Validator validator(std::function<std::string(const std::string&)> problem,
+                         std::string type_name);
 
 class CommandLine {
  public:
@@ -37,6 +43,9 @@ class CommandLine {
 
   // A stream name option ("--stream") or positional ("stream"), checked by the core's rules.
   CLI::Option* add_stream(std::string_view name, std::string& value, std::string_view help);
+  // Several stream names (a positional list), each checked the same way.
+  CLI::Option* add_streams(std::string_view name, std::vector<std::string>& values,
+                           std::string_view help);
   // --config FILE: YAML keys set the options of the same long name ("rt_priority" or
   // "rt-priority" for --rt-priority); a map becomes a list of "key=value" items; options given on
   // the command line override the file.

@@ -30,6 +30,7 @@ class StopSignal {
   // Sleeps until `deadline_ns` on CLOCK_MONOTONIC; false, at once, when a stop is requested.
   bool sleep_until(std::int64_t deadline_ns) const noexcept;
   bool sleep_for(std::chrono::nanoseconds duration) const noexcept;
+  bool sleep_for_seconds(double seconds) const noexcept;
 
   // Tests: forget a request so the next test starts clean.
   void reset_for_test() noexcept;

@@ -15,7 +15,7 @@
 #include <utility>
 #include <vector>
 
-#include "sim/camera/image_format.hpp"
+#include "sim/imaging/image_format.hpp"
 #include "sim/layout.hpp"
 #include "sim/result.hpp"
 
@@ -25,7 +25,7 @@ struct AravisCaptureConfig {
   std::string device_id;      // Aravis id, serial number or IP address; empty: the first camera
   std::string stream = "/camera_front";
   std::string pixel_format;   // GenICam name (Mono8, BayerRG8, RGB8, …); empty: keep the camera's
-  OutputFormat output = OutputFormat::bgr8;
+  imaging::OutputFormat output = imaging::OutputFormat::bgr8;
   double fps = 0;             // 0: keep
   double exposure_us = 0;     // 0: keep
   double gain = -1;           // negative: keep

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "sim/camera/clock_mapping.hpp"
-#include "sim/camera/decoder.hpp"
+#include "sim/imaging/decoder.hpp"
 #include "sim/camera/v4l2_device.hpp"
 #include "sim/camera/v4l2_io.hpp"
 #include "sim/result.hpp"
@@ -105,7 +105,7 @@ class V4l2Capture {
   V4l2Io* io_ = nullptr;
   V4l2CaptureConfig config_;
   std::optional<V4l2Device> device_;
-  std::optional<FrameDecoder> decoder_;
+  std::optional<imaging::FrameDecoder> decoder_;
   std::optional<Writer> writer_;
   StreamFormat format_{};
   CaptureStats stats_{};

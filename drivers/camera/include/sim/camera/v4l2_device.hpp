@@ -12,7 +12,7 @@
 #include <string_view>
 #include <vector>
 
-#include "sim/camera/image_format.hpp"
+#include "sim/imaging/image_format.hpp"
 #include "sim/camera/v4l2_io.hpp"
 #include "sim/layout.hpp"
 #include "sim/result.hpp"
@@ -73,7 +73,7 @@ struct FormatRequest {
   std::uint32_t width = 0;       // 0: keep the device's current size
   std::uint32_t height = 0;
   double fps = 0;                // 0: keep the device's current rate
-  OutputFormat output = OutputFormat::bgr8;
+  imaging::OutputFormat output = imaging::OutputFormat::bgr8;
 };
 
 struct StreamFormat {

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <string>
 #include <string_view>
 
 #include "sim/lidar_point.hpp"
@@ -23,6 +24,8 @@ enum class Model { l1, l2 };
 const char* to_string(Model model) noexcept;
 // Accepts "L1", "L2" (any case) and the pcap tool's "unitree-l1" / "unitree-l2".
 std::optional<Model> parse_model(std::string_view text) noexcept;
+// Empty when parse_model accepts `text`; otherwise one sentence naming the models.
+std::string model_problem(std::string_view text);
 
 // Where decoded data goes. The decoder calls begin_scan() at the first packet of a scan, writes
 // points into the span it returns, and calls end_scan() when the scan is complete.

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "sim/camera/image_format.hpp"
+#include "sim/imaging/image_format.hpp"
 
-namespace sim::camera {
+namespace sim::imaging {
 
 namespace {
 
@@ -93,4 +93,4 @@ PixelFormat output_pixel_format(OutputFormat output, PixelFormat input) noexcept
   return PixelFormat::unknown;
 }
 
-}  // namespace sim::camera
+}  // namespace sim::imaging

@@ -9,11 +9,11 @@
 #include <memory>
 #include <span>
 
-#include "sim/camera/image_format.hpp"
+#include "sim/imaging/image_format.hpp"
 #include "sim/layout.hpp"
 #include "sim/result.hpp"
 
-namespace sim::camera {
+namespace sim::imaging {
 
 enum class DecodeStatus : std::uint8_t {
   ok,
@@ -60,4 +60,4 @@ class FrameDecoder {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace sim::camera
+}  // namespace sim::imaging

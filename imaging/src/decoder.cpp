@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The only translation unit of the driver library that includes OpenCV's imgproc and turbojpeg:
 // both are heavy to compile, and every source shares this one decoder anyway.
-#include "sim/camera/decoder.hpp"
+#include "sim/imaging/decoder.hpp"
 
 #include <turbojpeg.h>
 
@@ -13,7 +13,7 @@
 
 #include "sim/opencv.hpp"
 
-namespace sim::camera {
+namespace sim::imaging {
 
 const char* to_string(DecodeStatus status) noexcept {
   switch (status) {
@@ -262,4 +262,4 @@ DecodeResult FrameDecoder::decode(std::span<const std::byte> in,
   }
 }
 
-}  // namespace sim::camera
+}  // namespace sim::imaging

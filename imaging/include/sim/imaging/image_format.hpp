@@ -9,7 +9,7 @@
 
 #include "sim/layout.hpp"
 
-namespace sim::camera {
+namespace sim::imaging {
 
 // What the driver writes into the stream. `raw` publishes the device bytes unchanged (YUYV,
 // MJPEG, Bayer, …) with their format recorded in the layout.
@@ -35,4 +35,4 @@ std::uint64_t min_input_bytes(const ImageLayout& layout) noexcept;
 // The pixel format an output choice gives for a given input.
 PixelFormat output_pixel_format(OutputFormat output, PixelFormat input) noexcept;
 
-}  // namespace sim::camera
+}  // namespace sim::imaging

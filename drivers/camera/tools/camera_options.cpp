@@ -1,0 +1,123 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "camera_options.hpp"
+
+#include "sim/imaging/image_format.hpp"
+
+namespace sim::camera {
+namespace {
+
+// "name=value" items (--ctrl, --feature, or a YAML map) into pairs; the offending item otherwise.
+std::optional<std::string> split_pairs(const std::vector<std::string>& items, const char* option,
+                                       std::vector<std::pair<std::string, std::string>>& out) {
+  for (const auto& item : items) {
+    const auto eq = item.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      return std::string(option) + " '" + item + "' must be name=value";
+    }
+    out.emplace_back(item.substr(0, eq), item.substr(eq + 1));
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+void add_v4l2_options(apps::CommandLine& cli, V4l2Options& o) {
+  auto& app = cli.app();
+  cli.add_config_file();
+  app.add_option("device", o.config.device, "video device node");
+  cli.add_stream("--stream", o.config.stream, "SIM stream name");
+  app.add_option("--format", o.format, "device format: auto, YUYV, UYVY, MJPG, GREY, Y16, ...");
+  app.add_option("--width", o.config.format.width, "frame width (0: the device's current one)");
+  app.add_option("--height", o.config.format.height, "frame height (0: the device's current one)");
+  app.add_option("--fps", o.config.format.fps, "frame rate to request (0: the device's current one)")
+      ->check(CLI::Range(0.0, 1000.0));
+  app.add_option("--output", o.output, "published format: bgr8, rgb8, mono8 or raw")
+      ->check(CLI::IsMember({"bgr8", "rgb8", "mono8", "raw"}));
+  app.add_option("--ctrl,--controls", o.controls,
+                 "V4L2 control as name=value, repeatable (see --list-controls)");
+  app.add_option("--buffers", o.config.buffers, "number of mmap buffers")->check(CLI::Range(2, 32));
+  app.add_option("--timestamps", o.timestamps, "frame stamps: device or receive")
+      ->check(CLI::IsMember({"device", "receive"}));
+  app.add_option("--time-offset-ns", o.config.time_offset_ns, "added to every frame stamp");
+  app.add_option("--frame-timeout-ms", o.frame_timeout_ms,
+                 "restart the stream after this long without a frame");
+  app.add_option("--retry-period-ms", o.retry_period_ms,
+                 "between attempts to reopen a lost device");
+  app.add_flag("--checksum", o.config.checksum, "publish an XXH3 checksum with every frame");
+  app.add_flag("--list-formats", o.list_formats, "list the device's formats, sizes and rates");
+  app.add_flag("--list-controls", o.list_controls, "list the device's controls");
+  cli.add_placement(o.placement);
+  app.add_flag("-q,--quiet", o.quiet, "no status line and no summary");
+}
+
+std::optional<std::string> finish_v4l2_options(V4l2Options& o) {
+  if (o.format == "auto") {
+    o.config.format.fourcc.reset();
+  } else if (auto fourcc = FourCc::parse(o.format)) {
+    o.config.format.fourcc = fourcc;
+  } else {
+    return "--format '" + o.format + "' is not auto or a four-letter code like YUYV";
+  }
+  o.config.format.output = *imaging::parse_output_format(o.output);
+  o.config.timestamps =
+      o.timestamps == "device" ? TimestampSource::device : TimestampSource::receive;
+  o.config.frame_timeout = std::chrono::milliseconds(o.frame_timeout_ms);
+  o.config.retry_period = std::chrono::milliseconds(o.retry_period_ms);
+  std::vector<std::pair<std::string, std::string>> pairs;
+  if (auto problem = split_pairs(o.controls, "--ctrl", pairs)) return problem;
+  o.config.controls.clear();
+  for (auto& [key, value] : pairs) o.config.controls.push_back({key, value});
+  return std::nullopt;
+}
+
+void add_aravis_options(apps::CommandLine& cli, AravisOptions& o) {
+  auto& app = cli.app();
+  cli.add_config_file();
+  app.add_option("device", o.config.device_id,
+                 "camera id, serial number or IP (empty: the first camera)");
+  cli.add_stream("--stream", o.config.stream, "SIM stream name");
+  app.add_option("--pixel-format", o.config.pixel_format,
+                 "GenICam pixel format (Mono8, BayerRG8, ...; empty: the camera's)");
+  app.add_option("--output", o.output, "published format: bgr8, rgb8, mono8 or raw")
+      ->check(CLI::IsMember({"bgr8", "rgb8", "mono8", "raw"}));
+  app.add_option("--fps", o.config.fps, "acquisition frame rate (0: the camera's)")
+      ->check(CLI::Range(0.0, 10000.0));
+  app.add_option("--exposure,--exposure-us", o.config.exposure_us,
+                 "exposure time in microseconds (0: the camera's)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--gain", o.config.gain, "gain in camera units (negative: the camera's)");
+  app.add_option("--roi", o.roi, "region of interest: X Y WIDTH HEIGHT")->expected(4);
+  app.add_option("--packet-size", o.config.packet_size,
+                 "GigE packet size in bytes (0: Aravis negotiates)")
+      ->check(CLI::Range(0, 16000));
+  app.add_flag("--packet-socket,!--no-packet-socket", o.config.packet_socket,
+               "receive through AF_PACKET (needs CAP_NET_RAW); --no-packet-socket: a plain UDP "
+               "socket that drops more");
+  app.add_option("--feature,--features", o.features,
+                 "any GenICam feature as Name=value, repeatable, applied in order");
+  app.add_option("--buffers", o.config.buffers, "buffers in the pool")->check(CLI::Range(2, 64));
+  app.add_flag("--device-timestamps", o.config.device_timestamps,
+               "stamp frames with the camera's clock (enable PTP on the camera)");
+  app.add_option("--retry-period-ms", o.retry_period_ms, "between attempts to find a lost camera");
+  app.add_flag("--checksum", o.config.checksum, "publish an XXH3 checksum with every frame");
+  app.add_flag("--list", o.list, "list the cameras Aravis finds and exit");
+  cli.add_placement(o.placement);
+  app.add_flag("-q,--quiet", o.quiet, "no status line and no summary");
+}
+
+std::optional<std::string> finish_aravis_options(AravisOptions& o) {
+  o.config.output = *imaging::parse_output_format(o.output);
+  if (o.roi.size() == 4) {
+    o.config.offset_x = o.roi[0];
+    o.config.offset_y = o.roi[1];
+    o.config.width = o.roi[2];
+    o.config.height = o.roi[3];
+  } else if (!o.roi.empty()) {
+    return "--roi takes four numbers: X Y WIDTH HEIGHT";
+  }
+  o.config.retry_period = std::chrono::milliseconds(o.retry_period_ms);
+  o.config.features.clear();
+  return split_pairs(o.features, "--feature", o.config.features);
+}
+
+}  // namespace sim::camera

@@ -1,0 +1,111 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "hub.hpp"
+
+#include <algorithm>
+
+#include "sim/foxglove/protocol.hpp"
+
+namespace sim::foxglove {
+
+void Hub::join(const std::shared_ptr<Client>& client) {
+  std::lock_guard lock(mutex_);
+  std::erase_if(clients_, [](const std::weak_ptr<Client>& w) { return w.expired(); });
+  clients_.push_back(client);
+  std::vector<Channel> channels;
+  for (const auto& [id, stream] : channels_) channels.push_back(stream.channel);
+  // The protocol asks for at least one advertise, even an empty one.
+  client->send_text(advertise_json(channels));
+}
+
+void Hub::leave(const Client* client) {
+  std::lock_guard lock(mutex_);
+  std::erase_if(clients_, [&](const std::weak_ptr<Client>& w) {
+    const auto c = w.lock();
+    return !c || c.get() == client;
+  });
+  for (auto& [id, pump] : pumps_) pump->remove(client);
+}
+
+std::optional<std::string> Hub::subscribe(const std::shared_ptr<Client>& client,
+                                          std::uint32_t channel_id) {
+  std::lock_guard lock(mutex_);
+  const auto channel = channels_.find(channel_id);
+  if (channel == channels_.end()) {
+    return "channel " + std::to_string(channel_id) +
+           " is not advertised; subscribe to a channel id from an advertise message.";
+  }
+  auto& pump = pumps_[channel_id];
+  if (!pump) {
+    pump = std::make_unique<Pump>(channel->second.channel.topic, channel_id,
+                                  channel->second.layout, pump_options_);
+  }
+  pump->add(client);
+  return std::nullopt;
+}
+
+void Hub::unsubscribe(const Client* client, std::uint32_t channel_id) {
+  std::lock_guard lock(mutex_);
+  if (const auto it = pumps_.find(channel_id); it != pumps_.end()) it->second->remove(client);
+}
+
+void Hub::reap() {
+  std::vector<std::unique_ptr<Pump>> finished;
+  std::lock_guard lock(mutex_);
+  for (auto it = pumps_.begin(); it != pumps_.end();) {
+    if (it->second->subscriber_count() == 0) {
+      finished.push_back(std::move(it->second));
+      it = pumps_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+  // `finished` is declared before the lock: the pumps join their threads after it is released.
+}
+
+void Hub::update(const std::vector<AdvertisedStream>& added,
+                 const std::vector<std::uint32_t>& removed) {
+  std::vector<std::unique_ptr<Pump>> finished;
+  std::lock_guard lock(mutex_);
+  std::vector<std::shared_ptr<Client>> clients;
+  for (const auto& w : clients_) {
+    if (auto c = w.lock()) clients.push_back(std::move(c));
+  }
+  if (!removed.empty()) {
+    for (const std::uint32_t id : removed) {
+      channels_.erase(id);
+      if (auto it = pumps_.find(id); it != pumps_.end()) {
+        finished.push_back(std::move(it->second));
+        pumps_.erase(it);
+      }
+    }
+    const std::string text = unadvertise_json(removed);
+    for (const auto& c : clients) {
+      for (const std::uint32_t id : removed) c->drop_channel(id);
+      c->send_text(text);
+    }
+  }
+  if (!added.empty()) {
+    std::vector<Channel> channels;
+    for (const auto& stream : added) {
+      channels_[stream.channel.id] = stream;
+      channels.push_back(stream.channel);
+    }
+    const std::string text = advertise_json(channels);
+    for (const auto& c : clients) c->send_text(text);
+  }
+}
+
+void Hub::stop() {
+  std::map<std::uint32_t, std::unique_ptr<Pump>> finished;
+  {
+    std::lock_guard lock(mutex_);
+    finished.swap(pumps_);
+  }
+}
+
+std::size_t Hub::pump_count() const {
+  std::lock_guard lock(mutex_);
+  return pumps_.size();
+}
+
+}  // namespace sim::foxglove

@@ -1,0 +1,31 @@
+// SPDX-License-Identifier: Apache-2.0
+// The built-in page's small HTTP API, as plain functions: the request target parsed into a path
+// and query parameters (fuzzed with the protocol parser), and the stream table as JSON.
+#pragma once
+
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "catalog.hpp"
+
+namespace sim::foxglove {
+
+struct Target {
+  std::string path;
+  std::map<std::string, std::string> query;
+};
+
+// "/api/image?stream=%2Fcamera_front" -> {"/api/image", {{"stream", "/camera_front"}}}.
+// nullopt for a target that is not an origin-form path or has broken percent-encoding.
+std::optional<Target> parse_target(std::string_view target);
+
+// The page's stream table: one object per stream with its health and how it is shown.
+std::string streams_json(const std::vector<StreamEntry>& streams);
+
+// The page itself (page.html, embedded at build time).
+extern const char* const kPageHtml;
+
+}  // namespace sim::foxglove

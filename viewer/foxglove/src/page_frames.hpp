@@ -1,0 +1,61 @@
+// SPDX-License-Identifier: Apache-2.0
+// The built-in page's pictures: the newest frame of a stream as JPEG, a camera image as it is or
+// a LiDAR frame from above. A stream gets a reader only once the page asks for it, each picture
+// is made at most once per frame however many browsers ask, and a frame is copied out of shared
+// memory (Reader::read), so the writer is never held up by a slow encode.
+#pragma once
+
+#include <cstddef>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "jpeg.hpp"
+#include "sim/reader.hpp"
+#include "top_down.hpp"
+
+namespace sim::foxglove {
+
+using Jpeg = std::shared_ptr<const std::vector<std::byte>>;
+
+// A picture for the page and one line that says what it shows (size, scale, frame).
+struct Picture {
+  Jpeg jpeg;
+  std::string caption;
+};
+
+class PageFrames {
+ public:
+  explicit PageFrames(int jpeg_quality) : quality_(jpeg_quality) {}
+
+  // The error is one sentence (no frame yet, not an image stream, …).
+  Expected<Picture> image(const std::string& stream);
+  Expected<Picture> top_down(const std::string& stream, const TopDownOptions& options);
+  // Closes the readers of streams that are not in `names` any more.
+  void keep_only(const std::set<std::string>& names);
+
+ private:
+  struct Entry {
+    std::mutex mutex;
+    std::optional<Reader> reader;
+    std::vector<std::byte> frame;
+    FrameInfo info{};
+    bool have_frame = false;
+    std::optional<ImageToJpeg> jpeg;
+    std::string picture_key;  // what `picture` shows: seq and options
+    Picture picture;
+  };
+  std::shared_ptr<Entry> entry(const std::string& stream);
+  // Copies the newest frame into the entry, if there is a newer one; the error is one sentence.
+  static std::optional<Error> refresh(Entry& e, const std::string& stream);
+
+  const int quality_;
+  std::mutex mutex_;
+  std::map<std::string, std::shared_ptr<Entry>> entries_;
+};
+
+}  // namespace sim::foxglove

@@ -1,0 +1,286 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "ws_session.hpp"
+
+#include <boost/asio/post.hpp>
+
+namespace sim::foxglove {
+
+namespace beast = boost::beast;
+namespace websocket = beast::websocket;
+namespace http = beast::http;
+namespace net = boost::asio;
+using namespace std::chrono_literals;
+
+namespace {
+
+// Client messages are small JSON requests; anything bigger is refused by the WebSocket layer.
+constexpr std::size_t kMaxClientMessage = 64 * 1024;
+// Status and advertise messages waiting for a client that does not read; more closes it.
+constexpr std::size_t kMaxQueuedTexts = 256;
+
+}  // namespace
+
+WsSession::WsSession(beast::tcp_stream&& stream, Hub& hub, const SessionOptions& options)
+    : ws_(std::move(stream)),
+      hub_(hub),
+      options_(options),
+      rate_timer_(ws_.get_executor()),
+      watchdog_(ws_.get_executor()) {}
+
+WsSession::~WsSession() = default;
+
+void WsSession::start(http::request<http::string_body> request) {
+  beast::get_lowest_layer(ws_).expires_never();  // the WebSocket layer keeps its own timeouts
+  websocket::stream_base::timeout timeouts =
+      websocket::stream_base::timeout::suggested(beast::role_type::server);
+  timeouts.handshake_timeout = 10s;
+  timeouts.idle_timeout = std::chrono::duration_cast<std::chrono::seconds>(
+      std::max<std::chrono::milliseconds>(options_.send_timeout * 3, 3s));
+  timeouts.keep_alive_pings = true;
+  ws_.set_option(timeouts);
+  ws_.set_option(websocket::stream_base::decorator([](websocket::response_type& response) {
+    response.set(http::field::sec_websocket_protocol, std::string(kSubprotocol));
+    response.set(http::field::server, "sim_foxglove");
+  }));
+  ws_.read_message_max(kMaxClientMessage);
+  ws_.auto_fragment(false);
+  ws_.async_accept(request, [self = shared_from_this()](beast::error_code ec) {
+    self->on_accept(ec);
+  });
+}
+
+void WsSession::on_accept(beast::error_code ec) {
+  if (ec) return close();
+  open_ = true;
+  send_text(server_info_json(options_.server_name, options_.session_id));
+  hub_.join(shared_from_this());
+  read();
+  watch();
+}
+
+void WsSession::read() {
+  ws_.async_read(read_buffer_, [self = shared_from_this()](beast::error_code ec, std::size_t n) {
+    self->on_read(ec, n);
+  });
+}
+
+void WsSession::on_read(beast::error_code ec, std::size_t) {
+  // Malformed frames, oversized messages and closes all end here: the WebSocket layer has
+  // already answered with the right close code.
+  if (ec) return close();
+  if (!ws_.got_text()) {
+    send_text(status_json(StatusLevel::error,
+                          "binary client messages (client publish) are not offered by this server."));
+  } else {
+    const auto data = read_buffer_.cdata();
+    handle(std::string_view(static_cast<const char*>(data.data()), data.size()));
+  }
+  read_buffer_.consume(read_buffer_.size());
+  if (!closed_) read();
+}
+
+void WsSession::handle(std::string_view text) {
+  const ClientRequest request = parse_client_request(text);
+  if (const auto* rejected = std::get_if<RejectedRequest>(&request)) {
+    send_text(status_json(StatusLevel::error, rejected->message));
+    return;
+  }
+  if (const auto* subscribe = std::get_if<SubscribeRequest>(&request)) {
+    for (const Subscription& s : subscribe->subscriptions) {
+      if (subscriptions_.contains(s.id)) {
+        send_text(status_json(StatusLevel::error, "subscription id " + std::to_string(s.id) +
+                                                      " is already in use; choose another id."));
+        continue;
+      }
+      bool taken = false;
+      for (const auto& [id, channel] : subscriptions_) taken |= channel == s.channel_id;
+      if (taken) {
+        send_text(status_json(StatusLevel::error,
+                              "this client already subscribes to channel " +
+                                  std::to_string(s.channel_id) + "; one subscription per channel."));
+        continue;
+      }
+      {
+        std::lock_guard lock(mutex_);
+        slots_[s.channel_id] = Slot{s.id, nullptr, {}};
+      }
+      if (const auto error = hub_.subscribe(shared_from_this(), s.channel_id)) {
+        {
+          std::lock_guard lock(mutex_);
+          slots_.erase(s.channel_id);
+        }
+        send_text(status_json(StatusLevel::error, *error));
+        continue;
+      }
+      subscriptions_[s.id] = s.channel_id;
+    }
+    return;
+  }
+  const auto& unsubscribe = std::get<UnsubscribeRequest>(request);
+  for (const std::uint32_t id : unsubscribe.subscription_ids) {
+    const auto it = subscriptions_.find(id);
+    if (it == subscriptions_.end()) {
+      send_text(status_json(StatusLevel::warning, "subscription id " + std::to_string(id) +
+                                                      " is not active; nothing to unsubscribe."));
+      continue;
+    }
+    const std::uint32_t channel_id = it->second;
+    subscriptions_.erase(it);
+    {
+      std::lock_guard lock(mutex_);
+      slots_.erase(channel_id);
+    }
+    hub_.unsubscribe(this, channel_id);
+  }
+}
+
+void WsSession::offer(std::shared_ptr<const Message> message) {
+  {
+    std::lock_guard lock(mutex_);
+    const auto it = slots_.find(message->channel_id);
+    if (it == slots_.end()) return;
+    it->second.pending = std::move(message);  // the older pending message, if any, is dropped
+  }
+  kick();
+}
+
+void WsSession::send_text(std::string text) {
+  {
+    std::lock_guard lock(mutex_);
+    if (texts_.size() >= kMaxQueuedTexts) {
+      text_overflow_ = true;
+    } else {
+      texts_.push_back(std::move(text));
+    }
+  }
+  kick();
+}
+
+void WsSession::drop_channel(std::uint32_t channel_id) {
+  std::lock_guard lock(mutex_);
+  slots_.erase(channel_id);
+  // subscriptions_ belongs to the strand; the stale entry is removed there on the next kick.
+}
+
+void WsSession::kick() {
+  if (kick_pending_.exchange(true)) return;
+  net::post(ws_.get_executor(), [self = shared_from_this()] {
+    self->kick_pending_.store(false);
+    self->write_next();
+  });
+}
+
+void WsSession::write_next() {
+  if (!open_ || closed_ || writing_) return;
+  const auto now = std::chrono::steady_clock::now();
+  std::unique_lock lock(mutex_);
+  // Channels the hub dropped: forget their subscriptions so the ids can be used again.
+  std::erase_if(subscriptions_, [&](const auto& s) { return !slots_.contains(s.second); });
+  if (text_overflow_) {
+    lock.unlock();
+    return close();
+  }
+  if (!texts_.empty()) {
+    current_text_ = std::move(texts_.front());
+    texts_.pop_front();
+    lock.unlock();
+    writing_ = true;
+    write_started_ = now;
+    ws_.text(true);
+    ws_.async_write(net::buffer(current_text_), [self = shared_from_this()](
+                                                    beast::error_code ec, std::size_t) {
+      self->on_write(ec);
+    });
+    return;
+  }
+  // The next due message, taking channels in turn so a fast stream cannot starve a slow one.
+  Slot* chosen = nullptr;
+  std::uint32_t chosen_channel = 0;
+  std::optional<std::chrono::steady_clock::time_point> earliest;
+  auto consider = [&](std::uint32_t channel, Slot& slot) {
+    if (!slot.pending || chosen != nullptr) return;
+    if (slot.next_due > now) {
+      if (!earliest || slot.next_due < *earliest) earliest = slot.next_due;
+      return;
+    }
+    chosen = &slot;
+    chosen_channel = channel;
+  };
+  for (auto it = slots_.upper_bound(next_channel_turn_); it != slots_.end(); ++it) {
+    consider(it->first, it->second);
+  }
+  for (auto it = slots_.begin(); it != slots_.end() && it->first <= next_channel_turn_; ++it) {
+    consider(it->first, it->second);
+  }
+  if (chosen == nullptr) {
+    lock.unlock();
+    if (earliest && !rate_timer_armed_) {
+      rate_timer_armed_ = true;
+      rate_timer_.expires_at(*earliest);
+      rate_timer_.async_wait([self = shared_from_this()](beast::error_code ec) {
+        self->rate_timer_armed_ = false;
+        if (!ec) self->write_next();
+      });
+    }
+    return;
+  }
+  current_message_ = std::move(chosen->pending);
+  current_header_ = message_header(chosen->subscription_id, current_message_->timestamp_ns);
+  if (options_.max_rate_hz > 0) {
+    chosen->next_due = now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                 std::chrono::duration<double>(1.0 / options_.max_rate_hz));
+  }
+  next_channel_turn_ = chosen_channel;
+  lock.unlock();
+  writing_ = true;
+  write_started_ = now;
+  ws_.binary(true);
+  const std::array<net::const_buffer, 2> buffers{
+      net::buffer(current_header_),
+      net::buffer(current_message_->payload.data(), current_message_->payload.size())};
+  ws_.async_write(buffers, [self = shared_from_this()](beast::error_code ec, std::size_t) {
+    self->on_write(ec);
+  });
+}
+
+void WsSession::on_write(beast::error_code ec) {
+  writing_ = false;
+  current_message_.reset();
+  current_text_.clear();
+  if (ec) return close();
+  write_next();
+}
+
+// Once a second: a write that has not finished within the send timeout means the client
+// stopped reading; closing it frees what it held.
+void WsSession::watch() {
+  watchdog_.expires_after(1s);
+  watchdog_.async_wait([self = shared_from_this()](beast::error_code ec) {
+    if (ec || self->closed_) return;
+    if (self->writing_ &&
+        std::chrono::steady_clock::now() - self->write_started_ > self->options_.send_timeout) {
+      return self->close();
+    }
+    self->watch();
+  });
+}
+
+void WsSession::close() {
+  if (closed_) return;
+  closed_ = true;
+  hub_.leave(this);
+  {
+    std::lock_guard lock(mutex_);
+    slots_.clear();
+    texts_.clear();
+  }
+  rate_timer_.cancel();
+  watchdog_.cancel();
+  // Closing the socket ends every pending operation; no close handshake with a client that
+  // may not be reading.
+  beast::error_code ignored;
+  beast::get_lowest_layer(ws_).socket().shutdown(net::ip::tcp::socket::shutdown_both, ignored);
+  beast::get_lowest_layer(ws_).socket().close(ignored);
+}
+
+}  // namespace sim::foxglove
