@@ -2,6 +2,7 @@
 #include "sim/reader.hpp"
 
 #include <dirent.h>
+#include <sched.h>
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -18,6 +19,7 @@
 #include "region_file.hpp"
 #include "shared_copy.hpp"
 #include "sim/clock.hpp"
+#include "wake_plan.hpp"
 
 namespace sim {
 
@@ -44,6 +46,29 @@ struct Snapshot {
 };
 
 enum class Begin { ready, idle, lapped, invalid, reopened };
+
+// How long a polling reader spins before it looks at the writer's liveness again.
+constexpr std::int64_t kPollSliceNs = 20'000'000;
+// Adaptive readers of this process spinning now; with each region's leases, this keeps spinners
+// to the cores the process may use minus one, so the writer and other work always have a core.
+std::atomic<int> spinners_in_this_process{0};
+
+// Tells the core this is a spin loop (frees the pipeline for the other hyperthread).
+inline void cpu_relax() noexcept {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#elif defined(__aarch64__)
+  asm volatile("yield" ::: "memory");
+#endif
+}
+
+// Cores this process may run on, minus one: how many of its readers may spin at once.
+int spin_limit_for_this_process() noexcept {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) != 0) return 0;
+  return std::max(0, CPU_COUNT(&set) - 1);
+}
 }  // namespace
 
 // A token no other reader on the machine uses, for the reader's wait slot (WaitPage::asleep).
@@ -69,6 +94,8 @@ struct Reader::Impl {
   const std::uint64_t token = new_reader_token();
   std::optional<std::size_t> wait_slot;  // this reader's slot in the wait page, if it got one
   ReaderStats stats;
+  WakePlanner planner;
+  int spin_limit = 0;  // spinners allowed at once (cores of this process minus one), at open
 
   void adopt(RegionFile&& f) {
     file = std::make_shared<const RegionFile>(std::move(f));
@@ -182,6 +209,71 @@ struct Reader::Impl {
     }
   }
 
+  StreamTiming timing() const noexcept {
+    const Liveness& l = header->liveness;
+    return {l.latest_publish_ns.load(std::memory_order_relaxed), l.period_ns.load(std::memory_order_relaxed),
+            l.jitter_ns.load(std::memory_order_relaxed),
+            l.frames_this_writer.load(std::memory_order_relaxed)};
+  }
+
+  // Spins until a frame is deliverable or `until` comes; true if one came. No system call:
+  // monotonic_ns() is a vDSO read.
+  bool spin_until(std::int64_t until) noexcept {
+    ++stats.spins;
+    const std::int64_t from = monotonic_ns();
+    std::int64_t now = from;
+    bool caught = false;
+    while (now < until) {
+      for (int i = 0; i < 32 && !caught; ++i) {
+        caught = deliverable();
+        if (!caught) cpu_relax();
+      }
+      now = monotonic_ns();
+      if (caught) break;
+    }
+    stats.spin_ns += now - from;
+    if (caught) ++stats.caught_spinning;
+    return caught;
+  }
+
+  // An adaptive spin, if this reader may take one of the region's spin leases and the process
+  // has a core to spare; false (nothing done) if it may not, and then it should sleep instead.
+  bool try_adaptive_spin(std::int64_t now, std::int64_t until) noexcept {
+    WaitPage* wait = file->wait_page();
+    if (wait == nullptr || spin_limit <= 0) return false;  // a reader that cannot count itself
+    if (spinners_in_this_process.fetch_add(1, std::memory_order_acq_rel) >= spin_limit) {
+      spinners_in_this_process.fetch_sub(1, std::memory_order_relaxed);
+      return false;
+    }
+    const std::size_t limit = std::min<std::size_t>(kSpinLeases, static_cast<std::size_t>(spin_limit));
+    const int lease = SpinLeases::acquire(wait->spin_lease, limit, now, until);
+    if (lease >= 0) {
+      spin_until(until);
+      SpinLeases::release(wait->spin_lease, lease, until);
+    }
+    spinners_in_this_process.fetch_sub(1, std::memory_order_relaxed);
+    return lease >= 0;
+  }
+
+  // One step of a wait that found nothing deliverable at `now`; the caller loops.
+  void wait_step(const std::atomic<std::uint32_t>& word, std::uint32_t seen, std::int64_t now,
+                 std::int64_t deadline) noexcept {
+    const std::int64_t slice_end = std::min(deadline, now + kWaitSliceNs);
+    switch (options.wait_mode) {
+      case WaitMode::block: sleep_until(word, seen, slice_end); return;
+      case WaitMode::poll: spin_until(std::min(deadline, now + kPollSliceNs)); return;
+      case WaitMode::adaptive: break;
+    }
+    const WakeStep step = planner.next(now, timing());
+    switch (step.action) {
+      case WakeStep::Action::sleep: sleep_until(word, seen, std::min(step.until, slice_end)); return;
+      case WakeStep::Action::spin:
+        if (try_adaptive_spin(now, std::min(step.until, deadline))) return;
+        [[fallthrough]];  // no core to spare: sleep like a blocking reader
+      case WakeStep::Action::block: sleep_until(word, seen, slice_end); return;
+    }
+  }
+
   // First half of a seqlock read: finds the newest frame and its metadata, if it is new.
   Begin begin(Snapshot& s) noexcept {
     if (header->publication.retired.load(std::memory_order_acquire) != 0 && reopen_if_replaced()) {
@@ -236,6 +328,7 @@ Expected<Reader> Reader::open(std::string_view name, const ReaderOptions& option
   auto impl = std::make_unique<Impl>();
   impl->name = std::string(name);
   impl->options = options;
+  if (options.wait_mode == WaitMode::adaptive) impl->spin_limit = spin_limit_for_this_process();
   impl->adopt(std::move(*file));
   return Reader(std::move(impl));
 }
@@ -334,8 +427,8 @@ ReadStatus Reader::wait(std::chrono::nanoseconds timeout) noexcept {
     if (r.deliverable()) return ReadStatus::new_frame;
     const std::int64_t now = monotonic_ns();
     if (now >= deadline) return r.idle_status();
-    // Sleep in slices, so a reader notices a region replaced by a new writer or a dead writer.
-    r.sleep_until(futex_word, word, std::min(deadline, now + kWaitSliceNs));
+    // Wait in slices, so a reader notices a region replaced by a new writer or a dead writer.
+    r.wait_step(futex_word, word, now, deadline);
   }
 }
 

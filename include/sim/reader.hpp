@@ -62,6 +62,14 @@ struct Trust {
   std::string describe() const;
 };
 
+// How Reader::wait waits for the next frame (docs/protocol.md, "Waiting").
+enum class WaitMode {
+  block,     // sleep on the futex until the writer publishes: no CPU while idle
+  poll,      // spin on the newest frame number: lowest latency, one whole core while waiting
+  adaptive,  // sleep until shortly before the writer's next expected publish, then spin briefly;
+             // a stream without a steady period (or a silent one) is waited for as in `block`
+};
+
 struct ReaderOptions {
   // A frame older than this (by its publish time) makes an idle stream "stale". Zero: never.
   std::chrono::nanoseconds stale_after{0};
@@ -70,6 +78,8 @@ struct ReaderOptions {
   // Whose regions to accept (see Trust); a region of anyone else is refused with a sentence that
   // names its actual owner.
   Trust trust{};
+  // How wait() (and read_next) wait; see WaitMode.
+  WaitMode wait_mode = WaitMode::block;
 };
 
 // A wait that never times out: Reader::wait(sim::kForever).
@@ -96,6 +106,9 @@ struct ReaderStats {
   std::uint64_t overruns = 0;            // copies invalidated by the writer and retried
   std::uint64_t checksum_failures = 0;
   std::uint64_t reopens = 0;             // times the region was replaced and reopened
+  std::uint64_t spins = 0;               // adaptive/poll waits that spun (WaitMode)
+  std::uint64_t caught_spinning = 0;     // frames that arrived while this reader spun
+  std::int64_t spin_ns = 0;              // time spent spinning: this reader's busy CPU in wait()
 };
 
 // Diagnostics the writer keeps in the region header; sim_ls shows them.

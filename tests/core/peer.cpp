@@ -2,11 +2,14 @@
 // sim_test_peer: the other process in multi-process tests. Prints key=value lines on stdout.
 //
 //   writer NAME FRAMES RATE_HZ MIN_BYTES MAX_BYTES LINGER_MS   publish pattern frames
-//   reader NAME UNTIL_SEQ TIMEOUT_MS MODE                       MODE: wait | poll | borrow
+//   reader NAME UNTIL_SEQ TIMEOUT_MS MODE                       MODE: wait | poll | borrow |
+//                                                               adaptive | spin (WaitMode::poll) |
+//                                                               adaptive-one-core (pinned to 1 CPU)
 //   hold NAME                                                   own the stream until killed
 //   remove NAME                                                 destroy() the stream until SIGTERM
 //   stall-in-copy NAME                                          stop inside read()'s copy of a frame
 //   hold-borrow NAME                                            borrow a frame and keep it
+#include <sched.h>
 #include <signal.h>
 #include <sys/mman.h>
 #include <time.h>
@@ -63,10 +66,26 @@ int run_writer(const std::string& name, std::uint64_t frames, double rate_hz, st
 int run_reader(const std::string& name, std::uint64_t until_seq, long timeout_ms,
                const std::string& mode) {
   const std::int64_t deadline = monotonic_ns() + timeout_ms * 1'000'000;
-  auto reader = Reader::open(name);
+  ReaderOptions options;
+  if (mode == "adaptive-one-core") {
+    cpu_set_t one;
+    CPU_ZERO(&one);
+    cpu_set_t all;
+    if (sched_getaffinity(0, sizeof all, &all) != 0) return 1;
+    for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu) {
+      if (CPU_ISSET(cpu, &all)) {
+        CPU_SET(cpu, &one);
+        break;
+      }
+    }
+    if (sched_setaffinity(0, sizeof one, &one) != 0) return 1;
+  }
+  if (mode.starts_with("adaptive")) options.wait_mode = WaitMode::adaptive;
+  if (mode == "spin") options.wait_mode = WaitMode::poll;
+  auto reader = Reader::open(name, options);
   while (!reader && monotonic_ns() < deadline) {
     std::this_thread::sleep_for(5ms);
-    reader = Reader::open(name);
+    reader = Reader::open(name, options);
   }
   if (!reader) {
     std::printf("error=%s\n", reader.error().message.c_str());
@@ -116,11 +135,13 @@ int run_reader(const std::string& name, std::uint64_t until_seq, long timeout_ms
     }
   }
   const ReaderStats stats = reader->stats();
-  std::printf("received=%llu torn=%llu disorder=%llu skipped=%llu first=%llu last=%llu overruns=%llu\n",
+  std::printf("received=%llu torn=%llu disorder=%llu skipped=%llu first=%llu last=%llu overruns=%llu "
+              "spins=%llu\n",
               static_cast<unsigned long long>(received), static_cast<unsigned long long>(torn),
               static_cast<unsigned long long>(disorder),
               static_cast<unsigned long long>(stats.skipped), static_cast<unsigned long long>(first),
-              static_cast<unsigned long long>(last), static_cast<unsigned long long>(stats.overruns));
+              static_cast<unsigned long long>(last), static_cast<unsigned long long>(stats.overruns),
+              static_cast<unsigned long long>(stats.spins));
   return last >= until_seq ? 0 : 1;
 }
 
