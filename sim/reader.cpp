@@ -19,6 +19,7 @@
 #include "region_file.hpp"
 #include "shared_copy.hpp"
 #include "sim/clock.hpp"
+#include "reader_wait.hpp"
 #include "wake_plan.hpp"
 
 namespace sim {
@@ -183,30 +184,52 @@ struct Reader::Impl {
     return (meta(seq).seq.load(std::memory_order_acquire) & ~kWritingBit) >= seq;
   }
 
-  // Sleeps until the futex word moves away from `word` or `until` (CLOCK_MONOTONIC) comes.
-  void sleep_until(const std::atomic<std::uint32_t>& word, std::uint32_t seen,
-                   std::int64_t until) noexcept {
+  // Counts this reader as a sleeper, so the writer's next publish wakes the futex word. False if
+  // nothing would wake it (a writer that predates wakes_every_publish and a reader that may not
+  // write the wait page): it must then poll.
+  bool begin_sleep() noexcept {
     if (WaitPage* wait = file->wait_page()) {
       if (wait_slot) wait->asleep[*wait_slot].store(token, std::memory_order_relaxed);
       wait->sleepers.fetch_add(1, std::memory_order_seq_cst);
       std::atomic_thread_fence(std::memory_order_seq_cst);
+      return true;
+    }
+    // A reader that may not write the region (another user's group stream): the writer wakes
+    // the futex on every publish, and the value check covers a publish since `seen` was read.
+    return header->publication.wakes_every_publish.load(std::memory_order_relaxed) != 0;
+  }
+  void end_sleep() noexcept {
+    WaitPage* wait = file->wait_page();
+    if (wait == nullptr) return;
+    // Take this reader's mark back out, unless the writer already did (it cannot tell a
+    // reader that is about to sleep from a dead one only while that reader's lock is held).
+    std::uint64_t mine = token;
+    if (!wait_slot ||
+        wait->asleep[*wait_slot].compare_exchange_strong(mine, 0, std::memory_order_acq_rel)) {
+      wait->sleepers.fetch_sub(1, std::memory_order_relaxed);
+    }
+  }
+
+  // Sleeps until the futex word moves away from `word` or `until` (CLOCK_MONOTONIC) comes.
+  void sleep_until(const std::atomic<std::uint32_t>& word, std::uint32_t seen,
+                   std::int64_t until) noexcept {
+    if (begin_sleep()) {
       if (!deliverable()) futex_wait_until(&word, seen, until);
-      // Take this reader's mark back out, unless the writer already did (it cannot tell a
-      // reader that is about to sleep from a dead one only while that reader's lock is held).
-      std::uint64_t mine = token;
-      if (!wait_slot ||
-          wait->asleep[*wait_slot].compare_exchange_strong(mine, 0, std::memory_order_acq_rel)) {
-        wait->sleepers.fetch_sub(1, std::memory_order_relaxed);
-      }
-    } else if (header->publication.wakes_every_publish.load(std::memory_order_relaxed) != 0) {
-      // A reader that may not write the region (another user's group stream): the writer wakes
-      // the futex on every publish, and the value check covers a publish since `seen` was read.
-      futex_wait_until(&word, seen, until);
+      end_sleep();
     } else {
       // A writer that predates wakes_every_publish: nothing would wake this reader.
       const std::int64_t nap = std::min(until - monotonic_ns(), kPollSleepNs);
       if (nap > 0) std::this_thread::sleep_for(std::chrono::nanoseconds(nap));
     }
+  }
+
+  // Looks at the name again if the region was replaced or the writer seems gone (both cheap,
+  // rate-limited); true if this reader now reads another region.
+  bool refresh() noexcept {
+    const std::uint64_t reopens = stats.reopens;
+    if (header->publication.retired.load(std::memory_order_acquire) != 0) reopen_if_replaced();
+    writer_alive(false);  // also reopens the name if a new writer replaced the region
+    return stats.reopens != reopens;
   }
 
   StreamTiming timing() const noexcept {
@@ -415,12 +438,7 @@ ReadStatus Reader::wait(std::chrono::nanoseconds timeout) noexcept {
       budget > std::numeric_limits<std::int64_t>::max() - start ? std::numeric_limits<std::int64_t>::max()
                                                                : start + budget;
   for (;;) {
-    const std::uint64_t reopens = r.stats.reopens;
-    if (r.header->publication.retired.load(std::memory_order_acquire) != 0) {
-      r.reopen_if_replaced();
-    }
-    r.writer_alive(false);  // also reopens the name if a new writer replaced the region
-    if (r.stats.reopens != reopens) continue;  // look again, at the new region
+    if (r.refresh()) continue;  // look again, at the new region
 
     const std::atomic<std::uint32_t>& futex_word = r.header->publication.futex_word;
     const std::uint32_t word = futex_word.load(std::memory_order_acquire);
@@ -432,11 +450,38 @@ ReadStatus Reader::wait(std::chrono::nanoseconds timeout) noexcept {
   }
 }
 
+bool detail::ReaderWaitAccess::refresh(Reader& reader) noexcept { return reader.impl_->refresh(); }
+bool detail::ReaderWaitAccess::deliverable(const Reader& reader) noexcept {
+  return reader.impl_->deliverable();
+}
+const std::atomic<std::uint32_t>& detail::ReaderWaitAccess::futex_word(const Reader& reader) noexcept {
+  return reader.impl_->header->publication.futex_word;
+}
+bool detail::ReaderWaitAccess::begin_sleep(Reader& reader) noexcept { return reader.impl_->begin_sleep(); }
+void detail::ReaderWaitAccess::end_sleep(Reader& reader) noexcept { reader.impl_->end_sleep(); }
+void detail::ReaderWaitAccess::sleep_until(Reader& reader, std::uint32_t seen, std::int64_t until) noexcept {
+  reader.impl_->sleep_until(reader.impl_->header->publication.futex_word, seen, until);
+}
+ReadStatus detail::ReaderWaitAccess::idle_status(Reader& reader) noexcept {
+  return reader.impl_->idle_status();
+}
+void detail::ReaderWaitAccess::skip_to_newest(Reader& reader) noexcept {
+  Reader::Impl& r = *reader.impl_;
+  if (r.deliverable()) r.last_seq = r.latest();
+}
+
 ReadStatus Reader::read_next(std::span<std::byte> out, FrameInfo& info,
                              std::chrono::nanoseconds timeout) noexcept {
   const ReadStatus waited = wait(timeout);
   if (waited != ReadStatus::new_frame) return waited;
   return read(out, info);
+}
+
+void Reader::set_wait_mode(WaitMode mode) noexcept {
+  impl_->options.wait_mode = mode;
+  if (mode == WaitMode::adaptive && impl_->spin_limit == 0) {
+    impl_->spin_limit = spin_limit_for_this_process();
+  }
 }
 
 bool Reader::writer_alive() noexcept { return impl_->writer_alive(true); }

@@ -142,6 +142,9 @@ struct StreamStatus {
 };
 
 class Reader;
+namespace detail {
+struct ReaderWaitAccess;  // WaitSet's view of a reader's wake-up machinery (sim/reader_wait.hpp)
+}
 
 // A published frame read in place. It can be overwritten at any time once the writer has
 // published two more frames; check still_valid() after using the bytes and discard them if false.
@@ -199,6 +202,9 @@ class Reader {
   // The newest frame in place, if it is newer than the last one returned.
   [[nodiscard]] Borrow borrow() noexcept;
 
+  // Changes how wait() waits (ReaderOptions::wait_mode).
+  void set_wait_mode(WaitMode mode) noexcept;
+
   // Whether a process holds the stream's writer lock (one system call).
   [[nodiscard]] bool writer_alive() noexcept;
   // Time since the newest frame was published, or -1 ns before the first frame.
@@ -214,6 +220,7 @@ class Reader {
   struct Impl;
 
  private:
+  friend struct detail::ReaderWaitAccess;
   explicit Reader(std::unique_ptr<Impl> impl) noexcept;
   std::unique_ptr<Impl> impl_;
 };
