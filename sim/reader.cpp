@@ -96,6 +96,7 @@ struct Reader::Impl {
   std::optional<std::size_t> wait_slot;  // this reader's slot in the wait page, if it got one
   ReaderStats stats;
   WakePlanner planner;
+  WakeLateness wake_late;  // how late this reader's timed sleeps wake (adaptive mode)
   int spin_limit = 0;  // spinners allowed at once (cores of this process minus one), at open
 
   void adopt(RegionFile&& f) {
@@ -287,9 +288,15 @@ struct Reader::Impl {
       case WaitMode::poll: spin_until(std::min(deadline, now + kPollSliceNs)); return;
       case WaitMode::adaptive: break;
     }
-    const WakeStep step = planner.next(now, timing());
+    const WakeStep step = planner.next(now, timing(), wake_late.ns());
     switch (step.action) {
-      case WakeStep::Action::sleep: sleep_until(word, seen, std::min(step.until, slice_end)); return;
+      case WakeStep::Action::sleep: {
+        const std::int64_t until = std::min(step.until, slice_end);
+        sleep_until(word, seen, until);
+        // Woken by its deadline rather than a publish: learn how late such wake-ups come.
+        if (until == step.until && !deliverable()) wake_late.add(monotonic_ns() - until);
+        return;
+      }
       case WakeStep::Action::spin:
         if (try_adaptive_spin(now, std::min(step.until, deadline))) return;
         [[fallthrough]];  // no core to spare: sleep like a blocking reader

@@ -17,6 +17,20 @@ struct StreamTiming {
   std::uint64_t frames_this_writer = 0;
 };
 
+// How late this reader's timed futex sleeps have woken, smoothed (a loaded machine or a VM wakes
+// later than the timer asked): the planner starts the spin that much earlier.
+class WakeLateness {
+ public:
+  void add(std::int64_t late_ns) noexcept {
+    if (late_ns < 0) late_ns = 0;
+    smoothed_ns_ += (late_ns - smoothed_ns_) / 8;
+  }
+  std::int64_t ns() const noexcept { return smoothed_ns_; }
+
+ private:
+  std::int64_t smoothed_ns_ = 0;
+};
+
 // What an adaptive reader does next, and until when (CLOCK_MONOTONIC).
 struct WakeStep {
   enum class Action {
@@ -47,8 +61,9 @@ class WakePlanner {
   WakePlanner() = default;
   explicit WakePlanner(const Params& params) noexcept : p_(params) {}
 
-  // The step for a reader waiting at `now` with nothing deliverable.
-  WakeStep next(std::int64_t now, const StreamTiming& t) const noexcept {
+  // The step for a reader waiting at `now` with nothing deliverable; `wake_late_ns`: how late its
+  // timed sleeps have been waking (WakeLateness), added to the wake margin when larger than it.
+  WakeStep next(std::int64_t now, const StreamTiming& t, std::int64_t wake_late_ns = 0) const noexcept {
     const WakeStep block{WakeStep::Action::block, 0};
     if (!predictable(t)) return block;
     const std::int64_t since = now - t.latest_publish_ns;
@@ -61,7 +76,8 @@ class WakePlanner {
     std::int64_t expected = t.latest_publish_ns + (periods_past + 1) * t.period_ns;
     if (expected - t.period_ns + guard > now && periods_past > 0) expected -= t.period_ns;
     const std::int64_t max_spin = t.period_ns / p_.max_spin_share_inverse;
-    const std::int64_t spin_from = expected - guard - p_.wake_margin_ns;
+    const std::int64_t margin = wake_late_ns > p_.wake_margin_ns ? wake_late_ns : p_.wake_margin_ns;
+    const std::int64_t spin_from = expected - guard - margin;
     std::int64_t spin_to = expected + guard;
     if (spin_to - spin_from > max_spin) spin_to = spin_from + max_spin;
     if (now < spin_from) return {WakeStep::Action::sleep, spin_from};

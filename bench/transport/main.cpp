@@ -26,6 +26,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <random>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -132,6 +133,7 @@ struct RoleOptions {
   std::uint64_t frames = 0;
   std::uint64_t warmup = 0;
   double rate = 0;  // 0: as fast as possible
+  double jitter = 0;  // each period is drawn uniformly from period * (1 ± jitter)
   int cpu = -1;
   int rt_priority = 0;
 };
@@ -165,6 +167,9 @@ int run_writer(const RoleOptions& o, Transport t) {
   for (std::size_t i = 0; i < frame.size(); ++i) frame[i] = static_cast<std::byte>(i * 131 + 7);
 
   const std::int64_t period_ns = o.rate > 0 ? static_cast<std::int64_t>(1e9 / o.rate) : 0;
+  // --jitter: a sensor whose frames come at irregular intervals (fixed seed: runs compare).
+  std::mt19937_64 random(12345);
+  std::uniform_real_distribution<double> deviation(-o.jitter, o.jitter);
   const Usage start = usage_now();
   const std::int64_t t0 = sim::monotonic_ns();
   std::int64_t next = t0;
@@ -172,7 +177,8 @@ int run_writer(const RoleOptions& o, Transport t) {
   for (std::uint64_t seq = 1; seq <= o.frames; ++seq) {
     if (publisher->publish(frame, seq)) ++published;
     if (period_ns > 0) {
-      next += period_ns;  // absolute schedule: no drift
+      const double scale = o.jitter > 0 ? 1.0 + deviation(random) : 1.0;
+      next += static_cast<std::int64_t>(static_cast<double>(period_ns) * scale);  // absolute: no drift
       sleep_until_ns(next);
     }
   }
@@ -273,11 +279,12 @@ volatile std::sig_atomic_t stop_requested = 0;
 extern "C" void request_stop(int) { stop_requested = 1; }
 
 struct Options {
-  std::vector<std::string> transports{"sim-poll", "sim-block", "sim-zero", "iceoryx", "fastdds",
+  std::vector<std::string> transports{"sim-poll", "sim-block", "sim-zero", "sim-adaptive", "sim-zero-adaptive", "iceoryx", "fastdds",
                                       "cyclone"};
   std::vector<std::size_t> payloads{25920, 1382400, 921600, 6912000};
   std::vector<int> readers{1, 10};
   double rate = 100;
+  double jitter = 0;
   bool max_rate = false;
   std::uint64_t frames = 1100;
   std::uint64_t warmup = 100;
@@ -384,6 +391,7 @@ class Bench {
                                "--frames", std::to_string(o_.frames),
                                "--warmup", std::to_string(o_.warmup),
                                "--rate", std::to_string(o_.max_rate ? 0.0 : o_.rate),
+                               "--jitter", std::to_string(o_.jitter),
                                "--rt-priority", std::to_string(o_.rt_priority)};
     const int cpu = cpu_for(role == "writer" ? -1 : index);
     if (cpu >= 0) {
@@ -635,7 +643,7 @@ class Bench {
                         "p999_us,max_us,std_us,received,skipped,lost,writer_cpu_s,reader_cpu_s\n");
       std::fprintf(extra, "transport,payload_bytes,readers,run,published,torn,writer_nvcsw,"
                           "writer_nivcsw,reader_nvcsw,reader_nivcsw,udp_datagrams,path,status,"
-                          "rate_hz,frames,warmup,cpus,rt_priority\n");
+                          "rate_hz,frames,warmup,cpus,rt_priority,jitter\n");
     }
     const std::size_t total = o_.payloads.size() * o_.readers.size() * static_cast<std::size_t>(o_.runs) *
                               (transports.size() + (o_.no_floor ? 0 : 1));
@@ -663,11 +671,11 @@ class Bench {
       std::string cpus;
       for (const int c : o_.cpus) cpus += (cpus.empty() ? "" : " ") + std::to_string(c);
       std::fprintf(extra, "%s,%zu,%d,%d,%" PRIu64 ",%" PRIu64 ",%ld,%ld,%ld,%ld,%lld,%s,%s,%g,%" PRIu64
-                          ",%" PRIu64 ",%s,%d\n",
+                          ",%" PRIu64 ",%s,%d,%g\n",
                    r.transport.c_str(), r.payload, r.readers, r.run, r.published, r.torn,
                    r.writer_nvcsw, r.writer_nivcsw, r.reader_nvcsw, r.reader_nivcsw, r.udp_datagrams,
                    r.path.empty() ? "-" : r.path.c_str(), r.status.c_str(), o_.max_rate ? 0.0 : o_.rate,
-                   o_.frames, o_.warmup, cpus.empty() ? "-" : cpus.c_str(), o_.rt_priority);
+                   o_.frames, o_.warmup, cpus.empty() ? "-" : cpus.c_str(), o_.rt_priority, o_.jitter);
       std::fflush(csv);
       std::fflush(extra);
     };
@@ -779,7 +787,7 @@ int main(int argc, char** argv) {
                "writer and N reader processes per configuration (issue 5)."};
   Options o;
   RoleOptions role;
-  std::string transports = "sim-poll,sim-block,sim-zero,iceoryx,fastdds,cyclone";
+  std::string transports = "sim-poll,sim-block,sim-zero,sim-adaptive,sim-zero-adaptive,iceoryx,fastdds,cyclone";
   std::string payloads = "25920,1382400,921600,6912000";
   std::string readers = "1,10";
   std::string cpus;
@@ -792,6 +800,9 @@ int main(int argc, char** argv) {
   app.add_option("--rate", o.rate, "frames per second the writer publishes (0: as fast as it can)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   app.add_flag("--max-rate", o.max_rate, "publish as fast as the writer can instead of --rate");
+  app.add_option("--jitter", o.jitter, "draw each publish period from period x (1 ± this), e.g. 0.1 "
+                                       "for ±10 %: an irregular sensor")
+      ->check(CLI::Range(0.0, 0.9));
   app.add_option("--frames", o.frames, "frames per run, warm-up included")->capture_default_str();
   app.add_option("--warmup", o.warmup, "first frames of each run left out of the statistics")
       ->capture_default_str();
@@ -825,12 +836,14 @@ int main(int argc, char** argv) {
     role.frames = o.frames;
     role.warmup = o.warmup;
     role.rate = o.rate;
+    role.jitter = o.jitter;
     role.rt_priority = o.rt_priority;
     return role.role == "writer" ? run_writer(role, t) : run_reader(role, t);
   }
 
   if (list) {
     for (const auto t : {Transport::sim_poll, Transport::sim_block, Transport::sim_zero,
+                         Transport::sim_adaptive, Transport::sim_zero_adaptive,
                          Transport::iceoryx, Transport::fastdds, Transport::cyclone}) {
       if (available(t)) std::printf("%s\n", std::string(to_string(t)).c_str());
     }

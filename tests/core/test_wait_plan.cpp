@@ -53,6 +53,23 @@ TEST(WakePlanner, WidensTheGuardBandWithTheObservedJitter) {
   EXPECT_EQ(calm.until - jittery.until, 3 * 60 * kUs - planner.params().min_guard_ns);
 }
 
+TEST(WakePlanner, StartsEarlierWhenItsSleepsHaveBeenWakingLate) {
+  const WakePlanner planner;
+  const WakeStep usual = planner.next(1001 * kMs, steady());
+  const WakeStep late = planner.next(1001 * kMs, steady(), 250 * kUs);
+  EXPECT_EQ(usual.until - late.until, 250 * kUs - planner.params().wake_margin_ns);
+  // Smaller lateness than the margin changes nothing.
+  EXPECT_EQ(planner.next(1001 * kMs, steady(), 10 * kUs).until, usual.until);
+}
+
+TEST(WakeLateness, FollowsTheObservedLatenessSmoothly) {
+  sim::detail::WakeLateness late;
+  for (int i = 0; i < 100; ++i) late.add(200 * kUs);
+  EXPECT_NEAR(static_cast<double>(late.ns()), 200.0 * kUs, 10.0 * kUs);
+  late.add(-5);  // a clock read before the deadline counts as on time, never negative
+  EXPECT_GE(late.ns(), 0);
+}
+
 TEST(WakePlanner, NeverSpinsLongerThanItsShareEvenWithLargeJitter) {
   const WakePlanner planner;
   const StreamTiming t = steady(2 * kMs);  // 20 % of the period: still below the aperiodic cut
