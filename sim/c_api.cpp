@@ -209,7 +209,7 @@ int SIM_readerSetWaitMode(sim_reader* r, int mode) {
 
 sim_waitset* SIM_waitsetCreate(void) {
   clear_last_error();
-  return new (std::nothrow) sim_waitset{};
+  return new (std::nothrow) sim_waitset{sim::WaitSet()};
 }
 
 int SIM_waitsetAdd(sim_waitset* ws, sim_reader* r) {

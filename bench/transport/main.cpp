@@ -134,6 +134,7 @@ struct RoleOptions {
   std::uint64_t warmup = 0;
   double rate = 0;  // 0: as fast as possible
   double jitter = 0;  // each period is drawn uniformly from period * (1 ± jitter)
+  double idle_s = 0;  // > 0: the idle-cost run (the writer publishes nothing for this long)
   int cpu = -1;
   int rt_priority = 0;
 };
@@ -174,7 +175,8 @@ int run_writer(const RoleOptions& o, Transport t) {
   const std::int64_t t0 = sim::monotonic_ns();
   std::int64_t next = t0;
   std::uint64_t published = 0;
-  for (std::uint64_t seq = 1; seq <= o.frames; ++seq) {
+  const std::uint64_t frames = o.idle_s > 0 ? 0 : o.frames;  // idle cost: a silent writer
+  for (std::uint64_t seq = 1; seq <= frames; ++seq) {
     if (publisher->publish(frame, seq)) ++published;
     if (period_ns > 0) {
       const double scale = o.jitter > 0 ? 1.0 + deviation(random) : 1.0;
@@ -210,6 +212,26 @@ int run_reader(const RoleOptions& o, Transport t) {
   }
   std::printf("ready\n");
   std::fflush(stdout);
+
+  if (o.idle_s > 0) {
+    // Idle cost: wait for frames that never come, as a program does between bursts.
+    const Usage start = usage_now();
+    const std::int64_t end = sim::monotonic_ns() + static_cast<std::int64_t>(o.idle_s * 1e9);
+    std::uint64_t received = 0;
+    while (sim::monotonic_ns() < end) {
+      const Delivery d = subscriber->receive(100ms);
+      if (d.kind == Delivery::Kind::frame) {
+        ++received;
+        (void)subscriber->release();
+      }
+    }
+    const Usage used = usage_since(start);
+    std::printf("result received=%" PRIu64 " gaps=0 torn=0 invalidated=0 last=0 cpu_s=%.6f nvcsw=%ld "
+                "nivcsw=%ld\nlat\n",
+                received, used.cpu_s, used.voluntary_switches, used.involuntary_switches);
+    std::fflush(stdout);
+    return 0;
+  }
 
   std::vector<std::int64_t> latencies;
   latencies.reserve(o.frames);
@@ -285,6 +307,7 @@ struct Options {
   std::vector<int> readers{1, 10};
   double rate = 100;
   double jitter = 0;
+  double idle_s = 0;
   bool max_rate = false;
   std::uint64_t frames = 1100;
   std::uint64_t warmup = 100;
@@ -392,6 +415,7 @@ class Bench {
                                "--warmup", std::to_string(o_.warmup),
                                "--rate", std::to_string(o_.max_rate ? 0.0 : o_.rate),
                                "--jitter", std::to_string(o_.jitter),
+                               "--idle-cost", std::to_string(o_.idle_s),
                                "--rt-priority", std::to_string(o_.rt_priority)};
     const int cpu = cpu_for(role == "writer" ? -1 : index);
     if (cpu >= 0) {
@@ -578,6 +602,27 @@ class Bench {
     return row;
   }
 
+  // The idle cost: per transport, the CPU its readers use while no frame comes.
+  int idle_cost(const std::vector<Transport>& transports) {
+    const int readers = o_.readers.front();
+    std::printf("%-18s %3s %8s %14s %16s\n", "transport", "R", "seconds", "readers_cpu_s",
+                "%_of_one_core");
+    int failures = 0;
+    for (const Transport t : transports) {
+      for (int run = 1; run <= o_.runs && !stop_requested; ++run) {
+        const Row row = run_one(std::string(to_string(t)), o_.payloads.front(), readers, run);
+        if (row.status == "failed") {
+          ++failures;
+          continue;
+        }
+        std::printf("%-18s %3d %8.1f %14.3f %16.2f\n", std::string(to_string(t)).c_str(), readers,
+                    o_.idle_s, row.reader_cpu_s, 100.0 * row.reader_cpu_s / o_.idle_s);
+        std::fflush(stdout);
+      }
+    }
+    return failures == 0 ? 0 : 1;
+  }
+
   int run_all() {
     std::vector<Transport> transports;
     for (const auto& name : o_.transports) {
@@ -625,6 +670,8 @@ class Bench {
         return 1;
       }
     }
+
+    if (o_.idle_s > 0) return idle_cost(transports);
 
     std::FILE* csv = nullptr;
     std::FILE* extra = nullptr;
@@ -803,6 +850,10 @@ int main(int argc, char** argv) {
   app.add_option("--jitter", o.jitter, "draw each publish period from period x (1 ± this), e.g. 0.1 "
                                        "for ±10 %: an irregular sensor")
       ->check(CLI::Range(0.0, 0.9));
+  app.add_option("--idle-cost", o.idle_s, "instead of latency: the CPU the readers (first --readers "
+                                          "value) use over this many seconds while the writer "
+                                          "publishes nothing, per transport")
+      ->check(CLI::Range(0.0, 3600.0));
   app.add_option("--frames", o.frames, "frames per run, warm-up included")->capture_default_str();
   app.add_option("--warmup", o.warmup, "first frames of each run left out of the statistics")
       ->capture_default_str();
@@ -837,6 +888,7 @@ int main(int argc, char** argv) {
     role.warmup = o.warmup;
     role.rate = o.rate;
     role.jitter = o.jitter;
+    role.idle_s = o.idle_s;
     role.rt_priority = o.rt_priority;
     return role.role == "writer" ? run_writer(role, t) : run_reader(role, t);
   }
