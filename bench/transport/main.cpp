@@ -308,6 +308,7 @@ struct Options {
   double rate = 100;
   double jitter = 0;
   double idle_s = 0;
+  double vehicle_s = 0;  // > 0: the many-stream vehicle workload for this many seconds
   bool max_rate = false;
   std::uint64_t frames = 1100;
   std::uint64_t warmup = 100;
@@ -602,6 +603,109 @@ class Bench {
     return row;
   }
 
+  // The vehicle of the SIM paper: every stream at its own rate at once, a reader each.
+  int vehicle(const std::vector<Transport>& transports) {
+    struct Spec {
+      const char* what;
+      std::size_t payload;
+      double rate;
+    };
+    std::vector<Spec> specs(7, Spec{"camera", 1920 * 1200 * 3, 30.0});
+    specs.push_back({"lidar", 1382400, 10.0});
+    std::printf("%-18s %3s %-7s %9s %6s %10s %10s %8s %5s\n", "transport", "run", "stream", "payload",
+                "Hz", "mean_us", "p99_us", "received", "lost");
+    int failures = 0;
+    for (const Transport t : transports) {
+      for (int run = 1; run <= o_.runs && !stop_requested; ++run) {
+        const std::string name(to_string(t));
+        std::vector<std::string> topics;
+        struct Sweep {
+          std::vector<std::string> names;
+          ~Sweep() {
+            for (const auto& n : names) (void)sim::destroy(n, /*force=*/true);
+          }
+        } sweep;
+        std::vector<std::unique_ptr<ChildProcess>> writers, readers;
+        std::string error;
+        bool ok = true;
+        for (std::size_t i = 0; i < specs.size() && ok; ++i) {
+          topics.push_back("simbench_" + std::to_string(getpid()) + "_" + std::to_string(counter_++));
+          if (name.rfind("sim-", 0) == 0) sweep.names.push_back("/" + topics.back());
+          const auto frames = static_cast<std::uint64_t>(o_.vehicle_s * specs[i].rate);
+          auto args = role_args("writer", name, topics.back(), specs[i].payload, 1, 0);
+          for (std::size_t a = 0; a + 1 < args.size(); ++a) {
+            if (args[a] == "--rate") args[a + 1] = std::to_string(specs[i].rate);
+            if (args[a] == "--frames") args[a + 1] = std::to_string(frames);
+            if (args[a] == "--warmup") args[a + 1] = std::to_string(static_cast<std::uint64_t>(specs[i].rate));
+          }
+          writers.push_back(std::make_unique<ChildProcess>(args));
+          ok = writers.back()->started() && await_ready(*writers.back(), "writer " + topics.back(), error);
+          if (!ok) break;
+          for (std::size_t a = 0; a + 1 < args.size(); ++a) {
+            if (args[a] == "--role") args[a + 1] = "reader";
+          }
+          readers.push_back(std::make_unique<ChildProcess>(args));
+        }
+        for (std::size_t i = 0; ok && i < readers.size(); ++i) {
+          ok = readers[i]->started() && await_ready(*readers[i], "reader " + topics[i], error);
+        }
+        if (!ok) {
+          std::fprintf(stderr, "sim_bench: vehicle %s run %d failed: %s\n", name.c_str(), run, error.c_str());
+          ++failures;
+          continue;
+        }
+        for (auto& w : writers) w->send("go");
+        double cpu_s = 0;
+        const auto budget = std::chrono::milliseconds(static_cast<long long>(o_.vehicle_s * 2000) + 120'000);
+        for (auto& w : writers) {
+          while (auto l = w->line(budget)) {
+            if (l->rfind("result ", 0) == 0) {
+              cpu_s += std::stod(fields(*l)["cpu_s"]);
+              break;
+            }
+          }
+        }
+        for (std::size_t i = 0; i < readers.size(); ++i) {
+          std::vector<std::int64_t> lat;
+          std::uint64_t received = 0, gaps = 0;
+          bool got_lat = false;
+          while (!got_lat) {
+            auto l = readers[i]->line(120s);
+            if (!l) break;
+            if (l->rfind("result ", 0) == 0) {
+              auto f = fields(*l);
+              received = std::stoull(f["received"]);
+              gaps = std::stoull(f["gaps"]);
+              cpu_s += std::stod(f["cpu_s"]);
+            } else if (l->rfind("lat", 0) == 0) {
+              std::istringstream in(l->substr(3));
+              std::int64_t v;
+              while (in >> v) lat.push_back(v);
+              got_lat = true;
+            }
+          }
+          const auto expected = static_cast<std::uint64_t>(o_.vehicle_s * specs[i].rate) -
+                                static_cast<std::uint64_t>(specs[i].rate);
+          const LatencySummary sum = summarize(std::move(lat));
+          std::printf("%-18s %3d %-7s %9zu %6.0f %10.1f %10.1f %8" PRIu64 " %5" PRIu64 "\n", name.c_str(),
+                      run, specs[i].what, specs[i].payload, specs[i].rate, sum.mean_us, sum.p99_us,
+                      received, expected - std::min(expected, received + gaps));
+        }
+        for (auto& w : writers) w->send("stop");
+        for (auto& w : writers) {
+          if (w->wait(30s) < 0) w->signal(SIGKILL);
+        }
+        for (auto& r : readers) {
+          if (r->wait(10s) < 0) r->signal(SIGKILL);
+        }
+        std::printf("%-18s %3d total CPU of 8 writers + 8 readers: %.2f s over %.0f s = %.1f %% of one core\n",
+                    name.c_str(), run, cpu_s, o_.vehicle_s, 100.0 * cpu_s / o_.vehicle_s);
+        std::fflush(stdout);
+      }
+    }
+    return failures == 0 ? 0 : 1;
+  }
+
   // The idle cost: per transport, the CPU its readers use while no frame comes.
   int idle_cost(const std::vector<Transport>& transports) {
     const int readers = o_.readers.front();
@@ -672,6 +776,7 @@ class Bench {
     }
 
     if (o_.idle_s > 0) return idle_cost(transports);
+    if (o_.vehicle_s > 0) return vehicle(transports);
 
     std::FILE* csv = nullptr;
     std::FILE* extra = nullptr;
@@ -850,6 +955,11 @@ int main(int argc, char** argv) {
   app.add_option("--jitter", o.jitter, "draw each publish period from period x (1 ± this), e.g. 0.1 "
                                        "for ±10 %: an irregular sensor")
       ->check(CLI::Range(0.0, 0.9));
+  app.add_option("--vehicle", o.vehicle_s, "instead of the payload grid: the many-stream vehicle "
+                                          "workload for this many seconds (7 camera streams of "
+                                          "1920x1200x3 B at 30 Hz + one 1,382,400 B LiDAR stream "
+                                          "at 10 Hz, a reader each), per transport")
+      ->check(CLI::Range(0.0, 3600.0));
   app.add_option("--idle-cost", o.idle_s, "instead of latency: the CPU the readers (first --readers "
                                           "value) use over this many seconds while the writer "
                                           "publishes nothing, per transport")

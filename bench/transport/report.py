@@ -217,7 +217,7 @@ def ratio_text(sim, peer, key):
         return f"{r:.2f}"
     dof = min(sim["runs"], peer["runs"]) - 1
     half = t95(dof) * r * math.sqrt((se_a / a) ** 2 + (se_b / b) ** 2)
-    return f"{r:.2f} [{r - half:.2f}, {r + half:.2f}]"
+    return f"{r:.2f} [{max(0.0, r - half):.2f}, {r + half:.2f}]"
 
 
 def ratios(agg):
