@@ -1,5 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// Decode throughput of sim::hesai::FrameAssembler on the real captures, on one core:
+// Decode throughput of sim::hesai::FrameAssembler on the real captures (Pandar64, XT32, QT128,
+// Pandar40P) and on synthetic revolutions of the models no capture exists of (XT16, QT64,
+// XT32M, built from the layout tables as the tests build them), on one core:
 // UDP payloads in memory → points in a caller's span, frames swapped as a driver swaps loans.
 // Counters: points/s, and x_real_time = seconds of sensor data decoded per second (the
 // issue's target is ≥ 50× for the Pandar64). Side by side, in the same run: cutting by block
@@ -12,6 +14,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "packet_builder.hpp"
 #include "pcap_payloads.hpp"
 #include "sim/hesai/hesai.hpp"
 
@@ -47,6 +50,64 @@ const Capture& pandar64() {
 const Capture& xt32() {
   static const Capture c =
       load("pandarxt32_dual.pcap", "pandarxt32.calibration.csv", Model::pandar_xt32);
+  return c;
+}
+
+const Capture& qt128() {
+  static const Capture c =
+      load("pandarqt128_dual.pcap", "pandarqt128.calibration.csv", Model::pandar_qt128);
+  return c;
+}
+const Capture& pandar40p() {
+  static const Capture c = load("pandar40p_last_20hz_raw.pcapng",
+                                "pandar40p.example-calibration.csv", Model::pandar40p);
+  return c;
+}
+
+// Two revolutions at 10 Hz, dual return (last + strongest differing by 0.2–1 m, as real
+// surfaces give), every channel returning, a calibration with ±1° azimuth offsets.
+Capture synthetic(Model model) {
+  const ModelInfo& m = info(model);
+  constexpr unsigned returns = 2;
+  const unsigned groups = m.blocks_per_packet / returns;
+  const unsigned step = m.azimuth_step_10hz;
+  const unsigned packets = 2 * 36000 / (step * groups);
+  std::vector<ChannelAngles> angles;
+  for (unsigned ch = 0; ch < m.channels; ++ch) {
+    angles.push_back({15.0f - 30.0f * static_cast<float>(ch) / m.channels, ch % 2 ? 1.0f : -1.0f});
+  }
+  auto calibration = Calibration::from_angles(angles);
+  Capture c{{}, std::move(calibration.value()), model, 0.2};
+  for (unsigned k = 0; k < packets; ++k) {
+    hesai_test::SyntheticPacket s;
+    s.channels = m.channels;
+    s.blocks = m.blocks_per_packet;
+    s.returns = returns;
+    s.return_mode = 0x39;
+    s.first_azimuth = static_cast<std::uint16_t>((k * groups * step) % 36000);
+    s.azimuth_step = static_cast<std::uint16_t>(step);
+    const auto us = static_cast<std::uint64_t>(k) * 200000 / packets;
+    s.utc[5] = static_cast<std::uint8_t>(7 + us / 1000000);
+    s.micros = static_cast<std::uint32_t>(us % 1000000);
+    s.sequence = k;
+    s.distance = [k](unsigned block, unsigned ch) {
+      return static_cast<std::uint16_t>(((ch * 7 + k) % 40 + 2) * 250 + (block % 2) * (50 + ch % 200));
+    };
+    auto bytes = model == Model::pandar_qt64 ? hesai_test::build_qt64(s) : hesai_test::build_xt(s);
+    c.packets.push_back({static_cast<std::int64_t>(us) * 1000, 2368, std::move(bytes)});
+  }
+  return c;
+}
+const Capture& xt32m() {
+  static const Capture c = synthetic(Model::pandar_xt32m);
+  return c;
+}
+const Capture& xt16() {
+  static const Capture c = synthetic(Model::pandar_xt16);
+  return c;
+}
+const Capture& qt64() {
+  static const Capture c = synthetic(Model::pandar_qt64);
   return c;
 }
 
@@ -102,6 +163,11 @@ void decode(benchmark::State& state, const Capture& capture, CutBy cut_by) {
 void BM_Pandar64_PointCut(benchmark::State& s) { decode(s, pandar64(), CutBy::point_azimuth); }
 void BM_Pandar64_BlockCut(benchmark::State& s) { decode(s, pandar64(), CutBy::block_azimuth); }
 void BM_PandarXT32_PointCut(benchmark::State& s) { decode(s, xt32(), CutBy::point_azimuth); }
+void BM_PandarQT128_PointCut(benchmark::State& s) { decode(s, qt128(), CutBy::point_azimuth); }
+void BM_Pandar40P_20Hz_PointCut(benchmark::State& s) { decode(s, pandar40p(), CutBy::point_azimuth); }
+void BM_PandarXT32M_Synthetic(benchmark::State& s) { decode(s, xt32m(), CutBy::point_azimuth); }
+void BM_PandarXT16_Synthetic(benchmark::State& s) { decode(s, xt16(), CutBy::point_azimuth); }
+void BM_PandarQT64_Synthetic(benchmark::State& s) { decode(s, qt64(), CutBy::point_azimuth); }
 
 // The floor: copying the payload bytes once, with no decoding at all.
 void BM_Pandar64_CopyPayloadsOnly(benchmark::State& state) {
@@ -122,5 +188,10 @@ void BM_Pandar64_CopyPayloadsOnly(benchmark::State& state) {
 BENCHMARK(BM_Pandar64_PointCut)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Pandar64_BlockCut)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PandarXT32_PointCut)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PandarQT128_PointCut)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Pandar40P_20Hz_PointCut)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PandarXT32M_Synthetic)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PandarXT16_Synthetic)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PandarQT64_Synthetic)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Pandar64_CopyPayloadsOnly)->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

@@ -13,7 +13,7 @@ using namespace sim::hesai;
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;
   std::optional<Model> model;
-  if (data[0] % 6 < all_models.size()) model = all_models[data[0] % 6];
+  if (data[0] % 8 < all_models.size()) model = all_models[data[0] % 8];
   const std::string_view text(reinterpret_cast<const char*>(data + 1), size - 1);
 
   auto calibration = Calibration::parse(text, model, "fuzz.csv");

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // libFuzzer target: arbitrary UDP payloads through model detection, the packet validator and
 // the frame assembler (both cut modes, any cut angle, spans that are too small, callers that
-// forget set_output). Input: [model][flags] then records [length lo][length hi][payload…].
+// forget set_output). Input: [model][flags] then records [length lo][length hi][payload…];
+// the model byte indexes all_models (5 = PandarQT128, 6 = PandarXT32M).
 // Invariants checked: no out-of-bounds access (ASan), frames never claim more points than the
 // span holds, every point is finite.
 #include <cmath>
@@ -89,6 +90,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       Packet packet;
       if (Packet::parse(payload, m, packet) == PacketError::none) {
         (void)packet.firing_offset_ns(packet.blocks() - 1, packet.channels() - 1);
+        if (packet.firing_loop(packet.blocks() - 1) > 1) __builtin_trap();
+        if (const auto safety = packet.functional_safety()) {
+          if (static_cast<unsigned>(safety->state) > 4) __builtin_trap();
+        }
       }
     }
     const PushResult r = assembler->push(payload, host_ns += 1000);

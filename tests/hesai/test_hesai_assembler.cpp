@@ -427,8 +427,9 @@ std::vector<std::vector<std::uint8_t>> synthetic_turns(Model model, unsigned ret
   for (unsigned k = 0; k < packets; ++k) {
     hesai_test::SyntheticPacket s;
     s.channels = m.channels;
+    s.blocks = m.blocks_per_packet;
     s.returns = returns;
-    s.return_mode = returns == 2 ? 0x39 : 0x38;
+    s.return_mode = returns == 3 ? 0x3d : returns == 2 ? 0x39 : 0x38;
     s.first_azimuth = static_cast<std::uint16_t>((k * groups * step) % 36000);
     s.azimuth_step = static_cast<std::uint16_t>(step);
     const auto us = static_cast<std::uint64_t>(k * packet_us);
@@ -444,9 +445,10 @@ std::vector<std::vector<std::uint8_t>> synthetic_turns(Model model, unsigned ret
 
 }  // namespace
 
-TEST(HesaiAssembler, SyntheticXT16AndQT64TurnsHaveEveryFiringOfARevolution) {
-  for (const Model model : {Model::pandar_xt16, Model::pandar_qt64}) {
-    for (const unsigned returns : {1u, 2u}) {
+TEST(HesaiAssembler, SyntheticXT16QT64AndXT32MTurnsHaveEveryFiringOfARevolution) {
+  for (const Model model : {Model::pandar_xt16, Model::pandar_qt64, Model::pandar_xt32m}) {
+    for (const unsigned returns : {1u, 2u, 3u}) {
+      if (returns > info(model).max_returns) continue;
       SCOPED_TRACE(std::string(to_string(model)) + " returns " + std::to_string(returns));
       const ModelInfo& m = info(model);
       auto cal = Calibration::from_angles(std::vector<ChannelAngles>(m.channels, {0.0f, 0.0f}));

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "packet_builder.hpp"
@@ -28,6 +29,16 @@ PacketError parse(const std::vector<std::uint8_t>& bytes, Model model) {
 }
 
 constexpr std::int64_t s_to_ns = 1'000'000'000;
+
+// A synthetic XT32M packet (6 blocks of 32 channels) with `returns` returns per firing.
+std::vector<std::uint8_t> xt32m_packet(unsigned returns) {
+  hesai_test::SyntheticPacket s;
+  s.channels = 32;
+  s.blocks = 6;
+  s.returns = returns;
+  s.return_mode = returns == 3 ? 0x3d : returns == 2 ? 0x3b : 0x33;
+  return hesai_test::build_xt(s);
+}
 
 }  // namespace
 
@@ -223,6 +234,8 @@ TEST(HesaiPacket, EveryTruncationIsRejectedWithoutReadingPastTheEnd) {
       {Model::pandar40p, first_payload("pandar40p_last_20hz_raw.pcapng")},
       {Model::pandar_xt16, hesai_test::build_xt(s16)},
       {Model::pandar_qt64, hesai_test::build_qt64(hesai_test::SyntheticPacket{})},
+      {Model::pandar_qt128, first_payload("pandarqt128_dual.pcap")},
+      {Model::pandar_xt32m, xt32m_packet(3)},
   };
   for (const auto& [model, full] : packets) {
     ASSERT_EQ(parse(full, model), PacketError::none) << to_string(model);
@@ -230,8 +243,9 @@ TEST(HesaiPacket, EveryTruncationIsRejectedWithoutReadingPastTheEnd) {
       // An exact-size heap copy, so a read past the end is caught by AddressSanitizer.
       const std::vector<std::uint8_t> cut(full.begin(), full.begin() + static_cast<std::ptrdiff_t>(n));
       const PacketError e = parse(cut, model);
-      if (n == info(model).payload_size && info(model).sequence_optional) {
-        // Without its 4-byte UDP sequence the packet is the model's other valid size.
+      if (n == info(model).payload_size && info(model).has_optional_trailer()) {
+        // Without its optional trailer (UDP sequence, QT128 signature) the packet is the
+        // model's other valid size.
         EXPECT_EQ(e, PacketError::none) << to_string(model);
         continue;
       }
@@ -348,4 +362,182 @@ TEST(HesaiPacket, RejectedPacketsAreCountedByReasonAndMakeNoFrame) {
   EXPECT_EQ(c.rejected[static_cast<std::size_t>(PacketError::bad_size)], 1u);
   EXPECT_EQ(assembler->pending_points(), 0u);
   EXPECT_FALSE(assembler->flush());
+}
+
+TEST(HesaiPacket, SyntheticXT32MInEveryReturnModeFromTheLayoutTables) {
+  for (const unsigned returns : {1u, 2u, 3u}) {
+    SCOPED_TRACE("returns " + std::to_string(returns));
+    const auto bytes = xt32m_packet(returns);
+    ASSERT_EQ(bytes.size(), 820u);
+    EXPECT_EQ(detect_model(bytes), Model::pandar_xt32m);
+    Packet p;
+    ASSERT_EQ(Packet::parse(bytes, Model::pandar_xt32m, p), PacketError::none);
+    EXPECT_EQ(p.blocks(), 6u);
+    EXPECT_EQ(p.channels(), 32u);
+    EXPECT_EQ(p.returns(), returns);
+    EXPECT_EQ(p.sequence(), 1u);
+    EXPECT_EQ(p.time_ns(), 1551675967 * s_to_ns + 250000000);
+    EXPECT_EQ(p.raw_distance(5, 31), 32 * 250);
+    // The last firing group is at the packet time; earlier groups 50 µs apart before it.
+    // Channels c and c + 16 fire together, 2.888 µs apart from c to c + 1 (nebula).
+    const unsigned groups = 6 / returns;
+    EXPECT_EQ(p.firing_offset_ns(0, 0), -50000 * static_cast<int>(groups - 1) + 6000);
+    EXPECT_EQ(p.firing_offset_ns(5, 2), 6000 + 2 * 2888);
+    EXPECT_EQ(p.firing_offset_ns(5, 18), p.firing_offset_ns(5, 2));
+    // Blocks of one return group fire together.
+    EXPECT_EQ(p.block_offset_ns(0), p.block_offset_ns(returns - 1));
+  }
+  // XT32 packets are not XT32M packets and the other way round.
+  EXPECT_EQ(parse(xt32m_packet(1), Model::pandar_xt32), PacketError::wrong_model);
+  EXPECT_EQ(parse(first_payload("pandarxt32_dual.pcap"), Model::pandar_xt32m),
+            PacketError::wrong_model);
+}
+
+TEST(HesaiPacket, PandarQT128FirstPacketOfTheCaptureByHand) {
+  const auto bytes = first_payload("pandarqt128_dual.pcap");
+  ASSERT_EQ(bytes.size(), 1127u);  // with the 32-byte signature area
+  Packet p;
+  ASSERT_EQ(Packet::parse(bytes, Model::pandar_qt128, p), PacketError::none);
+  EXPECT_EQ(p.channels(), 128u);
+  EXPECT_EQ(p.blocks(), 2u);
+  EXPECT_EQ(p.return_mode(), ReturnMode::dual_last_strongest);
+  EXPECT_FLOAT_EQ(p.distance_unit_m(), 0.004f);
+  EXPECT_EQ(p.motor_rpm(), 600);
+  // Tail bytes 78 0a 09 0c 03 1d, µs 4b 26 06 00: 2020-10-09 12:03:29.403019 UTC.
+  EXPECT_EQ(p.time_ns(), 1602245009 * s_to_ns + 403019000);
+  EXPECT_EQ(p.sequence(), 0x006192CDu);
+  EXPECT_EQ(p.azimuth(0), 1080);
+  EXPECT_EQ(p.azimuth(1), 1080);
+  // Mode flag 0: this dual-return firing is the second loop (channels 32–63 dark).
+  EXPECT_EQ(p.firing_loop(0), 1u);
+  EXPECT_EQ(p.firing_offset_ns(0, 0), 9000 + 2312);
+  EXPECT_EQ(p.firing_offset_ns(1, 127), 9000 + 48976);
+  // The short form without the signature is the same packet.
+  const std::vector<std::uint8_t> short_form(bytes.begin(), bytes.begin() + 1095);
+  EXPECT_EQ(detect_model(short_form), Model::pandar_qt128);
+  ASSERT_EQ(Packet::parse(short_form, Model::pandar_qt128, p), PacketError::none);
+}
+
+TEST(HesaiPacket, PandarQT128SingleReturnAlternatesFiringLoopsWithinAPacket) {
+  hesai_test::SyntheticPacket s;
+  s.returns = 1;
+  s.return_mode = 0x37;
+  s.first_azimuth = 100;
+  s.azimuth_step = 40;
+  s.signature = false;
+  const auto bytes = hesai_test::build_qt128(s);
+  ASSERT_EQ(bytes.size(), 1095u);
+  Packet p;
+  ASSERT_EQ(Packet::parse(bytes, Model::pandar_qt128, p), PacketError::none);
+  EXPECT_EQ(p.firing_loop(0), 0u);
+  EXPECT_EQ(p.firing_loop(1), 1u);
+  EXPECT_EQ(p.azimuth(1), 140);
+  // Block 1 fires one 0.4° step (111.11 µs at 600 rpm) after block 0; channel 32 is the
+  // first loop's 27.656 µs, channel 0 the second loop's 2.312 µs.
+  EXPECT_EQ(p.firing_offset_ns(0, 32), 9000 + 27656);
+  EXPECT_EQ(p.firing_offset_ns(1, 0), 9000 + 111110 + 2312);
+  EXPECT_EQ(p.raw_distance(0, 0), 0);   // dark in the first loop
+  EXPECT_NE(p.raw_distance(1, 0), 0);
+}
+
+TEST(HesaiPacket, PandarQT128WithABadCrcIsDroppedAndCounted) {
+  const auto good = first_payload("pandarqt128_dual.pcap");
+  ASSERT_EQ(parse(good, Model::pandar_qt128), PacketError::none);
+  // One flipped bit in a distance, in the functional-safety state, in the motor speed, and in
+  // each CRC itself.
+  for (const std::size_t at : {std::size_t{500}, std::size_t{1045}, std::size_t{1075},
+                               std::size_t{1041}, std::size_t{1058}, std::size_t{1093}}) {
+    auto bad = good;
+    bad[at] ^= 0x10;
+    EXPECT_EQ(parse(bad, Model::pandar_qt128), PacketError::bad_crc) << "byte " << at;
+  }
+  // The signature area is not covered: a changed signature byte still decodes.
+  auto signed_differently = good;
+  signed_differently[1100] ^= 0xFF;
+  EXPECT_EQ(parse(signed_differently, Model::pandar_qt128), PacketError::none);
+
+  auto cal = Calibration::load(data_path("pandarqt128.calibration.csv"), Model::pandar_qt128);
+  ASSERT_TRUE(cal) << cal.error().message;
+  AssemblerOptions options;
+  options.model = Model::pandar_qt128;
+  options.emit_partial_frames = true;
+  auto assembler = FrameAssembler::create(*cal, options);
+  ASSERT_TRUE(assembler) << assembler.error().message;
+  std::vector<sim::LidarPoint> points(frame_capacity(Model::pandar_qt128, 2));
+  assembler->set_output(points);
+  auto corrupted = good;
+  corrupted[600] ^= 0x01;
+  const PushResult r = assembler->push(corrupted, 0);
+  EXPECT_EQ(r.error, PacketError::bad_crc);
+  EXPECT_EQ(assembler->counters().crc_errors, 1u);
+  EXPECT_EQ(assembler->counters().malformed, 0u);
+  EXPECT_EQ(assembler->counters().rejected[static_cast<std::size_t>(PacketError::bad_crc)], 1u);
+  EXPECT_EQ(assembler->counters().packets, 0u);
+  EXPECT_EQ(assembler->pending_points(), 0u);  // nothing of it was decoded
+  EXPECT_EQ(assembler->push(good, 0).error, PacketError::none);
+  EXPECT_GT(assembler->pending_points(), 0u);
+}
+
+TEST(HesaiAssemblerQT128, FaultStateAndMotorSpeedReachTheFrame) {
+  // Three turns of synthetic QT128 packets at 598, 599, 600 rpm; in the second, one packet
+  // reports "output untrusted" with fault code 0x0123, the rest "normal".
+  std::vector<ChannelAngles> angles(128, ChannelAngles{0.0f, 0.0f});
+  auto cal = Calibration::from_angles(angles);
+  ASSERT_TRUE(cal);
+  AssemblerOptions options;
+  options.model = Model::pandar_qt128;
+  auto assembler = FrameAssembler::create(*cal, options);
+  ASSERT_TRUE(assembler) << assembler.error().message;
+  std::vector<sim::LidarPoint> points(frame_capacity(Model::pandar_qt128, 2));
+  assembler->set_output(points);
+  std::vector<CompletedFrame> frames;
+  constexpr unsigned per_turn = 900;  // dual return: one 0.4° firing per packet
+  for (unsigned k = 0; k < 3 * per_turn + 10; ++k) {
+    hesai_test::SyntheticPacket s;
+    s.returns = 2;
+    s.return_mode = 0x39;
+    s.first_azimuth = static_cast<std::uint16_t>((k * 40) % 36000);
+    s.azimuth_step = 40;
+    s.mode_flag = static_cast<std::uint8_t>(k % 2);
+    s.rpm = static_cast<std::uint16_t>(598 + k / per_turn);
+    s.sequence = k;
+    s.micros = k * 111;
+    s.distance = [](unsigned, unsigned ch) { return static_cast<std::uint16_t>((ch % 40 + 1) * 250); };
+    if (k == per_turn + 450) s.safety = {0x88, 0x21, 0x23, 0x01};  // state 4, current fault
+    const PushResult r = assembler->push(hesai_test::build_qt128(s), 0);
+    ASSERT_EQ(r.error, PacketError::none) << to_string(r.error);
+    if (r.frame) {
+      frames.push_back(*r.frame);
+      assembler->set_output(points);
+    }
+  }
+  ASSERT_EQ(frames.size(), 2u);  // turns 1 and 2 (turn 0, where the assembler joined, is not whole)
+  for (const auto& f : frames) {
+    ASSERT_TRUE(f.safety.has_value());
+    // 96 lasers fire per firing, 900 firings, identical dual returns keep one.
+    EXPECT_EQ(f.point_count, 900u * 96);
+  }
+  EXPECT_EQ(frames[0].motor_rpm, 599);
+  EXPECT_EQ(frames[0].safety->state, LidarState::output_untrusted);
+  EXPECT_EQ(frames[0].safety->fault_type, FaultCodeType::current);
+  EXPECT_EQ(frames[0].safety->fault_code, 0x0123);
+  EXPECT_EQ(frames[0].safety->total_fault_codes, 2);
+  EXPECT_EQ(frames[0].safety->fault_code_id, 1);
+  EXPECT_EQ(frames[1].motor_rpm, 600);
+  EXPECT_EQ(frames[1].safety->state, LidarState::normal);
+  // The latest packet's state, for status lines.
+  ASSERT_TRUE(assembler->functional_safety().has_value());
+  EXPECT_EQ(assembler->functional_safety()->state, LidarState::normal);
+  EXPECT_EQ(assembler->motor_rpm(), 601);  // the first packets of turn 3
+  // A firing-time file cannot describe the two loops: refused with a sentence.
+  auto firetimes = FiretimeCorrection::parse("Channel,fire time(us)\n" + [] {
+    std::string rows;
+    for (int c = 1; c <= 128; ++c) rows += std::to_string(c) + ",1.0\n";
+    return rows;
+  }(), Model::pandar_qt128);
+  ASSERT_TRUE(firetimes) << firetimes.error().message;
+  options.firetimes = *firetimes;
+  const auto refused = FrameAssembler::create(*cal, options);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().message.find("--firetimes"), std::string::npos);
 }

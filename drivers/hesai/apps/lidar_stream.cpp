@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/hesai/lidar_stream.hpp"
 
+#include <cstdio>
 #include <sstream>
 #include <utility>
 
@@ -120,13 +121,33 @@ std::string LidarStream::describe_counters(bool machine) const {
   out << "frames" << sep << p.frames << " packets" << sep << c.packets << " lost" << sep
       << c.lost_packets << " malformed" << sep << c.malformed << (machine ? " wrong_model" : " wrong-model")
       << sep << c.wrong_model;
+  const FrameAssembler& a = impl_->assembler;
+  const auto& safety = a.functional_safety();
   if (machine) {
     out << " out_of_order=" << c.out_of_order << " points=" << p.points
         << " partial_frames=" << p.partial_frames << " dropped_points=" << c.dropped_points
-        << " publish_failures=" << p.failed;
+        << " publish_failures=" << p.failed << " crc_errors=" << c.crc_errors
+        << " rpm=" << a.motor_rpm();
+    if (safety) {
+      std::string state = to_string(safety->state);
+      for (char& ch : state) ch = ch == ' ' ? '_' : ch;
+      out << " safety=" << state << " fault_code=" << safety->fault_code;
+    }
   } else {
     out << " points/frame " << impl_->last_points;
     if (c.dropped_points != 0) out << " dropped-points " << c.dropped_points;
+    if (c.crc_errors != 0) out << " crc-errors " << c.crc_errors;
+    if (a.motor_rpm() != 0) out << " rpm " << a.motor_rpm();
+    // The QT128's functional safety: what a user must see when the sensor distrusts itself.
+    if (safety) {
+      out << " safety " << to_string(safety->state);
+      if (safety->fault_type != FaultCodeType::none) {
+        char code[8];
+        std::snprintf(code, sizeof code, "%04X", safety->fault_code);
+        out << " fault 0x" << code
+            << (safety->fault_type == FaultCodeType::current ? " (current)" : " (past)");
+      }
+    }
   }
   return out.str();
 }

@@ -25,6 +25,7 @@
 #include "config_file.hpp"
 #include "sim/clock.hpp"
 #include "sim/hesai/lidar_stream.hpp"
+#include "sim/hesai/ptc_client.hpp"
 #include "sim/hesai/stream_options.hpp"
 
 namespace asio = boost::asio;
@@ -98,6 +99,12 @@ struct ReceiveBatch {
 };
 
 volatile std::sig_atomic_t stop_requested = 0;
+
+// Messages joined from several parts end with exactly one full stop.
+std::string sentence(std::string text) {
+  while (!text.empty() && (text.back() == '.' || text.back() == ' ')) text.pop_back();
+  return text + ".";
+}
 
 class Driver {
  public:
@@ -319,16 +326,20 @@ class Driver {
         return;
       }
     }
-    if (last_packet_ns_ != 0 && now - last_packet_ns_ > silence_timeout_ns()) {
+    // Silence is measured between the kernel's arrival stamps, not between the times this
+    // process took the packets: a stall of the driver (packets waiting in the socket buffer)
+    // is no silence of the sensor.
+    if (last_arrival_ns_ != 0 && host_ns - last_arrival_ns_ > silence_timeout_ns()) {
       // The sensor was silent: the revolution in progress is stale. Readers kept the last
       // frame meanwhile (stale by its publish time); start over with fresh packets.
       stream_->reset();
       ++resumes_;
       if (!terminal_) {
         std::fprintf(stderr, "%s: packets resumed after %.1f s of silence\n", tool,
-                     static_cast<double>(now - last_packet_ns_) / 1e9);
+                     static_cast<double>(host_ns - last_arrival_ns_) / 1e9);
       }
     }
+    last_arrival_ns_ = host_ns;
     last_packet_ns_ = now;
     stream_->push(payload, host_ns);
   }
@@ -377,7 +388,8 @@ class Driver {
   bool terminal_;
   std::optional<asio::ip::address> source_;
   std::optional<sim::hesai::LidarStream> stream_;
-  std::int64_t last_packet_ns_ = 0;
+  std::int64_t last_packet_ns_ = 0;   // monotonic time the last packet was taken
+  std::int64_t last_arrival_ns_ = 0;  // kernel arrival stamp (realtime) of the last packet
   std::uint64_t datagrams_ = 0;
   std::uint64_t other_source_ = 0;
   std::uint64_t unrecognised_ = 0;
@@ -414,7 +426,7 @@ int main(int argc, char** argv) {
   app.add_option_function<int>("--port", [&](int v) { network.port = v; },
                                "UDP port the sensor sends to; 0 picks a free one [2368]")
       ->check(CLI::Range(0, 65535));
-  app.add_option_function<std::string>("--multicast", [&](const std::string& v) { network.multicast_group = v; },
+  app.add_option_function<std::string>("--multicast,--multicast-group", [&](const std::string& v) { network.multicast_group = v; },
                                         "join this multicast group")
       ->type_name("GROUP");
   app.add_option_function<std::string>("--source", [&](const std::string& v) { network.source = v; },
@@ -429,6 +441,25 @@ int main(int argc, char** argv) {
   app.add_option_function<double>("--silence-timeout", [&](double v) { network.silence_timeout_s = v; },
                                   "a gap this long (s) means the sensor stopped: the next packet starts a new frame [0.5]")
       ->check(CLI::PositiveNumber);
+  bool calibration_from_sensor = false;
+  sim::hesai::PtcEndpoint sensor;
+  bool sensor_ip_given = false;
+  app.add_flag("--calibration-from-sensor", calibration_from_sensor,
+               "fetch the unit's angle-correction file from the sensor over PTC (TCP) at start, "
+               "check it and cache it in the --calibration file [~/.cache/sim/hesai-<ip>.csv]; "
+               "when the sensor does not deliver it, the cached file is used with a warning");
+  app.add_option_function<std::string>(
+         "--sensor-ip", [&](const std::string& v) { sensor.host = v; sensor_ip_given = true; },
+         "the sensor's address for --calibration-from-sensor [--source, else 192.168.1.201]")
+      ->type_name("IP");
+  app.add_option_function<int>("--ptc-port", [&](int v) { sensor.port = static_cast<std::uint16_t>(v); },
+                               "the sensor's PTC port [9347]")
+      ->check(CLI::Range(1, 65535));
+  app.add_option_function<double>(
+         "--ptc-timeout",
+         [&](double v) { sensor.timeout = std::chrono::milliseconds(static_cast<long>(v * 1000)); },
+         "seconds the whole calibration download may take [3]")
+      ->check(CLI::Range(0.01, 60.0));
   app.add_flag("--summary", summary, "print one line of counters on exit: summary frames=… packets=… lost=… malformed=…");
   try {
     app.parse(argc, argv);
@@ -439,9 +470,34 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: %s\n", tool, config_error->message.c_str());
     return 2;
   }
+  if (calibration_from_sensor) {
+    if (!sensor_ip_given && !network.source.empty()) sensor.host = network.source;
+    in_addr ignored{};
+    if (inet_pton(AF_INET, sensor.host.c_str(), &ignored) != 1) {
+      std::fprintf(stderr, "%s: --sensor-ip '%s' is not an IPv4 address (e.g. 192.168.1.201).\n",
+                   tool, sensor.host.c_str());
+      return 2;
+    }
+    if (stream.config.calibration.empty()) {
+      stream.config.calibration = sim::hesai::default_calibration_cache(sensor.host);
+    }
+    auto fetched = sim::hesai::calibration_from_sensor(sensor, stream.config.calibration, stream.model);
+    if (!fetched) {
+      std::fprintf(stderr, "%s: %s\n", tool, sentence(fetched.error().message).c_str());
+      return 1;
+    }
+    if (fetched->from_cache) {
+      std::fprintf(stderr, "%s: warning: %s\n", tool, sentence(fetched->warning).c_str());
+    } else {
+      std::printf("%s: calibration of sensor %s (%zu channels) fetched and cached in %s\n", tool,
+                  sensor.host.c_str(), fetched->channels, stream.config.calibration.c_str());
+      std::fflush(stdout);
+    }
+  }
   if (stream.config.calibration.empty()) {
     std::fprintf(stderr, "%s: no calibration file given; pass the sensor's angle-correction CSV "
-                         "with --calibration or in the --config file (every unit has its own).\n", tool);
+                         "with --calibration or in the --config file (every unit has its own), or use "
+                         "--calibration-from-sensor.\n", tool);
     return 2;
   }
 

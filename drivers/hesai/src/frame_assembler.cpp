@@ -25,6 +25,20 @@ constexpr double max_offset_spread_deg = 90.0;
 
 Error invalid(std::string message) { return Error{ErrorCode::invalid_argument, std::move(message)}; }
 
+// Severity order of the functional-safety states: initialization and warning still deliver
+// trusted points, degradation less so, untrusted output not at all.
+int severity(LidarState state) noexcept {
+  switch (state) {
+    case LidarState::normal: return 0;
+    case LidarState::initialization: return 1;
+    case LidarState::warning: return 2;
+    case LidarState::performance_degradation: return 3;
+    case LidarState::output_untrusted: return 4;
+  }
+  return 4;
+}
+bool worse(LidarState a, LidarState b) noexcept { return severity(a) > severity(b); }
+
 }  // namespace
 
 Expected<FrameAssembler> FrameAssembler::create(Calibration calibration,
@@ -40,6 +54,10 @@ Expected<FrameAssembler> FrameAssembler::create(Calibration calibration,
     return invalid("the firing-time file has " + std::to_string(options.firetimes->channels()) +
                    " channels but a " + model_name + " has " + std::to_string(m.channels) +
                    "; use Hesai's firing-time file for this model");
+  }
+  if (options.firetimes && options.model == Model::pandar_qt128) {
+    return invalid("a firing-time file cannot describe the PandarQT128's two firing loops; leave "
+                   "--firetimes out (its firing times are built in)");
   }
   float lowest = 0, highest = 0;
   for (const auto& a : calibration.angles()) {
@@ -86,15 +104,17 @@ FrameAssembler::FrameAssembler(Calibration calibration, AssemblerOptions options
     const double elevation = calibration_[ch].elevation_deg * deg;
     cos_elevation_[ch] = static_cast<float>(std::cos(elevation));
     sin_elevation_[ch] = static_cast<float>(std::sin(elevation));
-    std::int32_t offset = Packet::channel_offset_ns(options_.model, ch);
-    if (options_.firetimes) {
-      // Hesai's file has the same meaning as the built-in tables, except QT64 whose table
-      // adds 10 µs to the file's values (reference §5).
-      const double extra = options_.model == Model::pandar_qt64 ? 10000.0 : 0.0;
-      offset = static_cast<std::int32_t>(std::lround((*options_.firetimes)[ch] * 1000.0 + extra));
+    for (unsigned loop = 0; loop < 2; ++loop) {
+      std::int32_t offset = Packet::channel_offset_ns(options_.model, ch, loop);
+      if (options_.firetimes) {
+        // Hesai's file has the same meaning as the built-in tables, except QT64 whose table
+        // adds 10 µs to the file's values (reference §5).
+        const double extra = options_.model == Model::pandar_qt64 ? 10000.0 : 0.0;
+        offset = static_cast<std::int32_t>(std::lround((*options_.firetimes)[ch] * 1000.0 + extra));
+      }
+      channel_offset_ns_[loop][ch] = offset;
+      earliest_channel_offset_ns_ = std::min(earliest_channel_offset_ns_, offset);
     }
-    channel_offset_ns_[ch] = offset;
-    earliest_channel_offset_ns_ = std::min(earliest_channel_offset_ns_, offset);
   }
   update_azimuth_offsets(0);
 
@@ -199,6 +219,8 @@ void FrameAssembler::close_current(PushResult& result, bool ended_at_cut) noexce
       frame.lost_packets = current_.lost;
       frame.dropped_points = current_.dropped;
       frame.whole_revolution = current_.whole && ended_at_cut;
+      frame.motor_rpm = current_.rpm;
+      frame.safety = current_.safety;
       ++counters_.frames;
       // The span now belongs to the caller; the next frame's points are in the carry-over.
       output_attached_ = false;
@@ -297,6 +319,8 @@ PushResult FrameAssembler::push(std::span<const std::uint8_t> payload,
     ++counters_.rejected[static_cast<std::size_t>(result.error)];
     if (result.error == PacketError::wrong_model) {
       ++counters_.wrong_model;
+    } else if (result.error == PacketError::bad_crc) {
+      ++counters_.crc_errors;
     } else {
       ++counters_.malformed;
     }
@@ -305,6 +329,7 @@ PushResult FrameAssembler::push(std::span<const std::uint8_t> payload,
   ++counters_.packets;
   ++packet_counter_;
   last_rpm_ = packet.motor_rpm();
+  last_safety_ = packet.functional_safety();
   count_loss(packet);
   if (options_.firetimes && options_.firetime_azimuth_compensation &&
       packet.motor_rpm() != compensated_rpm_) {
@@ -436,8 +461,13 @@ void FrameAssembler::decode_group(const Packet& packet, unsigned first_block,
   }
   for (unsigned t = 0; t < 2; ++t) {
     if (sinks[t].active && sinks[t].frame->last_packet != packet_counter_) {
-      sinks[t].frame->last_packet = packet_counter_;
-      ++sinks[t].frame->packets;
+      FrameState& frame = *sinks[t].frame;
+      frame.last_packet = packet_counter_;
+      ++frame.packets;
+      frame.rpm = packet.motor_rpm();
+      if (const auto safety = packet.functional_safety()) {
+        if (!frame.safety || worse(safety->state, frame.safety->state)) frame.safety = safety;
+      }
     }
   }
 
@@ -447,6 +477,8 @@ void FrameAssembler::decode_group(const Packet& packet, unsigned first_block,
   const auto sin_block = static_cast<float>(std::sin(azimuth_rad));
   const auto cos_block = static_cast<float>(std::cos(azimuth_rad));
   const std::int64_t group_time = packet.time_ns() + packet.block_offset_ns(first_block);
+  const std::array<std::int32_t, max_channels>& channel_offset_ns =
+      channel_offset_ns_[packet.firing_loop(first_block)];
   const std::int64_t time_base[2] = {group_time - current_.stamp_ns, group_time - next_.stamp_ns};
   const float threshold = options_.multi_return_distance_threshold_m;
   const bool drop_identical = options_.drop_identical_returns;
@@ -469,7 +501,7 @@ void FrameAssembler::decode_group(const Packet& packet, unsigned first_block,
     const float sin_el = sin_elevation_[ch];
     // Offsets are ≥ 0 by the stamp's choice; clamped only against a clock that jumps.
     const auto time_offset = static_cast<std::uint32_t>(
-        std::clamp<std::int64_t>(time_base[target[ch]] + channel_offset_ns_[ch], 0,
+        std::clamp<std::int64_t>(time_base[target[ch]] + channel_offset_ns[ch], 0,
                                  std::numeric_limits<std::uint32_t>::max()));
     for (unsigned r = 0; r < returns; ++r) {
       if (raw[r] == 0 && drop_zero) continue;

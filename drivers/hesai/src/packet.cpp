@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Byte layouts: ../shared/reference/lidar-wire-formats.md §2 (Pandar64), §3 (Pandar40P),
-// §4 (XT32/XT16, protocol 6.1), §5 (QT64, protocol 3.1).
+// §4 (XT32/XT16, protocol 6.1), §5 (QT64, protocol 3.1); hesai-qt128-xt32m.md §6.2–§6.3
+// (QT128 protocol 3.2, XT32M protocol 6.1 with 6 blocks).
 #include "sim/hesai/packet.hpp"
 
 #include <array>
@@ -32,6 +33,64 @@ constexpr std::array<std::int32_t, 64> pandar_qt64_channel_ns{
     82970,  85020,  87080,  89140,  91190,  93250,  95300,  97750,  99820,  101870, 103930,
     105980, 108040, 110100, 112150, 115200, 117260, 119320, 121380, 123430, 125490, 127540,
     129600, 132050, 134110, 136170, 138220, 140280, 142340, 144390, 146450};
+
+// QT128: channel firing times in ns after the block time for its two firing loops (nebula
+// pandar_qt128.hpp). A 0 marks a channel that does not fire in that loop: 0–31 are dark in
+// the first loop, 32–63 in the second.
+constexpr std::array<std::int32_t, 128> pandar_qt128_loop1_ns{
+    0,     0,     0,     0,     0,     0,     0,     0,     0,      0,     0,     0,     0,
+    0,     0,     0,     0,     0,     0,     0,     0,     0,      0,     0,     0,     0,
+    0,     0,     0,     0,     0,     0,     27656, 53000, 2312,   78344, 81512, 5480,  56168,
+    30824, 33992, 59336, 8648,  84680, 87848, 11816, 62504, 37160,  40328, 65672, 14984, 91016,
+    94184, 18152, 68840, 43496, 46664, 72008, 21320, 97352, 100520, 24488, 75176, 49832, 1456,
+    77488, 26800, 52144, 55312, 29968, 80656, 4624,  7792,  83824,  33136, 58480, 61648, 36304,
+    86992, 10960, 14128, 90160, 39472, 64816, 67984, 42640, 93328,  17296, 20464, 96496, 45808,
+    71152, 74320, 48976, 99664, 23632, 25944, 51288, 600,   76632,  79800, 3768,  54456, 29112,
+    32280, 57624, 6936,  82968, 86136, 10104, 60792, 35448, 38616,  63960, 13272, 89304, 92472,
+    16440, 67128, 41784, 44952, 70296, 19608, 95640, 98808, 22776,  73464, 48120};
+constexpr std::array<std::int32_t, 128> pandar_qt128_loop2_ns{
+    2312,  78344, 27656, 53000, 56168,  30824, 81512, 5480,  8648,  84680, 33992, 59336, 62504,
+    37160, 87848, 11816, 14984, 91016,  40328, 65672, 68840, 43496, 94184, 18152, 21320, 97352,
+    46664, 72008, 75176, 49832, 100520, 24488, 0,     0,     0,     0,     0,     0,     0,
+    0,     0,     0,     0,     0,      0,     0,     0,     0,     0,     0,     0,     0,
+    0,     0,     0,     0,     0,      0,     0,     0,     0,     0,     0,     0,     600,
+    76632, 25944, 51288, 54456, 29112,  79800, 3768,  6936,  82968, 32280, 57624, 60792, 35448,
+    86136, 10104, 13272, 89304, 38616,  63960, 67128, 41784, 92472, 16440, 19608, 95640, 44952,
+    70296, 73464, 48120, 98808, 22776,  26800, 52144, 1456,  77488, 80656, 4624,  55312, 29968,
+    33136, 58480, 7792,  83824, 86992,  10960, 61648, 36304, 39472, 64816, 14128, 90160, 93328,
+    17296, 67984, 42640, 45808, 71152,  20464, 96496, 99664, 23632, 74320, 48976};
+
+// CRC-32/MPEG-2 (polynomial 0x04C11DB7, not reflected, initial value 0xFFFFFFFF, no final
+// xor), the CRC of the QT128's body, functional-safety and tail sections: established on the
+// real capture, whose every packet it matches. Slicing by 8 (eight 1 KiB tables, 8 bytes per
+// step) keeps the 1,071 checked bytes of a packet to a small part of its decode time.
+struct CrcTables {
+  std::array<std::array<std::uint32_t, 256>, 8> t{};
+  constexpr CrcTables() {
+    for (std::uint32_t i = 0; i < 256; ++i) {
+      std::uint32_t c = i << 24;
+      for (int k = 0; k < 8; ++k) c = (c & 0x8000'0000u) ? (c << 1) ^ 0x04C1'1DB7u : c << 1;
+      t[0][i] = c;
+    }
+    for (std::uint32_t i = 0; i < 256; ++i) {
+      for (std::size_t k = 1; k < 8; ++k) t[k][i] = (t[k - 1][i] << 8) ^ t[0][t[k - 1][i] >> 24];
+    }
+  }
+};
+constexpr CrcTables crc_tables{};
+
+std::uint32_t crc32_mpeg2(const std::uint8_t* p, std::size_t n) noexcept {
+  const auto& t = crc_tables.t;
+  std::uint32_t c = 0xFFFF'FFFFu;
+  for (; n >= 8; n -= 8, p += 8) {
+    const std::uint32_t hi = c ^ ((std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) |
+                                  (std::uint32_t{p[2]} << 8) | std::uint32_t{p[3]});
+    c = t[7][hi >> 24] ^ t[6][(hi >> 16) & 0xFF] ^ t[5][(hi >> 8) & 0xFF] ^ t[4][hi & 0xFF] ^
+        t[3][p[4]] ^ t[2][p[5]] ^ t[1][p[6]] ^ t[0][p[7]];
+  }
+  for (; n > 0; --n, ++p) c = (c << 8) ^ t[0][((c >> 24) ^ *p) & 0xFF];
+  return c;
+}
 
 std::uint16_t u16(const std::uint8_t* p) noexcept {
   return static_cast<std::uint16_t>(p[0] | (p[1] << 8));
@@ -95,6 +154,28 @@ PacketError size_error(std::span<const std::uint8_t> payload, Model model) noexc
                                                    : PacketError::bad_size;
 }
 
+// QT128 CRCs (stored little-endian after the bytes they cover): body = the blocks, safety =
+// the functional-safety section after its version byte, tail = the tail before its CRC.
+bool qt128_crcs_match(const std::uint8_t* p, std::size_t blocks_end, std::size_t safety,
+                      std::size_t tail) noexcept {
+  return crc32_mpeg2(p + 12, blocks_end - 12) == u32(p + blocks_end) &&
+         crc32_mpeg2(p + safety + 1, 12) == u32(p + safety + 13) &&
+         crc32_mpeg2(p + tail, 30) == u32(p + tail + 30);
+}
+
+FunctionalSafety read_safety(const std::uint8_t* fs) noexcept {
+  FunctionalSafety out;
+  const unsigned state = fs[1] >> 5;
+  out.state = state <= 4 ? static_cast<LidarState>(state) : LidarState::output_untrusted;
+  const unsigned type = (fs[1] >> 3) & 0x3;
+  out.fault_type = type <= 2 ? static_cast<FaultCodeType>(type) : FaultCodeType::current;
+  out.rolling_counter = fs[1] & 0x7;
+  out.total_fault_codes = static_cast<std::uint8_t>(fs[2] >> 4);
+  out.fault_code_id = fs[2] & 0xF;
+  out.fault_code = u16(fs + 3);
+  return out;
+}
+
 }  // namespace
 
 unsigned returns_of(ReturnMode mode) noexcept {
@@ -125,15 +206,27 @@ const char* to_string(PacketError error) noexcept {
     case PacketError::bad_distance_unit: return "packet has a distance unit of 0";
     case PacketError::bad_azimuth: return "packet has an impossible block azimuth";
     case PacketError::bad_time: return "packet has an impossible UTC date or time";
+    case PacketError::bad_crc: return "packet's CRC does not match its bytes (corrupted on the way)";
   }
   return "unknown packet error";
+}
+
+const char* to_string(LidarState state) noexcept {
+  switch (state) {
+    case LidarState::initialization: return "initialization";
+    case LidarState::normal: return "normal";
+    case LidarState::warning: return "warning";
+    case LidarState::performance_degradation: return "performance degradation";
+    case LidarState::output_untrusted: return "output untrusted";
+  }
+  return "unknown";
 }
 
 PacketError Packet::parse(std::span<const std::uint8_t> payload, Model model,
                           Packet& out) noexcept {
   const ModelInfo& m = info(model);
   const std::size_t n = payload.size();
-  if (n != m.payload_size && n != m.payload_size_with_sequence) return size_error(payload, model);
+  if (n != m.payload_size && n != m.long_payload_size) return size_error(payload, model);
   const std::uint8_t* p = payload.data();
 
   Packet pk;
@@ -164,7 +257,7 @@ PacketError Packet::parse(std::span<const std::uint8_t> payload, Model model,
       micros = u32(p + tail + 10);
       mode_byte = p[tail + 14];
       date = p + tail + 16;
-      pk.has_sequence_ = n == m.payload_size_with_sequence;
+      pk.has_sequence_ = n == m.long_payload_size;
       if (pk.has_sequence_) pk.sequence_ = u32(p + tail + 22);
       break;
     }
@@ -183,14 +276,15 @@ PacketError Packet::parse(std::span<const std::uint8_t> payload, Model model,
       micros = u32(p + tail + 10);
       mode_byte = p[tail + 14];
       date = p + tail + 16;
-      pk.has_sequence_ = n == m.payload_size_with_sequence;
+      pk.has_sequence_ = n == m.long_payload_size;
       if (pk.has_sequence_) pk.sequence_ = u32(p + tail + 22);
       break;
     }
     case Model::pandar_xt32:
-    case Model::pandar_xt16: {
+    case Model::pandar_xt16:
+    case Model::pandar_xt32m: {
       if (p[0] != 0xEE || p[1] != 0xFF) return PacketError::bad_marker;
-      if (p[2] != 6 || p[3] != 1 || p[6] != m.channels || p[7] != 8) {
+      if (p[2] != 6 || p[3] != 1 || p[6] != m.channels || p[7] != m.blocks_per_packet) {
         return PacketError::bad_header;
       }
       dis_unit_mm = p[9];
@@ -199,7 +293,7 @@ PacketError Packet::parse(std::span<const std::uint8_t> payload, Model model,
       pk.az_offset_ = 0;
       pk.units_offset_ = 2;
       pk.unit_size_ = 4;
-      tail = 12 + 8 * std::size_t{pk.block_stride_};  // 1052 / 540
+      tail = 12 + std::size_t{m.blocks_per_packet} * pk.block_stride_;  // 1052 / 540 / 792
       mode_byte = p[tail + 10];
       pk.rpm_ = u16(p + tail + 11);
       date = p + tail + 13;
@@ -223,8 +317,35 @@ PacketError Packet::parse(std::span<const std::uint8_t> payload, Model model,
       micros = u32(p + tail + 12);
       mode_byte = p[tail + 16];
       date = p + tail + 18;
-      pk.has_sequence_ = n == m.payload_size_with_sequence;
+      pk.has_sequence_ = n == m.long_payload_size;
       if (pk.has_sequence_) pk.sequence_ = u32(p + tail + 24);
+      break;
+    }
+    case Model::pandar_qt128: {
+      // Header 12 | 2 blocks of 2 + 128·4 | body CRC 4 | functional safety 17 | tail 34
+      // | optional signature 32.
+      if (p[0] != 0xEE || p[1] != 0xFF) return PacketError::bad_marker;
+      if (p[2] != 3 || p[3] != 2 || p[6] != 128 || p[7] != 2) return PacketError::bad_header;
+      dis_unit_mm = p[9];
+      pk.first_block_ = 12;
+      pk.block_stride_ = 2 + 128 * 4;
+      pk.az_offset_ = 0;
+      pk.units_offset_ = 2;
+      pk.unit_size_ = 4;
+      const std::size_t blocks_end = 12 + 2 * std::size_t{pk.block_stride_};  // 1040
+      const std::size_t safety = blocks_end + 4;                              // 1044
+      tail = safety + 17;                                                     // 1061
+      // Checked before any field is believed: a corrupted packet is dropped as such.
+      if (!qt128_crcs_match(p, blocks_end, safety, tail)) return PacketError::bad_crc;
+      pk.has_safety_ = true;
+      pk.safety_ = read_safety(p + safety);
+      pk.mode_flag_ = p[tail + 5];
+      mode_byte = p[tail + 12];
+      pk.rpm_ = u16(p + tail + 13);
+      date = p + tail + 15;
+      micros = u32(p + tail + 21);
+      pk.has_sequence_ = true;
+      pk.sequence_ = u32(p + tail + 26);
       break;
     }
   }
@@ -270,11 +391,26 @@ std::int32_t Packet::block_offset_ns(unsigned block) const noexcept {
     case Model::pandar_xt32:
     case Model::pandar_xt16: return -50000 * ((8 - b - 1) / r);
     case Model::pandar_qt64: return 25710 + (500000 * (b / r)) / 3;
+    // Firings 111.11 µs (0.4° at 600 rpm) apart, the second block's azimuth being the later
+    // one. nebula writes 9000 + 111110·(2 − b − 1)/n, which puts block 0 last; the azimuths
+    // say otherwise, so SIM follows them (unverified on a live sensor).
+    case Model::pandar_qt128: return 9000 + 111110 * (b / r);
+    // nebula uses (8 − b − 1) here, the XT32's block count, for a 6-block packet; SIM counts
+    // the XT32M's own 6 blocks so the last firing group is at the packet time, as on the XT32.
+    case Model::pandar_xt32m: return -50000 * ((6 - b - 1) / r);
   }
   return 0;
 }
 
-std::int32_t Packet::channel_offset_ns(Model model, unsigned channel) noexcept {
+unsigned Packet::firing_loop(unsigned block) const noexcept {
+  if (model_ != Model::pandar_qt128) return 0;
+  // Single return: the two blocks are consecutive firings, first loop then second. Multi
+  // return: one firing, whose loop the tail's mode flag names (bit 0 set = first loop).
+  if (returns_ == 1) return block % 2;
+  return (mode_flag_ & 0x01) != 0 ? 0 : 1;
+}
+
+std::int32_t Packet::channel_offset_ns(Model model, unsigned channel, unsigned loop) noexcept {
   const std::int32_t c = static_cast<std::int32_t>(channel);
   switch (model) {
     case Model::pandar64: return channel < 64 ? pandar64_channel_ns[channel] : 0;
@@ -284,12 +420,17 @@ std::int32_t Packet::channel_offset_ns(Model model, unsigned channel) noexcept {
     case Model::pandar_xt32: return 6000 + 1512 * c;
     case Model::pandar_xt16: return 6000 + 3024 * c;
     case Model::pandar_qt64: return channel < 64 ? pandar_qt64_channel_ns[channel] : 0;
+    case Model::pandar_qt128:
+      if (channel >= 128) return 0;
+      return loop == 0 ? pandar_qt128_loop1_ns[channel] : pandar_qt128_loop2_ns[channel];
+    // nebula: 5632 + 368 + 2888·(ch mod 16): channels c and c + 16 fire together.
+    case Model::pandar_xt32m: return 6000 + 2888 * (c % 16);
   }
   return 0;
 }
 
 std::int32_t Packet::firing_offset_ns(unsigned block, unsigned channel) const noexcept {
-  return block_offset_ns(block) + channel_offset_ns(model_, channel);
+  return block_offset_ns(block) + channel_offset_ns(model_, channel, firing_loop(block));
 }
 
 }  // namespace sim::hesai

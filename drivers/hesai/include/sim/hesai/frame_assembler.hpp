@@ -83,6 +83,11 @@ struct CompletedFrame {
   std::uint32_t lost_packets = 0;     // packets missing inside this frame (sequence/azimuth)
   std::uint32_t dropped_points = 0;   // points that did not fit in the output span
   bool whole_revolution = true;       // started at a cut and ended at the next one
+  std::uint16_t motor_rpm = 0;        // motor speed the frame's last packet reported
+  // Models with a functional-safety section (QT128): the worst state any packet of the frame
+  // reported, with that packet's fault code. A user drops or flags frames that are not
+  // `normal` (or `initialization`, while the sensor starts).
+  std::optional<FunctionalSafety> safety;
 };
 
 struct PushResult {
@@ -93,6 +98,7 @@ struct PushResult {
 struct AssemblerCounters {
   std::uint64_t packets = 0;          // decoded
   std::uint64_t malformed = 0;        // rejected: cut short, bad field values
+  std::uint64_t crc_errors = 0;       // rejected: a CRC did not match (QT128), not in malformed
   std::uint64_t wrong_model = 0;      // rejected: another Hesai model on the port
   std::uint64_t lost_packets = 0;     // estimated from UDP sequence or azimuth gaps
   std::uint64_t out_of_order = 0;     // sequence went backwards or repeated
@@ -106,7 +112,8 @@ struct AssemblerCounters {
 class FrameAssembler {
  public:
   // Fails (one sentence) when the calibration's channel count is not the model's, the range
-  // limits are inverted or negative, or the firing-time file has the wrong channel count.
+  // limits are inverted or negative, or the firing-time file has the wrong channel count (or
+  // is given for the QT128, whose two firing loops one column cannot describe).
   static Expected<FrameAssembler> create(Calibration calibration, AssemblerOptions options);
 
   // The span the following points go to. Call once before the first push and again after
@@ -129,6 +136,10 @@ class FrameAssembler {
   void reset() noexcept;
 
   const AssemblerCounters& counters() const noexcept { return counters_; }
+  // What the last decoded packet said about the sensor, for status lines: its motor speed
+  // (0 before the first packet) and functional-safety state (models that send one).
+  std::uint16_t motor_rpm() const noexcept { return last_rpm_; }
+  const std::optional<FunctionalSafety>& functional_safety() const noexcept { return last_safety_; }
   const AssemblerOptions& options() const noexcept { return options_; }
   const Calibration& calibration() const noexcept { return calibration_; }
   // Points the frame in progress holds so far.
@@ -150,6 +161,8 @@ class FrameAssembler {
     std::uint32_t packets = 0;
     std::uint32_t lost = 0;
     std::uint32_t dropped = 0;
+    std::uint16_t rpm = 0;
+    std::optional<FunctionalSafety> safety;  // worst seen
   };
 
   void begin(FrameState& frame, const Packet& packet, unsigned block, std::int64_t host_ns,
@@ -179,7 +192,8 @@ class FrameAssembler {
   std::array<double, max_channels> cut_offset_centi_{};
   double min_cut_offset_centi_ = 0;
   double max_cut_offset_centi_ = 0;
-  std::array<std::int32_t, max_channels> channel_offset_ns_{};
+  // Per firing loop (two on the QT128, see Packet::firing_loop), per channel.
+  std::array<std::array<std::int32_t, max_channels>, 2> channel_offset_ns_{};
   std::int32_t earliest_channel_offset_ns_ = 0;
   std::uint16_t compensated_rpm_ = 0;
 
@@ -200,6 +214,7 @@ class FrameAssembler {
   std::uint16_t last_azimuth_ = 0;   // last group's block azimuth, 0.01°
   std::uint16_t azimuth_step_ = 0;   // between firing groups, learned inside packets
   std::uint16_t last_rpm_ = 0;       // motor speed of the last decoded packet
+  std::optional<FunctionalSafety> last_safety_;
   bool have_sequence_ = false;
   std::uint32_t last_sequence_ = 0;
   std::uint64_t packet_counter_ = 0;

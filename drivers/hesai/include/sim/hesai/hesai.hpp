@@ -6,3 +6,4 @@
 #include "sim/hesai/frame_assembler.hpp"
 #include "sim/hesai/model.hpp"
 #include "sim/hesai/packet.hpp"
+#include "sim/hesai/ptc.hpp"

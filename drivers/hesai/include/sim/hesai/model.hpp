@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // The Hesai Pandar models SIM decodes, and the per-model facts every other part needs
 // (packet sizes, channel and block counts, range limits, capacity of one revolution).
-// Byte layouts: docs/hesai.md and ../shared/reference/lidar-wire-formats.md §2–§6.
+// Byte layouts: docs/hesai.md, ../shared/reference/lidar-wire-formats.md §2–§6 and
+// hesai-qt128-xt32m.md (QT128, XT32M).
 #pragma once
 
 #include <array>
@@ -19,32 +20,44 @@ enum class Model : std::uint8_t {
   pandar_xt32,
   pandar_xt16,
   pandar_qt64,
+  pandar_qt128,
+  pandar_xt32m,
 };
 
-inline constexpr std::array<Model, 5> all_models{Model::pandar64, Model::pandar40p,
+inline constexpr std::array<Model, 7> all_models{Model::pandar64,    Model::pandar40p,
                                                  Model::pandar_xt32, Model::pandar_xt16,
-                                                 Model::pandar_qt64};
+                                                 Model::pandar_qt64, Model::pandar_qt128,
+                                                 Model::pandar_xt32m};
 
-// Hesai's own spelling: "Pandar64", "Pandar40P", "PandarXT32", "PandarXT16", "PandarQT64".
+// Hesai's own spelling: "Pandar64", "Pandar40P", "PandarXT32", "PandarXT16", "PandarQT64",
+// "PandarQT128", "PandarXT32M".
 std::string_view to_string(Model model) noexcept;
 
 // Accepts Hesai's spelling case-insensitively, with or without "Pandar" ("XT32", "pandar64").
 std::optional<Model> parse_model(std::string_view name) noexcept;
 
-// "Pandar64, Pandar40P, PandarXT32, PandarXT16, PandarQT64", for --help and error messages.
+// "Pandar64, Pandar40P, …, PandarXT32M", for --help and error messages.
 std::string_view model_names() noexcept;
 
 struct ModelInfo {
   Model model;
   std::uint16_t channels;            // lasers
   std::uint16_t blocks_per_packet;   // firing blocks in one UDP payload
-  std::uint16_t payload_size;        // bytes, without the optional UDP sequence
-  std::uint16_t payload_size_with_sequence;  // bytes with the 4-byte UDP sequence
-  bool sequence_optional;            // false: the sequence is always present (XT)
+  // Bytes of the short form, and of the long form that adds an optional trailer: the 4-byte
+  // UDP sequence (Pandar40P/64, QT64) or the 32-byte signature (QT128). Equal when the model
+  // has no optional trailer (XT: the sequence is always there).
+  std::uint16_t payload_size;
+  std::uint16_t long_payload_size;
   float min_range_m;                 // manufacturer's limits (nebula's defaults)
   float max_range_m;
   std::uint16_t azimuth_step_10hz;   // 0.01° between firings at 10 Hz (observed)
+  // Lasers that fire in one firing: all channels, except the QT128 whose two alternating
+  // firing loops each leave 32 of its 128 channels dark.
+  std::uint16_t channels_per_firing;
+  std::uint8_t max_returns;          // returns per firing the model can send
+  bool has_crc;                      // body/functional-safety/tail CRCs (QT128)
 
+  bool has_optional_trailer() const noexcept { return long_payload_size != payload_size; }
   std::size_t max_points_per_packet() const noexcept {
     return std::size_t{channels} * blocks_per_packet;
   }
@@ -56,7 +69,7 @@ const ModelInfo& info(Model model) noexcept;
 inline constexpr std::size_t max_points_per_packet = 400;
 
 // How many points one revolution can hold, to size a SIM stream once:
-// channels × firings per revolution × returns, plus `margin` (default 10 %) for rpm drift and
+// lasers per firing × firings per revolution × returns (at most the model's), plus `margin` (default 10 %) for rpm drift and
 // the firing that straddles the cut. `rpm` is the motor speed the sensor is configured for
 // (600 = 10 Hz, 1200 = 20 Hz); lower rpm means more firings per revolution, so pass the lowest.
 std::size_t frame_capacity(Model model, unsigned returns = 2, unsigned rpm = 600,

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 // One Hesai point-cloud UDP payload, validated once and then read through a non-owning view.
 // Packet::parse checks the length, the markers, the header counts, every block azimuth, the
-// return mode, the distance unit and the UTC date before anything reads the body, so the
-// accessors need no further checks and cannot read outside the payload.
+// return mode, the distance unit, the UTC date and, where the packet carries them, its CRCs
+// before anything reads the body, so the accessors need no further checks and cannot read
+// outside the payload.
 #pragma once
 
 #include <cstdint>
@@ -42,11 +43,35 @@ enum class PacketError : std::uint8_t {
   bad_distance_unit,  // distance unit 0
   bad_azimuth,        // azimuth ≥ 360°, return group disagreeing, or azimuth going backwards
   bad_time,           // UTC date fields that are no date
+  bad_crc,            // body, functional-safety or tail CRC does not match (QT128)
 };
-inline constexpr std::size_t packet_error_count = 10;
+inline constexpr std::size_t packet_error_count = 11;
 
 // One sentence for logs and status lines ("packet shorter than the model's packet size").
 const char* to_string(PacketError error) noexcept;
+
+// The QT128's functional-safety section (hesai-qt128-xt32m.md §6.3; nebula
+// functional_safety.hpp), refreshed by the sensor every 5 ms.
+enum class LidarState : std::uint8_t {
+  initialization = 0,
+  normal = 1,
+  warning = 2,
+  performance_degradation = 3,
+  output_untrusted = 4,
+};
+enum class FaultCodeType : std::uint8_t { none = 0, current = 1, past = 2 };
+
+struct FunctionalSafety {
+  LidarState state = LidarState::normal;   // values above 4 are reported as output_untrusted
+  FaultCodeType fault_type = FaultCodeType::none;
+  std::uint8_t total_fault_codes = 0;      // faults the sensor is cycling through
+  std::uint8_t fault_code_id = 0;          // which of them this packet reports
+  std::uint16_t fault_code = 0;            // Hesai's code (see the sensor's manual)
+  std::uint8_t rolling_counter = 0;
+};
+
+// "normal", "performance degradation", … for status lines.
+const char* to_string(LidarState state) noexcept;
 
 class Packet {
  public:
@@ -65,6 +90,11 @@ class Packet {
   float distance_unit_m() const noexcept { return distance_unit_m_; }
   std::uint16_t motor_rpm() const noexcept { return rpm_; }
 
+  // The functional-safety section, for models that send one (QT128).
+  std::optional<FunctionalSafety> functional_safety() const noexcept {
+    return has_safety_ ? std::optional<FunctionalSafety>(safety_) : std::nullopt;
+  }
+
   // Sensor time of the packet, ns since the Unix epoch (UTC fields + µs field).
   std::int64_t time_ns() const noexcept { return time_ns_; }
   // The UDP sequence number, when the sensor sends one.
@@ -82,12 +112,16 @@ class Packet {
   }
 
   // Firing time of (block, channel) relative to time_ns(), in ns, from the model's built-in
-  // tables (Pandar64/40P/XT negative, QT64 positive). Depends on the return mode: blocks of one
+  // tables (Pandar64/40P/XT negative, QT positive). Depends on the return mode: blocks of one
   // return group fire together.
   std::int32_t firing_offset_ns(unsigned block, unsigned channel) const noexcept;
   // The block term alone (firing_offset_ns = block term + channel term).
   std::int32_t block_offset_ns(unsigned block) const noexcept;
-  static std::int32_t channel_offset_ns(Model model, unsigned channel) noexcept;
+  // The QT128 alternates two firing loops with different channel timings (and 32 dark
+  // channels each): which one fired this block, 0 or 1. Always 0 for the other models.
+  unsigned firing_loop(unsigned block) const noexcept;
+  static std::int32_t channel_offset_ns(Model model, unsigned channel,
+                                        unsigned loop = 0) noexcept;
 
  private:
   static std::uint16_t read_u16(const std::uint8_t* p) noexcept {
@@ -116,6 +150,9 @@ class Packet {
   std::uint16_t first_block_ = 0;
   std::uint16_t block_stride_ = 0;
   std::uint16_t rpm_ = 0;
+  std::uint8_t mode_flag_ = 0;  // QT128 tail: bit 0 selects the firing loop of a multi-return packet
+  bool has_safety_ = false;
+  FunctionalSafety safety_{};
 };
 
 }  // namespace sim::hesai

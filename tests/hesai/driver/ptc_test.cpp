@@ -1,0 +1,307 @@
+// SPDX-License-Identifier: Apache-2.0
+// Calibration from the sensor over PTC, against a small fake sensor in this process: a real TCP
+// server on loopback (port 0) that serves the recorded QT128 calibration file, or misbehaves
+// the ways a network and a sensor can (refuses, closes halfway, answers garbage, stalls, says
+// no). Each failure must be one sentence, none may hang (short deadlines), and the driver must
+// cache what it fetched and fall back to the cache with a warning.
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "sim/hesai/ptc_client.hpp"
+#include "sim/sim.hpp"
+#include "sim_test/process.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using sim::hesai::Model;
+using sim::testing::Process;
+using sim::testing::run;
+
+const fs::path data_dir = SIM_HESAI_TEST_DATA;
+const std::string live_tool = SIM_LIDAR_HESAI;
+
+std::string read_file(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+const std::string qt128_csv = read_file(data_dir / "pandarqt128.calibration.csv");
+const std::string xt32_csv = read_file(data_dir / "pandarxt32.calibration.csv");
+
+enum class Behaviour { serve, truncate, garbage, stall, silent, refuse_request };
+
+// One listening socket on 127.0.0.1, a thread answering each connection as told. Stalled
+// connections stay open until the server is destroyed.
+class FakeSensor {
+ public:
+  FakeSensor(Behaviour behaviour, std::string file = qt128_csv)
+      : behaviour_(behaviour), file_(std::move(file)), listener_(::socket(AF_INET, SOCK_STREAM, 0)) {
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ::bind(listener_, reinterpret_cast<const sockaddr*>(&address), sizeof address);
+    ::listen(listener_, 8);
+    socklen_t length = sizeof address;
+    ::getsockname(listener_, reinterpret_cast<sockaddr*>(&address), &length);
+    port_ = ntohs(address.sin_port);
+    thread_ = std::thread([this] { serve(); });
+  }
+  ~FakeSensor() {
+    stop_ = true;
+    thread_.join();
+    for (int fd : held_) ::close(fd);
+    ::close(listener_);
+  }
+  std::uint16_t port() const { return port_; }
+  int requests() const { return requests_; }
+
+ private:
+  void serve() {
+    while (!stop_) {
+      pollfd p{listener_, POLLIN, 0};
+      if (::poll(&p, 1, 20) <= 0) continue;
+      const int fd = ::accept(listener_, nullptr, nullptr);
+      if (fd < 0) continue;
+      answer(fd);
+    }
+  }
+
+  void send_all(int fd, const std::string& bytes) {
+    std::size_t sent = 0;
+    while (sent < bytes.size()) {
+      const ssize_t n = ::send(fd, bytes.data() + sent, bytes.size() - sent, MSG_NOSIGNAL);
+      if (n <= 0) return;
+      sent += static_cast<std::size_t>(n);
+    }
+  }
+
+  static std::string header(std::uint8_t code, std::size_t size) {
+    const auto n = static_cast<std::uint32_t>(size);
+    return {'\x47', '\x74', '\x05', static_cast<char>(code), static_cast<char>(n >> 24),
+            static_cast<char>(n >> 16), static_cast<char>(n >> 8), static_cast<char>(n)};
+  }
+
+  void answer(int fd) {
+    // The request: 47 74 05 00 00 00 00 00.
+    unsigned char request[8];
+    std::size_t got = 0;
+    while (got < sizeof request) {
+      const ssize_t n = ::recv(fd, request + got, sizeof request - got, 0);
+      if (n <= 0) break;
+      got += static_cast<std::size_t>(n);
+    }
+    if (got == 8 && request[0] == 0x47 && request[1] == 0x74 && request[2] == 0x05) ++requests_;
+    switch (behaviour_) {
+      case Behaviour::serve:
+        send_all(fd, header(0, file_.size()) + file_);
+        break;
+      case Behaviour::truncate:
+        send_all(fd, header(0, file_.size()) + file_.substr(0, file_.size() / 2));
+        break;
+      case Behaviour::garbage:
+        send_all(fd, "HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n");
+        break;
+      case Behaviour::stall:
+        send_all(fd, header(0, file_.size()) + file_.substr(0, 100));
+        held_.push_back(fd);  // open, silent, until the test ends
+        return;
+      case Behaviour::silent:
+        held_.push_back(fd);
+        return;
+      case Behaviour::refuse_request:
+        send_all(fd, header(3, 0));
+        break;
+    }
+    ::close(fd);
+  }
+
+  Behaviour behaviour_;
+  std::string file_;
+  int listener_;
+  std::uint16_t port_ = 0;
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+  std::atomic<int> requests_{0};
+  std::vector<int> held_;  // only touched by the server thread until it is joined
+};
+
+// A loopback port nothing listens on: bound once to learn a free number, then closed.
+std::uint16_t closed_port() {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ::bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address);
+  socklen_t length = sizeof address;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length);
+  ::close(fd);
+  return ntohs(address.sin_port);
+}
+
+sim::hesai::PtcEndpoint endpoint(std::uint16_t port) {
+  sim::hesai::PtcEndpoint e;
+  e.host = "127.0.0.1";
+  e.port = port;
+  e.timeout = 400ms;
+  return e;
+}
+
+struct TempDir {
+  fs::path path = fs::temp_directory_path() /
+                  ("sim_hesai_ptc_" + std::to_string(::getpid()) + "_" + std::to_string(counter()++));
+  TempDir() { fs::create_directories(path); }
+  ~TempDir() { fs::remove_all(path); }
+  static int& counter() {
+    static int c = 0;
+    return c;
+  }
+};
+
+void expect_one_sentence(const std::string& message, const std::string& must_contain) {
+  EXPECT_FALSE(message.empty());
+  EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  EXPECT_NE(message.find(must_contain), std::string::npos) << message;
+  EXPECT_NE(message.find("127.0.0.1"), std::string::npos) << "names the sensor: " << message;
+}
+
+}  // namespace
+
+TEST(PtcCalibration, FetchesTheSensorsFileAndCachesIt) {
+  FakeSensor sensor(Behaviour::serve);
+  auto text = sim::hesai::fetch_calibration_text(endpoint(sensor.port()));
+  ASSERT_TRUE(text) << text.error().message;
+  EXPECT_EQ(*text, qt128_csv);
+
+  TempDir dir;
+  const fs::path cache = dir.path / "sub" / "unit.csv";
+  auto fetched = sim::hesai::calibration_from_sensor(endpoint(sensor.port()), cache, Model::pandar_qt128);
+  ASSERT_TRUE(fetched) << fetched.error().message;
+  EXPECT_FALSE(fetched->from_cache);
+  EXPECT_EQ(fetched->channels, 128u);
+  EXPECT_EQ(read_file(cache), qt128_csv);
+  EXPECT_FALSE(fs::exists(cache.string() + ".part"));
+  EXPECT_EQ(sensor.requests(), 2);
+}
+
+TEST(PtcCalibration, EveryMisbehaviourIsOneSentenceAndNeverAHang) {
+  {
+    const auto r = sim::hesai::fetch_calibration_text(endpoint(closed_port()));
+    ASSERT_FALSE(r);
+    expect_one_sentence(r.error().message, "refused the PTC connection");
+  }
+  const std::vector<std::pair<Behaviour, std::string>> cases{
+      {Behaviour::truncate, "closed the PTC connection after"},
+      {Behaviour::garbage, "not Hesai PTC"},
+      {Behaviour::stall, "stopped sending after 108 bytes"},
+      {Behaviour::silent, "did not answer within 0.4 s"},
+      {Behaviour::refuse_request, "PTC return code 3"},
+  };
+  for (const auto& [behaviour, words] : cases) {
+    FakeSensor sensor(behaviour);
+    const auto r = sim::hesai::fetch_calibration_text(endpoint(sensor.port()));
+    ASSERT_FALSE(r) << words;
+    expect_one_sentence(r.error().message, words);
+  }
+  // Not an address: refused before any connection.
+  sim::hesai::PtcEndpoint nonsense = endpoint(1);
+  nonsense.host = "lidar.local";
+  const auto r = sim::hesai::fetch_calibration_text(nonsense);
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().message.find("not an IPv4 address"), std::string::npos);
+}
+
+TEST(PtcCalibration, FallsBackToTheCacheWithAWarningAndFailsWithoutOne) {
+  TempDir dir;
+  const fs::path cache = dir.path / "unit.csv";
+  {
+    FakeSensor sensor(Behaviour::serve);
+    ASSERT_TRUE(sim::hesai::calibration_from_sensor(endpoint(sensor.port()), cache, Model::pandar_qt128));
+  }
+  {  // the sensor is off
+    auto r = sim::hesai::calibration_from_sensor(endpoint(closed_port()), cache, Model::pandar_qt128);
+    ASSERT_TRUE(r) << r.error().message;
+    EXPECT_TRUE(r->from_cache);
+    EXPECT_EQ(r->channels, 128u);
+    EXPECT_NE(r->warning.find("using the cached " + cache.string()), std::string::npos) << r->warning;
+  }
+  {  // the sensor serves a file that is not a QT128's: checked, not cached, cache used
+    FakeSensor sensor(Behaviour::serve, xt32_csv);
+    auto r = sim::hesai::calibration_from_sensor(endpoint(sensor.port()), cache, Model::pandar_qt128);
+    ASSERT_TRUE(r) << r.error().message;
+    EXPECT_TRUE(r->from_cache);
+    EXPECT_NE(r->warning.find("32"), std::string::npos) << r->warning;
+    EXPECT_EQ(read_file(cache), qt128_csv);
+  }
+  {  // garbage text inside a well-formed answer
+    FakeSensor sensor(Behaviour::serve, std::string("\x01\x02 not a csv", 12));
+    auto r = sim::hesai::calibration_from_sensor(endpoint(sensor.port()), cache, Model::pandar_qt128);
+    ASSERT_TRUE(r) << r.error().message;
+    EXPECT_TRUE(r->from_cache);
+  }
+  {  // nothing to fall back on
+    FakeSensor sensor(Behaviour::stall);
+    auto r = sim::hesai::calibration_from_sensor(endpoint(sensor.port()), dir.path / "none.csv",
+                                                 Model::pandar_qt128);
+    ASSERT_FALSE(r);
+    EXPECT_NE(r.error().message.find("no cached calibration at"), std::string::npos) << r.error().message;
+    EXPECT_EQ(r.error().message.find('\n'), std::string::npos);
+  }
+}
+
+TEST(PtcCalibration, DriverFetchesAtStartAndFallsBackToItsCache) {
+  TempDir dir;
+  const std::string cache = (dir.path / "qt128.csv").string();
+  const std::string stream = "/test_hesai_ptc_" + std::to_string(::getpid());
+  auto driver_args = [&](std::uint16_t ptc_port) {
+    return std::vector<std::string>{live_tool, "--calibration-from-sensor", "--sensor-ip",
+                                    "127.0.0.1", "--ptc-port", std::to_string(ptc_port),
+                                    "--ptc-timeout", "0.4", "--calibration", cache, "--model",
+                                    "PandarQT128", "--port", "0", "--bind", "127.0.0.1",
+                                    "--stream", stream, "--status-interval", "0"};
+  };
+  {
+    FakeSensor sensor(Behaviour::serve);
+    Process driver(driver_args(sensor.port()));
+    ASSERT_TRUE(driver.wait_for_line("listening on")) << driver.err();
+    driver.signal(SIGTERM);
+    ASSERT_EQ(driver.wait(), 0) << driver.err();
+    EXPECT_NE(driver.out().find("fetched and cached in " + cache), std::string::npos) << driver.out();
+    EXPECT_EQ(read_file(cache), qt128_csv);
+  }
+  {
+    Process driver(driver_args(closed_port()));
+    ASSERT_TRUE(driver.wait_for_line("listening on")) << driver.err();
+    driver.signal(SIGTERM);
+    ASSERT_EQ(driver.wait(), 0) << driver.err();
+    EXPECT_NE(driver.err().find("warning: sensor 127.0.0.1:"), std::string::npos) << driver.err();
+    EXPECT_NE(driver.err().find("using the cached " + cache + "."), std::string::npos) << driver.err();
+  }
+  fs::remove(cache);
+  {
+    FakeSensor sensor(Behaviour::silent);
+    const auto r = run(driver_args(sensor.port()));
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("no cached calibration at " + cache), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << "one line: " << r.err;
+  }
+  auto bad_ip = driver_args(1);
+  bad_ip[3] = "sensor";
+  EXPECT_EQ(run(bad_ip).code, 2);
+  (void)sim::destroy(stream, true);  // cleanup: a stream already gone is fine
+}
