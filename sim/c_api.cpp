@@ -6,9 +6,11 @@
 #include <cstring>
 #include <new>
 #include <string>
+#include <vector>
 
 #include "sim/clock.hpp"
 #include "sim/reader.hpp"
+#include "sim/wait_set.hpp"
 #include "sim/writer.hpp"
 
 struct sim_writer {
@@ -16,6 +18,12 @@ struct sim_writer {
 };
 struct sim_reader {
   sim::Reader reader;
+};
+struct sim_waitset {
+  sim::WaitSet set;
+};
+struct sim_notifier {
+  sim::StreamNotifier notifier;
 };
 
 namespace {
@@ -182,5 +190,91 @@ int SIM_destroy(const char* name) {
 }
 
 const char* SIM_lastError(void) { return last_error; }
+
+// --- waiting (issue 12) ---
+
+int SIM_readerSetWaitMode(sim_reader* r, int mode) {
+  if (r == nullptr) return fail(SIM_EINVAL, "SIM_readerSetWaitMode needs a reader");
+  switch (mode) {
+    case SIM_WAIT_BLOCK: r->reader.set_wait_mode(sim::WaitMode::block); break;
+    case SIM_WAIT_POLL: r->reader.set_wait_mode(sim::WaitMode::poll); break;
+    case SIM_WAIT_ADAPTIVE: r->reader.set_wait_mode(sim::WaitMode::adaptive); break;
+    default:
+      return fail(SIM_EINVAL, "wait mode " + std::to_string(mode) +
+                                  " is unknown; use SIM_WAIT_BLOCK, SIM_WAIT_POLL or SIM_WAIT_ADAPTIVE");
+  }
+  clear_last_error();
+  return 0;
+}
+
+sim_waitset* SIM_waitsetCreate(void) {
+  clear_last_error();
+  return new (std::nothrow) sim_waitset{sim::WaitSet()};
+}
+
+int SIM_waitsetAdd(sim_waitset* ws, sim_reader* r) {
+  if (ws == nullptr || r == nullptr) return fail(SIM_EINVAL, "SIM_waitsetAdd needs a wait set and a reader");
+  auto index = ws->set.add(r->reader);
+  if (!index) return fail(SIM_EINVAL, index.error().message);
+  clear_last_error();
+  return static_cast<int>(*index);
+}
+
+int SIM_waitsetWait(sim_waitset* ws, int timeout_ms) {
+  if (ws == nullptr) return fail(SIM_EINVAL, "SIM_waitsetWait needs a wait set");
+  const auto timeout = timeout_ms < 0 ? sim::kForever
+                                     : std::chrono::nanoseconds(std::chrono::milliseconds(timeout_ms));
+  clear_last_error();
+  const auto ready = ws->set.wait(timeout);
+  return ready ? static_cast<int>(*ready) : SIM_ETIMEDOUT;
+}
+
+int SIM_waitsetReady(const sim_waitset* ws, int index) {
+  if (ws == nullptr || index < 0) return 0;
+  return ws->set.ready(static_cast<std::size_t>(index)) ? 1 : 0;
+}
+
+void SIM_waitsetClose(sim_waitset* ws) { delete ws; }
+
+sim_notifier* SIM_notifierOpen(const char* const* names, size_t count) {
+  if (names == nullptr || count == 0) {
+    fail(SIM_EINVAL, "SIM_notifierOpen needs at least one stream name");
+    return nullptr;
+  }
+  std::vector<std::string> list;
+  for (size_t i = 0; i < count; ++i) {
+    if (names[i] == nullptr) {
+      fail(SIM_EINVAL, "SIM_notifierOpen was given a NULL stream name");
+      return nullptr;
+    }
+    list.emplace_back(names[i]);
+  }
+  auto notifier = sim::StreamNotifier::open(list);
+  if (!notifier) {
+    fail(SIM_EINVAL, notifier.error().message);
+    return nullptr;
+  }
+  clear_last_error();
+  return new (std::nothrow) sim_notifier{std::move(*notifier)};
+}
+
+int SIM_notifierFd(const sim_notifier* n) {
+  if (n == nullptr) return fail(SIM_EINVAL, "SIM_notifierFd needs a notifier");
+  return n->notifier.fd();
+}
+
+int SIM_notifierDrain(sim_notifier* n, int* arrived, size_t count) {
+  if (n == nullptr) return fail(SIM_EINVAL, "SIM_notifierDrain needs a notifier");
+  const std::vector<bool> which = n->notifier.drain();
+  int streams = 0;
+  for (size_t i = 0; i < which.size(); ++i) {
+    if (which[i]) ++streams;
+    if (arrived != nullptr && i < count) arrived[i] = which[i] ? 1 : 0;
+  }
+  clear_last_error();
+  return streams;
+}
+
+void SIM_notifierClose(sim_notifier* n) { delete n; }
 
 }  // extern "C"

@@ -2,6 +2,7 @@
 #include "sim/reader.hpp"
 
 #include <dirent.h>
+#include <sched.h>
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -18,6 +19,8 @@
 #include "region_file.hpp"
 #include "shared_copy.hpp"
 #include "sim/clock.hpp"
+#include "reader_wait.hpp"
+#include "wake_plan.hpp"
 
 namespace sim {
 
@@ -44,6 +47,29 @@ struct Snapshot {
 };
 
 enum class Begin { ready, idle, lapped, invalid, reopened };
+
+// How long a polling reader spins before it looks at the writer's liveness again.
+constexpr std::int64_t kPollSliceNs = 20'000'000;
+// Adaptive readers of this process spinning now; with each region's leases, this keeps spinners
+// to the cores the process may use minus one, so the writer and other work always have a core.
+std::atomic<int> spinners_in_this_process{0};
+
+// Tells the core this is a spin loop (frees the pipeline for the other hyperthread).
+inline void cpu_relax() noexcept {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#elif defined(__aarch64__)
+  asm volatile("yield" ::: "memory");
+#endif
+}
+
+// Cores this process may run on, minus one: how many of its readers may spin at once.
+int spin_limit_for_this_process() noexcept {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) != 0) return 0;
+  return std::max(0, CPU_COUNT(&set) - 1);
+}
 }  // namespace
 
 // A token no other reader on the machine uses, for the reader's wait slot (WaitPage::asleep).
@@ -69,6 +95,9 @@ struct Reader::Impl {
   const std::uint64_t token = new_reader_token();
   std::optional<std::size_t> wait_slot;  // this reader's slot in the wait page, if it got one
   ReaderStats stats;
+  WakePlanner planner;
+  WakeLateness wake_late;  // how late this reader's timed sleeps wake (adaptive mode)
+  int spin_limit = 0;  // spinners allowed at once (cores of this process minus one), at open
 
   void adopt(RegionFile&& f) {
     file = std::make_shared<const RegionFile>(std::move(f));
@@ -156,29 +185,122 @@ struct Reader::Impl {
     return (meta(seq).seq.load(std::memory_order_acquire) & ~kWritingBit) >= seq;
   }
 
-  // Sleeps until the futex word moves away from `word` or `until` (CLOCK_MONOTONIC) comes.
-  void sleep_until(const std::atomic<std::uint32_t>& word, std::uint32_t seen,
-                   std::int64_t until) noexcept {
+  // Counts this reader as a sleeper, so the writer's next publish wakes the futex word. False if
+  // nothing would wake it (a writer that predates wakes_every_publish and a reader that may not
+  // write the wait page): it must then poll.
+  bool begin_sleep() noexcept {
     if (WaitPage* wait = file->wait_page()) {
       if (wait_slot) wait->asleep[*wait_slot].store(token, std::memory_order_relaxed);
       wait->sleepers.fetch_add(1, std::memory_order_seq_cst);
       std::atomic_thread_fence(std::memory_order_seq_cst);
+      return true;
+    }
+    // A reader that may not write the region (another user's group stream): the writer wakes
+    // the futex on every publish, and the value check covers a publish since `seen` was read.
+    return header->publication.wakes_every_publish.load(std::memory_order_relaxed) != 0;
+  }
+  void end_sleep() noexcept {
+    WaitPage* wait = file->wait_page();
+    if (wait == nullptr) return;
+    // Take this reader's mark back out, unless the writer already did (it cannot tell a
+    // reader that is about to sleep from a dead one only while that reader's lock is held).
+    std::uint64_t mine = token;
+    if (!wait_slot ||
+        wait->asleep[*wait_slot].compare_exchange_strong(mine, 0, std::memory_order_acq_rel)) {
+      wait->sleepers.fetch_sub(1, std::memory_order_relaxed);
+    }
+  }
+
+  // Sleeps until the futex word moves away from `word` or `until` (CLOCK_MONOTONIC) comes.
+  void sleep_until(const std::atomic<std::uint32_t>& word, std::uint32_t seen,
+                   std::int64_t until) noexcept {
+    if (begin_sleep()) {
       if (!deliverable()) futex_wait_until(&word, seen, until);
-      // Take this reader's mark back out, unless the writer already did (it cannot tell a
-      // reader that is about to sleep from a dead one only while that reader's lock is held).
-      std::uint64_t mine = token;
-      if (!wait_slot ||
-          wait->asleep[*wait_slot].compare_exchange_strong(mine, 0, std::memory_order_acq_rel)) {
-        wait->sleepers.fetch_sub(1, std::memory_order_relaxed);
-      }
-    } else if (header->publication.wakes_every_publish.load(std::memory_order_relaxed) != 0) {
-      // A reader that may not write the region (another user's group stream): the writer wakes
-      // the futex on every publish, and the value check covers a publish since `seen` was read.
-      futex_wait_until(&word, seen, until);
+      end_sleep();
     } else {
       // A writer that predates wakes_every_publish: nothing would wake this reader.
       const std::int64_t nap = std::min(until - monotonic_ns(), kPollSleepNs);
       if (nap > 0) std::this_thread::sleep_for(std::chrono::nanoseconds(nap));
+    }
+  }
+
+  // Looks at the name again if the region was replaced or the writer seems gone (both cheap,
+  // rate-limited); true if this reader now reads another region.
+  bool refresh() noexcept {
+    const std::uint64_t reopens = stats.reopens;
+    if (header->publication.retired.load(std::memory_order_acquire) != 0) reopen_if_replaced();
+    writer_alive(false);  // also reopens the name if a new writer replaced the region
+    return stats.reopens != reopens;
+  }
+
+  StreamTiming timing() const noexcept {
+    const Liveness& l = header->liveness;
+    return {l.latest_publish_ns.load(std::memory_order_relaxed), l.period_ns.load(std::memory_order_relaxed),
+            l.jitter_ns.load(std::memory_order_relaxed),
+            l.frames_this_writer.load(std::memory_order_relaxed)};
+  }
+
+  // Spins until a frame is deliverable or `until` comes; true if one came. No system call:
+  // monotonic_ns() is a vDSO read.
+  bool spin_until(std::int64_t until) noexcept {
+    ++stats.spins;
+    const std::int64_t from = monotonic_ns();
+    std::int64_t now = from;
+    bool caught = false;
+    while (now < until) {
+      for (int i = 0; i < 32 && !caught; ++i) {
+        caught = deliverable();
+        if (!caught) cpu_relax();
+      }
+      now = monotonic_ns();
+      if (caught) break;
+    }
+    stats.spin_ns += now - from;
+    if (caught) ++stats.caught_spinning;
+    return caught;
+  }
+
+  // An adaptive spin, if this reader may take one of the region's spin leases and the process
+  // has a core to spare; false (nothing done) if it may not, and then it should sleep instead.
+  bool try_adaptive_spin(std::int64_t now, std::int64_t until) noexcept {
+    WaitPage* wait = file->wait_page();
+    if (wait == nullptr || spin_limit <= 0) return false;  // a reader that cannot count itself
+    if (spinners_in_this_process.fetch_add(1, std::memory_order_acq_rel) >= spin_limit) {
+      spinners_in_this_process.fetch_sub(1, std::memory_order_relaxed);
+      return false;
+    }
+    const std::size_t limit = std::min<std::size_t>(kSpinLeases, static_cast<std::size_t>(spin_limit));
+    const int lease = SpinLeases::acquire(wait->spin_lease, limit, now, until);
+    if (lease >= 0) {
+      spin_until(until);
+      SpinLeases::release(wait->spin_lease, lease, until);
+    }
+    spinners_in_this_process.fetch_sub(1, std::memory_order_relaxed);
+    return lease >= 0;
+  }
+
+  // One step of a wait that found nothing deliverable at `now`; the caller loops.
+  void wait_step(const std::atomic<std::uint32_t>& word, std::uint32_t seen, std::int64_t now,
+                 std::int64_t deadline) noexcept {
+    const std::int64_t slice_end = std::min(deadline, now + kWaitSliceNs);
+    switch (options.wait_mode) {
+      case WaitMode::block: sleep_until(word, seen, slice_end); return;
+      case WaitMode::poll: spin_until(std::min(deadline, now + kPollSliceNs)); return;
+      case WaitMode::adaptive: break;
+    }
+    const WakeStep step = planner.next(now, timing(), wake_late.ns());
+    switch (step.action) {
+      case WakeStep::Action::sleep: {
+        const std::int64_t until = std::min(step.until, slice_end);
+        sleep_until(word, seen, until);
+        // Woken by its deadline rather than a publish: learn how late such wake-ups come.
+        if (until == step.until && !deliverable()) wake_late.add(monotonic_ns() - until);
+        return;
+      }
+      case WakeStep::Action::spin:
+        if (try_adaptive_spin(now, std::min(step.until, deadline))) return;
+        [[fallthrough]];  // no core to spare: sleep like a blocking reader
+      case WakeStep::Action::block: sleep_until(word, seen, slice_end); return;
     }
   }
 
@@ -236,6 +358,7 @@ Expected<Reader> Reader::open(std::string_view name, const ReaderOptions& option
   auto impl = std::make_unique<Impl>();
   impl->name = std::string(name);
   impl->options = options;
+  if (options.wait_mode == WaitMode::adaptive) impl->spin_limit = spin_limit_for_this_process();
   impl->adopt(std::move(*file));
   return Reader(std::move(impl));
 }
@@ -322,21 +445,36 @@ ReadStatus Reader::wait(std::chrono::nanoseconds timeout) noexcept {
       budget > std::numeric_limits<std::int64_t>::max() - start ? std::numeric_limits<std::int64_t>::max()
                                                                : start + budget;
   for (;;) {
-    const std::uint64_t reopens = r.stats.reopens;
-    if (r.header->publication.retired.load(std::memory_order_acquire) != 0) {
-      r.reopen_if_replaced();
-    }
-    r.writer_alive(false);  // also reopens the name if a new writer replaced the region
-    if (r.stats.reopens != reopens) continue;  // look again, at the new region
+    if (r.refresh()) continue;  // look again, at the new region
 
     const std::atomic<std::uint32_t>& futex_word = r.header->publication.futex_word;
     const std::uint32_t word = futex_word.load(std::memory_order_acquire);
     if (r.deliverable()) return ReadStatus::new_frame;
     const std::int64_t now = monotonic_ns();
     if (now >= deadline) return r.idle_status();
-    // Sleep in slices, so a reader notices a region replaced by a new writer or a dead writer.
-    r.sleep_until(futex_word, word, std::min(deadline, now + kWaitSliceNs));
+    // Wait in slices, so a reader notices a region replaced by a new writer or a dead writer.
+    r.wait_step(futex_word, word, now, deadline);
   }
+}
+
+bool detail::ReaderWaitAccess::refresh(Reader& reader) noexcept { return reader.impl_->refresh(); }
+bool detail::ReaderWaitAccess::deliverable(const Reader& reader) noexcept {
+  return reader.impl_->deliverable();
+}
+const std::atomic<std::uint32_t>& detail::ReaderWaitAccess::futex_word(const Reader& reader) noexcept {
+  return reader.impl_->header->publication.futex_word;
+}
+bool detail::ReaderWaitAccess::begin_sleep(Reader& reader) noexcept { return reader.impl_->begin_sleep(); }
+void detail::ReaderWaitAccess::end_sleep(Reader& reader) noexcept { reader.impl_->end_sleep(); }
+void detail::ReaderWaitAccess::sleep_until(Reader& reader, std::uint32_t seen, std::int64_t until) noexcept {
+  reader.impl_->sleep_until(reader.impl_->header->publication.futex_word, seen, until);
+}
+ReadStatus detail::ReaderWaitAccess::idle_status(Reader& reader) noexcept {
+  return reader.impl_->idle_status();
+}
+void detail::ReaderWaitAccess::skip_to_newest(Reader& reader) noexcept {
+  Reader::Impl& r = *reader.impl_;
+  if (r.deliverable()) r.last_seq = r.latest();
 }
 
 ReadStatus Reader::read_next(std::span<std::byte> out, FrameInfo& info,
@@ -344,6 +482,13 @@ ReadStatus Reader::read_next(std::span<std::byte> out, FrameInfo& info,
   const ReadStatus waited = wait(timeout);
   if (waited != ReadStatus::new_frame) return waited;
   return read(out, info);
+}
+
+void Reader::set_wait_mode(WaitMode mode) noexcept {
+  impl_->options.wait_mode = mode;
+  if (mode == WaitMode::adaptive && impl_->spin_limit == 0) {
+    impl_->spin_limit = spin_limit_for_this_process();
+  }
 }
 
 bool Reader::writer_alive() noexcept { return impl_->writer_alive(true); }

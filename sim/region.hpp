@@ -66,13 +66,20 @@ Layout from_record(const LayoutRecord& record) noexcept;
 // kernel drops a dead reader's lock, so the writer (when a wake-up finds nobody) and the next
 // reader to claim that slot can prove its owner is gone and take its mark back out of the count.
 inline constexpr std::size_t kReaderSlots = (kPage - kCacheLine) / sizeof(std::uint64_t);
+inline constexpr std::size_t kSpinLeases = 4;
 struct alignas(kPage) WaitPage {
   alignas(kCacheLine) std::atomic<std::uint32_t> sleepers;  // readers in futex_wait or about to be
+  std::uint32_t reserved0;
+  // Added in place of padding (zero in regions of older writers, which is "free"): leases of the
+  // adaptive readers spinning on this stream now. Each holds the CLOCK_MONOTONIC time its spin
+  // ends, so a spinner killed mid-spin frees its lease by itself (wake_plan.hpp, SpinLeases).
+  std::atomic<std::int64_t> spin_lease[kSpinLeases];
   // Per slot: 0, or the token of the slot's owner while it is counted in `sleepers`. Tokens are
   // unique per reader, so a stale mark is never mistaken for a new owner's (compare-exchange).
   alignas(kCacheLine) std::atomic<std::uint64_t> asleep[kReaderSlots];
 };
 static_assert(sizeof(WaitPage) == kPage);
+static_assert(offsetof(WaitPage, asleep) == kCacheLine, "spin leases must stay in the padding");
 
 // Byte-range locks on the region file (F_OFD_SETLK; ranges need not lie inside the file). Only
 // exclusive locks count, and taking one needs write access: a reader that may only read the file

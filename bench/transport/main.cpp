@@ -26,6 +26,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <random>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -132,6 +133,8 @@ struct RoleOptions {
   std::uint64_t frames = 0;
   std::uint64_t warmup = 0;
   double rate = 0;  // 0: as fast as possible
+  double jitter = 0;  // each period is drawn uniformly from period * (1 ± jitter)
+  double idle_s = 0;  // > 0: the idle-cost run (the writer publishes nothing for this long)
   int cpu = -1;
   int rt_priority = 0;
 };
@@ -165,14 +168,19 @@ int run_writer(const RoleOptions& o, Transport t) {
   for (std::size_t i = 0; i < frame.size(); ++i) frame[i] = static_cast<std::byte>(i * 131 + 7);
 
   const std::int64_t period_ns = o.rate > 0 ? static_cast<std::int64_t>(1e9 / o.rate) : 0;
+  // --jitter: a sensor whose frames come at irregular intervals (fixed seed: runs compare).
+  std::mt19937_64 random(12345);
+  std::uniform_real_distribution<double> deviation(-o.jitter, o.jitter);
   const Usage start = usage_now();
   const std::int64_t t0 = sim::monotonic_ns();
   std::int64_t next = t0;
   std::uint64_t published = 0;
-  for (std::uint64_t seq = 1; seq <= o.frames; ++seq) {
+  const std::uint64_t frames = o.idle_s > 0 ? 0 : o.frames;  // idle cost: a silent writer
+  for (std::uint64_t seq = 1; seq <= frames; ++seq) {
     if (publisher->publish(frame, seq)) ++published;
     if (period_ns > 0) {
-      next += period_ns;  // absolute schedule: no drift
+      const double scale = o.jitter > 0 ? 1.0 + deviation(random) : 1.0;
+      next += static_cast<std::int64_t>(static_cast<double>(period_ns) * scale);  // absolute: no drift
       sleep_until_ns(next);
     }
   }
@@ -204,6 +212,26 @@ int run_reader(const RoleOptions& o, Transport t) {
   }
   std::printf("ready\n");
   std::fflush(stdout);
+
+  if (o.idle_s > 0) {
+    // Idle cost: wait for frames that never come, as a program does between bursts.
+    const Usage start = usage_now();
+    const std::int64_t end = sim::monotonic_ns() + static_cast<std::int64_t>(o.idle_s * 1e9);
+    std::uint64_t received = 0;
+    while (sim::monotonic_ns() < end) {
+      const Delivery d = subscriber->receive(100ms);
+      if (d.kind == Delivery::Kind::frame) {
+        ++received;
+        (void)subscriber->release();
+      }
+    }
+    const Usage used = usage_since(start);
+    std::printf("result received=%" PRIu64 " gaps=0 torn=0 invalidated=0 last=0 cpu_s=%.6f nvcsw=%ld "
+                "nivcsw=%ld\nlat\n",
+                received, used.cpu_s, used.voluntary_switches, used.involuntary_switches);
+    std::fflush(stdout);
+    return 0;
+  }
 
   std::vector<std::int64_t> latencies;
   latencies.reserve(o.frames);
@@ -273,11 +301,14 @@ volatile std::sig_atomic_t stop_requested = 0;
 extern "C" void request_stop(int) { stop_requested = 1; }
 
 struct Options {
-  std::vector<std::string> transports{"sim-poll", "sim-block", "sim-zero", "iceoryx", "fastdds",
+  std::vector<std::string> transports{"sim-poll", "sim-block", "sim-zero", "sim-adaptive", "sim-zero-adaptive", "iceoryx", "fastdds",
                                       "cyclone"};
   std::vector<std::size_t> payloads{25920, 1382400, 921600, 6912000};
   std::vector<int> readers{1, 10};
   double rate = 100;
+  double jitter = 0;
+  double idle_s = 0;
+  double vehicle_s = 0;  // > 0: the many-stream vehicle workload for this many seconds
   bool max_rate = false;
   std::uint64_t frames = 1100;
   std::uint64_t warmup = 100;
@@ -384,6 +415,8 @@ class Bench {
                                "--frames", std::to_string(o_.frames),
                                "--warmup", std::to_string(o_.warmup),
                                "--rate", std::to_string(o_.max_rate ? 0.0 : o_.rate),
+                               "--jitter", std::to_string(o_.jitter),
+                               "--idle-cost", std::to_string(o_.idle_s),
                                "--rt-priority", std::to_string(o_.rt_priority)};
     const int cpu = cpu_for(role == "writer" ? -1 : index);
     if (cpu >= 0) {
@@ -570,6 +603,130 @@ class Bench {
     return row;
   }
 
+  // The vehicle of the SIM paper: every stream at its own rate at once, a reader each.
+  int vehicle(const std::vector<Transport>& transports) {
+    struct Spec {
+      const char* what;
+      std::size_t payload;
+      double rate;
+    };
+    std::vector<Spec> specs(7, Spec{"camera", 1920 * 1200 * 3, 30.0});
+    specs.push_back({"lidar", 1382400, 10.0});
+    std::printf("%-18s %3s %-7s %9s %6s %10s %10s %8s %5s\n", "transport", "run", "stream", "payload",
+                "Hz", "mean_us", "p99_us", "received", "lost");
+    int failures = 0;
+    for (const Transport t : transports) {
+      for (int run = 1; run <= o_.runs && !stop_requested; ++run) {
+        const std::string name(to_string(t));
+        std::vector<std::string> topics;
+        struct Sweep {
+          std::vector<std::string> names;
+          ~Sweep() {
+            for (const auto& n : names) (void)sim::destroy(n, /*force=*/true);
+          }
+        } sweep;
+        std::vector<std::unique_ptr<ChildProcess>> writers, readers;
+        std::string error;
+        bool ok = true;
+        for (std::size_t i = 0; i < specs.size() && ok; ++i) {
+          topics.push_back("simbench_" + std::to_string(getpid()) + "_" + std::to_string(counter_++));
+          if (name.rfind("sim-", 0) == 0) sweep.names.push_back("/" + topics.back());
+          const auto frames = static_cast<std::uint64_t>(o_.vehicle_s * specs[i].rate);
+          auto args = role_args("writer", name, topics.back(), specs[i].payload, 1, 0);
+          for (std::size_t a = 0; a + 1 < args.size(); ++a) {
+            if (args[a] == "--rate") args[a + 1] = std::to_string(specs[i].rate);
+            if (args[a] == "--frames") args[a + 1] = std::to_string(frames);
+            if (args[a] == "--warmup") args[a + 1] = std::to_string(static_cast<std::uint64_t>(specs[i].rate));
+          }
+          writers.push_back(std::make_unique<ChildProcess>(args));
+          ok = writers.back()->started() && await_ready(*writers.back(), "writer " + topics.back(), error);
+          if (!ok) break;
+          for (std::size_t a = 0; a + 1 < args.size(); ++a) {
+            if (args[a] == "--role") args[a + 1] = "reader";
+          }
+          readers.push_back(std::make_unique<ChildProcess>(args));
+        }
+        for (std::size_t i = 0; ok && i < readers.size(); ++i) {
+          ok = readers[i]->started() && await_ready(*readers[i], "reader " + topics[i], error);
+        }
+        if (!ok) {
+          std::fprintf(stderr, "sim_bench: vehicle %s run %d failed: %s\n", name.c_str(), run, error.c_str());
+          ++failures;
+          continue;
+        }
+        for (auto& w : writers) w->send("go");
+        double cpu_s = 0;
+        const auto budget = std::chrono::milliseconds(static_cast<long long>(o_.vehicle_s * 2000) + 120'000);
+        for (auto& w : writers) {
+          while (auto l = w->line(budget)) {
+            if (l->rfind("result ", 0) == 0) {
+              cpu_s += std::stod(fields(*l)["cpu_s"]);
+              break;
+            }
+          }
+        }
+        for (std::size_t i = 0; i < readers.size(); ++i) {
+          std::vector<std::int64_t> lat;
+          std::uint64_t received = 0, gaps = 0;
+          bool got_lat = false;
+          while (!got_lat) {
+            auto l = readers[i]->line(120s);
+            if (!l) break;
+            if (l->rfind("result ", 0) == 0) {
+              auto f = fields(*l);
+              received = std::stoull(f["received"]);
+              gaps = std::stoull(f["gaps"]);
+              cpu_s += std::stod(f["cpu_s"]);
+            } else if (l->rfind("lat", 0) == 0) {
+              std::istringstream in(l->substr(3));
+              std::int64_t v;
+              while (in >> v) lat.push_back(v);
+              got_lat = true;
+            }
+          }
+          const auto expected = static_cast<std::uint64_t>(o_.vehicle_s * specs[i].rate) -
+                                static_cast<std::uint64_t>(specs[i].rate);
+          const LatencySummary sum = summarize(std::move(lat));
+          std::printf("%-18s %3d %-7s %9zu %6.0f %10.1f %10.1f %8" PRIu64 " %5" PRIu64 "\n", name.c_str(),
+                      run, specs[i].what, specs[i].payload, specs[i].rate, sum.mean_us, sum.p99_us,
+                      received, expected - std::min(expected, received + gaps));
+        }
+        for (auto& w : writers) w->send("stop");
+        for (auto& w : writers) {
+          if (w->wait(30s) < 0) w->signal(SIGKILL);
+        }
+        for (auto& r : readers) {
+          if (r->wait(10s) < 0) r->signal(SIGKILL);
+        }
+        std::printf("%-18s %3d total CPU of 8 writers + 8 readers: %.2f s over %.0f s = %.1f %% of one core\n",
+                    name.c_str(), run, cpu_s, o_.vehicle_s, 100.0 * cpu_s / o_.vehicle_s);
+        std::fflush(stdout);
+      }
+    }
+    return failures == 0 ? 0 : 1;
+  }
+
+  // The idle cost: per transport, the CPU its readers use while no frame comes.
+  int idle_cost(const std::vector<Transport>& transports) {
+    const int readers = o_.readers.front();
+    std::printf("%-18s %3s %8s %14s %16s\n", "transport", "R", "seconds", "readers_cpu_s",
+                "%_of_one_core");
+    int failures = 0;
+    for (const Transport t : transports) {
+      for (int run = 1; run <= o_.runs && !stop_requested; ++run) {
+        const Row row = run_one(std::string(to_string(t)), o_.payloads.front(), readers, run);
+        if (row.status == "failed") {
+          ++failures;
+          continue;
+        }
+        std::printf("%-18s %3d %8.1f %14.3f %16.2f\n", std::string(to_string(t)).c_str(), readers,
+                    o_.idle_s, row.reader_cpu_s, 100.0 * row.reader_cpu_s / o_.idle_s);
+        std::fflush(stdout);
+      }
+    }
+    return failures == 0 ? 0 : 1;
+  }
+
   int run_all() {
     std::vector<Transport> transports;
     for (const auto& name : o_.transports) {
@@ -618,6 +775,9 @@ class Bench {
       }
     }
 
+    if (o_.idle_s > 0) return idle_cost(transports);
+    if (o_.vehicle_s > 0) return vehicle(transports);
+
     std::FILE* csv = nullptr;
     std::FILE* extra = nullptr;
     if (!o_.csv.empty()) {
@@ -635,7 +795,7 @@ class Bench {
                         "p999_us,max_us,std_us,received,skipped,lost,writer_cpu_s,reader_cpu_s\n");
       std::fprintf(extra, "transport,payload_bytes,readers,run,published,torn,writer_nvcsw,"
                           "writer_nivcsw,reader_nvcsw,reader_nivcsw,udp_datagrams,path,status,"
-                          "rate_hz,frames,warmup,cpus,rt_priority\n");
+                          "rate_hz,frames,warmup,cpus,rt_priority,jitter\n");
     }
     const std::size_t total = o_.payloads.size() * o_.readers.size() * static_cast<std::size_t>(o_.runs) *
                               (transports.size() + (o_.no_floor ? 0 : 1));
@@ -663,11 +823,11 @@ class Bench {
       std::string cpus;
       for (const int c : o_.cpus) cpus += (cpus.empty() ? "" : " ") + std::to_string(c);
       std::fprintf(extra, "%s,%zu,%d,%d,%" PRIu64 ",%" PRIu64 ",%ld,%ld,%ld,%ld,%lld,%s,%s,%g,%" PRIu64
-                          ",%" PRIu64 ",%s,%d\n",
+                          ",%" PRIu64 ",%s,%d,%g\n",
                    r.transport.c_str(), r.payload, r.readers, r.run, r.published, r.torn,
                    r.writer_nvcsw, r.writer_nivcsw, r.reader_nvcsw, r.reader_nivcsw, r.udp_datagrams,
                    r.path.empty() ? "-" : r.path.c_str(), r.status.c_str(), o_.max_rate ? 0.0 : o_.rate,
-                   o_.frames, o_.warmup, cpus.empty() ? "-" : cpus.c_str(), o_.rt_priority);
+                   o_.frames, o_.warmup, cpus.empty() ? "-" : cpus.c_str(), o_.rt_priority, o_.jitter);
       std::fflush(csv);
       std::fflush(extra);
     };
@@ -779,7 +939,7 @@ int main(int argc, char** argv) {
                "writer and N reader processes per configuration (issue 5)."};
   Options o;
   RoleOptions role;
-  std::string transports = "sim-poll,sim-block,sim-zero,iceoryx,fastdds,cyclone";
+  std::string transports = "sim-poll,sim-block,sim-zero,sim-adaptive,sim-zero-adaptive,iceoryx,fastdds,cyclone";
   std::string payloads = "25920,1382400,921600,6912000";
   std::string readers = "1,10";
   std::string cpus;
@@ -792,6 +952,18 @@ int main(int argc, char** argv) {
   app.add_option("--rate", o.rate, "frames per second the writer publishes (0: as fast as it can)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   app.add_flag("--max-rate", o.max_rate, "publish as fast as the writer can instead of --rate");
+  app.add_option("--jitter", o.jitter, "draw each publish period from period x (1 ± this), e.g. 0.1 "
+                                       "for ±10 %: an irregular sensor")
+      ->check(CLI::Range(0.0, 0.9));
+  app.add_option("--vehicle", o.vehicle_s, "instead of the payload grid: the many-stream vehicle "
+                                          "workload for this many seconds (7 camera streams of "
+                                          "1920x1200x3 B at 30 Hz + one 1,382,400 B LiDAR stream "
+                                          "at 10 Hz, a reader each), per transport")
+      ->check(CLI::Range(0.0, 3600.0));
+  app.add_option("--idle-cost", o.idle_s, "instead of latency: the CPU the readers (first --readers "
+                                          "value) use over this many seconds while the writer "
+                                          "publishes nothing, per transport")
+      ->check(CLI::Range(0.0, 3600.0));
   app.add_option("--frames", o.frames, "frames per run, warm-up included")->capture_default_str();
   app.add_option("--warmup", o.warmup, "first frames of each run left out of the statistics")
       ->capture_default_str();
@@ -825,12 +997,15 @@ int main(int argc, char** argv) {
     role.frames = o.frames;
     role.warmup = o.warmup;
     role.rate = o.rate;
+    role.jitter = o.jitter;
+    role.idle_s = o.idle_s;
     role.rt_priority = o.rt_priority;
     return role.role == "writer" ? run_writer(role, t) : run_reader(role, t);
   }
 
   if (list) {
     for (const auto t : {Transport::sim_poll, Transport::sim_block, Transport::sim_zero,
+                         Transport::sim_adaptive, Transport::sim_zero_adaptive,
                          Transport::iceoryx, Transport::fastdds, Transport::cyclone}) {
       if (available(t)) std::printf("%s\n", std::string(to_string(t)).c_str());
     }

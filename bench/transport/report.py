@@ -19,13 +19,16 @@ import statistics
 import sys
 from collections import defaultdict
 
-ORDER = ["memcpy", "sim-poll", "sim-block", "sim-zero", "iceoryx", "fastdds", "cyclone"]
+ORDER = ["memcpy", "sim-poll", "sim-block", "sim-zero", "sim-adaptive", "sim-zero-adaptive", "iceoryx",
+         "fastdds", "cyclone"]
 PEERS = ["iceoryx", "fastdds", "cyclone"]
 LABEL = {
     "memcpy": "memcpy floor",
     "sim-poll": "SIM poll (copy)",
     "sim-block": "SIM block (copy)",
     "sim-zero": "SIM borrow (zero-copy)",
+    "sim-adaptive": "SIM adaptive (copy)",
+    "sim-zero-adaptive": "SIM adaptive borrow",
     "iceoryx": "iceoryx 2.0",
     "fastdds": "Fast DDS 2.9",
     "cyclone": "Cyclone DDS 0.10",
@@ -94,6 +97,10 @@ def aggregate(rows):
         means = [r["mean_us"] for r in runs]
         half = t95(len(means) - 1) * statistics.stdev(means) / math.sqrt(len(means)) if len(means) > 1 else float("nan")
         a["mean_ci95_us"] = [a["mean_us"] - half, a["mean_us"] + half] if not math.isnan(half) else None
+        # Standard errors of the run means of mean and p99, for the SIM-vs-peer ratios.
+        for key in ["mean_us", "p99_us"]:
+            values = [r[key] for r in runs]
+            a[key + "_se"] = statistics.stdev(values) / math.sqrt(len(values)) if len(values) > 1 else float("nan")
         a["min_of_runs_us"] = min(r["min_us"] for r in runs)
         a["max_of_runs_us"] = max(r["max_us"] for r in runs)
         for key in ["received", "skipped", "lost"]:
@@ -199,6 +206,41 @@ def goals(agg):
     return lines
 
 
+def ratio_text(sim, peer, key):
+    """SIM / peer for `key` with a 95 % interval (delta method on the two run means; below 1: SIM ahead)."""
+    a, b = sim[key], peer[key]
+    if not b:
+        return "–"
+    r = a / b
+    se_a, se_b = sim.get(key + "_se", float("nan")), peer.get(key + "_se", float("nan"))
+    if math.isnan(se_a) or math.isnan(se_b) or a == 0:
+        return f"{r:.2f}"
+    dof = min(sim["runs"], peer["runs"]) - 1
+    half = t95(dof) * r * math.sqrt((se_a / a) ** 2 + (se_b / b) ** 2)
+    return f"{r:.2f} [{max(0.0, r - half):.2f}, {r + half:.2f}]"
+
+
+def ratios(agg):
+    """Every SIM transport against every peer: mean and p99 ratios with their intervals."""
+    index = lookup(agg)
+    configs = sorted({(a["payload_bytes"], a["readers"]) for a in agg if a["transport"] != "memcpy"},
+                     key=lambda c: (c[1], c[0]))
+    lines = ["| payload | readers | SIM | peer | mean ratio [95 % CI] | p99 ratio [95 % CI] |",
+             "|---|---|---|---|---|---|"]
+    for payload, readers in configs:
+        for name in [t for t in ORDER if t.startswith("sim-")]:
+            sim = index.get((name, payload, readers))
+            if sim is None:
+                continue
+            for peer_name in PEERS:
+                peer = index.get((peer_name, payload, readers))
+                if peer is None:
+                    continue
+                lines.append(f"| {payload:,} | {readers} | {LABEL[name]} | {LABEL[peer_name]} | "
+                             f"{ratio_text(sim, peer, 'mean_us')} | {ratio_text(sim, peer, 'p99_us')} |")
+    return lines if len(lines) > 2 else []
+
+
 def markdown(agg, title, command):
     index = lookup(agg)
     transports = [t for t in ORDER if any(a["transport"] == t for a in agg)]
@@ -234,6 +276,10 @@ def markdown(agg, title, command):
                 f"{fmt(a['std_us'], 1)} | {a['received']:,} | {a['skipped']:,} | {a['lost']:,} | "
                 f"{a['writer_cpu_s']:.3f} | {a['reader_cpu_s']:.3f} | {fmt(a.get('context_switches_writer'))} | "
                 f"{fmt(a.get('context_switches_readers'))} | {fmt(a.get('udp_datagrams'))} | {a.get('path', '-')} |")
+    ratio_lines = ratios(agg)
+    if ratio_lines:
+        out += ["", "## SIM against each peer (ratio of SIM to peer; below 1: SIM is ahead; an interval "
+                "that contains 1: no clear difference)", ""] + ratio_lines
     out += ["", "## Goals of issue 5, checked against these numbers", ""] + goals(agg) + [""]
     return "\n".join(out)
 

@@ -4,6 +4,8 @@
 //   sim-block : the same copies; the reader sleeps in read_next() until the writer's futex wake.
 //   sim-zero  : writer.loan() + commit(); the reader sleeps in wait(), then borrow()s in place
 //               and checks still_valid() after it has read the bytes.
+//   sim-adaptive, sim-zero-adaptive: sim-block and sim-zero with WaitMode::adaptive (sleep until
+//               shortly before the next expected publish, then spin briefly).
 #include <chrono>
 #include <thread>
 
@@ -49,6 +51,8 @@ class SimSubscriber final : public SubscriberBackend {
   SimSubscriber(Reader reader, Transport mode)
       : reader_(std::move(reader)), mode_(mode), buffer_(reader_.capacity()) {}
 
+  bool zero() const { return mode_ == Transport::sim_zero || mode_ == Transport::sim_zero_adaptive; }
+
   bool ready(std::chrono::milliseconds) override { return true; }
 
   Delivery receive(std::chrono::milliseconds timeout) override {
@@ -56,14 +60,14 @@ class SimSubscriber final : public SubscriberBackend {
     for (;;) {
       ReadStatus status;
       FrameInfo info;
-      if (mode_ == Transport::sim_zero) {
+      if (zero()) {
         status = reader_.wait(timeout);
         if (status == ReadStatus::new_frame) {
           borrow_ = reader_.borrow();
           status = borrow_.status();
           if (status == ReadStatus::new_frame) return {Delivery::Kind::frame, borrow_.bytes(), {}};
         }
-      } else if (mode_ == Transport::sim_block) {
+      } else if (mode_ == Transport::sim_block || mode_ == Transport::sim_adaptive) {
         status = reader_.read_next(buffer_, info, timeout);
         if (status == ReadStatus::new_frame) {
           return {Delivery::Kind::frame, std::span<const std::byte>(buffer_).first(info.size), {}};
@@ -81,8 +85,8 @@ class SimSubscriber final : public SubscriberBackend {
     }
   }
 
-  bool release() override { return mode_ != Transport::sim_zero || borrow_.still_valid(); }
-  bool zero_copy() const override { return mode_ == Transport::sim_zero; }
+  bool release() override { return !zero() || borrow_.still_valid(); }
+  bool zero_copy() const override { return zero(); }
 
  private:
   Reader reader_;
@@ -100,13 +104,18 @@ std::unique_ptr<PublisherBackend> make_sim_publisher(Transport t, const Endpoint
     error = writer.error().message;
     return nullptr;
   }
-  return std::make_unique<SimPublisher>(std::move(*writer), t == Transport::sim_zero);
+  const bool loan = t == Transport::sim_zero || t == Transport::sim_zero_adaptive;
+  return std::make_unique<SimPublisher>(std::move(*writer), loan);
 }
 
 std::unique_ptr<SubscriberBackend> make_sim_subscriber(Transport t, const Endpoint& e,
                                                        std::string& error) {
   // The writer process creates the region before any reader is started.
-  auto reader = Reader::open(region_name(e));
+  ReaderOptions options;
+  if (t == Transport::sim_adaptive || t == Transport::sim_zero_adaptive) {
+    options.wait_mode = WaitMode::adaptive;
+  }
+  auto reader = Reader::open(region_name(e), options);
   if (!reader) {
     error = reader.error().message;
     return nullptr;

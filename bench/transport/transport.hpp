@@ -40,7 +40,16 @@ inline void seal_frame(std::span<std::byte> frame, std::uint64_t seq, std::int64
   std::memcpy(frame.data() + frame.size() - sizeof(seq), &seq, sizeof(seq));
 }
 
-enum class Transport { sim_poll, sim_block, sim_zero, iceoryx, fastdds, cyclone };
+enum class Transport {
+  sim_poll,
+  sim_block,
+  sim_zero,
+  sim_adaptive,       // copy-out, WaitMode::adaptive (issue 12)
+  sim_zero_adaptive,  // borrow, WaitMode::adaptive
+  iceoryx,
+  fastdds,
+  cyclone
+};
 
 std::string_view to_string(Transport t) noexcept;
 bool parse_transport(std::string_view name, Transport& out) noexcept;

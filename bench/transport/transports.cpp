@@ -7,10 +7,12 @@
 
 namespace sim::bench {
 namespace {
-constexpr std::array<std::pair<Transport, std::string_view>, 6> kNames{{
+constexpr std::array<std::pair<Transport, std::string_view>, 8> kNames{{
     {Transport::sim_poll, "sim-poll"},
     {Transport::sim_block, "sim-block"},
     {Transport::sim_zero, "sim-zero"},
+    {Transport::sim_adaptive, "sim-adaptive"},
+    {Transport::sim_zero_adaptive, "sim-zero-adaptive"},
     {Transport::iceoryx, "iceoryx"},
     {Transport::fastdds, "fastdds"},
     {Transport::cyclone, "cyclone"},
@@ -39,6 +41,8 @@ bool available(Transport t) noexcept {
     case Transport::sim_poll:
     case Transport::sim_block:
     case Transport::sim_zero:
+    case Transport::sim_adaptive:
+    case Transport::sim_zero_adaptive:
       return true;
     case Transport::iceoryx:
 #ifdef SIM_BENCH_HAVE_ICEORYX
@@ -73,6 +77,8 @@ std::unique_ptr<PublisherBackend> make_publisher(Transport t, const Endpoint& e,
     case Transport::sim_poll:
     case Transport::sim_block:
     case Transport::sim_zero:
+    case Transport::sim_adaptive:
+    case Transport::sim_zero_adaptive:
       return make_sim_publisher(t, e, error);
 #ifdef SIM_BENCH_HAVE_ICEORYX
     case Transport::iceoryx:
@@ -100,6 +106,8 @@ std::unique_ptr<SubscriberBackend> make_subscriber(Transport t, const Endpoint& 
     case Transport::sim_poll:
     case Transport::sim_block:
     case Transport::sim_zero:
+    case Transport::sim_adaptive:
+    case Transport::sim_zero_adaptive:
       return make_sim_subscriber(t, e, error);
 #ifdef SIM_BENCH_HAVE_ICEORYX
     case Transport::iceoryx:

@@ -62,6 +62,14 @@ struct Trust {
   std::string describe() const;
 };
 
+// How Reader::wait waits for the next frame (docs/protocol.md, "Waiting").
+enum class WaitMode {
+  block,     // sleep on the futex until the writer publishes: no CPU while idle
+  poll,      // spin on the newest frame number: lowest latency, one whole core while waiting
+  adaptive,  // sleep until shortly before the writer's next expected publish, then spin briefly;
+             // a stream without a steady period (or a silent one) is waited for as in `block`
+};
+
 struct ReaderOptions {
   // A frame older than this (by its publish time) makes an idle stream "stale". Zero: never.
   std::chrono::nanoseconds stale_after{0};
@@ -70,6 +78,8 @@ struct ReaderOptions {
   // Whose regions to accept (see Trust); a region of anyone else is refused with a sentence that
   // names its actual owner.
   Trust trust{};
+  // How wait() (and read_next) wait; see WaitMode.
+  WaitMode wait_mode = WaitMode::block;
 };
 
 // A wait that never times out: Reader::wait(sim::kForever).
@@ -96,6 +106,9 @@ struct ReaderStats {
   std::uint64_t overruns = 0;            // copies invalidated by the writer and retried
   std::uint64_t checksum_failures = 0;
   std::uint64_t reopens = 0;             // times the region was replaced and reopened
+  std::uint64_t spins = 0;               // adaptive/poll waits that spun (WaitMode)
+  std::uint64_t caught_spinning = 0;     // frames that arrived while this reader spun
+  std::int64_t spin_ns = 0;              // time spent spinning: this reader's busy CPU in wait()
 };
 
 // Diagnostics the writer keeps in the region header; sim_ls shows them.
@@ -129,6 +142,9 @@ struct StreamStatus {
 };
 
 class Reader;
+namespace detail {
+struct ReaderWaitAccess;  // WaitSet's view of a reader's wake-up machinery (sim/reader_wait.hpp)
+}
 
 // A published frame read in place. It can be overwritten at any time once the writer has
 // published two more frames; check still_valid() after using the bytes and discard them if false.
@@ -186,6 +202,9 @@ class Reader {
   // The newest frame in place, if it is newer than the last one returned.
   [[nodiscard]] Borrow borrow() noexcept;
 
+  // Changes how wait() waits (ReaderOptions::wait_mode).
+  void set_wait_mode(WaitMode mode) noexcept;
+
   // Whether a process holds the stream's writer lock (one system call).
   [[nodiscard]] bool writer_alive() noexcept;
   // Time since the newest frame was published, or -1 ns before the first frame.
@@ -201,6 +220,7 @@ class Reader {
   struct Impl;
 
  private:
+  friend struct detail::ReaderWaitAccess;
   explicit Reader(std::unique_ptr<Impl> impl) noexcept;
   std::unique_ptr<Impl> impl_;
 };

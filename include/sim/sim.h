@@ -38,7 +38,8 @@ enum {
   SIM_EWRITERGONE = -5,     /* nothing new and no writer is alive; it may come back */
   SIM_ESTALE = -6,          /* nothing new and the newest frame is older than the deadline */
   SIM_EREGION = -7,         /* the region failed validation */
-  SIM_EOVERRUN = -8         /* the writer kept overwriting the frame during the copy; retry */
+  SIM_EOVERRUN = -8,        /* the writer kept overwriting the frame during the copy; retry */
+  SIM_ETIMEDOUT = -9        /* SIM_waitsetWait: no stream had a new frame before the timeout */
 };
 
 /* Creates or takes over the stream; NULL on error (see SIM_lastError). */
@@ -63,6 +64,34 @@ long long SIM_readData(sim_reader *r, void *buf, size_t size, sim_frame_info *in
  * timeout_ms < 0 waits for ever. */
 int SIM_waitData(sim_reader *r, int timeout_ms);
 void SIM_readerClose(sim_reader *r);
+
+/* How SIM_waitData waits (see sim::WaitMode): SIM_WAIT_BLOCK sleeps until a publish (default),
+ * SIM_WAIT_POLL spins (one core), SIM_WAIT_ADAPTIVE sleeps until shortly before the writer's next
+ * expected publish and spins briefly. 0, or SIM_EINVAL. */
+enum { SIM_WAIT_BLOCK = 0, SIM_WAIT_POLL = 1, SIM_WAIT_ADAPTIVE = 2 };
+int SIM_readerSetWaitMode(sim_reader *r, int mode);
+
+/* Several streams at once (sim::WaitSet). The readers must outlive the set. */
+typedef struct sim_waitset sim_waitset;
+sim_waitset *SIM_waitsetCreate(void);
+/* Adds a reader: its index in the set (0, 1, ...), or a negative SIM_E* code. */
+int SIM_waitsetAdd(sim_waitset *ws, sim_reader *r);
+/* Sleeps until a reader of the set has a new frame: its index (>= 0), SIM_ETIMEDOUT, or
+ * SIM_EINVAL. timeout_ms < 0 waits for ever. */
+int SIM_waitsetWait(sim_waitset *ws, int timeout_ms);
+/* 1 if reader `index` has a new frame now, else 0. */
+int SIM_waitsetReady(const sim_waitset *ws, int index);
+void SIM_waitsetClose(sim_waitset *ws);
+
+/* A file descriptor that becomes readable when any of the named streams has a new frame, for
+ * epoll/poll loops (sim::StreamNotifier). NULL on error (see SIM_lastError). */
+typedef struct sim_notifier sim_notifier;
+sim_notifier *SIM_notifierOpen(const char *const *names, size_t count);
+int SIM_notifierFd(const sim_notifier *n);
+/* Resets the fd; sets arrived[i] (count entries, may be NULL) to 1 for each stream with new
+ * frames. Returns how many streams had new frames. */
+int SIM_notifierDrain(sim_notifier *n, int *arrived, size_t count);
+void SIM_notifierClose(sim_notifier *n);
 
 /* Removes the stream's region; refused (<0) while its writer is alive. */
 int SIM_destroy(const char *name);

@@ -7,6 +7,8 @@
 #include "sim/lidar_point.hpp"
 #include "sim/names.hpp"
 #include "sim/os.hpp"
+#include "sim/pairing.hpp"
 #include "sim/reader.hpp"
 #include "sim/result.hpp"
+#include "sim/wait_set.hpp"
 #include "sim/writer.hpp"

@@ -2,16 +2,24 @@
 // sim_test_peer: the other process in multi-process tests. Prints key=value lines on stdout.
 //
 //   writer NAME FRAMES RATE_HZ MIN_BYTES MAX_BYTES LINGER_MS   publish pattern frames
-//   reader NAME UNTIL_SEQ TIMEOUT_MS MODE                       MODE: wait | poll | borrow
+//   reader NAME UNTIL_SEQ TIMEOUT_MS MODE                       MODE: wait | poll | borrow |
+//                                                               adaptive | spin (WaitMode::poll) |
+//                                                               adaptive-one-core (pinned to 1 CPU)
+//   waitset NAMES UNTIL_SEQ TIMEOUT_MS STRATEGY                 NAMES comma-separated; STRATEGY:
+//                                                               futex_waitv | round_robin; one
+//                                                               WaitSet until every stream reaches
+//                                                               UNTIL_SEQ; a summary line per stream
 //   hold NAME                                                   own the stream until killed
 //   remove NAME                                                 destroy() the stream until SIGTERM
 //   stall-in-copy NAME                                          stop inside read()'s copy of a frame
 //   hold-borrow NAME                                            borrow a frame and keep it
+#include <sched.h>
 #include <signal.h>
 #include <sys/mman.h>
 #include <time.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -22,6 +30,7 @@
 
 #include "sim/clock.hpp"
 #include "sim/reader.hpp"
+#include "sim/wait_set.hpp"
 #include "sim/writer.hpp"
 #include "support.hpp"
 
@@ -63,10 +72,26 @@ int run_writer(const std::string& name, std::uint64_t frames, double rate_hz, st
 int run_reader(const std::string& name, std::uint64_t until_seq, long timeout_ms,
                const std::string& mode) {
   const std::int64_t deadline = monotonic_ns() + timeout_ms * 1'000'000;
-  auto reader = Reader::open(name);
+  ReaderOptions options;
+  if (mode == "adaptive-one-core") {
+    cpu_set_t one;
+    CPU_ZERO(&one);
+    cpu_set_t all;
+    if (sched_getaffinity(0, sizeof all, &all) != 0) return 1;
+    for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu) {
+      if (CPU_ISSET(cpu, &all)) {
+        CPU_SET(cpu, &one);
+        break;
+      }
+    }
+    if (sched_setaffinity(0, sizeof one, &one) != 0) return 1;
+  }
+  if (mode.starts_with("adaptive")) options.wait_mode = WaitMode::adaptive;
+  if (mode == "spin") options.wait_mode = WaitMode::poll;
+  auto reader = Reader::open(name, options);
   while (!reader && monotonic_ns() < deadline) {
     std::this_thread::sleep_for(5ms);
-    reader = Reader::open(name);
+    reader = Reader::open(name, options);
   }
   if (!reader) {
     std::printf("error=%s\n", reader.error().message.c_str());
@@ -116,12 +141,69 @@ int run_reader(const std::string& name, std::uint64_t until_seq, long timeout_ms
     }
   }
   const ReaderStats stats = reader->stats();
-  std::printf("received=%llu torn=%llu disorder=%llu skipped=%llu first=%llu last=%llu overruns=%llu\n",
+  std::printf("received=%llu torn=%llu disorder=%llu skipped=%llu first=%llu last=%llu overruns=%llu "
+              "spins=%llu\n",
               static_cast<unsigned long long>(received), static_cast<unsigned long long>(torn),
               static_cast<unsigned long long>(disorder),
               static_cast<unsigned long long>(stats.skipped), static_cast<unsigned long long>(first),
-              static_cast<unsigned long long>(last), static_cast<unsigned long long>(stats.overruns));
+              static_cast<unsigned long long>(last), static_cast<unsigned long long>(stats.overruns),
+              static_cast<unsigned long long>(stats.spins));
   return last >= until_seq ? 0 : 1;
+}
+
+int run_waitset(const std::string& names, std::uint64_t until_seq, long timeout_ms,
+                const std::string& strategy) {
+  const std::int64_t deadline = monotonic_ns() + timeout_ms * 1'000'000;
+  std::vector<Reader> readers;
+  for (std::size_t at = 0; at <= names.size();) {
+    const std::size_t comma = std::min(names.find(',', at), names.size());
+    const std::string name = names.substr(at, comma - at);
+    auto reader = Reader::open(name);
+    while (!reader && monotonic_ns() < deadline) {
+      std::this_thread::sleep_for(5ms);
+      reader = Reader::open(name);
+    }
+    if (!reader) {
+      std::printf("error=%s\n", reader.error().message.c_str());
+      return 1;
+    }
+    readers.push_back(std::move(*reader));
+    at = comma + 1;
+  }
+  WaitSet set({.strategy = strategy == "round_robin" ? WaitSetStrategy::round_robin
+                                                     : WaitSetStrategy::futex_waitv});
+  for (Reader& r : readers) (void)set.add(r);
+  std::printf("ready\n");
+  std::fflush(stdout);
+  std::vector<std::uint64_t> last(readers.size(), 0), received(readers.size(), 0),
+      torn(readers.size(), 0);
+  std::vector<std::byte> buffer;
+  auto done = [&] {
+    for (std::uint64_t l : last) {
+      if (l < until_seq) return false;
+    }
+    return true;
+  };
+  while (!done() && monotonic_ns() < deadline) {
+    const auto ready = set.wait(50ms);
+    if (!ready) continue;
+    Reader& r = readers[*ready];
+    buffer.resize(r.capacity());
+    FrameInfo info;
+    if (r.read(buffer, info) != ReadStatus::new_frame) continue;
+    ++received[*ready];
+    if (!test::check_frame(std::span(buffer).first(info.size), info.seq) || info.seq <= last[*ready]) {
+      ++torn[*ready];
+    }
+    last[*ready] = info.seq;
+  }
+  for (std::size_t i = 0; i < readers.size(); ++i) {
+    std::printf("stream=%zu received=%llu torn=%llu last=%llu\n", i,
+                static_cast<unsigned long long>(received[i]), static_cast<unsigned long long>(torn[i]),
+                static_cast<unsigned long long>(last[i]));
+  }
+  std::printf("strategy=%s\n", set.strategy() == WaitSetStrategy::futex_waitv ? "futex_waitv" : "round_robin");
+  return done() ? 0 : 1;
 }
 
 int run_hold(const std::string& name) {
@@ -216,6 +298,9 @@ int main(int argc, char** argv) {
   }
   if (args.size() == 5 && args[0] == "reader") {
     return run_reader(args[1], std::stoull(args[2]), std::stol(args[3]), args[4]);
+  }
+  if (args.size() == 5 && args[0] == "waitset") {
+    return run_waitset(args[1], std::stoull(args[2]), std::stol(args[3]), args[4]);
   }
   if (args.size() == 2 && args[0] == "hold") return run_hold(args[1]);
   if (args.size() == 2 && args[0] == "remove") return run_remove(args[1]);
