@@ -210,3 +210,23 @@ def test_sixteen_bit_images_read_as_uint16(stream_name):
     image, _ = sim.Reader(stream_name).read()
     assert image.dtype == np.uint16 and image.shape == (4, 5, 1)
     np.testing.assert_array_equal(image, frame)
+
+
+def test_a_borrow_from_a_replaced_region_stays_readable_and_blocks_reading_on_until_dropped(stream_name):
+    first = sim.Writer(stream_name, capacity=16)
+    first.write(b"old region")
+    reader = sim.Reader(stream_name)
+    borrowed = reader.borrow()
+    view = borrowed.array
+    first.close()
+    second = sim.Writer(stream_name, capacity=4096)  # another capacity: a new region replaces the old
+    second.write(b"new region")
+    assert reader.read_next(timeout=10).array.tobytes() == b"new region"
+    # One more replacement would unmap the old region under `view`, so reading on is refused.
+    with pytest.raises(sim.SimError) as error:
+        reader.read()
+    assert error.value.code == "borrow_in_use"
+    assert view.tobytes() == b"old region"
+    del borrowed, view
+    second.write(b"again")
+    assert reader.read().array.tobytes() == b"again"
