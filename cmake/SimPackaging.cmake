@@ -20,6 +20,11 @@ endif()
 
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
+# The programs need libsim.so.0, which is in no installed package yet: let dpkg-shlibdeps find it
+# in the build tree (the tools package depends on libsim0 explicitly, below).
+get_target_property(_sim_library_dir sim_shared BINARY_DIR)
+set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS_PRIVATE_DIRS ${_sim_library_dir})
+unset(_sim_library_dir)
 set(CPACK_DEBIAN_PACKAGE_SECTION libs)
 set(CPACK_DEBIAN_PACKAGE_RELEASE 1)
 set(_sim_deb_version "${PROJECT_VERSION}-${CPACK_DEBIAN_PACKAGE_RELEASE}")

@@ -43,6 +43,10 @@ unset LD_LIBRARY_PATH PKG_CONFIG_PATH CMAKE_PREFIX_PATH PYTHONPATH
 [[ $(command -v sim_ls) == /usr/bin/sim_ls ]] || fail "sim_ls is not /usr/bin/sim_ls"
 sim_ls --help >/dev/null || fail "sim_ls --help failed"
 ls /usr/share/sim/config/*/*.yaml >/dev/null || fail "no configs in /usr/share/sim/config"
+# The example systemd units name the installed programs correctly and parse.
+if command -v systemd-analyze >/dev/null; then
+  systemd-analyze verify "$root"/deploy/systemd/*.service || fail "deploy/systemd units do not verify"
+fi
 
 # examples/consumer against the installed package: find_package and pkg-config, shared and static.
 cmake -S "$root/examples/consumer" -B consumer >/dev/null || fail "find_package(sim) failed"
