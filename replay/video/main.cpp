@@ -85,7 +85,7 @@ int main(int argc, char** argv) {
   ThreadPlacement placement;
   if (cpu >= 0) placement.cpu = cpu;
   if (rt_priority > 0) placement.rt_priority = rt_priority;
-  if (auto error = apply_thread_placement(placement)) return fail(error->message);
+  if (auto placed = apply_thread_placement(placement); !placed) return fail(placed.error().message);
 
   auto source = replay::VideoSource::open(path);
   if (!source) return fail(source.error().message);
@@ -159,7 +159,7 @@ int main(int argc, char** argv) {
     }
     if (!sleep_until(deadline)) break;
     if (fits && decoded.status == camera::DecodeStatus::ok &&
-        loan.commit(decoded.size, realtime_ns()) == WriteStatus::ok) {
+        std::move(loan).commit(decoded.size, realtime_ns()) == WriteStatus::ok) {
       ++published;
     } else {
       ++skipped;  // a corrupt frame, or one of another size: never published

@@ -33,8 +33,8 @@ int main(int argc, char** argv) {
         std::printf("kept %s: its writer is alive\n", name.c_str());
         continue;
       }
-      if (auto error = sim::destroy(name)) {
-        std::fprintf(stderr, "sim_rm: %s\n", error->message.c_str());
+      if (auto removed = sim::destroy(name); !removed) {
+        std::fprintf(stderr, "sim_rm: %s\n", removed.error().message.c_str());
         ++failures;
       } else {
         std::printf("removed %s\n", name.c_str());
@@ -42,8 +42,8 @@ int main(int argc, char** argv) {
     }
   }
   for (const auto& name : dead ? std::vector<std::string>{} : names) {
-    if (auto error = sim::destroy(name, force)) {
-      std::fprintf(stderr, "sim_rm: %s\n", error->message.c_str());
+    if (auto removed = sim::destroy(name, force); !removed) {
+      std::fprintf(stderr, "sim_rm: %s\n", removed.error().message.c_str());
       ++failures;
     } else {
       std::printf("removed %s\n", name.c_str());

@@ -122,8 +122,8 @@ int main(int argc, char** argv) {
   }
   if (cpu >= 0) placement.cpu = cpu;
   if (rt_priority > 0) placement.rt_priority = rt_priority;
-  if (auto error = sim::apply_thread_placement(placement)) {
-    std::fprintf(stderr, "sim_camera_aravis: %s\n", error->message.c_str());
+  if (auto placed = sim::apply_thread_placement(placement); !placed) {
+    std::fprintf(stderr, "sim_camera_aravis: %s\n", placed.error().message.c_str());
     return 1;
   }
   const bool terminal = !quiet && isatty(STDERR_FILENO) != 0;

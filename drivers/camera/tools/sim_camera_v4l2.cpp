@@ -159,8 +159,8 @@ int main(int argc, char** argv) {
     return 0;
   }
 
-  if (auto error = sim::apply_thread_placement(placement)) {
-    std::fprintf(stderr, "sim_camera_v4l2: %s\n", error->message.c_str());
+  if (auto placed = sim::apply_thread_placement(placement); !placed) {
+    std::fprintf(stderr, "sim_camera_v4l2: %s\n", placed.error().message.c_str());
     return 1;
   }
 

@@ -199,7 +199,7 @@ int main(int argc, char** argv) {
 
   auto stream = sim::hesai::LidarStream::create(s.config);
   if (!stream) return fail(stream.error().message);
-  if (auto error = sim::hesai::apply_thread_placement(s)) return fail(error->message);
+  if (auto placed = sim::hesai::apply_thread_placement(s); !placed) return fail(placed.error().message);
   install_signal_handlers();
 
   sim::pcap::Pacer pacer(r.max_rate ? 0.0 : r.rate);

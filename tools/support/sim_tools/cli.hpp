@@ -38,10 +38,10 @@ inline void add_placement_options(CLI::App& app, Placement& placement) {
 // Applies the placement; returns an exit code when it cannot be applied: usage for a CPU or
 // priority that cannot be had, failure when the process lacks the right to use them.
 inline std::optional<int> apply_placement(const Placement& placement, const char* tool) {
-  const auto error = sim::apply_thread_placement(placement);
-  if (!error) return std::nullopt;
-  std::fprintf(stderr, "%s: %s\n", tool, error->message.c_str());
-  return error->code == sim::ErrorCode::permission_denied ? kExitFailure : kExitUsage;
+  const auto placed = sim::apply_thread_placement(placement);
+  if (placed) return std::nullopt;
+  std::fprintf(stderr, "%s: %s\n", tool, placed.error().message.c_str());
+  return placed.error().code == sim::ErrorCode::permission_denied ? kExitFailure : kExitUsage;
 }
 
 }  // namespace sim::tools
