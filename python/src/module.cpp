@@ -17,7 +17,6 @@
 #include <memory>
 #include <mutex>
 #include <optional>
-#include <set>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -40,13 +39,8 @@ struct SimException : std::runtime_error {
   throw SimException(error.message, sim::to_string(error.code));
 }
 
-// sim::destroy returns an optional error today and an Expected-like result after issue 11.
-[[maybe_unused]] void raise_if_error(const std::optional<sim::Error>& error) {
-  if (error) raise(*error);
-}
-template <typename Result>
-void raise_if_error(const Result& result) {
-  if (!result.has_value()) raise(result.error());
+void raise_if_error(const sim::Expected<void>& result) {
+  if (!result) raise(result.error());
 }
 
 // ---- numpy shapes of the layouts ----
@@ -110,37 +104,27 @@ py::array shaped_array(const sim::Layout& layout, const std::byte* data, std::ui
   return array;
 }
 
-std::int64_t to_ns(double seconds) {
-  if (!(seconds >= 0)) throw py::value_error("a timeout is a number of seconds, 0 or more");
-  return static_cast<std::int64_t>(seconds * 1e9);
+// Seconds from Python (None: forever) as nanoseconds, saturating like the C++ API's timeouts.
+std::chrono::nanoseconds to_ns(std::optional<double> seconds) {
+  if (!seconds) return sim::kForever;
+  if (!(*seconds >= 0)) throw py::value_error("a timeout is a number of seconds, 0 or more (or None: forever)");
+  if (*seconds * 1e9 >= 9.2e18) return sim::kForever;
+  return std::chrono::nanoseconds(static_cast<std::int64_t>(*seconds * 1e9));
 }
 
 // ---- reader ----
 
-// What a Python Reader and its Borrows share. The sim::Reader lives here until the last of them
-// is gone; `open` is cleared by close().
+// What a Python Reader shares with the frames it hands out. `open` is cleared by close(); the
+// sim::Reader itself goes with the last Python object that needs it.
 struct ReaderState {
   std::mutex mutex;  // one call into the sim::Reader at a time (calls run without the GIL)
   std::optional<sim::Reader> reader;
   bool open = true;
-  // The reader's replacement count when each live borrow was taken. The sim::Reader keeps the
-  // region before the last replacement mapped; one more replacement would unmap a borrow older
-  // than the current region, so reading on is refused while one lives.
-  std::mutex borrows_mutex;
-  std::multiset<std::uint64_t> borrow_generations;
   sim::ReadStatus last_status = sim::ReadStatus::no_new_frame;
 
   // Called with `mutex` held.
   sim::Reader& usable() {
     if (!open) throw SimException("the reader is closed: open a new sim.Reader", "closed");
-    const std::uint64_t reopens = reader->stats().reopens;
-    std::lock_guard lock(borrows_mutex);
-    if (!borrow_generations.empty() && *borrow_generations.begin() < reopens) {
-      throw SimException("a frame borrowed before " + reader->name() +
-                             " was replaced by a new writer is still in use: delete its views "
-                             "before reading on, or their memory would be unmapped",
-                         "borrow_in_use");
-    }
     return *reader;
   }
 };
@@ -150,38 +134,30 @@ struct FrameObject {
   sim::FrameInfo info;
 };
 
+// A sim::Borrow keeps the region it points into mapped (whatever happens to the stream or the
+// Reader), so the Python object only has to live as long as its numpy views: it is their base.
 class BorrowObject {
  public:
-  BorrowObject(std::shared_ptr<ReaderState> state, sim::Borrow borrow, std::uint64_t generation)
-      : state_(std::move(state)), borrow_(borrow), generation_(generation) {
-    std::lock_guard lock(state_->borrows_mutex);
-    state_->borrow_generations.insert(generation_);
-  }
-  BorrowObject(const BorrowObject&) = delete;
-  BorrowObject& operator=(const BorrowObject&) = delete;
-  ~BorrowObject() {
-    std::lock_guard lock(state_->borrows_mutex);
-    state_->borrow_generations.erase(state_->borrow_generations.find(generation_));
-  }
+  explicit BorrowObject(sim::Borrow borrow) : borrow_(std::move(borrow)) {}
   const sim::FrameInfo& info() const { return borrow_.info(); }
   bool still_valid() const { return borrow_.still_valid(); }
   const sim::Borrow& borrow() const { return borrow_; }
 
  private:
-  std::shared_ptr<ReaderState> state_;
   sim::Borrow borrow_;
-  std::uint64_t generation_;
 };
 
 class ReaderObject {
  public:
   ReaderObject(const std::string& name, double stale_after, bool verify_checksum,
-               bool trust_other_owner)
+               const std::string& trust_owner, const std::string& trust_group)
       : state_(std::make_shared<ReaderState>()) {
     sim::ReaderOptions options;
-    options.stale_after = std::chrono::nanoseconds(to_ns(stale_after));
+    options.stale_after = to_ns(stale_after);
     options.verify_checksum = verify_checksum;
-    options.accept_other_owner = trust_other_owner;
+    auto trust = sim::Trust::parse(trust_owner, trust_group);
+    if (!trust) raise(trust.error());
+    options.trust = *trust;
     auto reader = sim::Reader::open(name, options);
     if (!reader) raise(reader.error());
     state_->reader.emplace(std::move(reader.value()));
@@ -189,7 +165,7 @@ class ReaderObject {
   }
 
   py::object read() { return read_impl(std::nullopt); }
-  py::object read_next(double timeout) { return read_impl(std::chrono::nanoseconds(to_ns(timeout))); }
+  py::object read_next(std::optional<double> timeout) { return read_impl(to_ns(timeout)); }
 
   // A copy: each frame gets its own numpy buffer (the last one is reused only if nobody kept it).
   py::object read_impl(std::optional<std::chrono::nanoseconds> timeout) {
@@ -225,23 +201,21 @@ class ReaderObject {
     return py::none();
   }
 
-  bool wait(double timeout) {
+  bool wait(std::optional<double> timeout) {
+    const std::chrono::nanoseconds ns = to_ns(timeout);
     py::gil_scoped_release release;
     std::lock_guard lock(state_->mutex);
-    const sim::ReadStatus status = state_->usable().wait(std::chrono::nanoseconds(to_ns(timeout)));
+    const sim::ReadStatus status = state_->usable().wait(ns);
     state_->last_status = status;
     return status == sim::ReadStatus::new_frame;
   }
 
   py::object borrow() {
     sim::Borrow borrow;
-    std::uint64_t generation = 0;
     {
       py::gil_scoped_release release;
       std::lock_guard lock(state_->mutex);
-      sim::Reader& reader = state_->usable();
-      borrow = reader.borrow();
-      generation = reader.stats().reopens;
+      borrow = state_->usable().borrow();
       state_->last_status = borrow.status();
     }
     if (borrow.status() == sim::ReadStatus::region_invalid) {
@@ -249,7 +223,7 @@ class ReaderObject {
                          "region_invalid");
     }
     if (borrow.status() != sim::ReadStatus::new_frame) return py::none();
-    return py::cast(std::make_unique<BorrowObject>(state_, borrow, generation));
+    return py::cast(std::make_unique<BorrowObject>(std::move(borrow)));
   }
 
   bool writer_alive() {
@@ -306,16 +280,25 @@ void raise_if_failed(sim::WriteStatus status, std::uint64_t size, std::uint64_t 
                              " bytes: create the writer with a larger capacity",
                          "too_large");
     case sim::WriteStatus::closed:
-      throw SimException("this loan was overtaken by a later loan or write and publishes nothing: "
-                         "take a new loan",
-                         "closed");
+      throw SimException("the writer is closed: create a new sim.Writer", "closed");
+    case sim::WriteStatus::loan_open:
+      throw SimException("a loan of this writer is still open: commit it or delete it first",
+                         "loan_open");
   }
 }
 
+// The Python object holds the writer's state, so the slot stays mapped (and the sim::Loan never
+// outlives its Writer) as long as the Loan or any view of it lives.
 class LoanObject {
  public:
   LoanObject(std::shared_ptr<WriterState> state, sim::Loan loan, sim::Layout layout)
       : state_(std::move(state)), loan_(std::move(loan)), layout_(layout) {}
+  LoanObject(const LoanObject&) = delete;
+  LoanObject& operator=(const LoanObject&) = delete;
+  ~LoanObject() {
+    std::lock_guard lock(state_->mutex);  // giving the loan up touches the writer's state
+    loan_ = sim::Loan();
+  }
 
   // A writable view of the whole slot; its base is this Loan, which keeps the mapping alive.
   py::array array(py::handle self) const {
@@ -325,7 +308,7 @@ class LoanObject {
 
   void commit(std::optional<std::uint64_t> nbytes, std::optional<std::int64_t> stamp_ns,
               std::int64_t receive_ns) {
-    if (!loan_.valid()) throw SimException("this loan was already committed: take a new loan", "closed");
+    if (!loan_.valid()) throw SimException("this loan was already committed: take a new loan", "committed");
     const std::uint64_t size = nbytes.value_or(default_size());
     const std::int64_t stamp = stamp_ns.value_or(sim::realtime_ns());
     const std::uint64_t slot_capacity = capacity();
@@ -333,7 +316,7 @@ class LoanObject {
     {
       py::gil_scoped_release release;
       std::lock_guard lock(state_->mutex);
-      // A successful commit empties the loan; a refused one (too large) leaves it to retry.
+      // commit() ends the loan whatever the outcome.
       status = std::move(loan_).commit(size, stamp, receive_ns);
     }
     raise_if_failed(status, size, slot_capacity);
@@ -349,6 +332,7 @@ class LoanObject {
   sim::Layout layout_;
 };
 
+
 class WriterObject {
  public:
   WriterObject(const std::string& name, const sim::Layout& layout, std::uint64_t capacity,
@@ -360,8 +344,7 @@ class WriterObject {
     spec.capacity = capacity;
     spec.checksum = checksum;
     spec.mode = mode;
-    spec.heartbeat_period =
-        std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::nanoseconds(to_ns(heartbeat_period)));
+    spec.heartbeat_period = std::chrono::duration_cast<std::chrono::milliseconds>(to_ns(heartbeat_period));
     std::optional<sim::Expected<sim::Writer>> writer;
     {
       py::gil_scoped_release release;
@@ -401,7 +384,9 @@ class WriterObject {
   std::unique_ptr<LoanObject> loan() {
     std::lock_guard lock(state_->mutex);
     sim::Writer& writer = state_->usable();
-    return std::make_unique<LoanObject>(state_, writer.loan(), writer.layout());
+    sim::Loan loan = writer.loan();
+    if (!loan.valid()) raise_if_failed(sim::WriteStatus::loan_open, 0, 0);
+    return std::make_unique<LoanObject>(state_, std::move(loan), writer.layout());
   }
 
   void close() {
@@ -576,15 +561,17 @@ PYBIND11_MODULE(_sim, m) {
            "True while the writer has not begun to overwrite the frame; call it after using the data.");
 
   py::class_<ReaderObject>(m, "Reader", "Reads one stream: copies (read, read_next) or borrows in place.")
-      .def(py::init<const std::string&, double, bool, bool>(), py::arg("name"), py::kw_only(),
-           py::arg("stale_after") = 0.0, py::arg("verify_checksum") = true,
-           py::arg("trust_other_owner") = false,
-           "Opens the stream `name` (\"/camera_front\"). Raises SimError with the reason when it cannot.")
+      .def(py::init<const std::string&, double, bool, const std::string&, const std::string&>(),
+           py::arg("name"), py::kw_only(), py::arg("stale_after") = 0.0, py::arg("verify_checksum") = true,
+           py::arg("trust_owner") = "", py::arg("trust_group") = "",
+           "Opens the stream `name` (\"/camera_front\"). By default only streams of this user are accepted; "
+           "trust_owner / trust_group (a name or numeric id) accept that user's or group's streams. "
+           "Raises SimError with the reason when it cannot.")
       .def("read", &ReaderObject::read,
            "The newest frame as a Frame (a copy) if it is newer than the last one returned, else None "
            "(last_status says why).")
       .def("read_next", &ReaderObject::read_next, py::arg("timeout"),
-           "Waits up to `timeout` seconds (without holding the GIL) for a new frame, then read().")
+           "Waits up to `timeout` seconds (None: forever; the GIL is released) for a new frame, then read().")
       .def("wait", &ReaderObject::wait, py::arg("timeout"),
            "Waits up to `timeout` seconds for a new frame without reading it; True if there is one.")
       .def("borrow", &ReaderObject::borrow,

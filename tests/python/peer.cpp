@@ -56,7 +56,10 @@ int write_image(const std::string& name, std::uint32_t width, std::uint32_t heig
     for (std::uint32_t y = 0; y < height; ++y)
       for (std::uint32_t x = 0; x < width; ++x)
         for (std::uint32_t c = 0; c < 3; ++c) frame[(std::size_t{y} * width + x) * 3 + c] = pixel_value(seq, x, y, c);
-    writer->write(std::span<const std::uint8_t>(frame), static_cast<std::int64_t>(seq) * 1000);
+    if (writer->write(std::span<const std::uint8_t>(frame), static_cast<std::int64_t>(seq) * 1000) !=
+        sim::WriteStatus::ok) {
+      return fail("write refused");
+    }
   } while (!stdin_closed(10));
   return 0;
 }
@@ -74,7 +77,10 @@ int write_points(const std::string& name, std::uint32_t count) {
     const std::uint64_t seq = writer->last_seq() + 1;
     auto points = loan.as<sim::LidarPoint>();
     for (std::uint32_t i = 0; i < count; ++i) points[i] = expected_point(seq, i);
-    std::move(loan).commit(count * sizeof(sim::LidarPoint), static_cast<std::int64_t>(seq));
+    if (std::move(loan).commit(count * sizeof(sim::LidarPoint), static_cast<std::int64_t>(seq)) !=
+        sim::WriteStatus::ok) {
+      return fail("commit refused");
+    }
   } while (!stdin_closed(10));
   return 0;
 }

@@ -95,8 +95,9 @@ def test_writes_through_a_loan_in_place(stream_name):
         points, info = reader.read()
         assert info.seq == 1 and info.stamp_ns == 123 and points.shape == (200,)
         np.testing.assert_array_equal(points, want)
-        with pytest.raises(sim.SimError, match="already committed"):
+        with pytest.raises(sim.SimError, match="already committed") as error:
             loan.commit()
+        assert error.value.code == "committed"
 
 
 def test_a_borrowed_view_is_read_only_and_keeps_the_memory_after_the_reader_is_gone(stream_name):
@@ -212,21 +213,30 @@ def test_sixteen_bit_images_read_as_uint16(stream_name):
     np.testing.assert_array_equal(image, frame)
 
 
-def test_a_borrow_from_a_replaced_region_stays_readable_and_blocks_reading_on_until_dropped(stream_name):
+def test_a_borrowed_view_stays_readable_while_new_writers_replace_the_region_twice(stream_name):
     first = sim.Writer(stream_name, capacity=16)
     first.write(b"old region")
     reader = sim.Reader(stream_name)
-    borrowed = reader.borrow()
-    view = borrowed.array
+    view = reader.borrow().array  # the Borrow lives on only as the view's base
     first.close()
-    second = sim.Writer(stream_name, capacity=4096)  # another capacity: a new region replaces the old
-    second.write(b"new region")
-    assert reader.read_next(timeout=10).array.tobytes() == b"new region"
-    # One more replacement would unmap the old region under `view`, so reading on is refused.
-    with pytest.raises(sim.SimError) as error:
-        reader.read()
-    assert error.value.code == "borrow_in_use"
+    for capacity, text in ((4096, b"second region"), (8192, b"third region")):
+        # another capacity: a new region replaces the old one under the same name
+        with sim.Writer(stream_name, capacity=capacity) as writer:
+            writer.write(text)
+            frame = reader.read_next(timeout=10)
+            assert frame is not None and frame.array.tobytes() == text
     assert view.tobytes() == b"old region"
-    del borrowed, view
-    second.write(b"again")
-    assert reader.read().array.tobytes() == b"again"
+
+
+def test_one_loan_at_a_time_and_a_write_waits_for_the_open_loan(stream_name):
+    writer = sim.Writer(stream_name, capacity=16)
+    loan = writer.loan()
+    with pytest.raises(sim.SimError) as error:
+        writer.loan()
+    assert error.value.code == "loan_open"
+    with pytest.raises(sim.SimError) as error:
+        writer.write(b"now")
+    assert error.value.code == "loan_open"
+    del loan  # given up uncommitted: publishes nothing, frees the writer
+    writer.write(b"now")
+    assert sim.Reader(stream_name).read().array.tobytes() == b"now"
