@@ -51,7 +51,7 @@ fi
 # examples/consumer against the installed package: find_package and pkg-config, shared and static.
 cmake -S "$root/examples/consumer" -B consumer >/dev/null || fail "find_package(sim) failed"
 cmake --build consumer >/dev/null || fail "examples/consumer did not build"
-for program in consumer_cpp consumer_static consumer_c consumer_c_static; do
+for program in consumer_cpp consumer_static consumer_cxx17 consumer_c consumer_c_static; do
   "consumer/$program" "/test_debs_${program}_$$" >/dev/null || fail "$program failed"
 done
 # shellcheck disable=SC2046

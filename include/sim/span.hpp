@@ -5,8 +5,9 @@
 // Under C++20, sim::span<T> IS std::span<T> (an alias): the API is identical. Under C++17 it is
 // a pointer and a size with the members the SIM headers and their users need (data, size,
 // size_bytes, empty, [], begin/end, first, last, subspan) and the same implicit conversions from
-// contiguous containers and arrays. The library's exported functions take (pointer, size), so the
-// two spellings never meet in a mangled name.
+// contiguous containers and arrays. The library's exported functions take (pointer, size) and
+// its classes hold detail::Bytes, so the two spellings never meet in a symbol or a class layout;
+// the span overloads are inline.
 #pragma once
 
 #include <cstddef>
@@ -95,3 +96,25 @@ span<std::byte> as_writable_bytes(span<T> s) noexcept {
 }  // namespace sim
 
 #endif
+
+namespace sim::detail {
+
+// How Borrow and Loan hold their bytes: a pointer and a size, the same type in C++17 and C++20
+// translation units (a span member would be std::span in one and sim::span in the other, and
+// those classes cross between the library and its users).
+template <typename T>
+class Bytes {
+ public:
+  constexpr Bytes() noexcept = default;
+  constexpr Bytes(T* data, std::size_t size) noexcept : data_(data), size_(size) {}
+  constexpr Bytes(span<T> s) noexcept : data_(s.data()), size_(s.size()) {}  // NOLINT: implicit
+  constexpr operator span<T>() const noexcept { return {data_, size_}; }     // NOLINT: implicit
+  constexpr T* data() const noexcept { return data_; }
+  constexpr std::size_t size() const noexcept { return size_; }
+
+ private:
+  T* data_ = nullptr;
+  std::size_t size_ = 0;
+};
+
+}  // namespace sim::detail

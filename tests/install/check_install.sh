@@ -3,8 +3,8 @@
 #   - the installed tools start without LD_LIBRARY_PATH (RPATH relative to the binary), also
 #     after the whole prefix is moved;
 #   - the configs are in share/sim/config;
-#   - C and C++ programs build and run against it through find_package (shared and static, and a
-#     C-only project) and through pkg-config (sim.pc shared, sim_static.pc static).
+#   - C and C++ (C++17 and C++20) programs build and run against it through find_package (shared
+#     and static, and a C-only project) and through pkg-config (sim.pc shared, sim_static.pc static).
 # Usage: check_install.sh BUILD_DIR SOURCE_DIR
 set -euo pipefail
 build=$1
@@ -31,7 +31,7 @@ not_linked_to_libsim() {  # a static program must not need libsim.so at run time
 # find_package: C and C++, shared and static.
 cmake -S "$source/examples/consumer" -B "$scratch/consumer" -DCMAKE_PREFIX_PATH="$prefix" >/dev/null
 cmake --build "$scratch/consumer" >/dev/null
-for program in consumer_cpp consumer_static consumer_c consumer_c_static; do
+for program in consumer_cpp consumer_static consumer_cxx17 consumer_c consumer_c_static; do
   "$scratch/consumer/$program" "${stream}_$program" >/dev/null || fail "find_package: $program failed"
 done
 not_linked_to_libsim "$scratch/consumer/consumer_static"
@@ -53,7 +53,10 @@ c++ -std=c++20 "$source/examples/points.cpp" -o "$scratch/pc_cpp" $(pkg-config -
   -Wl,-rpath,"$libdir"
 # shellcheck disable=SC2046
 c++ -std=c++20 "$source/examples/points.cpp" -o "$scratch/pc_cpp_static" $(pkg-config --cflags --libs sim_static)
-for program in pc_c pc_c_static pc_cpp pc_cpp_static; do
+# shellcheck disable=SC2046
+c++ -std=c++17 -DSIM_EXPECT_CPLUSPLUS=201703L "$source/examples/consumer/consumer_cxx.cpp" -o "$scratch/pc_cpp17" \
+  $(pkg-config --cflags --libs sim) -Wl,-rpath,"$libdir"
+for program in pc_c pc_c_static pc_cpp pc_cpp_static pc_cpp17; do
   "$scratch/$program" "${stream}_$program" >/dev/null || fail "pkg-config: $program failed"
 done
 not_linked_to_libsim "$scratch/pc_c_static"
