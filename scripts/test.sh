@@ -6,11 +6,14 @@
 #   scripts/test.sh                  everything (what CI runs)
 #   SIM_STRESS_FRAMES=10000000 SIM_FUZZ_SECONDS=600 scripts/test.sh   longer stress and fuzzing
 #   SIM_TEST_STAGES="release" scripts/test.sh                        one stage only
+# Stages: release (GCC, full suite, incl. the install and Python tests), deb (the Debian packages
+# from the release tree, installed with apt-get, checked and removed: scripts/test-debs.sh),
+# asan, tsan. Warnings are errors here (SIM_WERROR=ON), as in the CMake presets.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 jobs=${SIM_JOBS:-2}
-stages=${SIM_TEST_STAGES:-"release asan tsan"}
+stages=${SIM_TEST_STAGES:-"release deb asan tsan"}
 stress=${SIM_STRESS_FRAMES:-1000000}
 sanitizer_stress=${SIM_SANITIZER_STRESS_FRAMES:-200000}
 fuzz_seconds=${SIM_FUZZ_SECONDS:-30}
@@ -21,7 +24,7 @@ stage() { printf '\n=== %s ===\n' "$*"; }
 configure() {  # configure BUILD_DIR [cmake options…]
   local dir=$1
   shift
-  cmake -S "$root" -B "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo "$@" >"$dir.configure.log" 2>&1 ||
+  cmake -S "$root" -B "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSIM_WERROR=ON "$@" >"$dir.configure.log" 2>&1 ||
     { cat "$dir.configure.log"; return 1; }
 }
 
@@ -34,10 +37,17 @@ mkdir -p "$root/build"
 for s in $stages; do
   case $s in
     release)
-      stage "release build and full suite"
-      configure build/release
+      stage "release build (GCC, -O3) and full suite"
+      # -O3 as a user's plain Release build (GCC 12 warns there, not at -O2); /usr: the prefix
+      # of the Debian packages the deb stage makes from this tree.
+      configure build/release -DCMAKE_BUILD_TYPE=Release -DCMAKE_INSTALL_PREFIX=/usr
       cmake --build build/release -j"$jobs"
       SIM_STRESS_FRAMES=$stress ctest --test-dir build/release -j"$jobs" --output-on-failure
+      ;;
+    deb)
+      stage "Debian packages: build, apt-get install, check, remove"
+      [[ -f build/release/CPackConfig.cmake ]] || { echo "test.sh: the deb stage needs the release stage first" >&2; exit 2; }
+      "$root/scripts/test-debs.sh" build/release
       ;;
     asan)
       stage "AddressSanitizer + UndefinedBehaviorSanitizer, with libFuzzer targets (${fuzz_seconds} s each)"
@@ -55,7 +65,7 @@ for s in $stages; do
       SIM_STRESS_FRAMES=$sanitizer_stress ctest --test-dir build/tsan -j"$jobs" -L concurrency \
         --output-on-failure
       ;;
-    *) echo "test.sh: unknown stage '$s' (release, asan, tsan)" >&2; exit 2 ;;
+    *) echo "test.sh: unknown stage '$s' (release, deb, asan, tsan)" >&2; exit 2 ;;
   esac
 done
 stage "all stages passed: $stages"

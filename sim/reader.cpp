@@ -368,7 +368,8 @@ Reader::Reader(Reader&&) noexcept = default;
 Reader& Reader::operator=(Reader&&) noexcept = default;
 Reader::~Reader() = default;
 
-ReadStatus Reader::read(std::span<std::byte> out, FrameInfo& info) noexcept {
+ReadStatus Reader::read(std::byte* out_data, std::size_t out_size, FrameInfo& info) noexcept {
+  const std::span<std::byte> out(out_data, out_size);
   Impl& r = *impl_;
   for (int attempt = 0; attempt < kMaxAttempts; ++attempt) {
     Snapshot s{};
@@ -477,11 +478,11 @@ void detail::ReaderWaitAccess::skip_to_newest(Reader& reader) noexcept {
   if (r.deliverable()) r.last_seq = r.latest();
 }
 
-ReadStatus Reader::read_next(std::span<std::byte> out, FrameInfo& info,
+ReadStatus Reader::read_next(std::byte* out_data, std::size_t out_size, FrameInfo& info,
                              std::chrono::nanoseconds timeout) noexcept {
   const ReadStatus waited = wait(timeout);
   if (waited != ReadStatus::new_frame) return waited;
-  return read(out, info);
+  return read(out_data, out_size, info);
 }
 
 void Reader::set_wait_mode(WaitMode mode) noexcept {

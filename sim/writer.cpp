@@ -281,8 +281,9 @@ Writer::Writer(Writer&&) noexcept = default;
 Writer& Writer::operator=(Writer&&) noexcept = default;
 Writer::~Writer() = default;
 
-WriteStatus Writer::write(std::span<const std::byte> frame, std::int64_t stamp_ns,
+WriteStatus Writer::write(const std::byte* frame_data, std::size_t frame_size, std::int64_t stamp_ns,
                           std::int64_t receive_ns) noexcept {
+  const std::span<const std::byte> frame(frame_data, frame_size);
   if (!impl_) return WriteStatus::closed;
   if (impl_->loan_open) return WriteStatus::loan_open;
   if (frame.size() > impl_->capacity) return WriteStatus::too_large;

@@ -87,7 +87,7 @@ int measure_cut_to_visible(const Payloads& payloads, const std::string& calibrat
       if (reader->wait(std::chrono::milliseconds(50)) == sim::ReadStatus::new_frame) {
         woken_at.store(sim::monotonic_ns());  // the wake-up is what is timed, not the copy
         sim::FrameInfo info;
-        (void)reader->read(frame, info);  // only the wake-up is measured
+        (void)reader->read(frame, info);  // only the wake-up is measured; the copy just drains
         while (woken_at.load() != 0 && !stop.load()) std::this_thread::yield();
       }
     }

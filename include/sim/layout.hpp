@@ -50,8 +50,14 @@ struct ImageLayout {
   // Bytes of one full frame (stride × height), or 0 for compressed formats.
   std::uint64_t frame_bytes() const noexcept { return std::uint64_t{stride} * height; }
   static ImageLayout packed(std::uint32_t width, std::uint32_t height, PixelFormat format) noexcept;
-  friend bool operator==(const ImageLayout&, const ImageLayout&) = default;
+  // Every member, in order (written out rather than defaulted so C++17 consumers compile it).
+  friend bool operator==(const ImageLayout& a, const ImageLayout& b) noexcept {
+    return a.width == b.width && a.height == b.height && a.channels == b.channels &&
+           a.stride == b.stride && a.format == b.format && a.bit_depth == b.bit_depth;
+  }
+  friend bool operator!=(const ImageLayout& a, const ImageLayout& b) noexcept { return !(a == b); }
 };
+static_assert(sizeof(ImageLayout) == 24, "a new member must be compared in operator==");
 
 struct PointLayout {
   PointType type = PointType::unknown;
@@ -60,8 +66,12 @@ struct PointLayout {
 
   std::uint64_t frame_bytes() const noexcept { return std::uint64_t{point_size} * max_points; }
   static PointLayout of(PointType type, std::uint64_t max_points) noexcept;
-  friend bool operator==(const PointLayout&, const PointLayout&) = default;
+  friend bool operator==(const PointLayout& a, const PointLayout& b) noexcept {
+    return a.type == b.type && a.point_size == b.point_size && a.max_points == b.max_points;
+  }
+  friend bool operator!=(const PointLayout& a, const PointLayout& b) noexcept { return !(a == b); }
 };
+static_assert(sizeof(PointLayout) == 16, "a new member must be compared in operator==");
 
 enum class LayoutKind : std::uint32_t { bytes = 0, image = 1, points = 2 };
 
@@ -81,7 +91,10 @@ struct Layout {
   std::string check(std::uint64_t capacity) const;
   // "image 640x480 bgr8 stride 1920", "points lidar_point x 115200", "bytes".
   std::string describe() const;
-  friend bool operator==(const Layout&, const Layout&) = default;
+  friend bool operator==(const Layout& a, const Layout& b) noexcept {
+    return a.kind == b.kind && a.image == b.image && a.points == b.points;
+  }
+  friend bool operator!=(const Layout& a, const Layout& b) noexcept { return !(a == b); }
 };
 
 }  // namespace sim

@@ -8,7 +8,6 @@
 
 #include <cstddef>
 #include <opencv2/core/mat.hpp>
-#include <span>
 
 #include "sim/layout.hpp"
 #include "sim/reader.hpp"
@@ -48,7 +47,7 @@ inline bool fits(const ImageLayout& layout, std::size_t bytes, int type) noexcep
 
 // A header over `bytes` laid out as `layout`; empty when the layout has no matrix form or the
 // bytes are too few. No copy: the matrix lives as long as the bytes.
-inline cv::Mat as_mat(const ImageLayout& layout, std::span<std::byte> bytes) {
+inline cv::Mat as_mat(const ImageLayout& layout, span<std::byte> bytes) {
   const int type = cv_type(layout);
   if (!detail::fits(layout, bytes.size(), type)) return {};
   return cv::Mat(static_cast<int>(layout.height), static_cast<int>(layout.width), type,
@@ -57,8 +56,8 @@ inline cv::Mat as_mat(const ImageLayout& layout, std::span<std::byte> bytes) {
 
 // Read-only view. cv::Mat has no const element type: writing through it is undefined behaviour
 // on a reader's mapping (which is read-only and would fault).
-inline cv::Mat as_mat(const ImageLayout& layout, std::span<const std::byte> bytes) {
-  return as_mat(layout, std::span<std::byte>(const_cast<std::byte*>(bytes.data()), bytes.size()));
+inline cv::Mat as_mat(const ImageLayout& layout, span<const std::byte> bytes) {
+  return as_mat(layout, span<std::byte>(const_cast<std::byte*>(bytes.data()), bytes.size()));
 }
 
 // Zero-copy view of a borrowed frame. Check borrow.still_valid() after using the pixels.
@@ -107,7 +106,7 @@ inline ReadStatus read_mat(Reader& reader, cv::Mat& out, FrameInfo& info) {
     full.create(rows, step_cols, type);
     out = full.colRange(0, static_cast<int>(layout.image.width));
   }
-  return reader.read(std::span<std::byte>(reinterpret_cast<std::byte*>(full.data),
+  return reader.read(span<std::byte>(reinterpret_cast<std::byte*>(full.data),
                                           full.total() * full.elemSize()),
                      info);
 }

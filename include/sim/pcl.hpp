@@ -6,7 +6,7 @@
 //   sim::FrameInfo info;
 //   pcl::PointCloud<pcl::PointXYZI> cloud;
 //   if (reader.read_next(buffer, info, 1s) == sim::ReadStatus::new_frame)
-//     sim::to_pcl(std::span(buffer).first(info.size), info, cloud);
+//     sim::to_pcl(sim::span(buffer).first(info.size), info, cloud);
 //
 // Points keep the sensor frame of the driver (for Hesai: y forward at azimuth 0, x right, z up;
 // see sim/lidar_point.hpp). The cloud is resized in place, so reusing one cloud per stream
@@ -21,22 +21,30 @@
 #include <cmath>
 #include <cstddef>
 #include <cstring>
-#include <span>
 #include <string>
+#include <type_traits>
+#include <utility>
 
 #include "sim/layout.hpp"
 #include "sim/lidar_point.hpp"
 #include "sim/reader.hpp"
+#include "sim/span.hpp"
 
 namespace sim {
 namespace pcl_detail {
+
+// Whether a PCL point type has an intensity field (PointXYZI does, PointXYZ does not).
+template <typename PointT, typename = void>
+struct has_intensity : std::false_type {};
+template <typename PointT>
+struct has_intensity<PointT, std::void_t<decltype(std::declval<PointT&>().intensity)>> : std::true_type {};
 
 template <typename PointT>
 void set_point(PointT& out, float x, float y, float z, float intensity) noexcept {
   out.x = x;
   out.y = y;
   out.z = z;
-  if constexpr (requires { out.intensity; }) out.intensity = intensity;
+  if constexpr (has_intensity<PointT>::value) out.intensity = intensity;
 }
 
 template <typename PointT>
@@ -57,7 +65,7 @@ void finish(pcl::PointCloud<PointT>& cloud, const FrameInfo* info) {
 // The points of a lidar_point frame into a PointXYZI or PointXYZ cloud (an unorganised cloud:
 // height 1, width = number of points).
 template <typename PointT>
-void to_pcl(std::span<const LidarPoint> points, pcl::PointCloud<PointT>& cloud,
+void to_pcl(span<const LidarPoint> points, pcl::PointCloud<PointT>& cloud,
             const FrameInfo* info = nullptr) {
   cloud.resize(points.size());  // sets width = size, height = 1
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -71,7 +79,7 @@ void to_pcl(std::span<const LidarPoint> points, pcl::PointCloud<PointT>& cloud,
 // frame's layout. Returns false, leaving the cloud empty, for a frame that holds no points of a
 // known type (an image stream, a raw-bytes stream), or whose size is not whole points.
 template <typename PointT>
-bool to_pcl(std::span<const std::byte> frame, const FrameInfo& info,
+bool to_pcl(span<const std::byte> frame, const FrameInfo& info,
             pcl::PointCloud<PointT>& cloud) {
   cloud.clear();
   if (info.layout.kind != LayoutKind::points) return false;

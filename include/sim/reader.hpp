@@ -9,7 +9,6 @@
 #include <memory>
 #include <optional>
 #include <ratio>
-#include <span>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -17,6 +16,7 @@
 
 #include "sim/layout.hpp"
 #include "sim/result.hpp"
+#include "sim/span.hpp"
 
 namespace sim {
 
@@ -154,9 +154,9 @@ class Borrow {
  public:
   ReadStatus status() const noexcept { return status_; }
   const FrameInfo& info() const noexcept { return info_; }
-  std::span<const std::byte> bytes() const noexcept { return bytes_; }
+  span<const std::byte> bytes() const noexcept { return bytes_; }
   template <typename T>
-  std::span<const T> as() const noexcept {
+  span<const T> as() const noexcept {
     static_assert(std::is_trivially_copyable_v<T>);
     return {reinterpret_cast<const T*>(bytes_.data()), bytes_.size() / sizeof(T)};
   }
@@ -167,7 +167,7 @@ class Borrow {
   friend class Reader;
   ReadStatus status_ = ReadStatus::no_new_frame;
   FrameInfo info_{};
-  std::span<const std::byte> bytes_{};
+  detail::Bytes<const std::byte> bytes_{};
   const void* slot_seq_ = nullptr;        // the slot's sequence word in shared memory
   std::shared_ptr<const void> mapping_;  // keeps the region mapped while the Borrow lives
 };
@@ -183,7 +183,12 @@ class Reader {
   ~Reader();
 
   // Copies the newest frame into `out` if it is newer than the last one returned.
-  [[nodiscard]] ReadStatus read(std::span<std::byte> out, FrameInfo& info) noexcept;
+  [[nodiscard]] ReadStatus read(span<std::byte> out, FrameInfo& info) noexcept {
+    return read(out.data(), out.size(), info);
+  }
+  // The same with the buffer as a pointer and its size (what the library exports, so C++17 and
+  // C++20 programs call one function).
+  [[nodiscard]] ReadStatus read(std::byte* out, std::size_t size, FrameInfo& info) noexcept;
   // Sleeps until a frame that read() or borrow() can deliver is published, or the timeout passes
   // (kForever: no timeout). Returns new_frame only when there is such a frame.
   [[nodiscard]] ReadStatus wait(std::chrono::nanoseconds timeout) noexcept;
@@ -192,13 +197,18 @@ class Reader {
     return wait(saturating_nanoseconds(timeout));
   }
   // wait() then read().
-  [[nodiscard]] ReadStatus read_next(std::span<std::byte> out, FrameInfo& info,
-                                     std::chrono::nanoseconds timeout) noexcept;
+  [[nodiscard]] ReadStatus read_next(span<std::byte> out, FrameInfo& info,
+                                     std::chrono::nanoseconds timeout) noexcept {
+    return read_next(out.data(), out.size(), info, timeout);
+  }
   template <typename Rep, typename Period>
-  [[nodiscard]] ReadStatus read_next(std::span<std::byte> out, FrameInfo& info,
+  [[nodiscard]] ReadStatus read_next(span<std::byte> out, FrameInfo& info,
                                      std::chrono::duration<Rep, Period> timeout) noexcept {
     return read_next(out, info, saturating_nanoseconds(timeout));
   }
+  // The same with the buffer as a pointer and its size (the exported function).
+  [[nodiscard]] ReadStatus read_next(std::byte* out, std::size_t size, FrameInfo& info,
+                                     std::chrono::nanoseconds timeout) noexcept;
   // The newest frame in place, if it is newer than the last one returned.
   [[nodiscard]] Borrow borrow() noexcept;
 

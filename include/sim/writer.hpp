@@ -7,12 +7,12 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
-#include <span>
 #include <string>
 #include <type_traits>
 
 #include "sim/layout.hpp"
 #include "sim/result.hpp"
+#include "sim/span.hpp"
 
 namespace sim {
 
@@ -57,9 +57,9 @@ class Loan {
   Loan& operator=(const Loan&) = delete;
   ~Loan();
 
-  std::span<std::byte> bytes() const noexcept { return bytes_; }
+  span<std::byte> bytes() const noexcept { return bytes_; }
   template <typename T>
-  std::span<T> as() const noexcept {
+  span<T> as() const noexcept {
     static_assert(std::is_trivially_copyable_v<T>, "only plain data can live in shared memory");
     return {reinterpret_cast<T*>(bytes_.data()), bytes_.size() / sizeof(T)};
   }
@@ -75,11 +75,11 @@ class Loan {
 
  private:
   friend class Writer;
-  Loan(detail::WriterState* writer, std::span<std::byte> bytes) noexcept
+  Loan(detail::WriterState* writer, span<std::byte> bytes) noexcept
       : writer_(writer), bytes_(bytes) {}
   void release() noexcept;
   detail::WriterState* writer_ = nullptr;  // stays put when the Writer handle is moved
-  std::span<std::byte> bytes_;
+  detail::Bytes<std::byte> bytes_;
 };
 
 class Writer {
@@ -97,14 +97,20 @@ class Writer {
 
   // Copies one frame in and publishes it (stamps as in Loan::commit). Refused (loan_open) while a
   // loan is open, which would otherwise still be writing into the slot this frame goes to.
-  [[nodiscard]] WriteStatus write(std::span<const std::byte> frame, std::int64_t stamp_ns,
-                                  std::int64_t receive_ns = 0) noexcept;
+  [[nodiscard]] WriteStatus write(span<const std::byte> frame, std::int64_t stamp_ns,
+                                  std::int64_t receive_ns = 0) noexcept {
+    return write(frame.data(), frame.size(), stamp_ns, receive_ns);
+  }
   template <typename T>
-  [[nodiscard]] WriteStatus write(std::span<const T> items, std::int64_t stamp_ns,
+  [[nodiscard]] WriteStatus write(span<const T> items, std::int64_t stamp_ns,
                                   std::int64_t receive_ns = 0) noexcept {
     static_assert(std::is_trivially_copyable_v<T>);
-    return write(std::as_bytes(items), stamp_ns, receive_ns);
+    return write(sim::as_bytes(items), stamp_ns, receive_ns);
   }
+  // The same with the frame as a pointer and its size (the exported function, so C++17 and
+  // C++20 programs call one function).
+  [[nodiscard]] WriteStatus write(const std::byte* frame, std::size_t size, std::int64_t stamp_ns,
+                                  std::int64_t receive_ns = 0) noexcept;
 
   // The back slot, to fill in place. At most one loan at a time: while one is open this returns
   // an empty loan (valid() false, no bytes).

@@ -308,7 +308,9 @@ std::optional<Error> V4l2Device::set_control(std::string_view key, std::string_v
   }
   if (!parsed) {
     return Error{ErrorCode::invalid_argument,
-                 "'" + std::string(value) + "' is not a value for control " + it->key +
+                 // Not `"'" + std::string(value)`: GCC 12 at -O3 warns (-Wrestrict, GCC bug
+                 // 105651) inside operator+(const char*, string&&); append() says the same.
+                 std::string("'").append(value) + "' is not a value for control " + it->key +
                      ": give a number (or true/false, or a menu entry)"};
   }
   if (it->read_only) {

@@ -211,7 +211,9 @@ std::string Endpoint::to_string() const {
   }
   if (ip_version == 6) {
     inet_ntop(AF_INET6, address.data(), text, sizeof text);
-    return "[" + std::string(text) + "]:" + std::to_string(port);
+    // Not `"[" + std::string(text)`: GCC 12 at -O3 warns (-Wrestrict, GCC bug 105651) inside
+    // operator+(const char*, string&&).
+    return std::string("[") + text + "]:" + std::to_string(port);
   }
   return "?:" + std::to_string(port);
 }

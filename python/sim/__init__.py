@@ -1,0 +1,55 @@
+"""SIM (Sensor-in-Memory): camera and LiDAR frames between processes through shared memory.
+
+    import sim
+    with sim.Reader("/camera_front") as reader:
+        frame = reader.read_next(timeout=1.0)        # a copy: Frame(array, info) or None
+        if frame is not None:
+            image, info = frame                       # image.shape == (height, width, channels)
+        borrowed = reader.borrow()                    # zero-copy: a read-only view into shared memory
+        if borrowed is not None:
+            mean = borrowed.array.mean()
+            if not borrowed.still_valid():            # the writer overwrote it meanwhile
+                mean = None
+
+LiDAR frames are structured arrays of LIDAR_POINT_DTYPE (x, y, z, intensity, time_offset_ns,
+ring, return_index: the fields of the C++ sim::LidarPoint). Errors raise SimError whose message
+is the library's one-sentence explanation.
+"""
+
+from ._sim import (
+    LIDAR_POINT_DTYPE,
+    Borrow,
+    Frame,
+    FrameInfo,
+    Layout,
+    LayoutKind,
+    Loan,
+    PixelFormat,
+    PointType,
+    Reader,
+    ReaderStats,
+    ReadStatus,
+    SimError,
+    Writer,
+    destroy,
+    list_streams,
+)
+
+__all__ = [
+    "LIDAR_POINT_DTYPE",
+    "Borrow",
+    "Frame",
+    "FrameInfo",
+    "Layout",
+    "LayoutKind",
+    "Loan",
+    "PixelFormat",
+    "PointType",
+    "Reader",
+    "ReaderStats",
+    "ReadStatus",
+    "SimError",
+    "Writer",
+    "destroy",
+    "list_streams",
+]

@@ -1,0 +1,626 @@
+// SPDX-License-Identifier: Apache-2.0
+// The Python module `sim` (built as sim._sim): SIM readers and writers with frames as numpy arrays.
+//
+// Lifetimes are the point of this file. A borrowed frame's numpy view points into the reader's
+// shared-memory mapping, and a loan's view into the writer's; Python code can keep such a view
+// after dropping everything else. So every view's numpy `base` is the Python Borrow/Loan object,
+// and that object holds a shared_ptr to the reader's (writer's) state: the mapping lives as long
+// as the last view, whatever the program closes or deletes first.
+#include <pybind11/numpy.h>
+#include <pybind11/operators.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <chrono>
+#include <cstdint>
+#include <cstring>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "sim/sim.hpp"
+
+namespace py = pybind11;
+
+namespace {
+
+// ---- errors: one exception type whose message is the library's sentence ----
+
+struct SimException : std::runtime_error {
+  SimException(std::string message, std::string code_name)
+      : std::runtime_error(std::move(message)), code(std::move(code_name)) {}
+  std::string code;
+};
+
+[[noreturn]] void raise(const sim::Error& error) {
+  throw SimException(error.message, sim::to_string(error.code));
+}
+
+void raise_if_error(const sim::Expected<void>& result) {
+  if (!result) raise(result.error());
+}
+
+// ---- numpy shapes of the layouts ----
+
+py::object numpy_dtype(const py::dict& spec) {
+  return py::module_::import("numpy").attr("dtype")(spec);
+}
+
+// The structured dtypes of the point types; field names and offsets are sim::LidarPoint's.
+py::dtype point_dtype(sim::PointType type) {
+  using py::make_tuple;
+  py::dict spec;
+  switch (type) {
+    case sim::PointType::lidar_point:
+      spec["names"] = make_tuple("x", "y", "z", "intensity", "time_offset_ns", "ring", "return_index");
+      spec["formats"] = make_tuple("<f4", "<f4", "<f4", "<f4", "<u4", "<u2", "u1");
+      spec["offsets"] = make_tuple(offsetof(sim::LidarPoint, x), offsetof(sim::LidarPoint, y),
+                                   offsetof(sim::LidarPoint, z), offsetof(sim::LidarPoint, intensity),
+                                   offsetof(sim::LidarPoint, time_offset_ns),
+                                   offsetof(sim::LidarPoint, ring),
+                                   offsetof(sim::LidarPoint, return_index));
+      spec["itemsize"] = sizeof(sim::LidarPoint);
+      break;
+    case sim::PointType::xyz32:
+      spec["names"] = make_tuple("x", "y", "z");
+      spec["formats"] = make_tuple("<f4", "<f4", "<f4");
+      break;
+    case sim::PointType::xyzi32:
+      spec["names"] = make_tuple("x", "y", "z", "intensity");
+      spec["formats"] = make_tuple("<f4", "<f4", "<f4", "<f4");
+      break;
+    case sim::PointType::unknown: return py::dtype("u1");
+  }
+  return py::reinterpret_borrow<py::dtype>(numpy_dtype(spec));
+}
+
+// A numpy array over `size` bytes at `data` shaped by the layout: images (h, w, c) of uint8 or
+// uint16, points a structured array, everything else (raw bytes, MJPEG, a frame that does not
+// fill its layout) flat uint8. `base` keeps the memory alive.
+py::array shaped_array(const sim::Layout& layout, const std::byte* data, std::uint64_t size,
+                       py::handle base, bool writable) {
+  auto* ptr = const_cast<std::byte*>(data);
+  py::array array;
+  if (layout.kind == sim::LayoutKind::image && layout.image.frame_bytes() != 0 &&
+      size >= layout.image.frame_bytes() && layout.image.channels != 0) {
+    const sim::ImageLayout& im = layout.image;
+    const bool wide = im.bit_depth > 8;
+    const py::ssize_t item = wide ? 2 : 1;
+    const py::dtype dtype = wide ? py::dtype("<u2") : py::dtype("u1");
+    array = py::array(dtype, {py::ssize_t(im.height), py::ssize_t(im.width), py::ssize_t(im.channels)},
+                      {py::ssize_t(im.stride), py::ssize_t(im.channels) * item, item}, ptr, base);
+  } else if (layout.kind == sim::LayoutKind::points && layout.points.type != sim::PointType::unknown &&
+             layout.points.point_size != 0) {
+    const py::ssize_t count = py::ssize_t(size / layout.points.point_size);
+    array = py::array(point_dtype(layout.points.type), {count}, {py::ssize_t(layout.points.point_size)},
+                      ptr, base);
+  } else {
+    array = py::array(py::dtype("u1"), {py::ssize_t(size)}, {py::ssize_t(1)}, ptr, base);
+  }
+  if (!writable) array.attr("flags").attr("writeable") = false;
+  return array;
+}
+
+// Seconds from Python (None: forever) as nanoseconds, saturating like the C++ API's timeouts.
+std::chrono::nanoseconds to_ns(std::optional<double> seconds) {
+  if (!seconds) return sim::kForever;
+  if (!(*seconds >= 0)) throw py::value_error("a timeout is a number of seconds, 0 or more (or None: forever)");
+  if (*seconds * 1e9 >= 9.2e18) return sim::kForever;
+  return std::chrono::nanoseconds(static_cast<std::int64_t>(*seconds * 1e9));
+}
+
+// ---- reader ----
+
+// What a Python Reader shares with the frames it hands out. `open` is cleared by close(); the
+// sim::Reader itself goes with the last Python object that needs it.
+struct ReaderState {
+  std::mutex mutex;  // one call into the sim::Reader at a time (calls run without the GIL)
+  std::optional<sim::Reader> reader;
+  bool open = true;
+  sim::ReadStatus last_status = sim::ReadStatus::no_new_frame;
+
+  // Called with `mutex` held.
+  sim::Reader& usable() {
+    if (!open) throw SimException("the reader is closed: open a new sim.Reader", "closed");
+    return *reader;
+  }
+};
+
+struct FrameObject {
+  py::object array;
+  sim::FrameInfo info;
+};
+
+// A sim::Borrow keeps the region it points into mapped (whatever happens to the stream or the
+// Reader), so the Python object only has to live as long as its numpy views: it is their base.
+class BorrowObject {
+ public:
+  explicit BorrowObject(sim::Borrow borrow) : borrow_(std::move(borrow)) {}
+  const sim::FrameInfo& info() const { return borrow_.info(); }
+  bool still_valid() const { return borrow_.still_valid(); }
+  const sim::Borrow& borrow() const { return borrow_; }
+
+ private:
+  sim::Borrow borrow_;
+};
+
+class ReaderObject {
+ public:
+  ReaderObject(const std::string& name, double stale_after, bool verify_checksum,
+               const std::string& trust_owner, const std::string& trust_group)
+      : state_(std::make_shared<ReaderState>()) {
+    sim::ReaderOptions options;
+    options.stale_after = to_ns(stale_after);
+    options.verify_checksum = verify_checksum;
+    auto trust = sim::Trust::parse(trust_owner, trust_group);
+    if (!trust) raise(trust.error());
+    options.trust = *trust;
+    auto reader = sim::Reader::open(name, options);
+    if (!reader) raise(reader.error());
+    state_->reader.emplace(std::move(reader.value()));
+    buffer_ = py::array_t<std::uint8_t>(py::ssize_t(state_->reader->capacity()));
+  }
+
+  py::object read() { return read_impl(std::nullopt); }
+  py::object read_next(std::optional<double> timeout) { return read_impl(to_ns(timeout)); }
+
+  // A copy: each frame gets its own numpy buffer (the last one is reused only if nobody kept it).
+  py::object read_impl(std::optional<std::chrono::nanoseconds> timeout) {
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      py::array_t<std::uint8_t> out = fresh_buffer();
+      auto span = std::span<std::byte>(reinterpret_cast<std::byte*>(out.mutable_data()),
+                                       std::size_t(out.size()));
+      sim::FrameInfo info;
+      sim::ReadStatus status;
+      std::uint64_t capacity = 0;
+      {
+        py::gil_scoped_release release;
+        std::lock_guard lock(state_->mutex);
+        sim::Reader& reader = state_->usable();
+        status = timeout ? reader.read_next(span, info, *timeout) : reader.read(span, info);
+        state_->last_status = status;
+        capacity = reader.capacity();
+      }
+      if (status == sim::ReadStatus::buffer_too_small) {  // a new writer made the stream larger
+        buffer_ = py::array_t<std::uint8_t>(py::ssize_t(capacity));
+        continue;
+      }
+      if (status == sim::ReadStatus::region_invalid) {
+        throw SimException("the stream " + name() + " no longer passes validation: open it again",
+                           "region_invalid");
+      }
+      if (status != sim::ReadStatus::new_frame) return py::none();
+      buffer_ = py::array_t<std::uint8_t>();  // the frame's array owns this buffer now
+      return py::cast(FrameObject{shaped_array(info.layout, reinterpret_cast<const std::byte*>(out.data()),
+                                               info.size, out, true),
+                                  info});
+    }
+    return py::none();
+  }
+
+  bool wait(std::optional<double> timeout) {
+    const std::chrono::nanoseconds ns = to_ns(timeout);
+    py::gil_scoped_release release;
+    std::lock_guard lock(state_->mutex);
+    const sim::ReadStatus status = state_->usable().wait(ns);
+    state_->last_status = status;
+    return status == sim::ReadStatus::new_frame;
+  }
+
+  py::object borrow() {
+    sim::Borrow borrow;
+    {
+      py::gil_scoped_release release;
+      std::lock_guard lock(state_->mutex);
+      borrow = state_->usable().borrow();
+      state_->last_status = borrow.status();
+    }
+    if (borrow.status() == sim::ReadStatus::region_invalid) {
+      throw SimException("the stream " + name() + " no longer passes validation: open it again",
+                         "region_invalid");
+    }
+    if (borrow.status() != sim::ReadStatus::new_frame) return py::none();
+    return py::cast(std::make_unique<BorrowObject>(std::move(borrow)));
+  }
+
+  bool writer_alive() {
+    py::gil_scoped_release release;
+    std::lock_guard lock(state_->mutex);
+    return state_->usable().writer_alive();
+  }
+
+  void close() {
+    py::gil_scoped_release release;
+    std::lock_guard lock(state_->mutex);
+    state_->open = false;  // the mapping itself goes with the last borrow
+  }
+  bool closed() const { return !state_->open; }
+  sim::ReadStatus last_status() const { return state_->last_status; }
+  std::string name() const { return state_->reader->name(); }
+  std::uint64_t capacity() const { return state_->reader->capacity(); }
+  sim::Layout layout() const { return state_->reader->layout(); }
+  sim::ReaderStats stats() {
+    std::lock_guard lock(state_->mutex);
+    return state_->reader->stats();
+  }
+
+ private:
+  py::array_t<std::uint8_t> fresh_buffer() {
+    if (buffer_.size() == 0 || buffer_.ref_count() > 1) {
+      buffer_ = py::array_t<std::uint8_t>(py::ssize_t(state_->reader->capacity()));
+    }
+    return buffer_;
+  }
+  std::shared_ptr<ReaderState> state_;
+  py::array_t<std::uint8_t> buffer_;
+};
+
+// ---- writer ----
+
+struct WriterState {
+  std::mutex mutex;
+  std::optional<sim::Writer> writer;
+  bool open = true;
+
+  sim::Writer& usable() {
+    if (!open) throw SimException("the writer is closed: create a new sim.Writer", "closed");
+    return *writer;
+  }
+};
+
+void raise_if_failed(sim::WriteStatus status, std::uint64_t size, std::uint64_t capacity) {
+  switch (status) {
+    case sim::WriteStatus::ok: return;
+    case sim::WriteStatus::too_large:
+      throw SimException("a frame of " + std::to_string(size) + " bytes does not fit the stream's " +
+                             std::to_string(capacity) +
+                             " bytes: create the writer with a larger capacity",
+                         "too_large");
+    case sim::WriteStatus::closed:
+      throw SimException("the writer is closed: create a new sim.Writer", "closed");
+    case sim::WriteStatus::loan_open:
+      throw SimException("a loan of this writer is still open: commit it or delete it first",
+                         "loan_open");
+  }
+}
+
+// The Python object holds the writer's state, so the slot stays mapped (and the sim::Loan never
+// outlives its Writer) as long as the Loan or any view of it lives.
+class LoanObject {
+ public:
+  LoanObject(std::shared_ptr<WriterState> state, sim::Loan loan, sim::Layout layout)
+      : state_(std::move(state)), loan_(std::move(loan)), layout_(layout) {}
+  LoanObject(const LoanObject&) = delete;
+  LoanObject& operator=(const LoanObject&) = delete;
+  ~LoanObject() {
+    std::lock_guard lock(state_->mutex);  // giving the loan up touches the writer's state
+    loan_ = sim::Loan();
+  }
+
+  // A writable view of the whole slot; its base is this Loan, which keeps the mapping alive.
+  py::array array(py::handle self) const {
+    return shaped_array(layout_, loan_.bytes().data(), loan_.bytes().size(), self, true);
+  }
+  std::uint64_t capacity() const { return loan_.bytes().size(); }
+
+  void commit(std::optional<std::uint64_t> nbytes, std::optional<std::int64_t> stamp_ns,
+              std::int64_t receive_ns) {
+    if (!loan_.valid()) throw SimException("this loan was already committed: take a new loan", "committed");
+    const std::uint64_t size = nbytes.value_or(default_size());
+    const std::int64_t stamp = stamp_ns.value_or(sim::realtime_ns());
+    const std::uint64_t slot_capacity = capacity();
+    sim::WriteStatus status;
+    {
+      py::gil_scoped_release release;
+      std::lock_guard lock(state_->mutex);
+      // commit() ends the loan whatever the outcome.
+      status = std::move(loan_).commit(size, stamp, receive_ns);
+    }
+    raise_if_failed(status, size, slot_capacity);
+  }
+
+ private:
+  std::uint64_t default_size() const {
+    const std::uint64_t full = layout_.min_capacity();
+    return full != 0 ? std::min<std::uint64_t>(full, capacity()) : capacity();
+  }
+  std::shared_ptr<WriterState> state_;
+  sim::Loan loan_;
+  sim::Layout layout_;
+};
+
+
+class WriterObject {
+ public:
+  WriterObject(const std::string& name, const sim::Layout& layout, std::uint64_t capacity,
+               bool checksum, std::uint32_t mode, double heartbeat_period)
+      : state_(std::make_shared<WriterState>()) {
+    sim::StreamSpec spec;
+    spec.name = name;
+    spec.layout = layout;
+    spec.capacity = capacity;
+    spec.checksum = checksum;
+    spec.mode = mode;
+    spec.heartbeat_period = std::chrono::duration_cast<std::chrono::milliseconds>(to_ns(heartbeat_period));
+    std::optional<sim::Expected<sim::Writer>> writer;
+    {
+      py::gil_scoped_release release;
+      writer.emplace(sim::Writer::create(spec));
+    }
+    if (!*writer) raise(writer->error());
+    state_->writer.emplace(std::move(writer->value()));
+  }
+
+  void write(const py::object& data, std::optional<std::int64_t> stamp_ns, std::int64_t receive_ns) {
+    Py_buffer view;
+    if (PyObject_GetBuffer(data.ptr(), &view, PyBUF_C_CONTIGUOUS) != 0) {
+      PyErr_Clear();
+      throw py::type_error("write() takes a C-contiguous buffer (a numpy array, bytes, bytearray): "
+                           "pass numpy.ascontiguousarray(frame)");
+    }
+    const std::int64_t stamp = stamp_ns.value_or(sim::realtime_ns());
+    sim::WriteStatus status = sim::WriteStatus::ok;
+    std::uint64_t capacity = 0;
+    try {
+      py::gil_scoped_release release;
+      std::lock_guard lock(state_->mutex);
+      sim::Writer& writer = state_->usable();
+      capacity = writer.capacity();
+      status = writer.write(std::span<const std::byte>(static_cast<const std::byte*>(view.buf),
+                                                       std::size_t(view.len)),
+                            stamp, receive_ns);
+    } catch (...) {
+      PyBuffer_Release(&view);
+      throw;
+    }
+    const auto size = std::uint64_t(view.len);
+    PyBuffer_Release(&view);
+    raise_if_failed(status, size, capacity);
+  }
+
+  std::unique_ptr<LoanObject> loan() {
+    std::lock_guard lock(state_->mutex);
+    sim::Writer& writer = state_->usable();
+    sim::Loan loan = writer.loan();
+    if (!loan.valid()) raise_if_failed(sim::WriteStatus::loan_open, 0, 0);
+    return std::make_unique<LoanObject>(state_, std::move(loan), writer.layout());
+  }
+
+  void close() {
+    py::gil_scoped_release release;
+    std::lock_guard lock(state_->mutex);
+    state_->open = false;
+    // The region stays mapped while a loan lives; without one the writer lock goes now.
+    if (state_.use_count() == 1) state_->writer.reset();
+  }
+  bool closed() const { return !state_->open; }
+  std::string name() const { return state_->writer->name(); }
+  std::uint64_t capacity() const { return state_->writer->capacity(); }
+  sim::Layout layout() const { return state_->writer->layout(); }
+  std::uint64_t last_seq() const { return state_->writer->last_seq(); }
+
+ private:
+  std::shared_ptr<WriterState> state_;
+};
+
+sim::PixelFormat pixel_format_from(const py::handle& format) {
+  if (py::isinstance<sim::PixelFormat>(format)) return format.cast<sim::PixelFormat>();
+  const auto text = format.cast<std::string>();
+  for (std::uint32_t i = 1; i <= static_cast<std::uint32_t>(sim::PixelFormat::mjpeg); ++i) {
+    const auto candidate = static_cast<sim::PixelFormat>(i);
+    if (text == sim::to_string(candidate)) return candidate;
+  }
+  throw py::value_error("'" + text + "' is not a pixel format: use one of sim.PixelFormat's names");
+}
+
+sim::PointType point_type_from(const py::handle& type) {
+  if (py::isinstance<sim::PointType>(type)) return type.cast<sim::PointType>();
+  const auto text = type.cast<std::string>();
+  for (std::uint32_t i = 1; i <= static_cast<std::uint32_t>(sim::PointType::lidar_point); ++i) {
+    const auto candidate = static_cast<sim::PointType>(i);
+    if (text == sim::to_string(candidate)) return candidate;
+  }
+  throw py::value_error("'" + text + "' is not a point type: use xyz32, xyzi32 or lidar_point");
+}
+
+py::dict info_to_dict(const sim::FrameInfo& info) {
+  py::dict d;
+  d["seq"] = info.seq;
+  d["stamp_ns"] = info.stamp_ns;
+  d["publish_ns"] = info.publish_ns;
+  d["receive_ns"] = info.receive_ns;
+  d["size"] = info.size;
+  return d;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_sim, m) {
+  m.doc() = "SIM (Sensor-in-Memory): camera and LiDAR frames between processes through shared memory.";
+
+  static py::exception<SimException> sim_error(m, "SimError", PyExc_RuntimeError);
+  sim_error.doc() = "An error from SIM; str(e) is the library's one-sentence explanation, e.code its kind.";
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const SimException& e) {
+      py::object error = py::handle(sim_error.ptr())(e.what());  // an instance, to attach .code
+      error.attr("code") = e.code;
+      PyErr_SetObject(sim_error.ptr(), error.ptr());
+    }
+  });
+
+  py::enum_<sim::ReadStatus>(m, "ReadStatus", "Why a read returned what it did (Reader.last_status).")
+      .value("new_frame", sim::ReadStatus::new_frame)
+      .value("no_new_frame", sim::ReadStatus::no_new_frame)
+      .value("writer_gone", sim::ReadStatus::writer_gone)
+      .value("stale", sim::ReadStatus::stale)
+      .value("checksum_mismatch", sim::ReadStatus::checksum_mismatch)
+      .value("buffer_too_small", sim::ReadStatus::buffer_too_small)
+      .value("overrun", sim::ReadStatus::overrun)
+      .value("region_invalid", sim::ReadStatus::region_invalid);
+
+  py::enum_<sim::PixelFormat> pixel(m, "PixelFormat", "Pixel format of an image stream.");
+  for (std::uint32_t i = 0; i <= static_cast<std::uint32_t>(sim::PixelFormat::mjpeg); ++i) {
+    const auto f = static_cast<sim::PixelFormat>(i);
+    pixel.value(sim::to_string(f), f);
+  }
+  py::enum_<sim::PointType> point(m, "PointType", "Point type of a LiDAR stream.");
+  for (std::uint32_t i = 0; i <= static_cast<std::uint32_t>(sim::PointType::lidar_point); ++i) {
+    const auto t = static_cast<sim::PointType>(i);
+    point.value(sim::to_string(t), t);
+  }
+  py::enum_<sim::LayoutKind>(m, "LayoutKind", "What a stream's frames are.")
+      .value("bytes", sim::LayoutKind::bytes)
+      .value("image", sim::LayoutKind::image)
+      .value("points", sim::LayoutKind::points);
+
+  py::class_<sim::Layout>(m, "Layout", "What a stream's payload looks like (stored in the stream).")
+      .def_static("raw", &sim::Layout::raw, "Raw bytes.")
+      .def_static(
+          "image",
+          [](std::uint32_t width, std::uint32_t height, const py::object& format) {
+            return sim::Layout::of(sim::ImageLayout::packed(width, height, pixel_format_from(format)));
+          },
+          py::arg("width"), py::arg("height"), py::arg("format"),
+          "A packed image, e.g. Layout.image(640, 480, 'bgr8'); frames read as (height, width, channels).")
+      .def_static(
+          "points",
+          [](std::uint64_t max_points, const py::object& type) {
+            return sim::Layout::of(sim::PointLayout::of(point_type_from(type), max_points));
+          },
+          py::arg("max_points"), py::arg("type") = "lidar_point",
+          "Up to max_points points; frames read as a structured array (LIDAR_POINT_DTYPE for lidar_point).")
+      .def_property_readonly("kind", [](const sim::Layout& l) { return l.kind; })
+      .def_property_readonly("width", [](const sim::Layout& l) { return l.image.width; })
+      .def_property_readonly("height", [](const sim::Layout& l) { return l.image.height; })
+      .def_property_readonly("channels", [](const sim::Layout& l) { return l.image.channels; })
+      .def_property_readonly("stride", [](const sim::Layout& l) { return l.image.stride; })
+      .def_property_readonly("format", [](const sim::Layout& l) { return l.image.format; })
+      .def_property_readonly("bit_depth", [](const sim::Layout& l) { return l.image.bit_depth; })
+      .def_property_readonly("point_type", [](const sim::Layout& l) { return l.points.type; })
+      .def_property_readonly("point_size", [](const sim::Layout& l) { return l.points.point_size; })
+      .def_property_readonly("max_points", [](const sim::Layout& l) { return l.points.max_points; })
+      .def_property_readonly("min_capacity", &sim::Layout::min_capacity,
+                             "Bytes of the largest frame the layout describes (0 for raw/MJPEG).")
+      .def_property_readonly(
+          "dtype",
+          [](const sim::Layout& l) -> py::object {
+            if (l.kind == sim::LayoutKind::points) return point_dtype(l.points.type);
+            if (l.kind == sim::LayoutKind::image && l.image.bit_depth > 8) return py::dtype("<u2");
+            return py::dtype("u1");
+          },
+          "The numpy dtype of the stream's frames.")
+      .def("describe", &sim::Layout::describe)
+      .def("__repr__", [](const sim::Layout& l) { return "<sim.Layout " + l.describe() + ">"; })
+      .def(py::self == py::self);
+
+  py::class_<sim::FrameInfo>(m, "FrameInfo", "What the writer said about a frame.")
+      .def_readonly("seq", &sim::FrameInfo::seq, "Frame number; 1 for the first frame of the stream.")
+      .def_readonly("stamp_ns", &sim::FrameInfo::stamp_ns, "Sensor time of the frame (CLOCK_REALTIME, ns).")
+      .def_readonly("publish_ns", &sim::FrameInfo::publish_ns, "When it was published (CLOCK_MONOTONIC, ns).")
+      .def_readonly("receive_ns", &sim::FrameInfo::receive_ns,
+                    "When the host received its first data (CLOCK_REALTIME, ns); 0 if not given.")
+      .def_readonly("size", &sim::FrameInfo::size, "Bytes.")
+      .def_readonly("layout", &sim::FrameInfo::layout)
+      .def("as_dict", &info_to_dict)
+      .def("__repr__", [](const sim::FrameInfo& i) {
+        return "<sim.FrameInfo seq=" + std::to_string(i.seq) + " size=" + std::to_string(i.size) +
+               " stamp_ns=" + std::to_string(i.stamp_ns) + ">";
+      });
+
+  py::class_<sim::ReaderStats>(m, "ReaderStats", "Counters of one reader.")
+      .def_readonly("frames", &sim::ReaderStats::frames)
+      .def_readonly("skipped", &sim::ReaderStats::skipped)
+      .def_readonly("overruns", &sim::ReaderStats::overruns)
+      .def_readonly("checksum_failures", &sim::ReaderStats::checksum_failures)
+      .def_readonly("reopens", &sim::ReaderStats::reopens);
+
+  py::class_<FrameObject>(m, "Frame", "A copied frame: `array` (numpy, yours to keep) and `info`. Unpacks as (array, info).")
+      .def_readonly("array", &FrameObject::array)
+      .def_readonly("info", &FrameObject::info)
+      .def("__iter__", [](const FrameObject& f) { return py::iter(py::make_tuple(f.array, f.info)); });
+
+  py::class_<BorrowObject>(m, "Borrow",
+                           "A frame read in place (zero-copy). Its `array` is a read-only view into shared "
+                           "memory that keeps the mapping alive; the writer may overwrite the frame two "
+                           "frames later, so check still_valid() after using the data.")
+      .def_property_readonly(
+          "array",
+          [](py::object self) {
+            const auto& b = self.cast<const BorrowObject&>();
+            return shaped_array(b.info().layout, b.borrow().bytes().data(), b.borrow().bytes().size(),
+                                self, false);
+          },
+          "A read-only numpy view of the frame (each access gives a new view of the same memory).")
+      .def_property_readonly("info", &BorrowObject::info)
+      .def("still_valid", &BorrowObject::still_valid,
+           "True while the writer has not begun to overwrite the frame; call it after using the data.");
+
+  py::class_<ReaderObject>(m, "Reader", "Reads one stream: copies (read, read_next) or borrows in place.")
+      .def(py::init<const std::string&, double, bool, const std::string&, const std::string&>(),
+           py::arg("name"), py::kw_only(), py::arg("stale_after") = 0.0, py::arg("verify_checksum") = true,
+           py::arg("trust_owner") = "", py::arg("trust_group") = "",
+           "Opens the stream `name` (\"/camera_front\"). By default only streams of this user are accepted; "
+           "trust_owner / trust_group (a name or numeric id) accept that user's or group's streams. "
+           "Raises SimError with the reason when it cannot.")
+      .def("read", &ReaderObject::read,
+           "The newest frame as a Frame (a copy) if it is newer than the last one returned, else None "
+           "(last_status says why).")
+      .def("read_next", &ReaderObject::read_next, py::arg("timeout"),
+           "Waits up to `timeout` seconds (None: forever; the GIL is released) for a new frame, then read().")
+      .def("wait", &ReaderObject::wait, py::arg("timeout"),
+           "Waits up to `timeout` seconds for a new frame without reading it; True if there is one.")
+      .def("borrow", &ReaderObject::borrow,
+           "The newest frame in place as a Borrow if it is newer than the last one returned, else None.")
+      .def("writer_alive", &ReaderObject::writer_alive, "Whether a process holds the stream's writer lock.")
+      .def("close", &ReaderObject::close,
+           "Closes the reader; borrowed views stay readable until they are deleted.")
+      .def_property_readonly("closed", &ReaderObject::closed)
+      .def_property_readonly("last_status", &ReaderObject::last_status)
+      .def_property_readonly("name", &ReaderObject::name)
+      .def_property_readonly("capacity", &ReaderObject::capacity)
+      .def_property_readonly("layout", &ReaderObject::layout)
+      .def_property_readonly("stats", &ReaderObject::stats)
+      .def("__enter__", [](py::object self) { return self; })
+      .def("__exit__", [](ReaderObject& r, py::args) { r.close(); });
+
+  py::class_<LoanObject>(m, "Loan",
+                         "The writer's back slot, to fill in place; commit() publishes it. Its `array` "
+                         "views must not be written after commit().")
+      .def_property_readonly(
+          "array", [](py::object self) { return self.cast<const LoanObject&>().array(self); },
+          "A writable numpy view of the whole slot, shaped by the stream's layout.")
+      .def_property_readonly("capacity", &LoanObject::capacity)
+      .def("commit", &LoanObject::commit, py::arg("nbytes") = py::none(), py::kw_only(),
+           py::arg("stamp_ns") = py::none(), py::arg("receive_ns") = 0,
+           "Publishes the first `nbytes` bytes (default: a full frame of the layout). stamp_ns defaults to now.");
+
+  py::class_<WriterObject>(m, "Writer", "The one writer of a stream.")
+      .def(py::init<const std::string&, const sim::Layout&, std::uint64_t, bool, std::uint32_t, double>(),
+           py::arg("name"), py::arg("layout") = sim::Layout::raw(), py::kw_only(), py::arg("capacity") = 0,
+           py::arg("checksum") = false, py::arg("mode") = 0600, py::arg("heartbeat_period") = 0.0,
+           "Creates (or takes over) the stream `name`. capacity 0 takes the layout's frame size.")
+      .def("write", &WriterObject::write, py::arg("frame"), py::kw_only(), py::arg("stamp_ns") = py::none(),
+           py::arg("receive_ns") = 0,
+           "Copies a C-contiguous buffer (numpy array, bytes) in and publishes it. stamp_ns defaults to now.")
+      .def("loan", &WriterObject::loan, "The back slot to fill in place (see Loan).")
+      .def("close", &WriterObject::close, "Gives up the stream (once no loan is alive).")
+      .def_property_readonly("closed", &WriterObject::closed)
+      .def_property_readonly("name", &WriterObject::name)
+      .def_property_readonly("capacity", &WriterObject::capacity)
+      .def_property_readonly("layout", &WriterObject::layout)
+      .def_property_readonly("last_seq", &WriterObject::last_seq)
+      .def("__enter__", [](py::object self) { return self; })
+      .def("__exit__", [](WriterObject& w, py::args) { w.close(); });
+
+  m.def("list_streams", &sim::list_streams, "Names of every SIM stream on this machine, sorted.");
+  m.def(
+      "destroy", [](const std::string& name, bool force) { raise_if_error(sim::destroy(name, force)); },
+      py::arg("name"), py::kw_only(), py::arg("force") = false,
+      "Removes a stream. Refused while its writer is alive unless force=True.");
+  m.attr("LIDAR_POINT_DTYPE") = point_dtype(sim::PointType::lidar_point);
+}
