@@ -19,7 +19,9 @@ int main(int argc, char** argv) {
   for (std::size_t i = 0; i < 100; ++i) {
     points[i] = {static_cast<float>(i), 0.0f, 1.0f, 50.0f, 0, static_cast<std::uint16_t>(i % 64), 0, 0};
   }
-  loan.commit(100 * sizeof(sim::LidarPoint), sim::realtime_ns());
+  if (std::move(loan).commit(100 * sizeof(sim::LidarPoint), sim::realtime_ns()) != sim::WriteStatus::ok) {
+    return 1;
+  }
 
   auto reader = sim::Reader::open(name);
   if (!reader) {
@@ -37,6 +39,6 @@ int main(int argc, char** argv) {
   std::printf("frame %llu: %zu points, sum of x %.0f, %s\n",
               static_cast<unsigned long long>(frame.info().seq), frame.as<sim::LidarPoint>().size(),
               static_cast<double>(sum_x), valid ? "valid" : "overwritten");
-  sim::destroy(name, /*force=*/true);
+  if (!sim::destroy(name, /*force=*/true)) return 1;
   return valid && sum_x == 4950.0f ? 0 : 1;
 }

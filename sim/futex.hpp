@@ -24,8 +24,9 @@ inline void futex_wait_until(const std::atomic<std::uint32_t>* word, std::uint32
           &deadline, nullptr, FUTEX_BITSET_MATCH_ANY);
 }
 
-inline void futex_wake_all(std::atomic<std::uint32_t>* word) noexcept {
-  syscall(SYS_futex, word, FUTEX_WAKE, INT_MAX, nullptr, nullptr, 0);
+// Wakes every sleeper on `word`; returns how many there were.
+inline long futex_wake_all(std::atomic<std::uint32_t>* word) noexcept {
+  return syscall(SYS_futex, word, FUTEX_WAKE, INT_MAX, nullptr, nullptr, 0);
 }
 
 }  // namespace sim::detail

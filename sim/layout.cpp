@@ -173,6 +173,7 @@ const char* to_string(WriteStatus status) noexcept {
     case WriteStatus::ok: return "ok";
     case WriteStatus::too_large: return "too_large";
     case WriteStatus::closed: return "closed";
+    case WriteStatus::loan_open: return "loan_open";
   }
   return "invalid";
 }

@@ -9,7 +9,7 @@
 
 namespace sim {
 
-std::optional<Error> pin_current_thread(int cpu) {
+Expected<void> pin_current_thread(int cpu) {
   cpu_set_t set;
   CPU_ZERO(&set);
   if (cpu < 0 || cpu >= CPU_SETSIZE) {
@@ -21,10 +21,10 @@ std::optional<Error> pin_current_thread(int cpu) {
                                               std::strerror(err) +
                                               "); choose a CPU this process may use"};
   }
-  return std::nullopt;
+  return {};
 }
 
-std::optional<Error> set_realtime_priority(int priority) {
+Expected<void> set_realtime_priority(int priority) {
   if (priority < sched_get_priority_min(SCHED_FIFO) || priority > sched_get_priority_max(SCHED_FIFO)) {
     return Error{ErrorCode::invalid_argument,
                  "real-time priority " + std::to_string(priority) + " is outside 1–99"};
@@ -36,17 +36,17 @@ std::optional<Error> set_realtime_priority(int priority) {
                  "cannot switch to SCHED_FIFO priority " + std::to_string(priority) + " (" +
                      std::strerror(err) + "); run as root or grant CAP_SYS_NICE"};
   }
-  return std::nullopt;
+  return {};
 }
 
-std::optional<Error> apply_thread_placement(const ThreadPlacement& placement) {
+Expected<void> apply_thread_placement(const ThreadPlacement& placement) {
   if (placement.cpu) {
-    if (auto error = pin_current_thread(*placement.cpu)) return error;
+    if (auto pinned = pin_current_thread(*placement.cpu); !pinned) return pinned;
   }
   if (placement.rt_priority) {
-    if (auto error = set_realtime_priority(*placement.rt_priority)) return error;
+    if (auto raised = set_realtime_priority(*placement.rt_priority); !raised) return raised;
   }
-  return std::nullopt;
+  return {};
 }
 
 }  // namespace sim

@@ -8,6 +8,9 @@
 #include <xxhash.h>
 
 #include <algorithm>
+#include <atomic>
+#include <limits>
+#include <memory>
 #include <cerrno>
 #include <thread>
 
@@ -43,13 +46,19 @@ struct Snapshot {
 enum class Begin { ready, idle, lapped, invalid, reopened };
 }  // namespace
 
+// A token no other reader on the machine uses, for the reader's wait slot (WaitPage::asleep).
+std::uint64_t new_reader_token() noexcept {
+  static std::atomic<std::uint32_t> readers_in_this_process{0};
+  const std::uint32_t n = readers_in_this_process.fetch_add(1, std::memory_order_relaxed);
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(getpid())) << 32) | (n + 1);
+}
+
 struct Reader::Impl {
   std::string name;
   ReaderOptions options;
-  RegionFile file;
-  // The region before the last replacement stays mapped, so a Borrow taken from it just before
-  // the reader moved on still points at mapped memory (still_valid() tells it is outdated).
-  RegionFile previous_file;
+  // Shared with every Borrow taken from it, so a borrowed frame stays mapped however often the
+  // region is replaced while it is held.
+  std::shared_ptr<const RegionFile> file;
   const RegionHeader* header = nullptr;
   Layout layout;
   bool checksum = false;
@@ -57,23 +66,43 @@ struct Reader::Impl {
   std::int64_t opened_ns = 0;
   std::int64_t next_liveness_check_ns = 0;
   bool writer_alive_cached = false;
+  const std::uint64_t token = new_reader_token();
+  std::optional<std::size_t> wait_slot;  // this reader's slot in the wait page, if it got one
   ReaderStats stats;
 
   void adopt(RegionFile&& f) {
-    previous_file = std::move(file);
-    file = std::move(f);
-    header = file.header();
-    layout = from_record(file.identity().layout);
-    checksum = (file.identity().flags & kFlagChecksum) != 0;
+    file = std::make_shared<const RegionFile>(std::move(f));
+    header = file->header();
+    layout = from_record(file->identity().layout);
+    checksum = (file->identity().flags & kFlagChecksum) != 0;
     opened_ns = monotonic_ns();
     next_liveness_check_ns = 0;
+    claim_wait_slot();
+  }
+
+  // Takes a free slot of the wait page: the one whose lock no live reader holds. A mark left in
+  // it proves its last owner died asleep, and comes out of the sleeper count.
+  void claim_wait_slot() noexcept {
+    wait_slot.reset();
+    WaitPage* wait = file->wait_page();
+    if (wait == nullptr) return;
+    const std::size_t first = static_cast<std::size_t>(token % kReaderSlots);
+    for (std::size_t i = 0; i < kReaderSlots; ++i) {
+      const std::size_t slot = (first + i) % kReaderSlots;
+      if (!try_lock_byte(file->fd(), kReaderLockBase + static_cast<off_t>(slot), true)) continue;
+      if (wait->asleep[slot].exchange(0, std::memory_order_acq_rel) != 0) {
+        wait->sleepers.fetch_sub(1, std::memory_order_relaxed);
+      }
+      wait_slot = slot;
+      return;
+    }
   }
 
   const std::byte* slot(std::uint64_t seq) const noexcept {
-    return file.base() + file.identity().slot_offset[seq & 1];
+    return file->base() + file->identity().slot_offset[seq & 1];
   }
   const SlotMeta& meta(std::uint64_t seq) const noexcept { return header->slots[seq & 1]; }
-  std::uint64_t capacity() const noexcept { return file.identity().capacity; }
+  std::uint64_t capacity() const noexcept { return file->identity().capacity; }
 
   // After copying: did the slot keep the frame for the whole copy?
   bool unchanged(std::uint64_t seq) const noexcept {
@@ -83,8 +112,8 @@ struct Reader::Impl {
 
   // Opens the name again if it now holds another region (a new writer replaced this one).
   bool reopen_if_replaced() noexcept {
-    if (name_refers_to(name, file.inode())) return false;
-    auto fresh = RegionFile::open_for_reading(name, options.accept_other_owner);
+    if (name_refers_to(name, file->inode())) return false;
+    auto fresh = RegionFile::open_for_reading(name, options.trust);
     if (!fresh) return false;
     adopt(std::move(*fresh));
     ++stats.reopens;
@@ -94,10 +123,10 @@ struct Reader::Impl {
   bool writer_alive(bool force) noexcept {
     const std::int64_t now = monotonic_ns();
     if (force || now >= next_liveness_check_ns) {
-      writer_alive_cached = writer_lock_held(file.fd());
+      writer_alive_cached = writer_lock_held(file->fd());
       next_liveness_check_ns = now + kLivenessCheckPeriodNs;
       if (!writer_alive_cached && reopen_if_replaced()) {
-        writer_alive_cached = writer_lock_held(file.fd());
+        writer_alive_cached = writer_lock_held(file->fd());
       }
     }
     return writer_alive_cached;
@@ -116,6 +145,41 @@ struct Reader::Impl {
 
   std::uint64_t latest() const noexcept {
     return header->publication.latest_seq.load(std::memory_order_acquire);
+  }
+
+  // Whether read() or borrow() would find a frame now: a newest number this reader has not
+  // returned, whose frame is in this region (a region that replaced another carries the old
+  // numbering on before its writer's first frame) or was already overtaken by a newer one.
+  bool deliverable() const noexcept {
+    const std::uint64_t seq = latest();
+    if (seq == 0 || seq == last_seq) return false;
+    return (meta(seq).seq.load(std::memory_order_acquire) & ~kWritingBit) >= seq;
+  }
+
+  // Sleeps until the futex word moves away from `word` or `until` (CLOCK_MONOTONIC) comes.
+  void sleep_until(const std::atomic<std::uint32_t>& word, std::uint32_t seen,
+                   std::int64_t until) noexcept {
+    if (WaitPage* wait = file->wait_page()) {
+      if (wait_slot) wait->asleep[*wait_slot].store(token, std::memory_order_relaxed);
+      wait->sleepers.fetch_add(1, std::memory_order_seq_cst);
+      std::atomic_thread_fence(std::memory_order_seq_cst);
+      if (!deliverable()) futex_wait_until(&word, seen, until);
+      // Take this reader's mark back out, unless the writer already did (it cannot tell a
+      // reader that is about to sleep from a dead one only while that reader's lock is held).
+      std::uint64_t mine = token;
+      if (!wait_slot ||
+          wait->asleep[*wait_slot].compare_exchange_strong(mine, 0, std::memory_order_acq_rel)) {
+        wait->sleepers.fetch_sub(1, std::memory_order_relaxed);
+      }
+    } else if (header->publication.wakes_every_publish.load(std::memory_order_relaxed) != 0) {
+      // A reader that may not write the region (another user's group stream): the writer wakes
+      // the futex on every publish, and the value check covers a publish since `seen` was read.
+      futex_wait_until(&word, seen, until);
+    } else {
+      // A writer that predates wakes_every_publish: nothing would wake this reader.
+      const std::int64_t nap = std::min(until - monotonic_ns(), kPollSleepNs);
+      if (nap > 0) std::this_thread::sleep_for(std::chrono::nanoseconds(nap));
+    }
   }
 
   // First half of a seqlock read: finds the newest frame and its metadata, if it is new.
@@ -167,7 +231,7 @@ struct Reader::Impl {
 };
 
 Expected<Reader> Reader::open(std::string_view name, const ReaderOptions& options) {
-  auto file = RegionFile::open_for_reading(name, options.accept_other_owner);
+  auto file = RegionFile::open_for_reading(name, options.trust);
   if (!file) return file.error();
   auto impl = std::make_unique<Impl>();
   impl->name = std::string(name);
@@ -235,6 +299,7 @@ Borrow Reader::borrow() noexcept {
     b.status_ = ReadStatus::new_frame;
     b.bytes_ = {data, s.size};
     b.slot_seq_ = &r.meta(s.seq).seq;
+    b.mapping_ = r.file;
     return b;
   }
   b.status_ = ReadStatus::overrun;
@@ -250,7 +315,12 @@ bool Borrow::still_valid() const noexcept {
 
 ReadStatus Reader::wait(std::chrono::nanoseconds timeout) noexcept {
   Impl& r = *impl_;
-  const std::int64_t deadline = monotonic_ns() + std::max<std::int64_t>(timeout.count(), 0);
+  const std::int64_t start = monotonic_ns();
+  // Saturating: kForever (or any timeout past the year 2262) must not wrap into the past.
+  const std::int64_t budget = std::max<std::int64_t>(timeout.count(), 0);
+  const std::int64_t deadline =
+      budget > std::numeric_limits<std::int64_t>::max() - start ? std::numeric_limits<std::int64_t>::max()
+                                                               : start + budget;
   for (;;) {
     const std::uint64_t reopens = r.stats.reopens;
     if (r.header->publication.retired.load(std::memory_order_acquire) != 0) {
@@ -261,20 +331,11 @@ ReadStatus Reader::wait(std::chrono::nanoseconds timeout) noexcept {
 
     const std::atomic<std::uint32_t>& futex_word = r.header->publication.futex_word;
     const std::uint32_t word = futex_word.load(std::memory_order_acquire);
-    const std::uint64_t seq = r.latest();
-    if (seq != 0 && seq != r.last_seq) return ReadStatus::new_frame;
+    if (r.deliverable()) return ReadStatus::new_frame;
     const std::int64_t now = monotonic_ns();
     if (now >= deadline) return r.idle_status();
-    const std::int64_t until = std::min(deadline, now + kWaitSliceNs);
-    if (WaitPage* wp = r.file.wait_page()) {
-      wp->sleepers.fetch_add(1, std::memory_order_seq_cst);
-      std::atomic_thread_fence(std::memory_order_seq_cst);
-      if (r.latest() == r.last_seq) futex_wait_until(&futex_word, word, until);
-      wp->sleepers.fetch_sub(1, std::memory_order_relaxed);
-    } else {
-      const std::int64_t nap = std::min(until - now, kPollSleepNs);
-      std::this_thread::sleep_for(std::chrono::nanoseconds(nap));
-    }
+    // Sleep in slices, so a reader notices a region replaced by a new writer or a dead writer.
+    r.sleep_until(futex_word, word, std::min(deadline, now + kWaitSliceNs));
   }
 }
 
@@ -303,6 +364,7 @@ ReaderStats Reader::stats() const noexcept { return impl_->stats; }
 StreamStatus Reader::status() noexcept {
   const bool alive = impl_->writer_alive(true);  // first: it may move the reader to a new region
   const Impl& r = *impl_;
+  const RegionFile& file = *r.file;
   const RegionHeader& h = *r.header;
   StreamStatus s;
   s.name = r.name;
@@ -314,14 +376,26 @@ StreamStatus Reader::status() noexcept {
   s.latest_publish_ns = h.liveness.latest_publish_ns.load(std::memory_order_relaxed);
   s.heartbeat_ns = h.liveness.heartbeat_ns.load(std::memory_order_relaxed);
   s.max_publish_interval_ns = h.liveness.max_publish_interval_ns.load(std::memory_order_relaxed);
+  s.period_ns = h.liveness.period_ns.load(std::memory_order_relaxed);
+  s.jitter_ns = h.liveness.jitter_ns.load(std::memory_order_relaxed);
+  s.frames_this_writer = h.liveness.frames_this_writer.load(std::memory_order_relaxed);
   s.writer_start_realtime_ns = h.writer.start_realtime_ns.load(std::memory_order_relaxed);
   s.writer_pid = h.writer.pid.load(std::memory_order_relaxed);
   s.writer_command = unpack_command(h.writer.command);
   s.writer_alive = alive;
-  if (const WaitPage* wp = r.file.wait_page()) {
+  if (const WaitPage* wp = file.wait_page()) {
     s.sleeping_readers = wp->sleepers.load(std::memory_order_relaxed);
   }
+  s.owner_uid = file.owner_uid();
+  s.owner_gid = file.owner_gid();
+  s.mode = file.mode();
   return s;
+}
+
+double StreamStatus::rate_hz(std::int64_t now_monotonic_ns) const noexcept {
+  if (period_ns <= 0 || frames_this_writer < 2 || latest_publish_ns == 0) return 0.0;
+  if (now_monotonic_ns - latest_publish_ns > 3 * period_ns) return 0.0;  // it stopped
+  return 1e9 / static_cast<double>(period_ns);
 }
 
 std::vector<std::string> list_streams() {
@@ -334,9 +408,7 @@ std::vector<std::string> list_streams() {
     if (!file.starts_with(kRegionPrefix)) continue;
     std::string name(1, '/');  // built in place: GCC 12's -Wrestrict misfires on "/" + string
     name += file.substr(kRegionPrefix.size());
-    if (name_problem(name).empty() && name.find(".tmp") == std::string::npos) {
-      names.push_back(name);
-    }
+    if (name_problem(name).empty()) names.push_back(name);
   }
   closedir(d);
   std::sort(names.begin(), names.end());
@@ -345,34 +417,59 @@ std::vector<std::string> list_streams() {
 
 Expected<StreamStatus> inspect(std::string_view name) {
   ReaderOptions options;
-  options.accept_other_owner = true;  // looking is harmless; sim_ls lists every stream
+  options.trust = Trust::any_owner();  // looking is harmless; sim_ls lists every stream
   auto reader = Reader::open(name, options);
   if (!reader) return reader.error();
   return reader->status();
 }
 
-std::optional<Error> destroy(std::string_view name, bool force) {
+Expected<void> destroy(std::string_view name, bool force) {
   if (const std::string problem = name_problem(name); !problem.empty()) {
     return Error{ErrorCode::invalid_name, problem};
   }
   const std::string path = region_path(name);
-  const int fd = open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK);
-  if (fd < 0 && errno == ENOENT) {
-    return Error{ErrorCode::not_found, "no stream named " + std::string(name) + " exists"};
-  }
-  if (fd >= 0) {
-    const bool alive = writer_lock_held(fd);
-    close(fd);
-    if (alive && !force) {
-      return Error{ErrorCode::writer_exists, "stream " + std::string(name) +
-                                                 " has a live writer; stop it first or use --force"};
+  for (int attempt = 0; attempt < 8; ++attempt) {
+    // O_NONBLOCK: never wait on a FIFO planted under the name. Read-write when allowed, because
+    // the remover's lock is exclusive; an odd or foreign file is removed without it.
+    int fd = open(path.c_str(), O_RDWR | O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK);
+    if (fd < 0 && (errno == EACCES || errno == ENXIO)) {
+      fd = open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK);
     }
+    if (fd < 0 && errno == ENOENT) {
+      return Error{ErrorCode::not_found, "no stream named " + std::string(name) + " exists"};
+    }
+    struct stat st {};
+    const bool region_like = fd >= 0 && fstat(fd, &st) == 0 && S_ISREG(st.st_mode);
+    if (region_like && !force) {
+      // Writer::create takes the writer lock, then checks this lock; this takes this lock, then
+      // checks the writer lock. Either this sees the writer (and refuses), or the writer sees this
+      // (and waits until the name is gone): a starting writer is never left in a removed file.
+      const bool locked = try_lock_byte(fd, kRemoverLockByte, /*exclusive=*/true);
+      if (writer_lock_held(fd)) {
+        close(fd);
+        return Error{ErrorCode::writer_exists,
+                     "stream " + std::string(name) + " has a live writer; stop it first or use --force"};
+      }
+      if (!name_refers_to(name, st.st_ino)) {  // replaced meanwhile: look at the new file
+        close(fd);
+        continue;
+      }
+      if (!locked && (fcntl(fd, F_GETFL) & O_ACCMODE) == O_RDWR) {
+        close(fd);  // another remover is at work; look again
+        continue;
+      }
+    }
+    const int unlinked = unlink(path.c_str());
+    const int err = errno;
+    if (fd >= 0) close(fd);  // releases the remover lock, after the name is gone
+    if (unlinked != 0 && err != ENOENT) {
+      return errno_error(ErrorCode::permission_denied,
+                         "cannot remove " + path + "; only its owner (or root) can", err);
+    }
+    return {};
   }
-  // A symlink or other odd file under our prefix is removed without being opened.
-  if (unlink(path.c_str()) != 0 && errno != ENOENT) {
-    return errno_error(ErrorCode::permission_denied, "cannot remove " + path, errno);
-  }
-  return std::nullopt;
+  return Error{ErrorCode::system_error,
+               "stream " + std::string(name) + " kept changing while it was being removed; try again"};
 }
 
 }  // namespace sim

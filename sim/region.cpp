@@ -33,24 +33,26 @@ Layout from_record(const LayoutRecord& r) noexcept {
   return layout;
 }
 
-std::string name_problem(std::string_view name) {
-  if (name.size() < 2 || name.front() != '/') {
-    return "stream name \"" + std::string(name) +
+std::string name_problem(std::string_view raw_name) {
+  // The name may come from anywhere: it is echoed only with its control bytes escaped.
+  const std::string name = printable(raw_name.substr(0, 240));
+  if (raw_name.size() < 2 || raw_name.front() != '/') {
+    return "stream name \"" + name +
            "\" must start with '/' followed by a name, like \"/lidar_top\"";
   }
-  const std::string_view rest = name.substr(1);
+  const std::string_view rest = raw_name.substr(1);
   if (rest.size() > 200) {
-    return "stream name \"" + std::string(name.substr(0, 40)) +
+    return "stream name \"" + name.substr(0, 40) +
            "...\" is longer than 200 characters; choose a shorter name";
   }
   if (rest == "." || rest == "..") {
-    return "stream name \"" + std::string(name) + "\" is reserved; choose another name";
+    return "stream name \"" + name + "\" is reserved; choose another name";
   }
   for (const char c : rest) {
     const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
                     c == '_' || c == '-' || c == '.';
     if (!ok) {
-      return "stream name \"" + std::string(name) +
+      return "stream name \"" + name +
              "\" may only contain letters, digits, '_', '-' and '.' after its leading '/'; "
              "rename it, like \"/camera_front\"";
     }
@@ -90,32 +92,56 @@ std::string header_problem(const Identity& id, std::uint64_t file_size) {
 }
 
 namespace {
-struct flock writer_lock_range(short type) {
+struct flock one_byte(short type, off_t byte) {
   struct flock fl {};
   fl.l_type = type;
   fl.l_whence = SEEK_SET;
-  fl.l_start = 0;
+  fl.l_start = byte;
   fl.l_len = 1;
   return fl;
 }
 }  // namespace
 
-bool try_lock_writer(int fd) noexcept {
-  struct flock fl = writer_lock_range(F_WRLCK);
+bool try_lock_byte(int fd, off_t byte, bool exclusive) noexcept {
+  struct flock fl = one_byte(exclusive ? F_WRLCK : F_RDLCK, byte);
   return fcntl(fd, F_OFD_SETLK, &fl) == 0;
 }
 
-void unlock_writer(int fd) noexcept {
-  struct flock fl = writer_lock_range(F_UNLCK);
+void unlock_byte(int fd, off_t byte) noexcept {
+  struct flock fl = one_byte(F_UNLCK, byte);
   fcntl(fd, F_OFD_SETLK, &fl);
 }
 
-bool writer_lock_held(int fd) noexcept {
-  // A read lock conflicts only with the writer's write lock, so the kernel answers "unlocked"
-  // exactly when no live process holds the writer lock. Readers never take the lock.
-  struct flock fl = writer_lock_range(F_RDLCK);
+bool byte_locked(int fd, off_t byte) noexcept {
+  // A shared probe conflicts only with exclusive locks, so shared locks that any reader could take
+  // cannot fake a holder; no pid is involved, so a reused pid cannot either.
+  struct flock fl = one_byte(F_RDLCK, byte);
   if (fcntl(fd, F_OFD_GETLK, &fl) != 0) return false;
   return fl.l_type != F_UNLCK;
+}
+
+void wait_until_unlocked(int fd, off_t byte) noexcept {
+  struct flock fl = one_byte(F_RDLCK, byte);
+  while (fcntl(fd, F_OFD_SETLKW, &fl) != 0 && errno == EINTR) {
+  }
+  unlock_byte(fd, byte);
+}
+
+std::string printable(std::string_view text) {
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte >= 0x20 && byte < 0x7f) {
+      out += c;
+    } else {
+      out += "\\x";
+      out += kHex[byte >> 4];
+      out += kHex[byte & 15];
+    }
+  }
+  return out;
 }
 
 void pack_command(std::atomic<std::uint64_t> (&out)[2]) noexcept {

@@ -9,6 +9,8 @@
 // Everything in shared memory is an offset or a fixed-width value, never a pointer.
 #pragma once
 
+#include <sys/types.h>
+
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
@@ -55,10 +57,29 @@ static_assert(sizeof(LayoutRecord) == 48);
 LayoutRecord to_record(const Layout& layout) noexcept;
 Layout from_record(const LayoutRecord& record) noexcept;
 
+// Page 0, written by readers that may write the region file (the owner's own readers); a
+// group-readable region's other readers never write it (see Writer: it then wakes on every publish).
+//
+// `sleepers` is what the writer's fast path reads. A reader killed while asleep would leave it
+// raised forever, so each reader that can also claims one of `asleep` by holding an OFD lock on
+// the byte kReaderLockBase + index of the region file, and marks its slot while it sleeps. The
+// kernel drops a dead reader's lock, so the writer (when a wake-up finds nobody) and the next
+// reader to claim that slot can prove its owner is gone and take its mark back out of the count.
+inline constexpr std::size_t kReaderSlots = (kPage - kCacheLine) / sizeof(std::uint64_t);
 struct alignas(kPage) WaitPage {
-  std::atomic<std::uint32_t> sleepers;  // readers inside futex_wait, or about to enter it
+  alignas(kCacheLine) std::atomic<std::uint32_t> sleepers;  // readers in futex_wait or about to be
+  // Per slot: 0, or the token of the slot's owner while it is counted in `sleepers`. Tokens are
+  // unique per reader, so a stale mark is never mistaken for a new owner's (compare-exchange).
+  alignas(kCacheLine) std::atomic<std::uint64_t> asleep[kReaderSlots];
 };
 static_assert(sizeof(WaitPage) == kPage);
+
+// Byte-range locks on the region file (F_OFD_SETLK; ranges need not lie inside the file). Only
+// exclusive locks count, and taking one needs write access: a reader that may only read the file
+// can take shared locks, which nobody here looks at.
+inline constexpr off_t kWriterLockByte = 0;   // held by the live writer for its whole life
+inline constexpr off_t kRemoverLockByte = 1;  // held by destroy() while it checks and unlinks
+inline constexpr off_t kReaderLockBase = 64;  // + slot index: held by the reader owning the slot
 
 // Fixed when the region is created, before it becomes visible under its name.
 struct alignas(kCacheLine) Identity {
@@ -85,8 +106,11 @@ struct alignas(kCacheLine) WriterIdentity {
 
 struct alignas(kCacheLine) Publication {
   std::atomic<std::uint64_t> latest_seq;  // newest published frame; 0 before the first
-  std::atomic<std::uint32_t> futex_word;  // changes on every publish; readers sleep on it
+  std::atomic<std::uint32_t> futex_word;  // +1 on every publish, by every writer; readers sleep on it
   std::atomic<std::uint32_t> retired;     // 1: a newer region replaced this one; reopen by name
+  // 1: the writer wakes the futex on every publish (group-readable streams), so readers that may
+  // not write the wait page can sleep too. Zero from writers that predate it: such readers poll.
+  std::atomic<std::uint32_t> wakes_every_publish;
 };
 
 struct alignas(kCacheLine) Liveness {
@@ -94,7 +118,13 @@ struct alignas(kCacheLine) Liveness {
   std::atomic<std::int64_t> latest_publish_ns;  // CLOCK_MONOTONIC
   std::atomic<std::uint64_t> frames_published;
   std::atomic<std::int64_t> max_publish_interval_ns;
+  // Added in place of padding (zero from writers that do not keep them): this writer's publish
+  // period and its typical deviation, smoothed over recent frames (PeriodEstimate in writer.cpp).
+  std::atomic<std::int64_t> period_ns;
+  std::atomic<std::int64_t> jitter_ns;
+  std::atomic<std::uint64_t> frames_this_writer;  // published since this writer attached
 };
+static_assert(sizeof(Liveness) == kCacheLine);
 
 // Per-slot metadata, guarded by `seq` as a seqlock: valid only if `seq` reads the same (and
 // without kWritingBit) before and after the metadata and payload are read.
@@ -144,15 +174,31 @@ inline constexpr std::string_view kRegionPrefix = "sim.";
 // Checks a header the caller must not trust against the file it came from. Empty if valid.
 std::string header_problem(const Identity& identity, std::uint64_t file_size);
 
-// The writer's lock: an open-file-description lock on the first byte of the region file.
-bool try_lock_writer(int fd) noexcept;
-bool writer_lock_held(int fd) noexcept;
-void unlock_writer(int fd) noexcept;
+// Open-file-description locks on one byte of the region file. The kernel drops them when the
+// last descriptor of the open file goes, however its process ends.
+bool try_lock_byte(int fd, off_t byte, bool exclusive) noexcept;
+void unlock_byte(int fd, off_t byte) noexcept;
+// Whether another open file holds an exclusive lock on `byte`.
+bool byte_locked(int fd, off_t byte) noexcept;
+// Waits until no other open file holds an exclusive lock on `byte` (a remover holds it for
+// microseconds and never waits while holding it).
+void wait_until_unlocked(int fd, off_t byte) noexcept;
+
+inline bool try_lock_writer(int fd) noexcept { return try_lock_byte(fd, kWriterLockByte, true); }
+inline bool writer_lock_held(int fd) noexcept { return byte_locked(fd, kWriterLockByte); }
+inline void unlock_writer(int fd) noexcept { unlock_byte(fd, kWriterLockByte); }
+
+// `text` with every byte outside printable ASCII shown as \xNN, for error messages.
+std::string printable(std::string_view text);
 
 // The process name of the caller, packed for WriterIdentity::command.
 void pack_command(std::atomic<std::uint64_t> (&out)[2]) noexcept;
 std::string unpack_command(const std::atomic<std::uint64_t> (&in)[2]);
 
 Error errno_error(ErrorCode code, std::string what, int err);
+
+// "alice (uid 1000)", or "uid 1000" for a user with no name here (trust.cpp); likewise groups.
+std::string user_name(uid_t uid);
+std::string group_name(gid_t gid);
 
 }  // namespace sim::detail

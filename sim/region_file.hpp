@@ -3,6 +3,7 @@
 // open one without trusting it.
 #pragma once
 
+#include <sys/stat.h>
 #include <sys/types.h>
 
 #include <cstdint>
@@ -11,6 +12,7 @@
 #include <string_view>
 
 #include "region.hpp"
+#include "sim/reader.hpp"
 #include "sim/result.hpp"
 
 namespace sim::detail {
@@ -25,25 +27,30 @@ class RegionFile {
   ~RegionFile();
 
   // For a reader: maps the file read-only, plus the wait page writable when the file allows it.
-  // Validates the header; the returned identity is a private copy the reader can trust.
-  static Expected<RegionFile> open_for_reading(std::string_view name, bool accept_other_owner);
+  // Refuses a region whose owner `trust` does not accept. Validates the header; the returned
+  // identity is a private copy the reader can trust.
+  static Expected<RegionFile> open_for_reading(std::string_view name, const Trust& trust);
   // For a writer: an existing region, opened read-write and not yet validated.
   // Returns not_found when no region has that name.
   static Expected<RegionFile> open_for_writing(std::string_view name);
   // For a writer: a new unnamed region file of `file_size` bytes, memory reserved, mapped
   // read-write. publish_as() gives it its name once the header is complete.
   static Expected<RegionFile> create_unnamed(std::uint64_t file_size, std::uint32_t mode);
-  // Links the unnamed file under the stream's name: fails with writer_exists-like EEXIST
-  // unless `replace`, in which case an existing region is atomically replaced.
-  std::optional<Error> publish_as(std::string_view name, bool replace);
+  // Links the unnamed file under the stream's name: fails with writer_exists when the name is
+  // taken, unless `replace`, in which case an existing region is atomically replaced.
+  Expected<void> publish_as(std::string_view name, bool replace);
   // Maps a region opened with open_for_writing read-write (after its header was validated).
-  std::optional<Error> map_read_write();
+  Expected<void> map_read_write();
   // Takes the identity from the mapped header again (after the writer has initialised it).
   void reload_identity() noexcept;
 
   int fd() const noexcept { return fd_; }
   std::uint64_t file_size() const noexcept { return file_size_; }
   ino_t inode() const noexcept { return inode_; }
+  nlink_t link_count() const noexcept { return link_count_; }  // names of the file when opened
+  uid_t owner_uid() const noexcept { return owner_uid_; }
+  gid_t owner_gid() const noexcept { return owner_gid_; }
+  mode_t mode() const noexcept { return mode_; }
   bool wait_page_writable() const noexcept { return wait_page_ != nullptr; }
   // Null until the file is mapped.
   RegionHeader* header() const noexcept {
@@ -55,15 +62,20 @@ class RegionFile {
   const Identity& identity() const noexcept { return identity_; }  // private, validated copy
 
   // Reads the identity out of the file with pread (for a writer deciding whether to reuse a
-  // region before mapping it). Fails when the file is too small.
-  std::optional<Error> read_identity(Identity& out) const;
+  // region before mapping it). False when the file is too small to hold one.
+  bool read_identity(Identity& out) const;
 
  private:
   void reset() noexcept;
+  void take_stat(const struct stat& st) noexcept;
   int fd_ = -1;
   void* base_ = nullptr;
   std::uint64_t file_size_ = 0;
   ino_t inode_ = 0;
+  nlink_t link_count_ = 0;
+  uid_t owner_uid_ = 0;
+  gid_t owner_gid_ = 0;
+  mode_t mode_ = 0;
   WaitPage* wait_page_ = nullptr;  // separate writable mapping of page 0 (readers), or in base_
   bool wait_page_separate_ = false;
   Identity identity_{};

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "futex.hpp"
+#include "period_estimate.hpp"
 #include "region_file.hpp"
 #include "sim/clock.hpp"
 
@@ -24,12 +25,18 @@ struct detail::WriterState {
   std::uint64_t capacity = 0;
   Layout layout;
   bool checksum = false;
+  // Group-readable streams have readers that may not write the wait page, so they cannot say
+  // they sleep: the writer then wakes the futex on every publish (one cheap system call).
+  bool wakes_every_publish = false;
   RegionFile file;
   RegionHeader* header = nullptr;
   std::uint64_t last_seq = 0;  // newest published frame
   std::int64_t last_publish_ns = 0;
   std::int64_t max_interval_ns = 0;
-  std::uint64_t loans_started = 0;  // identifies the newest loan: only it may commit
+  std::uint64_t frames_published = 0;  // by this writer
+  detail::PeriodEstimate period;
+  std::int64_t last_heal_ns = 0;  // last scan for sleepers that died asleep
+  bool loan_open = false;
 
   // Optional idle heartbeat.
   std::thread heartbeat_thread;
@@ -60,6 +67,23 @@ struct detail::WriterState {
     heartbeat_stop_cv.notify_all();
     heartbeat_thread.join();
   }
+
+  // Takes the marks of readers that died asleep out of the sleeper count, so the writer's fast
+  // path (no system call while nobody sleeps) comes back by itself. A reader holds the lock of
+  // its slot for its whole life; the kernel drops it when the reader dies, however it dies.
+  void heal_dead_sleepers(std::int64_t now) noexcept {
+    if (now - last_heal_ns < kHealPeriodNs) return;
+    last_heal_ns = now;
+    WaitPage& wait = *file.wait_page();
+    for (std::size_t i = 0; i < kReaderSlots; ++i) {
+      std::uint64_t token = wait.asleep[i].load(std::memory_order_acquire);
+      if (token == 0 || byte_locked(file.fd(), kReaderLockBase + static_cast<off_t>(i))) continue;
+      if (wait.asleep[i].compare_exchange_strong(token, 0, std::memory_order_acq_rel)) {
+        wait.sleepers.fetch_sub(1, std::memory_order_relaxed);
+      }
+    }
+  }
+  static constexpr std::int64_t kHealPeriodNs = 100'000'000;
 
   ~WriterState() {
     stop_heartbeat();
@@ -106,6 +130,23 @@ void initialise_header(RegionHeader& h, std::uint64_t capacity, const StreamSpec
 
 }  // namespace
 
+namespace {
+
+// Why a writer of `spec` cannot take `name` now, naming the live writer; for the error message.
+Error live_writer_error(const StreamSpec& spec, RegionFile& file) {
+  std::string who;
+  Identity id{};
+  if (file.read_identity(id) && header_problem(id, file.file_size()).empty() &&
+      file.map_read_write()) {
+    who = " (pid " + std::to_string(file.header()->writer.pid.load()) + ", " +
+          unpack_command(file.header()->writer.command) + ")";
+  }
+  return Error{ErrorCode::writer_exists, "stream " + spec.name + " already has a live writer" + who +
+                                             "; stop it first or use another name"};
+}
+
+}  // namespace
+
 Expected<Writer> Writer::create(const StreamSpec& spec) {
   if (const std::string problem = name_problem(spec.name); !problem.empty()) {
     return Error{ErrorCode::invalid_name, problem};
@@ -118,9 +159,13 @@ Expected<Writer> Writer::create(const StreamSpec& spec) {
   if (const std::string problem = spec.layout.check(capacity); !problem.empty()) {
     return Error{ErrorCode::invalid_argument, "stream " + spec.name + ": " + problem};
   }
-  if ((spec.mode & ~0666u) != 0 || (spec.mode & 0600u) != 0600u) {
+  // Write access to the region is the power to truncate it (SIGBUS for the writer) or to forge
+  // frames, so only the owner ever has it; readers of the group never need it (see wakes_every_publish).
+  if ((spec.mode & ~0644u) != 0 || (spec.mode & 0600u) != 0600u) {
     return Error{ErrorCode::invalid_argument,
-                 "stream " + spec.name + ": mode must give the owner read and write and no one execute"};
+                 "stream " + spec.name +
+                     ": mode must give the owner read and write and others at most read (0600, 0640 "
+                     "or 0644)"};
   }
 
   auto impl = std::make_unique<WriterState>();
@@ -128,40 +173,42 @@ Expected<Writer> Writer::create(const StreamSpec& spec) {
   impl->capacity = capacity;
   impl->layout = spec.layout;
   impl->checksum = spec.checksum;
+  impl->wakes_every_publish = (spec.mode & 0044u) != 0;
 
-  // Two writers can race for a new name; the loser sees the winner's region on its next pass.
-  for (int attempt = 0; attempt < 3; ++attempt) {
+  // Each pass looks at what the name holds now. Another pass is needed when a second writer won a
+  // race for a new name, or when destroy() was removing the region while this writer opened it.
+  for (int attempt = 0; attempt < 8; ++attempt) {
     auto existing = RegionFile::open_for_writing(spec.name);
     std::uint64_t first_seq = 0;
     bool replace = false;
     RegionFile old;
     if (existing) {
       RegionFile& file = *existing;
-      if (!try_lock_writer(file.fd())) {
-        std::string who;
-        Identity id{};
-        if (!file.read_identity(id) && header_problem(id, file.file_size()).empty() &&
-            file.map_read_write() == std::nullopt) {
-          who = " (pid " + std::to_string(file.header()->writer.pid.load()) + ", " +
-                unpack_command(file.header()->writer.command) + ")";
-        }
-        return Error{ErrorCode::writer_exists, "stream " + spec.name + " already has a live writer" +
-                                                   who + "; stop it first or use another name"};
+      if (!try_lock_writer(file.fd())) return live_writer_error(spec, file);
+      // destroy() takes the remover lock, then checks the writer lock; this writer took the
+      // writer lock and now checks the remover lock. Whichever order the two ran in, one sees the
+      // other: a removal in progress is waited out and the name looked at again.
+      if (byte_locked(file.fd(), kRemoverLockByte)) {
+        unlock_writer(file.fd());
+        wait_until_unlocked(file.fd(), kRemoverLockByte);
+        continue;
       }
+      if (!name_refers_to(spec.name, file.inode())) continue;  // removed or replaced meanwhile
       Identity id{};
-      const bool valid =
-          !file.read_identity(id) && header_problem(id, file.file_size()).empty();
-      if (valid && compatible(id, spec, capacity)) {
-        if (auto error = file.map_read_write()) return *error;
+      const bool valid = file.read_identity(id) && header_problem(id, file.file_size()).empty();
+      // A second name for the same file (a hard link) would let its readers read this stream
+      // under that name: such a region is replaced, never taken over.
+      if (valid && compatible(id, spec, capacity) && file.link_count() == 1) {
+        if (auto mapped = file.map_read_write(); !mapped) return mapped.error();
         impl->file = std::move(file);  // take it over: the lock stays with this open file
         impl->header = impl->file.header();
         impl->last_seq = impl->header->publication.latest_seq.load(std::memory_order_acquire);
         fchmod(impl->file.fd(), spec.mode & 0777);
         break;
       }
-      // Layout or capacity changed, or the region is corrupt: build a new one and replace it,
-      // keeping the old one locked until then so no other writer can slip in.
-      if (valid && file.map_read_write() == std::nullopt) {
+      // Layout or capacity changed, or the region is corrupt or linked twice: build a new one
+      // and replace it, keeping the old one locked until then so no other writer can slip in.
+      if (valid && file.map_read_write()) {
         first_seq = file.header()->publication.latest_seq.load(std::memory_order_acquire);
       }
       old = std::move(file);
@@ -177,9 +224,9 @@ Expected<Writer> Writer::create(const StreamSpec& spec) {
     }
     initialise_header(*created->header(), capacity, spec, first_seq);
     created->reload_identity();
-    if (auto error = created->publish_as(spec.name, replace)) {
-      if (error->code == ErrorCode::writer_exists) continue;  // lost the race: look again
-      return *error;
+    if (auto published = created->publish_as(spec.name, replace); !published) {
+      if (published.error().code == ErrorCode::writer_exists) continue;  // lost the race: look again
+      return published.error();
     }
     if (old.header() != nullptr) {
       // Tell readers of the old region to reopen the name.
@@ -194,7 +241,7 @@ Expected<Writer> Writer::create(const StreamSpec& spec) {
   }
   if (impl->header == nullptr) {
     return Error{ErrorCode::writer_exists,
-                 "stream " + spec.name + " is being created by another writer; try again"};
+                 "stream " + spec.name + " is being created or removed by another process; try again"};
   }
 
   RegionHeader& h = *impl->header;
@@ -202,8 +249,13 @@ Expected<Writer> Writer::create(const StreamSpec& spec) {
   h.writer.attach_count.fetch_add(1, std::memory_order_relaxed);
   h.writer.start_realtime_ns.store(realtime_ns(), std::memory_order_relaxed);
   pack_command(h.writer.command);
+  h.publication.wakes_every_publish.store(impl->wakes_every_publish ? 1 : 0,
+                                          std::memory_order_relaxed);
   h.liveness.heartbeat_ns.store(monotonic_ns(), std::memory_order_relaxed);
   h.liveness.max_publish_interval_ns.store(0, std::memory_order_relaxed);
+  h.liveness.period_ns.store(0, std::memory_order_relaxed);
+  h.liveness.jitter_ns.store(0, std::memory_order_relaxed);
+  h.liveness.frames_this_writer.store(0, std::memory_order_relaxed);
 
   if (spec.lock_memory && mlock(impl->file.base(), impl->file.file_size()) != 0) {
     return errno_error(ErrorCode::system_error,
@@ -232,18 +284,18 @@ Writer::~Writer() = default;
 WriteStatus Writer::write(std::span<const std::byte> frame, std::int64_t stamp_ns,
                           std::int64_t receive_ns) noexcept {
   if (!impl_) return WriteStatus::closed;
+  if (impl_->loan_open) return WriteStatus::loan_open;
   if (frame.size() > impl_->capacity) return WriteStatus::too_large;
   impl_->begin_write();
-  ++impl_->loans_started;  // a loan still open is overtaken by this write
   std::memcpy(impl_->slot(impl_->last_seq + 1), frame.data(), frame.size());
   return publish(*impl_, frame.size(), stamp_ns, receive_ns);
 }
 
 Loan Writer::loan() noexcept {
-  if (!impl_) return Loan(nullptr, {}, 0);
+  if (!impl_ || impl_->loan_open) return Loan(nullptr, {});
   impl_->begin_write();
-  ++impl_->loans_started;
-  return Loan(impl_.get(), {impl_->slot(impl_->last_seq + 1), impl_->capacity}, impl_->loans_started);
+  impl_->loan_open = true;
+  return Loan(impl_.get(), {impl_->slot(impl_->last_seq + 1), impl_->capacity});
 }
 
 namespace {
@@ -263,24 +315,37 @@ WriteStatus publish(WriterState& w, std::uint64_t size, std::int64_t stamp_ns,
   meta.seq.store(seq, std::memory_order_release);
   Publication& pub = w.header->publication;
   pub.latest_seq.store(seq, std::memory_order_release);
-  pub.futex_word.store(static_cast<std::uint32_t>(seq), std::memory_order_release);
+  // +1 rather than the frame number: the word must change on every publish, also when a new
+  // writer's first frame carries the number the last writer's exit already bumped the word to.
+  pub.futex_word.fetch_add(1, std::memory_order_release);
   w.last_seq = seq;
 
   Liveness& live = w.header->liveness;
-  if (w.last_publish_ns != 0 && now - w.last_publish_ns > w.max_interval_ns) {
-    w.max_interval_ns = now - w.last_publish_ns;
-    live.max_publish_interval_ns.store(w.max_interval_ns, std::memory_order_relaxed);
+  if (w.last_publish_ns != 0) {
+    const std::int64_t interval = now - w.last_publish_ns;
+    if (interval > w.max_interval_ns) {
+      w.max_interval_ns = interval;
+      live.max_publish_interval_ns.store(w.max_interval_ns, std::memory_order_relaxed);
+    }
+    w.period.add(interval);
+    live.period_ns.store(w.period.period_ns(), std::memory_order_relaxed);
+    live.jitter_ns.store(w.period.jitter_ns(), std::memory_order_relaxed);
   }
   w.last_publish_ns = now;
   live.latest_publish_ns.store(now, std::memory_order_relaxed);
   live.heartbeat_ns.store(now, std::memory_order_relaxed);
   live.frames_published.fetch_add(1, std::memory_order_relaxed);
+  live.frames_this_writer.store(++w.frames_published, std::memory_order_relaxed);
 
   // Dekker-style handshake with Reader::wait: either a sleeper sees the new frame before it
   // sleeps, or this load sees the sleeper and wakes it. No system call when nobody sleeps.
   std::atomic_thread_fence(std::memory_order_seq_cst);
-  if (w.file.wait_page()->sleepers.load(std::memory_order_relaxed) != 0) {
-    futex_wake_all(&pub.futex_word);
+  const bool sleepers = w.file.wait_page()->sleepers.load(std::memory_order_relaxed) != 0;
+  if (sleepers || w.wakes_every_publish) {
+    const long woken = futex_wake_all(&pub.futex_word);
+    // Counted sleepers but nobody woke: usually a reader just about to sleep, but perhaps one
+    // that died asleep. Check (rarely) so the count does not stay raised forever.
+    if (sleepers && woken == 0) w.heal_dead_sleepers(now);
   }
   return WriteStatus::ok;
 }
@@ -297,24 +362,29 @@ const Layout& Writer::layout() const noexcept { return impl_->layout; }
 std::uint64_t Writer::last_seq() const noexcept { return impl_->last_seq; }
 
 Loan::Loan(Loan&& other) noexcept
-    : writer_(std::exchange(other.writer_, nullptr)),
-      bytes_(std::exchange(other.bytes_, {})),
-      seq_(std::exchange(other.seq_, 0)) {}
+    : writer_(std::exchange(other.writer_, nullptr)), bytes_(std::exchange(other.bytes_, {})) {}
 
 Loan& Loan::operator=(Loan&& other) noexcept {
-  writer_ = std::exchange(other.writer_, nullptr);
-  bytes_ = std::exchange(other.bytes_, {});
-  seq_ = std::exchange(other.seq_, 0);
+  if (this != &other) {
+    release();
+    writer_ = std::exchange(other.writer_, nullptr);
+    bytes_ = std::exchange(other.bytes_, {});
+  }
   return *this;
 }
 
-WriteStatus Loan::commit(std::uint64_t size, std::int64_t stamp_ns, std::int64_t receive_ns) noexcept {
-  if (writer_ == nullptr || writer_->loans_started != seq_) return WriteStatus::closed;
+Loan::~Loan() { release(); }
+
+void Loan::release() noexcept {
+  if (writer_ != nullptr) writer_->loan_open = false;
+  writer_ = nullptr;
+  bytes_ = {};
+}
+
+WriteStatus Loan::commit(std::uint64_t size, std::int64_t stamp_ns, std::int64_t receive_ns) && noexcept {
+  if (writer_ == nullptr) return WriteStatus::closed;
   const WriteStatus status = publish(*writer_, size, stamp_ns, receive_ns);
-  if (status == WriteStatus::ok) {
-    writer_ = nullptr;
-    bytes_ = {};
-  }
+  release();
   return status;
 }
 

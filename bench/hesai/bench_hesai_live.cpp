@@ -75,7 +75,7 @@ int measure_cut_to_visible(const Payloads& payloads, const std::string& calibrat
   auto reader = sim::Reader::open(config.stream);
   if (!reader) {
     std::fprintf(stderr, "bench_hesai_live: %s\n", reader.error().message.c_str());
-    sim::destroy(config.stream, true);
+    (void)sim::destroy(config.stream, true);
     return 1;
   }
 
@@ -113,7 +113,7 @@ int measure_cut_to_visible(const Payloads& payloads, const std::string& calibrat
   }
   stop.store(true);
   consumer.join();
-  sim::destroy(config.stream, true);
+  (void)sim::destroy(config.stream, true);
 
   const Percentiles cut = summarise(cut_push), woken = summarise(to_reader),
                     ordinary = summarise(ordinary_push);
@@ -290,7 +290,7 @@ int measure_driver_cpu(const Payloads& payloads, const std::string& calibration,
   kill(driver.pid, SIGTERM);
   waitpid(driver.pid, nullptr, 0);
   close(driver.out);
-  sim::destroy(stream, true);
+  (void)sim::destroy(stream, true);
 
   std::printf("live driver CPU, Pandar64 dual at the recorded rate over UDP on 127.0.0.1\n");
   std::printf("  %.1f s, %llu packets (%.0f/s), %llu frames published\n", wall,

@@ -110,13 +110,13 @@ void sleep_until_ns(std::int64_t t) {
 // Pins and raises the calling process as asked; failures are reported, not fatal.
 void place_self(int cpu, int rt_priority) {
   if (cpu >= 0) {
-    if (auto err = sim::pin_current_thread(cpu)) {
-      std::fprintf(stderr, "sim_bench: cannot pin to CPU %d: %s\n", cpu, err->message.c_str());
+    if (auto pinned = sim::pin_current_thread(cpu); !pinned) {
+      std::fprintf(stderr, "sim_bench: cannot pin to CPU %d: %s\n", cpu, pinned.error().message.c_str());
     }
   }
   if (rt_priority > 0) {
-    if (auto err = sim::set_realtime_priority(rt_priority)) {
-      std::fprintf(stderr, "sim_bench: cannot use SCHED_FIFO: %s\n", err->message.c_str());
+    if (auto raised = sim::set_realtime_priority(rt_priority); !raised) {
+      std::fprintf(stderr, "sim_bench: cannot use SCHED_FIFO: %s\n", raised.error().message.c_str());
     }
   }
 }
@@ -416,7 +416,7 @@ class Bench {
     struct RegionSweep {
       std::string name;
       ~RegionSweep() {
-        if (!name.empty()) sim::destroy(name, /*force=*/true);
+        if (!name.empty()) (void)sim::destroy(name, /*force=*/true);
       }
     } sweep{transport.rfind("sim-", 0) == 0 ? "/" + topic : std::string()};
     auto fail = [&](const std::string& why) {

@@ -20,7 +20,7 @@ std::string region_name(const Endpoint& e) { return "/" + e.topic; }
 class SimPublisher final : public PublisherBackend {
  public:
   SimPublisher(Writer writer, bool loan) : writer_(std::move(writer)), loan_(loan) {}
-  ~SimPublisher() override { sim::destroy(writer_.name(), /*force=*/true); }
+  ~SimPublisher() override { (void)sim::destroy(writer_.name(), /*force=*/true); }
 
   bool wait_for_readers(int, std::chrono::milliseconds) override { return true; }
 
@@ -31,7 +31,7 @@ class SimPublisher final : public PublisherBackend {
       std::memcpy(slot.data(), source.data(), source.size());  // "producing" the frame in place
       const std::int64_t now = monotonic_ns();
       seal_frame(slot, seq, now);
-      return loan.commit(source.size(), now) == WriteStatus::ok;
+      return std::move(loan).commit(source.size(), now) == WriteStatus::ok;
     }
     // Copy-in: write() copies the writer's frame into the slot.
     const std::int64_t now = monotonic_ns();

@@ -9,9 +9,9 @@
 namespace sim {
 
 // Pins the calling thread to one CPU.
-std::optional<Error> pin_current_thread(int cpu);
+Expected<void> pin_current_thread(int cpu);
 // Runs the calling thread under SCHED_FIFO at `priority` (1–99); needs CAP_SYS_NICE or root.
-std::optional<Error> set_realtime_priority(int priority);
+Expected<void> set_realtime_priority(int priority);
 
 // Where a tool's working thread runs: its --cpu and --rt-priority (or a config file's cpu and
 // rt_priority). Unset means "leave as the system chose".
@@ -20,6 +20,6 @@ struct ThreadPlacement {
   std::optional<int> rt_priority;
 };
 // Pins, then raises the priority, of the calling thread; the first error, if any.
-std::optional<Error> apply_thread_placement(const ThreadPlacement& placement);
+Expected<void> apply_thread_placement(const ThreadPlacement& placement);
 
 }  // namespace sim

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <ratio>
 #include <span>
 #include <string>
 #include <string_view>
@@ -42,14 +43,52 @@ enum class ReadStatus {
 
 const char* to_string(ReadStatus status) noexcept;
 
+// Whose regions a reader accepts. A region is a file anyone with write access to /dev/shm could
+// have created under the name first; the trust says which creator is the real writer.
+// Default (nothing set): only regions of the reader's own effective user.
+struct Trust {
+  std::optional<std::uint32_t> owner_uid;  // the region must belong to this user
+  std::optional<std::uint32_t> group_gid;  // the region must belong to this group: every member
+                                           // of the group is then trusted to be the writer
+  bool anyone = false;  // any owner at all: for looking (sim_ls), never for frames you act on
+
+  static Trust user(std::uint32_t uid) { return {uid, std::nullopt, false}; }
+  static Trust group(std::uint32_t gid) { return {std::nullopt, gid, false}; }
+  static Trust any_owner() { return {std::nullopt, std::nullopt, true}; }
+  // From a tool's --trust-owner / --trust-group: user and group names or numeric ids; an empty
+  // string leaves that part unset. Fails with a sentence for an unknown name.
+  static Expected<Trust> parse(std::string_view owner, std::string_view group);
+  // "user alice", "group sensors", "user alice and group sensors", "this user".
+  std::string describe() const;
+};
+
 struct ReaderOptions {
   // A frame older than this (by its publish time) makes an idle stream "stale". Zero: never.
   std::chrono::nanoseconds stale_after{0};
   // Verify the writer's per-frame checksum when the stream has one.
   bool verify_checksum = true;
-  // Readers refuse a region owned by another user unless told to trust it (group streams).
-  bool accept_other_owner = false;
+  // Whose regions to accept (see Trust); a region of anyone else is refused with a sentence that
+  // names its actual owner.
+  Trust trust{};
 };
+
+// A wait that never times out: Reader::wait(sim::kForever).
+inline constexpr std::chrono::nanoseconds kForever = std::chrono::nanoseconds::max();
+
+// `timeout` in nanoseconds, clamped to what nanoseconds can hold (hours(100000000) is "forever",
+// not an overflow into the past).
+template <typename Rep, typename Period>
+constexpr std::chrono::nanoseconds saturating_nanoseconds(std::chrono::duration<Rep, Period> timeout) {
+  using Unit = std::chrono::duration<Rep, Period>;
+  if constexpr (std::ratio_less_equal_v<Period, std::nano>) {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(timeout);
+  } else {
+    constexpr Unit kMaxInUnit = std::chrono::duration_cast<Unit>(std::chrono::nanoseconds::max());
+    if (timeout >= kMaxInUnit) return std::chrono::nanoseconds::max();
+    if (timeout <= -kMaxInUnit) return std::chrono::nanoseconds::min();
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(timeout);
+  }
+}
 
 struct ReaderStats {
   std::uint64_t frames = 0;              // frames delivered
@@ -70,18 +109,31 @@ struct StreamStatus {
   std::int64_t latest_publish_ns = 0;       // CLOCK_MONOTONIC; 0 before the first frame
   std::int64_t heartbeat_ns = 0;            // CLOCK_MONOTONIC
   std::int64_t max_publish_interval_ns = 0;
+  // The current writer's publish period and its typical deviation, smoothed over its recent frames
+  // on CLOCK_MONOTONIC (0 until it has published twice; frames of earlier writers do not count).
+  std::int64_t period_ns = 0;
+  std::int64_t jitter_ns = 0;
+  std::uint64_t frames_this_writer = 0;
   std::int64_t writer_start_realtime_ns = 0;
   std::int32_t writer_pid = 0;
   std::string writer_command;               // the writer's process name
   bool writer_alive = false;
-  std::uint32_t sleeping_readers = 0;
+  std::uint32_t sleeping_readers = 0;  // the owner's readers asleep in wait()
+  std::uint32_t owner_uid = 0;         // who owns the region file
+  std::uint32_t owner_gid = 0;
+  std::uint32_t mode = 0;              // its permission bits (0600, 0640)
+
+  // Frames per second over the current writer's recent frames; 0 when it has not published twice
+  // or has not published for three periods (it stopped).
+  double rate_hz(std::int64_t now_monotonic_ns) const noexcept;
 };
 
 class Reader;
 
 // A published frame read in place. It can be overwritten at any time once the writer has
 // published two more frames; check still_valid() after using the bytes and discard them if false.
-// A Borrow must not outlive its Reader.
+// A Borrow keeps the region it points into mapped, so it stays safe to use and to ask whatever
+// happens to the stream meanwhile (replaced, removed) and even after its Reader is gone.
 class Borrow {
  public:
   ReadStatus status() const noexcept { return status_; }
@@ -93,14 +145,15 @@ class Borrow {
     return {reinterpret_cast<const T*>(bytes_.data()), bytes_.size() / sizeof(T)};
   }
   // True when the writer has not begun to overwrite the slot since it was borrowed.
-  bool still_valid() const noexcept;
+  [[nodiscard]] bool still_valid() const noexcept;
 
  private:
   friend class Reader;
   ReadStatus status_ = ReadStatus::no_new_frame;
   FrameInfo info_{};
   std::span<const std::byte> bytes_{};
-  const void* slot_seq_ = nullptr;  // the slot's sequence word in shared memory
+  const void* slot_seq_ = nullptr;        // the slot's sequence word in shared memory
+  std::shared_ptr<const void> mapping_;  // keeps the region mapped while the Borrow lives
 };
 
 class Reader {
@@ -114,17 +167,27 @@ class Reader {
   ~Reader();
 
   // Copies the newest frame into `out` if it is newer than the last one returned.
-  ReadStatus read(std::span<std::byte> out, FrameInfo& info) noexcept;
-  // Sleeps until a frame newer than the last one returned is published, or the timeout passes.
-  ReadStatus wait(std::chrono::nanoseconds timeout) noexcept;
+  [[nodiscard]] ReadStatus read(std::span<std::byte> out, FrameInfo& info) noexcept;
+  // Sleeps until a frame that read() or borrow() can deliver is published, or the timeout passes
+  // (kForever: no timeout). Returns new_frame only when there is such a frame.
+  [[nodiscard]] ReadStatus wait(std::chrono::nanoseconds timeout) noexcept;
+  template <typename Rep, typename Period>
+  [[nodiscard]] ReadStatus wait(std::chrono::duration<Rep, Period> timeout) noexcept {
+    return wait(saturating_nanoseconds(timeout));
+  }
   // wait() then read().
-  ReadStatus read_next(std::span<std::byte> out, FrameInfo& info,
-                       std::chrono::nanoseconds timeout) noexcept;
+  [[nodiscard]] ReadStatus read_next(std::span<std::byte> out, FrameInfo& info,
+                                     std::chrono::nanoseconds timeout) noexcept;
+  template <typename Rep, typename Period>
+  [[nodiscard]] ReadStatus read_next(std::span<std::byte> out, FrameInfo& info,
+                                     std::chrono::duration<Rep, Period> timeout) noexcept {
+    return read_next(out, info, saturating_nanoseconds(timeout));
+  }
   // The newest frame in place, if it is newer than the last one returned.
-  Borrow borrow() noexcept;
+  [[nodiscard]] Borrow borrow() noexcept;
 
   // Whether a process holds the stream's writer lock (one system call).
-  bool writer_alive() noexcept;
+  [[nodiscard]] bool writer_alive() noexcept;
   // Time since the newest frame was published, or -1 ns before the first frame.
   std::chrono::nanoseconds newest_age() const noexcept;
 
@@ -146,8 +209,10 @@ class Reader {
 std::vector<std::string> list_streams();
 // The diagnostics of one stream without keeping it open.
 Expected<StreamStatus> inspect(std::string_view name);
-// Removes a stream's region. Refused while its writer is alive unless `force`.
+// Removes a stream's region. Refused while its writer is alive unless `force`. A writer starting
+// or restarting at the same moment either keeps the region (removal is refused) or finds the name
+// free and creates a new one: it never goes on writing into a removed file (unless `force`).
 // Readers that have it open keep their mapping until they close it.
-std::optional<Error> destroy(std::string_view name, bool force = false);
+Expected<void> destroy(std::string_view name, bool force = false);
 
 }  // namespace sim

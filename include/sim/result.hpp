@@ -23,7 +23,7 @@ enum class ErrorCode {
 
 const char* to_string(ErrorCode code) noexcept;
 
-struct Error {
+struct [[nodiscard]] Error {
   ErrorCode code;
   std::string message;  // one sentence: what went wrong and what to do
 };
@@ -56,6 +56,27 @@ class [[nodiscard]] Expected {
 
  private:
   std::variant<T, Error> state_;
+};
+
+// The result of an operation that returns nothing but may fail: true on success, else error().
+//   if (auto removed = sim::destroy("/old"); !removed) report(removed.error().message);
+template <>
+class [[nodiscard]] Expected<void> {
+ public:
+  Expected() = default;  // success
+  Expected(Error error) : error_(std::move(error)), failed_(true) {}  // NOLINT: implicit
+
+  bool has_value() const noexcept { return !failed_; }
+  explicit operator bool() const noexcept { return has_value(); }
+
+  const Error& error() const {
+    assert(failed_);
+    return error_;
+  }
+
+ private:
+  Error error_{ErrorCode::system_error, {}};
+  bool failed_ = false;
 };
 
 }  // namespace sim

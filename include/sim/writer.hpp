@@ -21,7 +21,9 @@ struct StreamSpec {
   std::uint64_t capacity = 0;     // bytes per slot; 0 takes layout.min_capacity()
   Layout layout = Layout::raw();
   bool checksum = false;          // XXH3-64 over each frame, verified by readers
-  std::uint32_t mode = 0600;      // file mode of the region; 0640 lets a group read
+  // File mode of the region: 0600, or 0640 to let the file's group read (0644: everyone). Nobody
+  // but the owner may ever write it: modes with group or other write bits are refused.
+  std::uint32_t mode = 0600;
   bool lock_memory = false;       // mlock the region so frames never page-fault
   // Refresh the heartbeat from a background thread while no frame is written, so readers can
   // tell an idle writer from a dead one. Zero: the heartbeat moves only with published frames.
@@ -31,7 +33,8 @@ struct StreamSpec {
 enum class WriteStatus {
   ok,
   too_large,  // the frame is larger than the stream's capacity: nothing was published
-  closed,     // the writer was moved from
+  closed,     // the writer was moved from, or the loan was already committed or given up
+  loan_open,  // a loan of this writer is still open: commit or drop it first
 };
 
 const char* to_string(WriteStatus status) noexcept;
@@ -42,14 +45,17 @@ struct WriterState;
 }
 
 // A writable view of the back slot, so a driver decodes straight into shared memory.
-// Committing publishes it; dropping it uncommitted publishes nothing. Move-only.
+// Committing publishes it; dropping it uncommitted publishes nothing. Move-only, and at most one
+// per writer at a time: while it is open, the writer hands out no other view of that slot.
+// A Loan must not outlive its Writer.
 class Loan {
  public:
+  Loan() noexcept = default;  // empty: valid() is false, no bytes
   Loan(Loan&& other) noexcept;
   Loan& operator=(Loan&& other) noexcept;
   Loan(const Loan&) = delete;
   Loan& operator=(const Loan&) = delete;
-  ~Loan() = default;
+  ~Loan();
 
   std::span<std::byte> bytes() const noexcept { return bytes_; }
   template <typename T>
@@ -57,20 +63,23 @@ class Loan {
     static_assert(std::is_trivially_copyable_v<T>, "only plain data can live in shared memory");
     return {reinterpret_cast<T*>(bytes_.data()), bytes_.size() / sizeof(T)};
   }
+  // False for a moved-from or committed loan, and for the empty loan loan() returns while
+  // another loan is open.
   bool valid() const noexcept { return writer_ != nullptr; }
 
   // Publishes the first `size` bytes with the sensor time of the frame and, optionally, the
-  // host time its first data arrived (both CLOCK_REALTIME, ns; see FrameInfo).
-  // A loan overtaken by a later loan or write() publishes nothing and returns closed.
-  WriteStatus commit(std::uint64_t size, std::int64_t stamp_ns, std::int64_t receive_ns = 0) noexcept;
+  // host time its first data arrived (both CLOCK_REALTIME, ns; see FrameInfo). Ends the loan
+  // whatever the outcome, so it is called on an rvalue: std::move(loan).commit(size, stamp).
+  [[nodiscard]] WriteStatus commit(std::uint64_t size, std::int64_t stamp_ns,
+                                   std::int64_t receive_ns = 0) && noexcept;
 
  private:
   friend class Writer;
-  Loan(detail::WriterState* writer, std::span<std::byte> bytes, std::uint64_t seq) noexcept
-      : writer_(writer), bytes_(bytes), seq_(seq) {}
+  Loan(detail::WriterState* writer, std::span<std::byte> bytes) noexcept
+      : writer_(writer), bytes_(bytes) {}
+  void release() noexcept;
   detail::WriterState* writer_ = nullptr;  // stays put when the Writer handle is moved
   std::span<std::byte> bytes_;
-  std::uint64_t seq_ = 0;  // the frame number this loan will publish
 };
 
 class Writer {
@@ -86,18 +95,20 @@ class Writer {
   Writer& operator=(const Writer&) = delete;
   ~Writer();
 
-  // Copies one frame in and publishes it (stamps as in Loan::commit).
-  WriteStatus write(std::span<const std::byte> frame, std::int64_t stamp_ns,
-                    std::int64_t receive_ns = 0) noexcept;
+  // Copies one frame in and publishes it (stamps as in Loan::commit). Refused (loan_open) while a
+  // loan is open, which would otherwise still be writing into the slot this frame goes to.
+  [[nodiscard]] WriteStatus write(std::span<const std::byte> frame, std::int64_t stamp_ns,
+                                  std::int64_t receive_ns = 0) noexcept;
   template <typename T>
-  WriteStatus write(std::span<const T> items, std::int64_t stamp_ns,
-                    std::int64_t receive_ns = 0) noexcept {
+  [[nodiscard]] WriteStatus write(std::span<const T> items, std::int64_t stamp_ns,
+                                  std::int64_t receive_ns = 0) noexcept {
     static_assert(std::is_trivially_copyable_v<T>);
     return write(std::as_bytes(items), stamp_ns, receive_ns);
   }
 
-  // The back slot, to fill in place. At most one loan at a time; a new loan discards the last.
-  Loan loan() noexcept;
+  // The back slot, to fill in place. At most one loan at a time: while one is open this returns
+  // an empty loan (valid() false, no bytes).
+  [[nodiscard]] Loan loan() noexcept;
 
   // Tells readers the writer is alive without publishing a frame.
   void heartbeat() noexcept;

@@ -114,12 +114,20 @@ TEST(EveryProgram, HelpExitsZeroAndShowsTheExitCodes) {
   }
 }
 
-TEST(EveryProgram, ANegativeCountOrAnImpossiblePriorityIsAUsageError) {
+TEST(EveryProgram, ANegativeCountAnImpossiblePriorityOrAnUnknownTrustIsAUsageError) {
 #ifdef SIM_PROGRAM_sim_dump
   expect_usage_error({SIM_PROGRAM_sim_dump, {"/lidar_top", "--count", "-1"}, "--count"});
 #endif
 #ifdef SIM_PROGRAM_sim_echo
   expect_usage_error({SIM_PROGRAM_sim_echo, {"/lidar_top", "--rt-priority", "100"}, "--rt-priority"});
+#endif
+#ifdef SIM_PROGRAM_sim_dump
+  expect_usage_error({SIM_PROGRAM_sim_dump, {"/lidar_top", "--trust-owner", "sim-no-such-user"},
+                      "sim-no-such-user"});
+#endif
+#ifdef SIM_PROGRAM_sim_echo
+  expect_usage_error({SIM_PROGRAM_sim_echo, {"/lidar_top", "--trust-group", "sim-no-such-group"},
+                      "sim-no-such-group"});
 #endif
 #ifdef SIM_PROGRAM_sim_lidar_unitree
   expect_usage_error({SIM_PROGRAM_sim_lidar_unitree,

@@ -101,7 +101,7 @@ class AravisDriver : public ::testing::Test {
       kill(pid, SIGKILL);
       waitpid(pid, nullptr, 0);
     }
-    sim::destroy(stream, true);
+    (void)sim::destroy(stream, true);
     std::remove(log.c_str());
   }
 

@@ -38,7 +38,7 @@ struct Stream {
   ~Stream() {
     reader.reset();
     writer.reset();
-    destroy(name, true);
+    (void)destroy(name, true);
   }
   std::string name;
   std::optional<Writer> writer;
@@ -55,7 +55,7 @@ TEST(OpenCv, LoanMatIsTheSlotAndBorrowMatIsTheFrame) {
   EXPECT_EQ(slot.type(), CV_8UC3);
   slot.setTo(cv::Scalar(10, 20, 30));
   slot.at<cv::Vec3b>(47, 63) = {1, 2, 3};
-  ASSERT_EQ(loan.commit(layout.frame_bytes(), 42), WriteStatus::ok);
+  ASSERT_EQ(std::move(loan).commit(layout.frame_bytes(), 42), WriteStatus::ok);
 
   Borrow borrow = stream.reader->borrow();
   ASSERT_EQ(borrow.status(), ReadStatus::new_frame);
@@ -81,7 +81,7 @@ TEST(OpenCv, ReadMatKeepsAPaddedStrideAndReusesItsBuffer) {
   for (int y = 0; y < 48; ++y) {
     for (int x = 0; x < 64; ++x) slot.at<cv::Vec2b>(y, x) = {static_cast<uchar>(x), static_cast<uchar>(y)};
   }
-  ASSERT_EQ(loan.commit(layout.frame_bytes(), 1), WriteStatus::ok);
+  ASSERT_EQ(std::move(loan).commit(layout.frame_bytes(), 1), WriteStatus::ok);
 
   cv::Mat out;
   FrameInfo info;
@@ -95,7 +95,7 @@ TEST(OpenCv, ReadMatKeepsAPaddedStrideAndReusesItsBuffer) {
   const uchar* first = out.data;
   Loan again = stream.writer->loan();
   as_mat(again, layout).setTo(cv::Scalar(7, 8));
-  ASSERT_EQ(again.commit(layout.frame_bytes(), 2), WriteStatus::ok);
+  ASSERT_EQ(std::move(again).commit(layout.frame_bytes(), 2), WriteStatus::ok);
   ASSERT_EQ(read_mat(*stream.reader, out, info), ReadStatus::new_frame);
   EXPECT_EQ(out.data, first);  // no allocation per frame
   EXPECT_EQ(out.at<cv::Vec2b>(47, 63), cv::Vec2b(7, 8));
@@ -122,7 +122,7 @@ TEST(OpenCv, CopiesUnderConcurrentWritesAreWholeFrames) {
     for (int k = 0; !stop.load(); ++k) {
       Loan loan = stream.writer->loan();
       as_mat(loan, layout).setTo(cv::Scalar(k % 256));
-      (void)loan.commit(layout.frame_bytes(), k);
+      (void)std::move(loan).commit(layout.frame_bytes(), k);
     }
   });
   int vouched = 0;

@@ -72,7 +72,7 @@ class V4l2CaptureTest : public ::testing::Test {
     config.retry_period = 0ms;
     config.frame_timeout = 60s;
   }
-  ~V4l2CaptureTest() override { sim::destroy(config.stream, true); }
+  ~V4l2CaptureTest() override { (void)sim::destroy(config.stream, true); }
 
   Expected<V4l2Capture> start() { return V4l2Capture::start(fake, config); }
 
@@ -550,7 +550,7 @@ TEST(V4l2RealDevice, CapturesFramesWhenADeviceIsGiven) {
   ASSERT_TRUE(capture) << capture.error().message;
   for (int i = 0; i < 200 && capture->stats().published < 10; ++i) capture->step(100ms);
   EXPECT_GE(capture->stats().published, 10u);
-  sim::destroy(config.stream, true);
+  (void)sim::destroy(config.stream, true);
 }
 
 struct ToolRun {

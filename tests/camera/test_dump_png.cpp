@@ -36,7 +36,7 @@ class DumpPng : public ::testing::Test {
     fs::remove_all(dir_);
   }
   void TearDown() override {
-    sim::destroy(stream_, true);
+    (void)sim::destroy(stream_, true);
     fs::remove_all(dir_);
   }
 

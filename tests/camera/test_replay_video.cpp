@@ -56,7 +56,7 @@ class ReplayVideo : public ::testing::Test {
       kill(pid, SIGKILL);
       waitpid(pid, nullptr, 0);
     }
-    sim::destroy(stream, true);
+    (void)sim::destroy(stream, true);
     fs::remove_all(dir);
   }
 

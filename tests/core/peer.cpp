@@ -4,10 +4,16 @@
 //   writer NAME FRAMES RATE_HZ MIN_BYTES MAX_BYTES LINGER_MS   publish pattern frames
 //   reader NAME UNTIL_SEQ TIMEOUT_MS MODE                       MODE: wait | poll | borrow
 //   hold NAME                                                   own the stream until killed
+//   remove NAME                                                 destroy() the stream until SIGTERM
+//   stall-in-copy NAME                                          stop inside read()'s copy of a frame
+//   hold-borrow NAME                                            borrow a frame and keep it
+#include <signal.h>
+#include <sys/mman.h>
 #include <time.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -41,7 +47,7 @@ int run_writer(const std::string& name, std::uint64_t frames, double rate_hz, st
     Loan loan = writer->loan();
     const std::size_t size = test::frame_size(seq, min_bytes, max_bytes);
     test::fill_frame(loan.bytes().first(size), seq);
-    loan.commit(size, realtime_ns());
+    if (std::move(loan).commit(size, realtime_ns()) != WriteStatus::ok) return 1;
     if (period_ns > 0) {
       next += period_ns;  // absolute schedule: no drift
       timespec ts{next / 1'000'000'000, next % 1'000'000'000};
@@ -129,6 +135,77 @@ int run_hold(const std::string& name) {
   for (;;) pause();
 }
 
+// Races Writer::create in the test: removes the stream whenever its writer is not alive, until
+// told to stop.
+volatile std::sig_atomic_t stop_removing = 0;
+void on_stop_removing(int) { stop_removing = 1; }
+
+int run_remove(const std::string& name) {
+  struct sigaction stop {};
+  stop.sa_handler = on_stop_removing;
+  sigaction(SIGTERM, &stop, nullptr);
+  long removed = 0;
+  while (stop_removing == 0) {
+    if (destroy(name)) ++removed;
+  }
+  std::printf("removed=%ld\n", removed);
+  return 0;
+}
+
+// The page after the copy buffer's first byte is inaccessible, so read() faults inside its copy
+// of the frame; the handler reports that and waits there to be killed. A kill that follows the
+// report provably lands in the middle of a copy.
+int mid_copy_report_fd = -1;
+void report_mid_copy(int) {
+  static const char kLine[] = "mid-copy\n";
+  [[maybe_unused]] const ssize_t n = ::write(mid_copy_report_fd, kLine, sizeof kLine - 1);
+  for (;;) pause();
+}
+
+int run_stall_in_copy(const std::string& name) {
+  auto reader = Reader::open(name);
+  if (!reader) {
+    std::printf("error=%s\n", reader.error().message.c_str());
+    return 1;
+  }
+  const long page = sysconf(_SC_PAGESIZE);
+  auto* buffer = static_cast<std::byte*>(
+      mmap(nullptr, static_cast<std::size_t>(2 * page), PROT_READ | PROT_WRITE,
+           MAP_PRIVATE | MAP_ANONYMOUS, -1, 0));
+  if (buffer == MAP_FAILED || mprotect(buffer + page, static_cast<std::size_t>(page), PROT_NONE) != 0) {
+    std::printf("error=cannot map the copy buffer\n");
+    return 1;
+  }
+  mid_copy_report_fd = STDOUT_FILENO;
+  struct sigaction on_fault {};
+  on_fault.sa_handler = report_mid_copy;
+  sigaction(SIGSEGV, &on_fault, nullptr);
+  std::printf("ready\n");
+  std::fflush(stdout);
+  // Claims room for a whole frame: the copy runs past the first page into the guard page.
+  const std::span<std::byte> out(buffer, reader->capacity());
+  for (;;) {
+    FrameInfo info;
+    if (reader->read_next(out, info, 50ms) == ReadStatus::buffer_too_small) return 1;
+  }
+}
+
+int run_hold_borrow(const std::string& name) {
+  auto reader = Reader::open(name);
+  if (!reader) {
+    std::printf("error=%s\n", reader.error().message.c_str());
+    return 1;
+  }
+  for (;;) {
+    if (reader->wait(50ms) != ReadStatus::new_frame) continue;
+    const Borrow held = reader->borrow();
+    if (held.status() != ReadStatus::new_frame) continue;
+    std::printf("holding seq=%llu\n", static_cast<unsigned long long>(held.info().seq));
+    std::fflush(stdout);
+    for (;;) pause();
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -141,6 +218,9 @@ int main(int argc, char** argv) {
     return run_reader(args[1], std::stoull(args[2]), std::stol(args[3]), args[4]);
   }
   if (args.size() == 2 && args[0] == "hold") return run_hold(args[1]);
+  if (args.size() == 2 && args[0] == "remove") return run_remove(args[1]);
+  if (args.size() == 2 && args[0] == "stall-in-copy") return run_stall_in_copy(args[1]);
+  if (args.size() == 2 && args[0] == "hold-borrow") return run_hold_borrow(args[1]);
   std::fprintf(stderr, "usage: see the comment at the top of tests/core/peer.cpp\n");
   return 2;
 }

@@ -28,7 +28,7 @@ void make_region(const std::string& name, std::uint64_t capacity = 4096) {
   auto w = Writer::create({.name = name, .capacity = capacity});
   ASSERT_TRUE(w);
   std::vector<std::byte> frame(capacity / 2, std::byte{1});
-  w->write(std::span<const std::byte>(frame), 0);
+  EXPECT_EQ(w->write(std::span<const std::byte>(frame), 0), WriteStatus::ok);
 }
 
 template <typename T>

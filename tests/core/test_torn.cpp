@@ -91,7 +91,7 @@ void run_stress(std::uint64_t frames, std::size_t min_bytes, std::size_t max_byt
     Loan loan = w->loan();
     const std::size_t size = test::frame_size(seq, min_bytes, max_bytes);
     test::fill_frame(loan.bytes().first(size), seq);
-    ASSERT_EQ(loan.commit(size, 0), WriteStatus::ok);
+    ASSERT_EQ(std::move(loan).commit(size, 0), WriteStatus::ok);
   }
   done.store(true);
   for (auto& t : readers) t.join();

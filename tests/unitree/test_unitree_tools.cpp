@@ -63,7 +63,7 @@ void write_file(const std::string& path, std::span<const std::byte> bytes) {
 struct StreamGuard {
   std::vector<std::string> names;
   ~StreamGuard() {
-    for (const auto& n : names) sim::destroy(n, true);
+    for (const auto& n : names) (void)sim::destroy(n, true);
   }
 };
 

@@ -78,6 +78,17 @@ void CommandLine::add_placement(ThreadPlacement& placement) {
       ->check(CLI::Range(1, 99));
 }
 
+void CommandLine::add_trust(Trust& trust) {
+  trust_ = &trust;
+  app_.add_option("--trust-owner", trust_owner_,
+                  "also accept streams owned by this user (name or uid); default: only your own")
+      ->type_name("USER");
+  app_.add_option("--trust-group", trust_group_,
+                  "also accept streams owned by this group (name or gid): every member is then "
+                  "trusted to be the writer")
+      ->type_name("GROUP");
+}
+
 std::optional<int> CommandLine::parse(int argc, char** argv) {
   try {
     app_.parse(argc, argv);
@@ -97,6 +108,11 @@ std::optional<int> CommandLine::parse(int argc, char** argv) {
     return usage_error(what + "; see --help for the option names");
   } catch (const CLI::ParseError& e) {
     return usage_error(as_sentence(e.what()) + "; see " + tool_ + " --help");
+  }
+  if (trust_ != nullptr && (!trust_owner_.empty() || !trust_group_.empty())) {
+    auto trust = Trust::parse(trust_owner_, trust_group_);
+    if (!trust) return usage_error(trust.error().message);
+    *trust_ = *trust;
   }
   return std::nullopt;
 }
@@ -120,10 +136,11 @@ int CommandLine::fail(const Error& error) const {
 }
 
 std::optional<int> CommandLine::apply_placement(const ThreadPlacement& placement) const {
-  const auto error = apply_thread_placement(placement);
-  if (!error) return std::nullopt;
-  return error->code == ErrorCode::permission_denied ? fail(std::string_view(error->message))
-                                                     : usage_error(error->message);
+  const auto placed = apply_thread_placement(placement);
+  if (placed) return std::nullopt;
+  const Error& error = placed.error();
+  return error.code == ErrorCode::permission_denied ? fail(std::string_view(error.message))
+                                                    : usage_error(error.message);
 }
 
 bool stderr_is_terminal() noexcept { return ::isatty(STDERR_FILENO) != 0; }

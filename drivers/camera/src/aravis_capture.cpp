@@ -134,7 +134,7 @@ struct AravisCapture::Impl {
       bad_size.fetch_add(1, std::memory_order_relaxed);
       return;
     }
-    if (loan.commit(decoded.size, stamp > 0 ? stamp : realtime_ns(), received) == WriteStatus::ok) {
+    if (std::move(loan).commit(decoded.size, stamp > 0 ? stamp : realtime_ns(), received) == WriteStatus::ok) {
       published.fetch_add(1, std::memory_order_relaxed);
     }
   }

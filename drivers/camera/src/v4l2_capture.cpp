@@ -161,7 +161,7 @@ StepResult V4l2Capture::handle(const DeviceFrame& frame) {
   switch (decoded.status) {
     case imaging::DecodeStatus::ok:
       // An uncommitted loan publishes nothing, so every failure below simply returns.
-      if (loan.commit(decoded.size, stamp, received) != WriteStatus::ok) return StepResult::skipped;
+      if (std::move(loan).commit(decoded.size, stamp, received) != WriteStatus::ok) return StepResult::skipped;
       ++stats_.published;
       return StepResult::published;
     case imaging::DecodeStatus::corrupt_input:

@@ -15,19 +15,20 @@ struct LidarStream::Impl {
   // heap and is never moved itself.
   Writer writer;
   FrameAssembler assembler;
-  Loan loan{writer.loan()};
+  Loan loan;
   PublishCounters published;
   std::size_t last_points = 0;
   std::int64_t stamp_offset_ns = 0;
 
   void attach() noexcept {
+    loan = Loan{};  // a writer lends one slot at a time: give back the one still open first
     loan = writer.loan();
     assembler.set_output(loan.as<LidarPoint>());
   }
 
   void publish(const CompletedFrame& frame) noexcept {
     const WriteStatus status =
-        loan.commit(frame.point_count * sizeof(LidarPoint), frame.stamp_ns + stamp_offset_ns,
+        std::move(loan).commit(frame.point_count * sizeof(LidarPoint), frame.stamp_ns + stamp_offset_ns,
                     frame.host_receive_ns);
     if (status == WriteStatus::ok) {
       ++published.frames;

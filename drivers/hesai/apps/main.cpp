@@ -171,7 +171,9 @@ class Driver {
       options_.config.assembler.model = *options_.model;
       if (auto code = create_stream()) return code;
     }
-    if (auto error = sim::hesai::apply_thread_placement(options_)) return failure(error->message);
+    if (auto placed = sim::hesai::apply_thread_placement(options_); !placed) {
+      return failure(placed.error().message);
+    }
     return std::nullopt;
   }
 

@@ -85,7 +85,7 @@ void add_stream_options(CLI::App& app, StreamOptions& o) {
       ->check(CLI::Range(1, 99));
 }
 
-std::optional<Error> apply_thread_placement(const StreamOptions& options) {
+Expected<void> apply_thread_placement(const StreamOptions& options) {
   ThreadPlacement placement;
   if (options.cpu >= 0) placement.cpu = options.cpu;
   if (options.rt_priority > 0) placement.rt_priority = options.rt_priority;

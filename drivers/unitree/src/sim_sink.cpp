@@ -44,6 +44,7 @@ SimScanSink::SimScanSink(Writer points, std::optional<Writer> imu,
     : points_(std::move(points)), imu_(std::move(imu)), max_points_(max_points) {}
 
 std::span<LidarPoint> SimScanSink::begin_scan() {
+  loan_.reset();  // a scan begun and never ended gives its slot back first: one loan at a time
   loan_.emplace(points_.loan());
   const std::span<LidarPoint> slot = loan_->as<LidarPoint>();
   return slot.first(std::min<std::size_t>(slot.size(), max_points_));
@@ -51,7 +52,7 @@ std::span<LidarPoint> SimScanSink::begin_scan() {
 
 void SimScanSink::end_scan(std::size_t points, std::int64_t stamp_ns, std::int64_t receive_ns) {
   if (!loan_) return;
-  const WriteStatus status = loan_->commit(points * sizeof(LidarPoint), stamp_ns, receive_ns);
+  const WriteStatus status = std::move(*loan_).commit(points * sizeof(LidarPoint), stamp_ns, receive_ns);
   loan_.reset();
   if (status == WriteStatus::ok) {
     ++counters_.scans_published;

@@ -88,7 +88,7 @@ class DumpTool : public ::testing::Test {
     ASSERT_EQ(replay.code, 0) << replay.err;
   }
   void TearDown() override {
-    sim::destroy(stream_, true);
+    (void)sim::destroy(stream_, true);
     fs::remove_all(dir_);
   }
   std::string stream_;

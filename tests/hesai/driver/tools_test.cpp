@@ -54,7 +54,7 @@ std::string unique_stream() {
 // Removes the stream when the test ends, however it ends.
 struct StreamGuard {
   std::string name = unique_stream();
-  ~StreamGuard() { sim::destroy(name, true); }
+  ~StreamGuard() { (void)sim::destroy(name, true); }
 };
 
 struct Frame {

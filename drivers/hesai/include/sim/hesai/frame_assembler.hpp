@@ -9,7 +9,7 @@
 //   for each UDP payload:
 //     PushResult r = assembler.push(payload, host_receive_ns);
 //     if (r.frame) {                                       // a revolution is complete
-//       loan.commit(r.frame->point_count * sizeof(sim::LidarPoint), r.frame->stamp_ns);
+//       std::move(loan).commit(r.frame->point_count * sizeof(sim::LidarPoint), r.frame->stamp_ns);
 //       loan = writer.loan();
 //       assembler.set_output(loan.as<sim::LidarPoint>());  // before the next push
 //     }

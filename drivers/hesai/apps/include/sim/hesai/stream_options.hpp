@@ -27,6 +27,6 @@ struct StreamOptions {
 void add_stream_options(CLI::App& app, StreamOptions& options);
 
 // Applies --cpu and --rt-priority to the calling thread; the error says what to do.
-std::optional<Error> apply_thread_placement(const StreamOptions& options);
+Expected<void> apply_thread_placement(const StreamOptions& options);
 
 }  // namespace sim::hesai
