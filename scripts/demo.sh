@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The main job with no sensor attached: installs what is missing, builds, replays the bundled
 # Pandar64 recording into /lidar_top and a real video into /camera_front, in a loop, and shows
-# the live streams with sim_ls and sim_echo --stats. Ctrl-C stops everything and removes the streams.
+# every stream live with sim_ls --watch. Ctrl-C stops everything and removes the streams the
+# demo created (never a stream another program owns: the demo refuses to start instead).
 #
 #   scripts/demo.sh                 run until Ctrl-C
 #   scripts/demo.sh --duration 20   run for 20 seconds
@@ -10,7 +11,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 duration=0
 if [[ ${1:-} == --duration ]]; then duration=${2:?--duration takes seconds}; fi
-if [[ ${1:-} == --help || ${1:-} == -h ]]; then sed -n '2,8p' "$0"; exit 0; fi
+if [[ ${1:-} == --help || ${1:-} == -h ]]; then sed -n '2,9p' "$0"; exit 0; fi
 
 "$root/scripts/install-deps.sh" "$root/scripts/demo-deps.txt"
 mkdir -p build
@@ -19,16 +20,28 @@ cmake --build build/release -j"${SIM_JOBS:-2}" --target sim_replay_pcap sim_repl
 cmake --build build/release -j"${SIM_JOBS:-2}" --target sim_foxglove  # the live view
 bin=build/release
 data=tests/hesai/data
+streams=(/lidar_top /camera_front)
+
+# A live writer owns one of our names (a real driver, another demo): leave it alone.
+for name in "${streams[@]}"; do
+  if "$bin/tools/sim_ls" --json --window 0 | grep -q "\"name\":\"$name\".*\"writer_alive\":true"; then
+    echo "demo: $name is already published by a running program; stop it (or use another machine) and run the demo again." >&2
+    exit 1
+  fi
+done
 
 video=/usr/share/doc/opencv-doc/examples/data/vtest.avi
 [[ -f $video ]] || video=$(find /usr/share/doc/opencv-doc -name 'vtest.avi*' 2>/dev/null | head -n 1)
 if [[ $video == *.gz ]]; then gunzip -c "$video" >build/vtest.avi && video=build/vtest.avi; fi
 
 pids=()
+created=()
 cleanup() {
   for pid in "${pids[@]}"; do kill "$pid" 2>/dev/null || true; done
   wait 2>/dev/null || true
-  "$bin/tools/sim_rm" --force /lidar_top /camera_front >/dev/null 2>&1 || true
+  # Only the streams this demo's replays created; without --force, so a stream another writer
+  # took over meanwhile is kept.
+  ((${#created[@]} > 0)) && "$bin/tools/sim_rm" "${created[@]}" >/dev/null 2>&1 || true
 }
 trap cleanup EXIT
 trap 'exit 0' INT TERM
@@ -36,9 +49,11 @@ trap 'exit 0' INT TERM
 "$bin/replay/pcap/sim_replay_pcap" "$data/pandar64_dual.pcap" --stream /lidar_top \
   --calibration "$data/pandar64.calibration.csv" --loop --quiet &
 pids+=($!)
+created+=(/lidar_top)
 if [[ -f $video ]]; then
   "$bin/replay/video/sim_replay_video" "$video" --stream /camera_front --loop --quiet &
   pids+=($!)
+  created+=(/camera_front)
 else
   echo "demo: no video found (opencv-doc not installed); showing the LiDAR stream only"
 fi
@@ -47,18 +62,13 @@ port=${SIM_FOXGLOVE_PORT:-8765}
 "$bin/viewer/foxglove/sim_foxglove" --port "$port" >/dev/null &
 pids+=($!)
 
-sleep 2
+sleep 1
 echo "demo: open http://127.0.0.1:$port/ in a browser to see the streams live"
 echo "      (or connect Foxglove / Lichtblick to ws://127.0.0.1:$port)"
-"$bin/tools/sim_ls"
-echo
-echo "Live statistics, one line per stream per second (Ctrl-C to stop):"
-echo_args=(--stats --interval 1)
-((duration > 0)) && echo_args+=(--duration "$duration")
-"$bin/tools/sim_echo" /lidar_top "${echo_args[@]}" &
-pids+=($!)
-if [[ -f $video ]]; then
-  "$bin/tools/sim_echo" /camera_front "${echo_args[@]}" &
+if ((duration > 0)); then
+  "$bin/tools/sim_ls" --watch &
   pids+=($!)
+  sleep "$duration"
+else
+  "$bin/tools/sim_ls" --watch
 fi
-wait "${pids[-1]}"

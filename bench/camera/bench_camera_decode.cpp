@@ -74,7 +74,7 @@ struct Stream {
   }
   ~Stream() {
     writer.reset();
-    sim::destroy(name, true);
+    (void)sim::destroy(name, true);
   }
   static inline int counter = 0;
   std::string name;
@@ -99,7 +99,7 @@ void YuyvToBgr_Sim(benchmark::State& state) {
   for (auto _ : state) {
     sim::Loan loan = stream.writer->loan();
     const auto result = decoder->decode(bytes_of(yuyv), loan.bytes());
-    benchmark::DoNotOptimize(loan.commit(result.size, ++stamp));
+    benchmark::DoNotOptimize(std::move(loan).commit(result.size, ++stamp));
   }
 }
 
@@ -145,7 +145,7 @@ void MjpegToBgr_Sim(benchmark::State& state) {
     sim::Loan loan = stream.writer->loan();
     const auto result = decoder->decode(input, loan.bytes());
     if (result.status != sim::imaging::DecodeStatus::ok) return state.SkipWithError("decode failed");
-    benchmark::DoNotOptimize(loan.commit(result.size, ++stamp));
+    benchmark::DoNotOptimize(std::move(loan).commit(result.size, ++stamp));
   }
   state.counters["jpeg_kB"] = static_cast<double>(jpeg.size()) / 1000.0;
 }
@@ -163,7 +163,7 @@ void MjpegToBgr_ImdecodeCopy(benchmark::State& state) {
     const cv::Mat bgr = cv::imdecode(encoded, cv::IMREAD_COLOR);
     sim::Loan loan = stream.writer->loan();
     std::memcpy(loan.bytes().data(), bgr.data, bgr.total() * bgr.elemSize());
-    benchmark::DoNotOptimize(loan.commit(bgr.total() * bgr.elemSize(), ++stamp));
+    benchmark::DoNotOptimize(std::move(loan).commit(bgr.total() * bgr.elemSize(), ++stamp));
   }
 }
 

@@ -116,7 +116,7 @@ int main(int argc, char** argv) {
     }
     if (!pacer.wait(index * period_ns, stop)) break;
     if (fits && decoded.status == imaging::DecodeStatus::ok &&
-        loan.commit(decoded.size, realtime_ns(), receive_ns) == WriteStatus::ok) {
+        std::move(loan).commit(decoded.size, realtime_ns(), receive_ns) == WriteStatus::ok) {
       ++published;
     } else {
       ++skipped;  // a corrupt frame, or one of another size: never published

@@ -13,20 +13,13 @@
 #include <string>
 
 #include "sim/reader.hpp"
+#include "sim_test/streams.hpp"
 
 namespace sim::test {
 
-// A stream name no other test (or test process) uses at the same time.
-inline std::string unique_name(const std::string& what) {
-  static std::atomic<int> counter{0};
-  return "/test_" + what + "_" + std::to_string(getpid()) + "_" + std::to_string(counter++);
-}
-
-// Removes the stream when the test ends, however it ends.
-struct StreamGuard {
-  std::string name;
-  ~StreamGuard() { (void)sim::destroy(name, /*force=*/true); }  // gone already is fine
-};
+// Unique names and stream guards: tests/support/sim_test/streams.hpp, shared by every suite.
+using sim::testing::StreamGuard;
+using sim::testing::unique_name;
 
 // Frame content derived from the sequence number: any mix of two frames fails check_frame.
 inline std::uint64_t pattern_word(std::uint64_t seq, std::uint64_t index) {

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <sys/stat.h>
 #include <memory>
 #include <optional>
 #include <thread>
@@ -210,4 +211,22 @@ TEST(SimLs, WatchShowsTheRateOfALiveStreamAndStopsOnSigint) {
   EXPECT_NE(line->find("\"writer_alive\":true"), std::string::npos) << *line;
   ls.signal(SIGINT);
   EXPECT_EQ(ls.wait(), 0) << ls.err();
+}
+
+// A FIFO planted at a stream's path (any local user can) must not hold a tool forever: it
+// either refuses the path at once or stops on SIGTERM, whatever it waits in.
+TEST(EveryTool, StopsOnSigtermWhenAFifoSitsAtTheStreamsPath) {
+  const std::string name = unique_name("fifo");
+  const std::string path = "/dev/shm/sim." + name.substr(1);
+  ASSERT_EQ(::mkfifo(path.c_str(), 0600), 0);
+  for (const std::vector<std::string>& argv :
+       {std::vector<std::string>{kEcho, name}, {kLs}, {kRm, "--dead", name}}) {
+    Process tool(argv);
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    tool.signal(SIGTERM);
+    const int code = tool.wait(std::chrono::seconds(10));
+    EXPECT_FALSE(tool.deadline_passed()) << argv[0] << " hung on the FIFO";
+    EXPECT_TRUE(code == 0 || code == 1) << argv[0] << " exit " << code << ": " << tool.err();
+  }
+  std::remove(path.c_str());
 }

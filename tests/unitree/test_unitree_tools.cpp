@@ -23,6 +23,7 @@
 #include "sim/reader.hpp"
 #include "sim/unitree/decoder.hpp"
 #include "sim_test/process.hpp"
+#include "sim_test/streams.hpp"
 #include "unitree_encoder.hpp"
 #include "vector_sink.hpp"
 
@@ -35,9 +36,7 @@ using namespace std::chrono_literals;
 constexpr auto kTimeout = 20s;  // generous: only a hang makes a test wait this long
 
 std::string unique_name(const char* what) {
-  static std::atomic<int> counter{0};
-  return "/test_unitree_" + std::to_string(getpid()) + "_" + what + "_" +
-         std::to_string(counter++);
+  return sim::testing::unique_name(std::string("unitree_") + what);
 }
 
 std::string temp_path(const char* what) {
@@ -59,13 +58,7 @@ void write_file(const std::string& path, std::span<const std::byte> bytes) {
   out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
 }
 
-// Removes the streams a test created, whatever happens to the test.
-struct StreamGuard {
-  std::vector<std::string> names;
-  ~StreamGuard() {
-    for (const auto& n : names) (void)sim::destroy(n, true);
-  }
-};
+using sim::testing::StreamGuard;
 
 L2PointSpec l2_packet_spec(std::uint32_t seq) {
   L2PointSpec s;
@@ -510,12 +503,8 @@ TEST(UnitreeReplayPcap, ALoopingReplayKeepsWholeScansAndIncreasingStamps) {
   write_udp_capture(file, payloads);
   Process replay({SIM_REPLAY_PCAP_PATH, file, "--model", "unitree-l2", "--stream", stream,
                   "--scan-packets", "3", "--rate", "4", "--loop", "--summary", "-q"});
-  std::optional<sim::Reader> reader;
-  for (int i = 0; i < 2000 && !reader; ++i) {
-    if (auto r = sim::Reader::open(stream)) reader.emplace(std::move(*r));
-    else std::this_thread::sleep_for(5ms);
-  }
-  ASSERT_TRUE(reader);
+  auto reader = sim::testing::wait_for_stream(stream);
+  ASSERT_TRUE(reader) << replay.err();
   std::vector<std::byte> buffer(reader->capacity());
   sim::FrameInfo info;
   std::int64_t last_stamp = 0;

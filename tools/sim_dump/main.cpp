@@ -53,10 +53,12 @@ int main(int argc, char** argv) {
   app.add_option("--timeout", timeout_s, "give up when no new frame arrives for this many seconds")
       ->check(CLI::PositiveNumber);
   app.add_flag("-q,--quiet", quiet, "no progress line and no summary");
+  sim::ReaderOptions reader_options;
+  cli.add_trust(reader_options.trust);
   if (auto code = cli.parse(argc, argv)) return *code;
   const auto& stop = sim::apps::StopSignal::install();
 
-  auto reader = sim::Reader::open(stream);
+  auto reader = sim::Reader::open(stream, reader_options);
   if (!reader) return cli.fail(std::string_view(reader.error().message));
   auto sink = sim::dump::make_sink(reader->layout(), sink_options);
   if (!sink) return cli.fail(std::string_view(sink.error().message));

@@ -25,6 +25,7 @@ struct Options {
   bool wait_for_stream = false;
   bool poll = false;
   sim::ThreadPlacement placement;
+  sim::ReaderOptions reader;
 };
 
 void print_frame(const Options& o, const sim::FrameInfo& info, std::int64_t read_ns,
@@ -83,6 +84,7 @@ int main(int argc, char** argv) {
   app.add_flag("--wait-for-stream", o.wait_for_stream, "wait until the stream exists");
   app.add_flag("--poll", o.poll, "busy-poll instead of sleeping until each frame (uses a core)");
   cli.add_placement(o.placement);
+  cli.add_trust(o.reader.trust);
   if (auto code = cli.parse(argc, argv)) return *code;
   if (auto code = cli.apply_placement(o.placement)) return *code;
 
@@ -92,10 +94,10 @@ int main(int argc, char** argv) {
     return seconds > 0 && static_cast<double>(sim::monotonic_ns() - start) / 1e9 >= seconds;
   };
 
-  auto reader = sim::Reader::open(o.stream);
+  auto reader = sim::Reader::open(o.stream, o.reader);
   while (!reader && o.wait_for_stream && reader.error().code == sim::ErrorCode::not_found &&
          !past(o.duration_s) && stop.sleep_for(std::chrono::milliseconds(100))) {
-    reader = sim::Reader::open(o.stream);
+    reader = sim::Reader::open(o.stream, o.reader);
   }
   if (!reader) {
     if (stop.requested() || past(o.duration_s)) return sim::apps::kExitOk;

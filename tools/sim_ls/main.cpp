@@ -270,7 +270,10 @@ int main(int argc, char** argv) {
         row.seen_span_s = static_cast<double>(now - last) / 1e9;
         kept.emplace(row.name, std::move(found->second));
       } else if (row.status) {
-        if (auto reader = sim::Reader::open(row.name)) {
+        // Looking only: the view accepts any owner's stream (sim::Trust::any_owner).
+        sim::ReaderOptions look;
+        look.trust = sim::Trust::any_owner();
+        if (auto reader = sim::Reader::open(row.name, look)) {
           kept.emplace(row.name, std::make_unique<sim::ls::StreamWatch>(std::move(*reader)));
         }
       }

@@ -29,8 +29,8 @@ int main(int argc, char** argv) {
 
   int failures = 0;
   const auto remove = [&](const std::string& name, bool forced) {
-    if (auto error = sim::destroy(name, forced)) {
-      cli.fail(std::string_view(error->message));
+    if (auto removed = sim::destroy(name, forced); !removed) {
+      cli.fail(std::string_view(removed.error().message));
       ++failures;
     } else {
       std::printf("removed %s\n", name.c_str());

@@ -78,6 +78,17 @@ void CommandLine::add_placement(ThreadPlacement& placement) {
       ->check(CLI::Range(1, 99));
 }
 
+void CommandLine::add_trust(Trust& trust) {
+  trust_ = &trust;
+  app_.add_option("--trust-owner", trust_owner_,
+                  "also accept streams owned by this user (name or uid); default: only your own")
+      ->type_name("USER");
+  app_.add_option("--trust-group", trust_group_,
+                  "also accept streams owned by this group (name or gid): every member is then "
+                  "trusted to be the writer")
+      ->type_name("GROUP");
+}
+
 std::optional<int> CommandLine::parse(int argc, char** argv) {
   try {
     app_.parse(argc, argv);
@@ -97,6 +108,11 @@ std::optional<int> CommandLine::parse(int argc, char** argv) {
     return usage_error(what + "; see --help for the option names");
   } catch (const CLI::ParseError& e) {
     return usage_error(as_sentence(e.what()) + "; see " + tool_ + " --help");
+  }
+  if (trust_ != nullptr && (!trust_owner_.empty() || !trust_group_.empty())) {
+    auto trust = Trust::parse(trust_owner_, trust_group_);
+    if (!trust) return usage_error(trust.error().message);
+    *trust_ = *trust;
   }
   return std::nullopt;
 }

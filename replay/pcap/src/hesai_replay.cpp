@@ -142,7 +142,7 @@ int run_hesai_replay(int argc, char** argv) {
 
   auto stream = hesai::LidarStream::create(s.config);
   if (!stream) return cli.fail(std::string_view(stream.error().message));
-  if (auto error = hesai::apply_thread_placement(s)) return cli.fail(*error);
+  if (auto placed = hesai::apply_thread_placement(s); !placed) return cli.fail(placed.error());
   HesaiTarget target(std::move(*stream), r.restamp);
 
   const ReplayResult result = replay(r, target, stop, cli.tool());

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "sim/os.hpp"
+#include "sim/reader.hpp"
 #include "sim/result.hpp"
 
 namespace sim::apps {
@@ -52,6 +53,10 @@ class CommandLine {
   void add_config_file();
   // --cpu N and --rt-priority P for the program's working thread.
   void add_placement(ThreadPlacement& placement);
+  // --trust-owner USER and --trust-group GROUP for a program that reads streams: whose regions it
+  // accepts besides its own user's (sim::Trust). Checked by parse(); an unknown user or group is
+  // a usage error.
+  void add_trust(Trust& trust);
 
   // Parses; an exit code when the program should end now (--help: 0; a bad argument: 2 after one
   // sentence on stderr), nothing when it should run.
@@ -69,6 +74,9 @@ class CommandLine {
  private:
   std::string tool_;
   CLI::App app_;
+  Trust* trust_ = nullptr;
+  std::string trust_owner_;
+  std::string trust_group_;
 };
 
 // Whether a status line belongs on stderr: it is a terminal and the user did not ask for quiet.

@@ -9,7 +9,7 @@
 #include "sim/imaging/decoder.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  using namespace sim::camera;
+  using namespace sim;
   static auto decode = imaging::FrameDecoder::create(imaging::make_layout(64, 48, sim::PixelFormat::mjpeg),
                                             imaging::OutputFormat::bgr8);
   static auto pass = imaging::FrameDecoder::create(imaging::make_layout(64, 48, sim::PixelFormat::mjpeg),
