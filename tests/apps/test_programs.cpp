@@ -129,6 +129,21 @@ TEST(EveryProgram, ANegativeCountAnImpossiblePriorityOrAnUnknownTrustIsAUsageErr
   expect_usage_error({SIM_PROGRAM_sim_echo, {"/lidar_top", "--trust-group", "sim-no-such-group"},
                       "sim-no-such-group"});
 #endif
+  // The programs that read streams for others (recorder, live view, DDS bridge) take them too.
+#ifdef SIM_PROGRAM_sim_record
+  expect_usage_error({SIM_PROGRAM_sim_record,
+                      {"-o", "/nonexistent/never.mcap", "/lidar_top", "--trust-owner", "sim-no-such-user"},
+                      "sim-no-such-user"});
+#endif
+#ifdef SIM_PROGRAM_sim_foxglove
+  expect_usage_error({SIM_PROGRAM_sim_foxglove, {"--port", "0", "--trust-group", "sim-no-such-group"},
+                      "sim-no-such-group"});
+#endif
+#ifdef SIM_PROGRAM_sim_dds_bridge
+  expect_usage_error({SIM_PROGRAM_sim_dds_bridge,
+                      {"--publish", "/lidar_top", "--trust-owner", "sim-no-such-user"},
+                      "sim-no-such-user"});
+#endif
 #ifdef SIM_PROGRAM_sim_lidar_unitree
   expect_usage_error({SIM_PROGRAM_sim_lidar_unitree,
                       {"--model", "L1", "--stream", "/lidar_top"}, "--serial"});

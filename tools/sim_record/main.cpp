@@ -96,6 +96,8 @@ int main(int argc, char** argv) {
                "wait until every named stream exists, then record");
   app.add_flag("--json", json, "print the final counters as one JSON object");
   app.add_flag("--quiet", quiet, "no progress line");
+  sim::Trust trust;
+  cli.add_trust(trust);
   cli.add_config_file();
   if (auto code = cli.parse(argc, argv)) return *code;
   if (all == !streams.empty()) return cli.usage_error("name the streams to record or pass --all (not both)");
@@ -104,7 +106,7 @@ int main(int argc, char** argv) {
   sim::apps::StatusLine status = sim::apps::StatusLine::for_stderr("sim_record", quiet);
   if (all) {
     for (const auto& name : sim::list_streams()) {
-      auto reader = sim::Reader::open(name);
+      auto reader = sim::Reader::open(name, {.trust = trust});
       if (reader && sim::ros2::message_type_for(reader->layout())) {
         streams.push_back(name);
       } else {
@@ -128,6 +130,7 @@ int main(int argc, char** argv) {
   sim::record::RecorderOptions options;
   options.path = output;
   options.streams = streams;
+  options.trust = trust;
   options.writer.library = "sim_record";
   options.writer.compression = *sim::mcap::parse_compression(compression);
   options.writer.chunk_size = chunk_kib * 1024;

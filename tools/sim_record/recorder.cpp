@@ -272,7 +272,7 @@ Expected<Recorder> Recorder::start(const RecorderOptions& options) {
   }
   auto impl = std::make_unique<Impl>(options);
   for (const auto& name : options.streams) {
-    auto reader = Reader::open(name);
+    auto reader = Reader::open(name, {.trust = options.trust});
     if (!reader) return reader.error();
     if (auto type = ros2::message_type_for(reader->layout()); !type) {
       return Error{ErrorCode::invalid_argument,

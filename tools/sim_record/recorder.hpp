@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "sim/mcap/writer.hpp"
+#include "sim/reader.hpp"
 #include "sim/result.hpp"
 
 namespace sim::record {
@@ -23,6 +24,7 @@ struct RecorderOptions {
   std::vector<std::string> streams;  // SIM stream names ("/lidar_top")
   mcap::WriterOptions writer{};
   std::uint64_t queue_bytes = 256u << 20;  // messages waiting for the writer thread, at most
+  Trust trust{};                           // whose regions to read (--trust-owner, --trust-group)
 };
 
 struct StreamCounters {

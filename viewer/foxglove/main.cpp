@@ -57,6 +57,7 @@ int main(int argc, char** argv) {
                  "images as JPEG sensor_msgs/msg/CompressedImage: none, jpeg or jpeg:QUALITY (1-100)")
       ->capture_default_str();
   app.add_flag("--json", json, "print the listening line as JSON");
+  cli.add_trust(options.trust);
   cli.add_config_file();
   if (auto code = cli.parse(argc, argv)) return *code;
   if (!parse_compress(compress, options)) {

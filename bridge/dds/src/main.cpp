@@ -150,6 +150,8 @@ int main(int argc, char** argv) {
   app.add_option("--status-period", status_period, "seconds between status reports")
       ->check(CLI::Range(0.05, 3600.0));
   app.add_flag("-q,--quiet", quiet, "no status line and no summary");
+  Trust trust;
+  cli.add_trust(trust);
   cli.add_config_file();
   if (auto code = cli.parse(argc, argv)) return *code;
 
@@ -178,7 +180,10 @@ int main(int argc, char** argv) {
 
   std::vector<std::unique_ptr<Outbound>> outbound;
   std::vector<std::unique_ptr<Inbound>> inbound;
-  for (auto& o : plan->outbound) outbound.push_back(std::make_unique<Outbound>(**session, o));
+  for (auto& o : plan->outbound) {
+    o.trust = trust;
+    outbound.push_back(std::make_unique<Outbound>(**session, o));
+  }
   for (auto& i : plan->inbound) inbound.push_back(std::make_unique<Inbound>(**session, i));
   const Report report{outbound, inbound};
 

@@ -115,7 +115,7 @@ void Outbound::run() {
 
   while (!stop_.load(std::memory_order_relaxed)) {
     if (!reader) {
-      auto opened = Reader::open(options_.stream);
+      auto opened = Reader::open(options_.stream, {.trust = options_.trust});
       if (!opened) {
         raw_.connected.store(false);
         if (opened.error().code != ErrorCode::not_found) raw_.problem(opened.error().message);

@@ -11,6 +11,7 @@
 
 #include "counters.hpp"
 #include "dds_session.hpp"
+#include "sim/reader.hpp"
 
 namespace sim::bridge {
 
@@ -21,6 +22,7 @@ struct OutboundOptions {
   double max_rate_hz = 0;   // 0: every frame
   std::optional<int> jpeg_quality;  // --compress: also CompressedImage on <topic>/compressed
   QosChoice qos;
+  Trust trust{};            // whose regions to read (--trust-owner, --trust-group)
 };
 
 class Outbound {

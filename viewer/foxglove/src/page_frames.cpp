@@ -17,9 +17,9 @@ void PageFrames::keep_only(const std::set<std::string>& names) {
   std::erase_if(entries_, [&](const auto& kv) { return !names.contains(kv.first); });
 }
 
-std::optional<Error> PageFrames::refresh(Entry& e, const std::string& stream) {
+std::optional<Error> PageFrames::refresh(Entry& e, const std::string& stream) const {
   if (!e.reader) {
-    auto opened = Reader::open(stream);
+    auto opened = Reader::open(stream, {.trust = trust_});
     if (!opened) return opened.error();
     e.reader.emplace(std::move(opened.value()));
   }

@@ -30,7 +30,7 @@ struct Picture {
 
 class PageFrames {
  public:
-  explicit PageFrames(int jpeg_quality) : quality_(jpeg_quality) {}
+  PageFrames(int jpeg_quality, Trust trust) : quality_(jpeg_quality), trust_(std::move(trust)) {}
 
   // The error is one sentence (no frame yet, not an image stream, …).
   Expected<Picture> image(const std::string& stream);
@@ -51,9 +51,10 @@ class PageFrames {
   };
   std::shared_ptr<Entry> entry(const std::string& stream);
   // Copies the newest frame into the entry, if there is a newer one; the error is one sentence.
-  static std::optional<Error> refresh(Entry& e, const std::string& stream);
+  std::optional<Error> refresh(Entry& e, const std::string& stream) const;
 
   const int quality_;
+  const Trust trust_;
   std::mutex mutex_;
   std::map<std::string, std::shared_ptr<Entry>> entries_;
 };

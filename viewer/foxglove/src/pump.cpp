@@ -81,7 +81,7 @@ void Pump::run() {
   bool reported = false;
   while (!stopping_.load(std::memory_order_relaxed)) {
     if (!reader) {
-      auto opened = Reader::open(stream_);
+      auto opened = Reader::open(stream_, {.trust = options_.trust});
       if (!opened) {
         sleep_unless(stopping_, 500ms);  // the catalog unadvertises it if it stays gone
         continue;

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "encoder.hpp"
+#include "sim/reader.hpp"
 
 namespace sim::foxglove {
 
@@ -38,6 +39,7 @@ class Subscriber {
 struct PumpOptions {
   EncodeOptions encode;
   double max_rate_hz = 0;  // 0: every frame
+  Trust trust{};           // whose regions to read
 };
 
 class Pump {

@@ -57,8 +57,8 @@ std::string random_session_id() {
 struct Server::Impl {
   explicit Impl(const ServerOptions& o)
       : options(o),
-        hub(PumpOptions{encode_options(o), o.max_rate_hz}),
-        frames(o.jpeg_quality),
+        hub(PumpOptions{encode_options(o), o.max_rate_hz, o.trust}),
+        frames(o.jpeg_quality, o.trust),
         catalog(o.streams, encode_options(o), o.poll_interval,
                 [this](const auto& added, const auto& removed) { hub.update(added, removed); },
                 [this] { after_poll(); }),

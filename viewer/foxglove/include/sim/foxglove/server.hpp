@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/reader.hpp"
 #include "sim/result.hpp"
 
 namespace sim::foxglove {
@@ -26,6 +27,7 @@ struct ServerOptions {
   std::chrono::milliseconds send_timeout{10'000};  // a client that takes no data this long is closed
   unsigned io_threads = 2;
   std::string name = "sim_foxglove";
+  Trust trust{};  // whose regions to serve (--trust-owner, --trust-group); default: this user's
 };
 
 // The running server: bound and serving once start() returns; stops when destroyed.
