@@ -288,7 +288,8 @@ WriteStatus Writer::write(const std::byte* frame_data, std::size_t frame_size, s
   if (impl_->loan_open) return WriteStatus::loan_open;
   if (frame.size() > impl_->capacity) return WriteStatus::too_large;
   impl_->begin_write();
-  std::memcpy(impl_->slot(impl_->last_seq + 1), frame.data(), frame.size());
+  // An empty frame may come with no buffer at all (C: SIM_writeData(w, NULL, 0)).
+  if (!frame.empty()) std::memcpy(impl_->slot(impl_->last_seq + 1), frame.data(), frame.size());
   return publish(*impl_, frame.size(), stamp_ns, receive_ns);
 }
 
