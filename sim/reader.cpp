@@ -293,8 +293,18 @@ struct Reader::Impl {
       case WakeStep::Action::sleep: {
         const std::int64_t until = std::min(step.until, slice_end);
         sleep_until(word, seen, until);
-        // Woken by its deadline rather than a publish: learn how late such wake-ups come.
-        if (until == step.until && !deliverable()) wake_late.add(monotonic_ns() - until);
+        // Learn how late the deadline wake-ups come. Woken by the deadline: the lateness itself.
+        // Woken by a publish after the deadline had passed: the timer had not woken it yet, so
+        // it is later than that (leaving these out would teach the reader only its luckier
+        // wake-ups, and its spin window would open too late to catch frames).
+        if (until == step.until) {
+          const std::int64_t late = monotonic_ns() - until;
+          if (!deliverable()) {
+            wake_late.add(late);
+          } else if (late > wake_late.ns()) {
+            wake_late.add_at_least(late);
+          }
+        }
         return;
       }
       case WakeStep::Action::spin:

@@ -3,6 +3,7 @@
 // Pure logic on numbers the caller passes in, so it is tested against a simulated clock.
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
@@ -17,18 +18,35 @@ struct StreamTiming {
   std::uint64_t frames_this_writer = 0;
 };
 
-// How late this reader's timed futex sleeps have woken, smoothed (a loaded machine or a VM wakes
-// later than the timer asked): the planner starts the spin that much earlier.
+// How late this reader's timed futex sleeps typically wake (a loaded machine or a VM wakes later
+// than the timer asked: on this project's VM 120–170 µs, now and then milliseconds): the planner
+// starts the spin that much earlier. It tracks the median, one small step toward each sample, so
+// a rare wake-up milliseconds late (the vCPU was descheduled) cannot drag the window so early
+// that it ends before the frame comes, as a mean would.
 class WakeLateness {
  public:
   void add(std::int64_t late_ns) noexcept {
     if (late_ns < 0) late_ns = 0;
-    smoothed_ns_ += (late_ns - smoothed_ns_) / 8;
+    if (!seeded_) {
+      median_ns_ = late_ns;
+      seeded_ = true;
+      return;
+    }
+    const std::int64_t step = std::max<std::int64_t>(kMinStepNs, median_ns_ / 16);
+    if (late_ns > median_ns_) median_ns_ += step;
+    if (late_ns < median_ns_) median_ns_ -= std::min(step, median_ns_);
   }
-  std::int64_t ns() const noexcept { return smoothed_ns_; }
+  // A wake-up known only to be at least this late (a publish woke the reader after its timer
+  // should have): counts as a sample above the median when it is above it.
+  void add_at_least(std::int64_t late_ns) noexcept {
+    if (seeded_ && late_ns > median_ns_) add(late_ns);
+  }
+  std::int64_t ns() const noexcept { return median_ns_; }
 
  private:
-  std::int64_t smoothed_ns_ = 0;
+  static constexpr std::int64_t kMinStepNs = 1'000;
+  std::int64_t median_ns_ = 0;
+  bool seeded_ = false;
 };
 
 // What an adaptive reader does next, and until when (CLOCK_MONOTONIC).
@@ -44,8 +62,11 @@ struct WakeStep {
 
 // Places a short spin window around the next expected publish: the futex sleep ends `wake_margin`
 // plus a jitter guard before it (a sleeping thread wakes late by the timer slack and, on a VM, by
-// the wake-up of an idle vCPU), and the spin ends a jitter guard after it. The window never takes
-// more than `max_spin_share` of a period, so a reader spins at most that share of a core.
+// the wake-up of an idle vCPU), and the spin goes on after it for the rest of the spin budget.
+// The window never takes more than `max_spin_share` of a period, so a reader spins at most that
+// share of a core. When the budget is short (a large jitter), the guard shrinks so as much of the
+// window lies after the expected publish as before it: frames come late more often than early
+// (the writer's own timer wakes late), and a window that ends at the expected time misses half.
 class WakePlanner {
  public:
   struct Params {
@@ -68,17 +89,19 @@ class WakePlanner {
     if (!predictable(t)) return block;
     const std::int64_t since = now - t.latest_publish_ns;
     if (since < 0 || since > t.period_ns * p_.silent_after_periods) return block;
-    std::int64_t guard = t.jitter_ns * p_.guard_jitters;
-    if (guard < p_.min_guard_ns) guard = p_.min_guard_ns;
+    const std::int64_t max_spin = t.period_ns / p_.max_spin_share_inverse;
+    const std::int64_t margin = wake_late_ns > p_.wake_margin_ns ? wake_late_ns : p_.wake_margin_ns;
+    std::int64_t guard = std::max(t.jitter_ns * p_.guard_jitters, p_.min_guard_ns);
+    guard = std::min(guard, std::max<std::int64_t>(0, (max_spin - margin) / 2));
+    const std::int64_t lead = guard + margin;  // the spin starts this long before the publish
+    const std::int64_t tail = std::max(guard, max_spin - lead);  // and may go on this long after
     // The next expected publish whose spin window has not ended yet (a missed frame moves the
     // window on by whole periods, as the writer's clock does).
     const std::int64_t periods_past = since / t.period_ns;
     std::int64_t expected = t.latest_publish_ns + (periods_past + 1) * t.period_ns;
-    if (expected - t.period_ns + guard > now && periods_past > 0) expected -= t.period_ns;
-    const std::int64_t max_spin = t.period_ns / p_.max_spin_share_inverse;
-    const std::int64_t margin = wake_late_ns > p_.wake_margin_ns ? wake_late_ns : p_.wake_margin_ns;
-    const std::int64_t spin_from = expected - guard - margin;
-    std::int64_t spin_to = expected + guard;
+    if (expected - t.period_ns + tail > now && periods_past > 0) expected -= t.period_ns;
+    const std::int64_t spin_from = expected - lead;
+    std::int64_t spin_to = expected + tail;
     if (spin_to - spin_from > max_spin) spin_to = spin_from + max_spin;
     if (now < spin_from) return {WakeStep::Action::sleep, spin_from};
     if (now < spin_to) return {WakeStep::Action::spin, spin_to};

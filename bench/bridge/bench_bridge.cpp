@@ -3,12 +3,18 @@
 // publisher that sends the same ROS 2 message from memory, in the same run, for the SIM paper's
 // four payloads at their sensor rates. Per case and path: messages received of those sent,
 // latency (frame stamp → Cyclone take, mean and p99), throughput, and the CPU time of the
-// publishing process (the bridge, or the plain publisher) per second.
+// publishing process (the bridge, or the plain publisher) per second of the same window: from
+// just before the first frame to a fixed time after the last, counted in nanoseconds by the
+// scheduler (/proc/PID/task/*/schedstat), since a clock tick (10 ms) is more than either path
+// spends in a second at LiDAR rates. With --runs N the cases repeat N times (the two paths in
+// alternating order) and a summary gives the bridge/plain CPU ratio per case with its 95 %
+// interval, and the machine's load during the runs.
 //
-//   bench_bridge [--seconds 5] [--reliable] [--case camera_1920x1200]
+//   bench_bridge [--seconds 5] [--runs 5] [--reliable] [--case camera_1920x1200_30Hz]
 //
 // Run it as root so it can use a private network namespace (loopback only); otherwise it runs on
 // the machine's interfaces. Speed is reported, never asserted.
+#include <dirent.h>
 #include <net/if.h>
 #include <sched.h>
 #include <sys/ioctl.h>
@@ -20,10 +26,12 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -59,18 +67,42 @@ std::vector<Case> paper_cases() {
   };
 }
 
-// utime + stime of a process, in seconds.
+// CPU time of every thread of a process, in seconds: the scheduler's nanosecond accounting of
+// each live thread (/proc/PID/task/TID/schedstat, first field). Fast DDS and the bridge keep
+// their threads for the whole run, so no thread's time is lost between two samples.
 double cpu_seconds(pid_t pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
-  std::string stat((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const auto close = stat.rfind(')');
-  if (close == std::string::npos) return 0;
-  std::istringstream fields(stat.substr(close + 2));
-  std::string skip;
-  for (int i = 0; i < 11; ++i) fields >> skip;  // state … cmajflt
-  double utime = 0, stime = 0;
-  fields >> utime >> stime;
-  return (utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
+  const std::string tasks = "/proc/" + std::to_string(pid) + "/task";
+  DIR* dir = opendir(tasks.c_str());
+  if (dir == nullptr) return 0;
+  double total_ns = 0;
+  while (const dirent* entry = readdir(dir)) {
+    if (entry->d_name[0] == '.') continue;
+    std::ifstream in(tasks + "/" + entry->d_name + "/schedstat");
+    double ns = 0;
+    if (in >> ns) total_ns += ns;
+  }
+  closedir(dir);
+  return total_ns / 1e9;
+}
+
+// The whole machine's busy and total CPU time so far (/proc/stat), in clock ticks.
+std::pair<double, double> machine_cpu() {
+  std::ifstream in("/proc/stat");
+  std::string cpu;
+  in >> cpu;
+  double busy = 0, total = 0, value = 0;
+  for (int field = 0; field < 8 && (in >> value); ++field) {
+    total += value;
+    if (field != 3 && field != 4) busy += value;  // idle and iowait are not busy
+  }
+  return {busy, total};
+}
+
+std::string load_average() {
+  std::ifstream in("/proc/loadavg");
+  std::string one, five, fifteen;
+  in >> one >> five >> fifteen;
+  return one + " " + five + " " + fifteen;
 }
 
 struct Result {
@@ -116,7 +148,7 @@ class Receiver {
 };
 
 Result summarize(std::vector<double> latencies, std::uint64_t bytes, std::uint64_t sent,
-                 double seconds, double cpu) {
+                 double seconds, double cpu, double cpu_window) {
   Result r;
   r.sent = sent;
   r.received = latencies.size();
@@ -128,30 +160,57 @@ Result summarize(std::vector<double> latencies, std::uint64_t bytes, std::uint64
     r.p99_ms = latencies[std::min(latencies.size() - 1, latencies.size() * 99 / 100)];
   }
   r.mb_per_s = static_cast<double>(bytes) / 1e6 / seconds;
-  r.cpu_percent = 100.0 * cpu / seconds;
+  r.cpu_percent = 100.0 * cpu / cpu_window;
   return r;
 }
 
 // Frames with a recognizable pattern, paced at the case's rate, stamped with the present.
 void pace(const Case& c, double seconds, const std::function<void(std::int64_t)>& send) {
-  // One sleep per frame, so the plain publisher's CPU is its sending, not its pacing.
+  // One sleep per frame, so the plain publisher's CPU is its sending, not its pacing. The first
+  // frame goes a period after the start, so a CPU window opened at the start holds it.
   const auto period = std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 / c.rate_hz));
   const auto start = std::chrono::steady_clock::now();
   const auto end = start + std::chrono::nanoseconds(static_cast<std::int64_t>(seconds * 1e9));
-  for (auto next = start; next < end; next += period) {
+  for (auto next = start + period; next <= end; next += period) {
     std::this_thread::sleep_until(next);
     send(sim::realtime_ns());
   }
 }
 
+// How long after the last frame the CPU window of either path ends: the last messages leave.
+constexpr auto kTail = std::chrono::milliseconds(300);
+
+// CPU seconds of `pid` and the wall-clock seconds between start() and stop().
+class CpuWindow {
+ public:
+  explicit CpuWindow(pid_t pid) : pid_(pid) {}
+  void start() {
+    cpu0_ = cpu_seconds(pid_);
+    wall0_ = std::chrono::steady_clock::now();
+  }
+  void stop() {
+    cpu_ = cpu_seconds(pid_) - cpu0_;
+    wall_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
+  }
+  double cpu() const { return cpu_; }
+  double wall() const { return wall_; }
+
+ private:
+  pid_t pid_;
+  double cpu0_ = 0, cpu_ = 0, wall_ = 0;
+  std::chrono::steady_clock::time_point wall0_;
+};
+
 template <typename Sample>
 Result run_case(const Case& c, const dds_topic_descriptor_t* type, const std::string& self,
                 const std::string& bridge_tool, bool via_bridge, double seconds, bool reliable) {
-  const std::string name = "/bench_bridge_" + std::to_string(::getpid()) + (via_bridge ? "_b" : "_p");
+  static int counter = 0;
+  const std::string name = "/bench_bridge_" + std::to_string(::getpid()) + "_" +
+                           std::to_string(counter++) + (via_bridge ? "_b" : "_p");
   CycloneParticipant participant;
   Receiver<Sample> receiver(participant, type, "rt" + name, reliable);
   std::uint64_t sent = 0;
-  double cpu = 0;
+  double cpu = 0, window = 1;
   if (via_bridge) {
     sim::StreamSpec spec;
     spec.name = name;
@@ -162,15 +221,18 @@ Result run_case(const Case& c, const dds_topic_descriptor_t* type, const std::st
     if (reliable) argv.push_back("--reliable");
     sim::testing::Process bridge(argv);
     std::this_thread::sleep_for(2s);  // discovery and matching
-    const double cpu0 = cpu_seconds(bridge.pid());
+    CpuWindow measured(bridge.pid());
+    measured.start();
     pace(c, seconds, [&](std::int64_t stamp) {
       // The producer's cost is not the bridge's: only the first byte changes per frame.
       sim::Loan loan = writer->loan();
       loan.bytes()[0] = static_cast<std::byte>(sent & 0xff);
       if (std::move(loan).commit(c.layout.min_capacity(), stamp) == sim::WriteStatus::ok) ++sent;
     });
-    std::this_thread::sleep_for(500ms);  // the last messages in flight
-    cpu = cpu_seconds(bridge.pid()) - cpu0;
+    std::this_thread::sleep_for(kTail);
+    measured.stop();
+    cpu = measured.cpu();
+    window = measured.wall();
     bridge.signal(SIGTERM);
     bridge.wait();
     (void)sim::destroy(name, true);
@@ -179,17 +241,22 @@ Result run_case(const Case& c, const dds_topic_descriptor_t* type, const std::st
                                      "--seconds", std::to_string(seconds)};
     if (reliable) argv.push_back("--reliable");
     sim::testing::Process publisher(argv);
+    // The publisher says "started" and sends its first frame a period later (pace()); the
+    // window opens when the line is read, well within that period.
     const auto started = publisher.wait_for_line("started");
-    const double cpu0 = cpu_seconds(publisher.pid());
+    CpuWindow measured(publisher.pid());
+    measured.start();
     const auto done = publisher.wait_for_line("sent", std::chrono::milliseconds(static_cast<int>(seconds * 1000) + 30'000));
-    cpu = cpu_seconds(publisher.pid()) - cpu0;
+    std::this_thread::sleep_for(kTail);
+    measured.stop();
+    cpu = measured.cpu();
+    window = measured.wall();
     if (done) sent = std::stoull(done->substr(done->find(' ') + 1));
-    std::this_thread::sleep_for(500ms);
     publisher.signal(SIGTERM);
     publisher.wait();
     (void)started;
   }
-  return summarize(receiver.latencies_ms(), receiver.bytes(), sent, seconds, cpu);
+  return summarize(receiver.latencies_ms(), receiver.bytes(), sent, seconds, cpu, window);
 }
 
 // The reference: the same message serialized from process memory by the same Fast DDS type
@@ -241,16 +308,48 @@ void enter_private_network() {
   std::system("ip route add 224.0.0.0/4 dev lo 2>/dev/null");
 }
 
+// Two-sided 95 % quantile of Student's t for `dof` degrees of freedom.
+double t95(std::size_t dof) {
+  static const double table[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262,
+                                 2.228, 2.201, 2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101,
+                                 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056, 2.052,
+                                 2.048, 2.045, 2.042};
+  return dof == 0 ? NAN : dof <= 30 ? table[dof - 1] : 1.96;
+}
+
+// "mean [low, high]" of the samples, the interval being the mean's 95 % confidence interval.
+std::string mean_interval(const std::vector<double>& v, int digits) {
+  double mean = 0;
+  for (double x : v) mean += x;
+  mean /= static_cast<double>(v.size());
+  char text[96];
+  if (v.size() < 2) {
+    std::snprintf(text, sizeof text, "%.*f", digits, mean);
+    return text;
+  }
+  double squares = 0;
+  for (double x : v) squares += (x - mean) * (x - mean);
+  const double sd = std::sqrt(squares / static_cast<double>(v.size() - 1));
+  const double half = t95(v.size() - 1) * sd / std::sqrt(static_cast<double>(v.size()));
+  std::snprintf(text, sizeof text, "%.*f [%.*f, %.*f]", digits, mean, digits, mean - half, digits,
+                mean + half);
+  return text;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"SIM → sim_dds_bridge → Cyclone DDS against a plain Fast DDS publisher, same run.",
                "bench_bridge"};
   double seconds = 5;
+  int runs = 1;
   bool reliable = false;
   std::string only;
   std::string plain_name;
   app.add_option("--seconds", seconds, "seconds per case and path")->check(CLI::PositiveNumber);
+  app.add_option("--runs", runs, "repeat every case this many times; with 2 or more, a summary "
+                                 "gives the bridge/plain CPU ratio with its 95 % interval")
+      ->check(CLI::Range(1, 100));
   app.add_flag("--reliable", reliable, "reliable QoS instead of best effort");
   app.add_option("--case", only, "run only this case");
   app.add_option("--plain-publisher", plain_name, "(internal) be the plain publisher of this topic");
@@ -266,24 +365,68 @@ int main(int argc, char** argv) {
   const ssize_t n = readlink("/proc/self/exe", path, sizeof path - 1);
   const std::string me = n > 0 ? std::string(path, static_cast<std::size_t>(n)) : self;
 
-  std::printf("| case | path | QoS | received/sent | mean ms | p99 ms | MB/s | publisher CPU %% |\n");
-  std::printf("|---|---|---|---|---|---|---|---|\n");
-  for (const Case& c : paper_cases()) {
-    if (!only.empty() && c.name != only) continue;
-    for (bool via_bridge : {false, true}) {
-      const Result r = c.layout.kind == sim::LayoutKind::points
-                           ? run_case<sensor_msgs_msg_dds__PointCloud2_>(
-                                 c, &sensor_msgs_msg_dds__PointCloud2__desc, me, SIM_DDS_BRIDGE,
-                                 via_bridge, seconds, reliable)
-                           : run_case<sensor_msgs_msg_dds__Image_>(
-                                 c, &sensor_msgs_msg_dds__Image__desc, me, SIM_DDS_BRIDGE,
-                                 via_bridge, seconds, reliable);
-      std::printf("| %s | %s | %s | %llu/%llu | %.2f | %.2f | %.1f | %.1f |\n", c.name.c_str(),
-                  via_bridge ? "SIM → bridge" : "plain Fast DDS", reliable ? "reliable" : "best effort",
-                  static_cast<unsigned long long>(r.received), static_cast<unsigned long long>(r.sent),
-                  r.mean_ms, r.p99_ms, r.mb_per_s, r.cpu_percent);
-      std::fflush(stdout);
+  const std::string load_before = load_average();
+  const auto machine_before = machine_cpu();
+  std::printf("| run | case | path | QoS | received/sent | mean ms | p99 ms | MB/s | publisher CPU %% |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|\n");
+  struct Samples {
+    std::vector<double> plain, bridge, ratio, difference;
+    std::uint64_t plain_received = 0, bridge_received = 0, sent = 0;
+  };
+  std::map<std::string, Samples> samples;
+  for (int run = 1; run <= runs; ++run) {
+    for (const Case& c : paper_cases()) {
+      if (!only.empty() && c.name != only) continue;
+      Result results[2];  // plain, bridge
+      // Alternating which path goes first cancels a trend in the machine's load.
+      const bool bridge_first = run % 2 == 0;
+      for (bool via_bridge : {bridge_first, !bridge_first}) {
+        const Result r = c.layout.kind == sim::LayoutKind::points
+                             ? run_case<sensor_msgs_msg_dds__PointCloud2_>(
+                                   c, &sensor_msgs_msg_dds__PointCloud2__desc, me, SIM_DDS_BRIDGE,
+                                   via_bridge, seconds, reliable)
+                             : run_case<sensor_msgs_msg_dds__Image_>(
+                                   c, &sensor_msgs_msg_dds__Image__desc, me, SIM_DDS_BRIDGE,
+                                   via_bridge, seconds, reliable);
+        results[via_bridge ? 1 : 0] = r;
+        std::printf("| %d | %s | %s | %s | %llu/%llu | %.2f | %.2f | %.1f | %.2f |\n", run,
+                    c.name.c_str(), via_bridge ? "SIM → bridge" : "plain Fast DDS",
+                    reliable ? "reliable" : "best effort",
+                    static_cast<unsigned long long>(r.received), static_cast<unsigned long long>(r.sent),
+                    r.mean_ms, r.p99_ms, r.mb_per_s, r.cpu_percent);
+        std::fflush(stdout);
+      }
+      Samples& s = samples[c.name];
+      s.plain.push_back(results[0].cpu_percent);
+      s.bridge.push_back(results[1].cpu_percent);
+      s.ratio.push_back(results[1].cpu_percent / results[0].cpu_percent);
+      s.difference.push_back(results[1].cpu_percent - results[0].cpu_percent);
+      s.plain_received += results[0].received;
+      s.bridge_received += results[1].received;
+      s.sent += results[1].sent;
     }
   }
+  const auto machine_after = machine_cpu();
+  const double busy = 100.0 * (machine_after.first - machine_before.first) /
+                      (machine_after.second - machine_before.second);
+  std::printf("\nCPU of the publishing process, %% of one core, mean [95 %% interval] over %d run%s "
+              "of %.0f s per case and path:\n\n",
+              runs, runs == 1 ? "" : "s", seconds);
+  std::printf("| case | plain Fast DDS | SIM → bridge | bridge / plain | bridge − plain | received plain / bridge / sent |\n");
+  std::printf("|---|---|---|---|---|---|\n");
+  for (const Case& c : paper_cases()) {
+    const auto it = samples.find(c.name);
+    if (it == samples.end()) continue;
+    const Samples& s = it->second;
+    std::printf("| %s | %s | %s | %s | %s | %llu / %llu / %llu |\n", c.name.c_str(),
+                mean_interval(s.plain, 2).c_str(), mean_interval(s.bridge, 2).c_str(),
+                mean_interval(s.ratio, 2).c_str(), mean_interval(s.difference, 2).c_str(),
+                static_cast<unsigned long long>(s.plain_received),
+                static_cast<unsigned long long>(s.bridge_received),
+                static_cast<unsigned long long>(s.sent));
+  }
+  std::printf("\nMachine: %ld cores, busy %.0f %% of them during the runs (this bench included); "
+              "load average %s before, %s after.\n",
+              sysconf(_SC_NPROCESSORS_ONLN), busy, load_before.c_str(), load_average().c_str());
   return 0;
 }

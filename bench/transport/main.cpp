@@ -134,6 +134,7 @@ struct RoleOptions {
   std::uint64_t warmup = 0;
   double rate = 0;  // 0: as fast as possible
   double jitter = 0;  // each period is drawn uniformly from period * (1 ± jitter)
+  double pause_s = 0;  // > 0: the writer falls silent this long halfway through the measured frames
   double idle_s = 0;  // > 0: the idle-cost run (the writer publishes nothing for this long)
   int cpu = -1;
   int rt_priority = 0;
@@ -176,8 +177,14 @@ int run_writer(const RoleOptions& o, Transport t) {
   std::int64_t next = t0;
   std::uint64_t published = 0;
   const std::uint64_t frames = o.idle_s > 0 ? 0 : o.frames;  // idle cost: a silent writer
+  // --pause: a sensor that stops for seconds (unplugged, a replay held) and then resumes.
+  const std::uint64_t pause_after = o.warmup + (frames - std::min(frames, o.warmup)) / 2;
   for (std::uint64_t seq = 1; seq <= frames; ++seq) {
     if (publisher->publish(frame, seq)) ++published;
+    if (o.pause_s > 0 && seq == pause_after) {
+      next += static_cast<std::int64_t>(o.pause_s * 1e9);
+      sleep_until_ns(next);
+    }
     if (period_ns > 0) {
       const double scale = o.jitter > 0 ? 1.0 + deviation(random) : 1.0;
       next += static_cast<std::int64_t>(static_cast<double>(period_ns) * scale);  // absolute: no drift
@@ -237,7 +244,8 @@ int run_reader(const RoleOptions& o, Transport t) {
   latencies.reserve(o.frames);
   std::uint64_t last = 0, received = 0, gaps = 0, torn = 0, invalidated = 0;
   const std::int64_t period_ns = o.rate > 0 ? static_cast<std::int64_t>(1e9 / o.rate) : 0;
-  const std::int64_t idle_limit_ns = std::max<std::int64_t>(3'000'000'000, 50 * period_ns);
+  const std::int64_t idle_limit_ns = std::max<std::int64_t>(3'000'000'000, 50 * period_ns) +
+                                     static_cast<std::int64_t>(o.pause_s * 1e9);
   const std::int64_t first_deadline = sim::monotonic_ns() + 60'000'000'000;
   std::int64_t last_frame_at = 0;
   const Usage start = usage_now();
@@ -283,9 +291,10 @@ int run_reader(const RoleOptions& o, Transport t) {
   }
   const Usage used = usage_since(start);
   std::printf("result received=%" PRIu64 " gaps=%" PRIu64 " torn=%" PRIu64 " invalidated=%" PRIu64
-              " last=%" PRIu64 " cpu_s=%.6f nvcsw=%ld nivcsw=%ld\n",
+              " last=%" PRIu64 " cpu_s=%.6f nvcsw=%ld nivcsw=%ld caught_spinning=%" PRIu64
+              " spin_s=%.6f\n",
               received, gaps, torn, invalidated, last, used.cpu_s, used.voluntary_switches,
-              used.involuntary_switches);
+              used.involuntary_switches, subscriber->frames_caught_spinning(), subscriber->spin_s());
   std::string lat = "lat";
   for (const auto v : latencies) lat += " " + std::to_string(v);
   std::printf("%s\n", lat.c_str());
@@ -307,6 +316,7 @@ struct Options {
   std::vector<int> readers{1, 10};
   double rate = 100;
   double jitter = 0;
+  double pause_s = 0;
   double idle_s = 0;
   double vehicle_s = 0;  // > 0: the many-stream vehicle workload for this many seconds
   bool max_rate = false;
@@ -331,6 +341,8 @@ struct Row {
   double writer_cpu_s = 0, reader_cpu_s = 0;
   long writer_nvcsw = 0, writer_nivcsw = 0, reader_nvcsw = 0, reader_nivcsw = 0;
   long long udp_datagrams = -1;
+  std::uint64_t caught_spinning = 0;  // adaptive readers: frames that arrived while they spun
+  double spin_s = 0;                  // and the time they spent spinning, all readers
   std::string path;
   std::string status = "ok";
 };
@@ -416,6 +428,7 @@ class Bench {
                                "--warmup", std::to_string(o_.warmup),
                                "--rate", std::to_string(o_.max_rate ? 0.0 : o_.rate),
                                "--jitter", std::to_string(o_.jitter),
+                               "--pause", std::to_string(o_.pause_s),
                                "--idle-cost", std::to_string(o_.idle_s),
                                "--rt-priority", std::to_string(o_.rt_priority)};
     const int cpu = cpu_for(role == "writer" ? -1 : index);
@@ -478,7 +491,7 @@ class Bench {
 
     const double period_s = o_.max_rate ? 0.0 : 1.0 / o_.rate;
     const auto run_budget = std::chrono::milliseconds(
-        static_cast<long long>(static_cast<double>(o_.frames) * period_s * 1000.0 * 2) + 120'000);
+        static_cast<long long>((static_cast<double>(o_.frames) * period_s + o_.pause_s) * 1000.0 * 2) + 120'000);
     // The writer reports when it has published everything.
     for (;;) {
       auto l = writer.line(run_budget);
@@ -520,6 +533,8 @@ class Bench {
           row.reader_cpu_s += std::stod(f["cpu_s"]);
           row.reader_nvcsw += std::stol(f["nvcsw"]);
           row.reader_nivcsw += std::stol(f["nivcsw"]);
+          if (f.count("caught_spinning") != 0) row.caught_spinning += std::stoull(f["caught_spinning"]);
+          if (f.count("spin_s") != 0) row.spin_s += std::stod(f["spin_s"]);
           got_result = true;
         } else if (l->rfind("lat", 0) == 0) {
           std::istringstream in(l->substr(3));
@@ -795,7 +810,7 @@ class Bench {
                         "p999_us,max_us,std_us,received,skipped,lost,writer_cpu_s,reader_cpu_s\n");
       std::fprintf(extra, "transport,payload_bytes,readers,run,published,torn,writer_nvcsw,"
                           "writer_nivcsw,reader_nvcsw,reader_nivcsw,udp_datagrams,path,status,"
-                          "rate_hz,frames,warmup,cpus,rt_priority,jitter\n");
+                          "rate_hz,frames,warmup,cpus,rt_priority,jitter,pause_s,caught_spinning,spin_s\n");
     }
     const std::size_t total = o_.payloads.size() * o_.readers.size() * static_cast<std::size_t>(o_.runs) *
                               (transports.size() + (o_.no_floor ? 0 : 1));
@@ -823,11 +838,11 @@ class Bench {
       std::string cpus;
       for (const int c : o_.cpus) cpus += (cpus.empty() ? "" : " ") + std::to_string(c);
       std::fprintf(extra, "%s,%zu,%d,%d,%" PRIu64 ",%" PRIu64 ",%ld,%ld,%ld,%ld,%lld,%s,%s,%g,%" PRIu64
-                          ",%" PRIu64 ",%s,%d,%g\n",
+                          ",%" PRIu64 ",%s,%d,%g,%g,%" PRIu64 ",%.6f\n",
                    r.transport.c_str(), r.payload, r.readers, r.run, r.published, r.torn,
                    r.writer_nvcsw, r.writer_nivcsw, r.reader_nvcsw, r.reader_nivcsw, r.udp_datagrams,
                    r.path.empty() ? "-" : r.path.c_str(), r.status.c_str(), o_.max_rate ? 0.0 : o_.rate,
-                   o_.frames, o_.warmup, cpus.empty() ? "-" : cpus.c_str(), o_.rt_priority, o_.jitter);
+                   o_.frames, o_.warmup, cpus.empty() ? "-" : cpus.c_str(), o_.rt_priority, o_.jitter, o_.pause_s, r.caught_spinning, r.spin_s);
       std::fflush(csv);
       std::fflush(extra);
     };
@@ -955,6 +970,10 @@ int main(int argc, char** argv) {
   app.add_option("--jitter", o.jitter, "draw each publish period from period x (1 ± this), e.g. 0.1 "
                                        "for ±10 %: an irregular sensor")
       ->check(CLI::Range(0.0, 0.9));
+  app.add_option("--pause", o.pause_s, "the writer falls silent for this many seconds halfway "
+                                       "through each run, then resumes: readers must stay correct "
+                                       "and cheap across it (reader CPU includes the pause)")
+      ->check(CLI::Range(0.0, 60.0));
   app.add_option("--vehicle", o.vehicle_s, "instead of the payload grid: the many-stream vehicle "
                                           "workload for this many seconds (7 camera streams of "
                                           "1920x1200x3 B at 30 Hz + one 1,382,400 B LiDAR stream "
@@ -998,6 +1017,7 @@ int main(int argc, char** argv) {
     role.warmup = o.warmup;
     role.rate = o.rate;
     role.jitter = o.jitter;
+    role.pause_s = o.pause_s;
     role.idle_s = o.idle_s;
     role.rt_priority = o.rt_priority;
     return role.role == "writer" ? run_writer(role, t) : run_reader(role, t);

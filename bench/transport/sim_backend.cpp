@@ -87,6 +87,8 @@ class SimSubscriber final : public SubscriberBackend {
 
   bool release() override { return !zero() || borrow_.still_valid(); }
   bool zero_copy() const override { return zero(); }
+  std::uint64_t frames_caught_spinning() const override { return reader_.stats().caught_spinning; }
+  double spin_s() const override { return static_cast<double>(reader_.stats().spin_ns) / 1e9; }
 
  private:
   Reader reader_;

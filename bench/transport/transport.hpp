@@ -99,6 +99,9 @@ class SubscriberBackend {
   // Gives the frame back. False if zero-copy bytes were overwritten while held: discard them.
   virtual bool release() = 0;
   virtual bool zero_copy() const = 0;
+  // Adaptive SIM readers: frames caught while spinning, and the time spent spinning.
+  virtual std::uint64_t frames_caught_spinning() const { return 0; }
+  virtual double spin_s() const { return 0; }
 };
 
 // Backend factories; they return nullptr and set `error` to one sentence when setup fails.

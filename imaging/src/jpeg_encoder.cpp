@@ -3,6 +3,7 @@
 
 #include <turbojpeg.h>
 
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -13,6 +14,10 @@ namespace sim::imaging {
 struct JpegEncoder::Impl {
   tjhandle handle = nullptr;
   int quality = 90;
+  // libjpeg-turbo's output: the worst case for the largest image so far, kept between calls and
+  // never cleared (a vector resized to the worst case would zero megabytes per frame).
+  std::unique_ptr<unsigned char[]> buffer;
+  unsigned long buffer_size = 0;
   ~Impl() {
     if (handle != nullptr) tjDestroy(handle);
   }
@@ -37,22 +42,33 @@ Expected<JpegEncoder> JpegEncoder::create(int quality) {
   return JpegEncoder(std::move(impl));
 }
 
-std::optional<Error> JpegEncoder::encode(const ImageLayout& layout,
-                                         std::span<const std::byte> pixels,
-                                         std::vector<std::byte>& out) {
-  int format = -1;
-  int subsampling = TJSAMP_420;
-  switch (layout.format) {
-    case PixelFormat::bgr8: format = TJPF_BGR; break;
-    case PixelFormat::rgb8: format = TJPF_RGB; break;
-    case PixelFormat::mono8:
-      format = TJPF_GRAY;
-      subsampling = TJSAMP_GRAY;
-      break;
-    default:
-      return Error{ErrorCode::invalid_argument,
-                   "JPEG encoding takes bgr8, rgb8 or mono8 images; convert the image first"};
+namespace {
+
+// libjpeg-turbo's name for the pixels of a SIM format, or -1 when it has none.
+int turbojpeg_format(PixelFormat format) noexcept {
+  switch (format) {
+    case PixelFormat::bgr8: return TJPF_BGR;
+    case PixelFormat::rgb8: return TJPF_RGB;
+    case PixelFormat::bgra8: return TJPF_BGRA;
+    case PixelFormat::rgba8: return TJPF_RGBA;
+    case PixelFormat::mono8: return TJPF_GRAY;
+    default: return -1;
   }
+}
+
+}  // namespace
+
+bool JpegEncoder::encodes(PixelFormat format) noexcept { return turbojpeg_format(format) >= 0; }
+
+Expected<std::span<const std::byte>> JpegEncoder::encode(const ImageLayout& layout,
+                                                         std::span<const std::byte> pixels) {
+  const int format = turbojpeg_format(layout.format);
+  if (format < 0) {
+    return Error{ErrorCode::invalid_argument,
+                 "JPEG encoding takes bgr8, rgb8, bgra8, rgba8 or mono8 images; convert the "
+                 "image first"};
+  }
+  const int subsampling = layout.format == PixelFormat::mono8 ? TJSAMP_GRAY : TJSAMP_420;
   if (layout.width == 0 || layout.height == 0 || pixels.size() < min_input_bytes(layout)) {
     return Error{ErrorCode::invalid_argument,
                  "the image holds " + std::to_string(pixels.size()) + " bytes, fewer than its " +
@@ -61,9 +77,12 @@ std::optional<Error> JpegEncoder::encode(const ImageLayout& layout,
   }
   const unsigned long bound = tjBufSize(static_cast<int>(layout.width),
                                         static_cast<int>(layout.height), subsampling);
-  out.resize(bound);
-  auto* destination = reinterpret_cast<unsigned char*>(out.data());
-  unsigned long size = bound;
+  if (impl_->buffer_size < bound) {
+    impl_->buffer.reset(new unsigned char[bound]);  // uninitialized: it is only written
+    impl_->buffer_size = bound;
+  }
+  unsigned char* destination = impl_->buffer.get();
+  unsigned long size = impl_->buffer_size;
   const int rc = tjCompress2(impl_->handle, reinterpret_cast<const unsigned char*>(pixels.data()),
                              static_cast<int>(layout.width), static_cast<int>(layout.stride),
                              static_cast<int>(layout.height), format, &destination, &size,
@@ -73,8 +92,37 @@ std::optional<Error> JpegEncoder::encode(const ImageLayout& layout,
                  std::string("libjpeg-turbo could not encode the image: ") +
                      tjGetErrorStr2(impl_->handle)};
   }
-  out.resize(size);
+  return std::span<const std::byte>(reinterpret_cast<const std::byte*>(destination), size);
+}
+
+std::optional<Error> JpegEncoder::encode(const ImageLayout& layout,
+                                         std::span<const std::byte> pixels,
+                                         std::vector<std::byte>& out) {
+  auto jpeg = encode(layout, pixels);
+  if (!jpeg) return jpeg.error();
+  out.assign(jpeg->begin(), jpeg->end());
   return std::nullopt;
+}
+
+Expected<JpegSize> read_jpeg_size(std::span<const std::byte> jpeg) {
+  tjhandle handle = tjInitDecompress();
+  if (handle == nullptr) {
+    return Error{ErrorCode::system_error, "libjpeg-turbo could not start a JPEG decoder"};
+  }
+  int width = 0;
+  int height = 0;
+  int subsampling = 0;
+  int colorspace = 0;
+  const int rc = tjDecompressHeader3(handle, reinterpret_cast<const unsigned char*>(jpeg.data()),
+                                     static_cast<unsigned long>(jpeg.size()), &width, &height,
+                                     &subsampling, &colorspace);
+  tjDestroy(handle);
+  if (rc != 0 || width <= 0 || height <= 0) {
+    return Error{ErrorCode::invalid_argument,
+                 "the " + std::to_string(jpeg.size()) +
+                     " bytes are not a JPEG with a readable header"};
+  }
+  return JpegSize{static_cast<std::uint32_t>(width), static_cast<std::uint32_t>(height)};
 }
 
 }  // namespace sim::imaging

@@ -14,30 +14,36 @@ std::uint32_t crc32(std::span<const std::byte> data, std::uint32_t crc) noexcept
       ::crc32_z(crc, reinterpret_cast<const Bytef*>(data.data()), data.size()));
 }
 
-void compress(Compression compression, std::span<const std::byte> in, std::vector<std::byte>& out,
-              int zstd_level) {
+std::uint32_t crc32_combine(std::uint32_t crc_a, std::uint32_t crc_b, std::uint64_t length_b) noexcept {
+  return static_cast<std::uint32_t>(
+      ::crc32_combine64(crc_a, crc_b, static_cast<z_off64_t>(length_b)));
+}
+
+std::size_t compress(Compression compression, std::span<const std::byte> in,
+                     std::vector<std::byte>& out, int zstd_level) {
+  auto room_for = [&out](std::size_t bound) {
+    if (out.size() < bound) out.resize(bound);
+  };
   switch (compression) {
     case Compression::none:
-      out.assign(in.begin(), in.end());
-      return;
+      break;
     case Compression::zstd: {
-      out.resize(ZSTD_compressBound(in.size()));
+      room_for(ZSTD_compressBound(in.size()));
       const std::size_t n = ZSTD_compress(out.data(), out.size(), in.data(), in.size(), zstd_level);
       if (ZSTD_isError(n)) throw std::runtime_error(ZSTD_getErrorName(n));
-      out.resize(n);
-      return;
+      return n;
     }
     case Compression::lz4: {
       LZ4F_preferences_t prefs{};
       prefs.frameInfo.contentSize = in.size();
       prefs.frameInfo.blockSizeID = LZ4F_max4MB;
-      out.resize(LZ4F_compressFrameBound(in.size(), &prefs));
+      room_for(LZ4F_compressFrameBound(in.size(), &prefs));
       const std::size_t n = LZ4F_compressFrame(out.data(), out.size(), in.data(), in.size(), &prefs);
       if (LZ4F_isError(n)) throw std::runtime_error(LZ4F_getErrorName(n));
-      out.resize(n);
-      return;
+      return n;
     }
   }
+  throw std::runtime_error("no compression was asked for");
 }
 
 std::string decompress(Compression compression, std::span<const std::byte> in,

@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <cstring>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -83,9 +84,12 @@ struct Writer::Impl {
     write_fully(out);
     out.clear();
   }
-  // Every byte of the file goes through here, so offsets and CRCs stay right.
-  void emit(std::span<const std::byte> data) {
-    if (options.crc) crc = detail::crc32(data, crc);
+  // Every byte of the file goes through here, so offsets and CRCs stay right. `data_crc`: the
+  // CRC of `data` when the caller has it already (an uncompressed chunk), so it is not read twice.
+  void emit(std::span<const std::byte> data, std::optional<std::uint32_t> data_crc = std::nullopt) {
+    if (options.crc) {
+      crc = data_crc ? detail::crc32_combine(crc, *data_crc, data.size()) : detail::crc32(data, crc);
+    }
     offset += data.size();
     if (data.size() >= (1u << 16)) {
       flush_out();
@@ -138,13 +142,13 @@ struct Writer::Impl {
     std::span<const std::byte> body = chunk;
     if (options.compression != Compression::none) {
       try {
-        detail::compress(options.compression, chunk, compressed, options.zstd_level);
+        const std::size_t size = detail::compress(options.compression, chunk, compressed, options.zstd_level);
+        body = std::span<const std::byte>(compressed).first(size);
       } catch (const std::exception& e) {
         failure = Error{ErrorCode::system_error,
                         std::string("cannot compress a chunk (") + e.what() + "); try --compression none"};
         return;
       }
-      body = compressed;
     }
     ChunkIndex index;
     index.start_time = chunk_start_time;
@@ -166,7 +170,10 @@ struct Writer::Impl {
     w.string(compression);
     w.put(static_cast<std::uint64_t>(body.size()));
     emit(prefix);
-    emit(body);
+    // Uncompressed, the body is the chunk whose CRC was just computed.
+    emit(body, options.crc && options.compression == Compression::none
+                   ? std::optional<std::uint32_t>(chunk_crc)
+                   : std::nullopt);
     index.chunk_length = offset - index.chunk_offset;
 
     const std::uint64_t indexes_start = offset;

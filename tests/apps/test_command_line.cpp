@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -157,6 +158,66 @@ TEST(ConfigFile, BrokenYamlIsAUsageErrorWithItsLine) {
   const std::string message = testing::internal::GetCapturedStderr();
   EXPECT_EQ(code, std::optional<int>(sim::apps::kExitUsage));
   EXPECT_NE(message.find("not valid YAML"), std::string::npos) << message;
+}
+
+// The Hesai config files (config/hesai/*.yaml) name the calibration beside them: a relative
+// file name in a config file is relative to the file's folder; on the command line, to the
+// working folder; an absolute one stays.
+TEST(ConfigFile, ARelativePathOptionIsTakenFromTheFilesFolder) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("sim_apps_test_dir_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string file = (dir / "lidar.yaml").string();
+  std::ofstream(file) << "calibration: unit.csv\nfiretimes: /etc/sim/firetimes.csv\n"
+                         "label: notes.txt\n";
+  auto parse_with = [&](std::vector<std::string> extra) {
+    CommandLine cli("sim_test", "test");
+    cli.add_config_file({"calibration", "firetimes"});
+    std::string calibration, firetimes, label;
+    cli.app().add_option("--calibration", calibration, "file");
+    cli.app().add_option("--firetimes", firetimes, "file");
+    cli.app().add_option("--label", label, "not a file");
+    std::vector<std::string> words = {"sim_test", "--config", file};
+    words.insert(words.end(), extra.begin(), extra.end());
+    EXPECT_FALSE(parse(cli, words).has_value());
+    return std::vector<std::string>{calibration, firetimes, label};
+  };
+  const auto from_file = parse_with({});
+  EXPECT_EQ(from_file[0], (dir / "unit.csv").string());
+  EXPECT_EQ(from_file[1], "/etc/sim/firetimes.csv");
+  EXPECT_EQ(from_file[2], "notes.txt");  // not a path option: as written
+  const auto overridden = parse_with({"--calibration", "other.csv"});
+  EXPECT_EQ(overridden[0], "other.csv");  // the command line's is relative to the working folder
+  std::filesystem::remove_all(dir);
+}
+
+// The Hesai config files say `keep_zero_distance: false`: a flag set to false in the file stays
+// off, true turns it on, the command line still turns it on, and a value that is no boolean is
+// a usage error that names the option.
+TEST(ConfigFile, AFlagIsSetByTrueOrFalseInTheFile) {
+  TempFile file("keep_zero_distance: false\npartial_frames: true\nchecksum: false\n");
+  CommandLine cli("sim_test", "test");
+  cli.add_config_file();
+  bool keep_zero_distance = false, partial_frames = false, checksum = false;
+  cli.app().add_flag("--keep-zero-distance", keep_zero_distance, "flag");
+  cli.app().add_flag("--partial-frames", partial_frames, "flag");
+  cli.app().add_flag("--checksum", checksum, "flag");
+  ASSERT_FALSE(parse(cli, {"sim_test", "--config", file.path(), "--checksum"}).has_value());
+  EXPECT_FALSE(keep_zero_distance);
+  EXPECT_TRUE(partial_frames);
+  EXPECT_TRUE(checksum);
+
+  TempFile bad("keep_zero_distance: maybe\n");
+  CommandLine strict("sim_test", "test");
+  strict.add_config_file();
+  bool flag = false;
+  strict.app().add_flag("--keep-zero-distance", flag, "flag");
+  testing::internal::CaptureStderr();
+  const auto code = parse(strict, {"sim_test", "--config", bad.path()});
+  const std::string message = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(code, std::optional<int>(sim::apps::kExitUsage));
+  EXPECT_NE(message.find("keep-zero-distance"), std::string::npos) << message;
+  EXPECT_FALSE(flag);
 }
 
 TEST(ConfigFile, AMissingFileIsAUsageError) {

@@ -78,6 +78,12 @@ std::vector<Program> programs() {
 #ifdef SIM_PROGRAM_sim_lidar_unitree
   list.push_back({SIM_PROGRAM_sim_lidar_unitree, {"--model", "L2", "--udp-port", "0"}, "--stream"});
 #endif
+#ifdef SIM_PROGRAM_sim_lidar_hesai
+  // A free port on loopback opens fine; the missing calibration fails only after it (exit 1).
+  list.push_back({SIM_PROGRAM_sim_lidar_hesai,
+                  {"--calibration", "/nonexistent/c.csv", "--bind", "127.0.0.1", "--port", "0"},
+                  "--stream"});
+#endif
   return list;
 }
 
@@ -149,6 +155,17 @@ TEST(EveryProgram, ANegativeCountAnImpossiblePriorityOrAnUnknownTrustIsAUsageErr
                       {"--model", "L1", "--stream", "/lidar_top"}, "--serial"});
   expect_usage_error({SIM_PROGRAM_sim_lidar_unitree,
                       {"--model", "L3", "--stream", "/lidar_top"}, "unknown model"});
+#endif
+#ifdef SIM_PROGRAM_sim_lidar_hesai
+  expect_usage_error({SIM_PROGRAM_sim_lidar_hesai,
+                      {"--calibration", "/nonexistent/c.csv", "--model", "Velodyne"}, "unknown model"});
+  expect_usage_error({SIM_PROGRAM_sim_lidar_hesai,
+                      {"--calibration", "/nonexistent/c.csv", "--bind", "not-an-ip"},
+                      "is not an IP address"});
+  expect_usage_error({SIM_PROGRAM_sim_lidar_hesai,
+                      {"--calibration", "/nonexistent/c.csv", "--multicast-group", "10.0.0.1"},
+                      "is not a multicast group address"});
+  expect_usage_error({SIM_PROGRAM_sim_lidar_hesai, {"--stream", "/lidar_top"}, "no calibration"});
 #endif
 }
 

@@ -1,9 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 // JPEG encoding: what it makes decodes back (through the drivers' own decoder) to nearly the
-// same image, and what it cannot encode gets one sentence.
+// same image, and what it cannot encode gets one sentence; a JPEG's header gives its size.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
+#include <span>
+#include <string>
 #include <vector>
 
 #include "sim/imaging/decoder.hpp"
@@ -39,6 +42,10 @@ TEST(JpegEncoder, AnImageDecodesBackToNearlyTheSamePixels) {
   ASSERT_GT(jpeg.size(), 2U);
   EXPECT_EQ(jpeg[0], std::byte{0xFF});
   EXPECT_EQ(jpeg[1], std::byte{0xD8});  // SOI marker
+  // The same JPEG as a view of the encoder's own buffer (what a sender copies straight on).
+  auto view = encoder->encode(layout, pixels);
+  ASSERT_TRUE(view) << view.error().message;
+  EXPECT_TRUE(std::equal(view->begin(), view->end(), jpeg.begin(), jpeg.end()));
 
   auto decoder = FrameDecoder::create(make_layout(64, 48, PixelFormat::mjpeg), OutputFormat::bgr8);
   ASSERT_TRUE(decoder);
@@ -54,6 +61,53 @@ TEST(JpegEncoder, AnImageDecodesBackToNearlyTheSamePixels) {
     }
   }
   EXPECT_LE(worst, 24);
+}
+
+TEST(JpegEncoder, AnImageWithAlphaEncodesItsColoursAndLeavesAlphaOut) {
+  for (const PixelFormat format : {PixelFormat::bgra8, PixelFormat::rgba8}) {
+    const ImageLayout layout = make_layout(64, 48, format);
+    const auto pixels = gradient(layout);
+    auto encoder = JpegEncoder::create(95);
+    ASSERT_TRUE(encoder);
+    ASSERT_TRUE(JpegEncoder::encodes(format));
+    std::vector<std::byte> jpeg;
+    ASSERT_FALSE(encoder->encode(layout, pixels, jpeg).has_value());
+    auto decoder = FrameDecoder::create(make_layout(64, 48, PixelFormat::mjpeg),
+                                        format == PixelFormat::bgra8 ? OutputFormat::bgr8
+                                                                     : OutputFormat::rgb8);
+    ASSERT_TRUE(decoder);
+    std::vector<std::byte> decoded(decoder->output_layout().frame_bytes());
+    ASSERT_EQ(decoder->decode(jpeg, decoded).status, DecodeStatus::ok);
+    int worst = 0;
+    for (std::uint32_t p = 0; p < 64 * 48; ++p) {
+      for (std::uint32_t c = 0; c < 3; ++c) {  // the same three colours, in the same order
+        const int a = static_cast<int>(pixels[p * 4 + c]);
+        const int b = static_cast<int>(decoded[p * 3 + c]);
+        worst = std::max(worst, std::abs(a - b));
+      }
+    }
+    EXPECT_LE(worst, 24) << to_string(format);
+  }
+}
+
+TEST(JpegSize, TheHeaderGivesTheSizeAndOtherBytesGetOneSentence) {
+  const ImageLayout layout = make_layout(80, 24, PixelFormat::rgb8);
+  auto encoder = JpegEncoder::create();
+  ASSERT_TRUE(encoder);
+  std::vector<std::byte> jpeg;
+  ASSERT_FALSE(encoder->encode(layout, gradient(layout), jpeg).has_value());
+  auto size = read_jpeg_size(jpeg);
+  ASSERT_TRUE(size) << size.error().message;
+  EXPECT_EQ(size->width, 80U);
+  EXPECT_EQ(size->height, 24U);
+
+  const std::vector<std::byte> png_signature = {std::byte{0x89}, std::byte{'P'}, std::byte{'N'},
+                                                std::byte{'G'}};
+  const auto not_jpeg = read_jpeg_size(png_signature);
+  ASSERT_FALSE(not_jpeg);
+  EXPECT_NE(not_jpeg.error().message.find("not a JPEG"), std::string::npos);
+  EXPECT_FALSE(read_jpeg_size({}));
+  EXPECT_FALSE(read_jpeg_size(std::span(jpeg).first(10)));  // cut inside the header
 }
 
 TEST(JpegEncoder, AGreyImageEncodes) {

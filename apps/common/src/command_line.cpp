@@ -58,13 +58,22 @@ CLI::Option* CommandLine::add_streams(std::string_view name, std::vector<std::st
       ->check(stream_name_validator());
 }
 
-void CommandLine::add_config_file() {
-  app_.config_formatter(std::make_shared<YamlConfig>());
+void CommandLine::add_config_file(std::vector<std::string> path_options) {
+  auto config = std::make_shared<YamlConfig>(std::move(path_options));
+  app_.config_formatter(config);
   app_.allow_config_extras(CLI::config_extras_mode::error);  // a typo in the file is an error
   app_.set_config("--config", "",
                   "YAML file of options (keys are the long option names; the command line "
                   "overrides the file)")
-      ->type_name("FILE");
+      ->type_name("FILE")
+      // CLI11 checks the file name just before it reads the file: the moment to tell the reader
+      // which folder relative paths in it start from.
+      ->check(CLI::Validator(
+          [config](std::string& path) {
+            config->set_file(path);
+            return std::string();
+          },
+          "", "config file"));
 }
 
 void CommandLine::add_placement(ThreadPlacement& placement) {

@@ -4,6 +4,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <filesystem>
 
 namespace sim::apps {
 namespace {
@@ -18,7 +19,20 @@ std::string scalar(const YAML::Node& node, const std::string& key) {
   return node.Scalar();
 }
 
+std::string dashed(std::string name) {
+  std::replace(name.begin(), name.end(), '_', '-');
+  return name;
+}
+
 }  // namespace
+
+YamlConfig::YamlConfig(std::vector<std::string> path_options) {
+  for (auto& name : path_options) path_options_.push_back(dashed(std::move(name)));
+}
+
+void YamlConfig::set_file(const std::string& path) {
+  folder_ = std::filesystem::path(path).parent_path().string();
+}
 
 std::vector<CLI::ConfigItem> YamlConfig::from_config(std::istream& input) const {
   YAML::Node root;
@@ -33,8 +47,7 @@ std::vector<CLI::ConfigItem> YamlConfig::from_config(std::istream& input) const 
   if (!root.IsMap()) throw CLI::ConfigError("the config file must be a map of option: value");
   for (const auto& entry : root) {
     CLI::ConfigItem item;
-    item.name = entry.first.Scalar();
-    std::replace(item.name.begin(), item.name.end(), '_', '-');
+    item.name = dashed(entry.first.Scalar());
     const YAML::Node& value = entry.second;
     if (value.IsMap()) {
       for (const auto& pair : value) {
@@ -46,6 +59,14 @@ std::vector<CLI::ConfigItem> YamlConfig::from_config(std::istream& input) const 
       item.inputs.push_back(value.Scalar());
     } else {
       continue;  // "key:" with no value leaves the option at its default
+    }
+    if (!folder_.empty() &&
+        std::find(path_options_.begin(), path_options_.end(), item.name) != path_options_.end()) {
+      for (std::string& file : item.inputs) {
+        if (!file.empty() && std::filesystem::path(file).is_relative()) {
+          file = (std::filesystem::path(folder_) / file).string();
+        }
+      }
     }
     result.push_back(std::move(item));
   }

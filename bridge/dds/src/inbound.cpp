@@ -8,7 +8,7 @@
 #include <chrono>
 #include <cstring>
 
-#include "jpeg.hpp"
+#include "sim/imaging/jpeg_encoder.hpp"
 #include "sim/ros2/decode.hpp"
 
 namespace sim::bridge {
@@ -125,8 +125,8 @@ void Inbound::deliver_compressed(std::span<const std::byte> message) {
     return drop("CompressedImage format '" + std::string(view->format) +
                 "' is not JPEG; only JPEG becomes an mjpeg SIM stream");
   }
-  auto size = jpeg_size(view->data);
-  if (!size) return drop(size.error().message);
+  auto size = imaging::read_jpeg_size(view->data);
+  if (!size) return drop("the CompressedImage data: " + size.error().message);
   const ImageLayout image{size->width, size->height, 3, 0, PixelFormat::mjpeg, 8};
   // A JPEG's size varies per frame: keep slots at twice the largest seen so far.
   std::uint64_t capacity = std::max<std::uint64_t>(min_jpeg_capacity, 2 * view->data.size());

@@ -5,9 +5,9 @@
 
 #include <chrono>
 
-#include "jpeg.hpp"
 #include "ros_message_type.hpp"
 #include "sim/clock.hpp"
+#include "sim/imaging/jpeg_encoder.hpp"
 #include "sim/reader.hpp"
 
 namespace sim::bridge {
@@ -103,11 +103,16 @@ Outbound::~Outbound() {
 void Outbound::run() {
   TopicWriter raw(session_, ros2::dds_topic_name(options_.topic), options_.qos, raw_);
   std::optional<TopicWriter> compressed;
-  std::optional<JpegEncoder> encoder;
+  std::optional<imaging::JpegEncoder> encoder;
   if (options_.jpeg_quality) {
-    compressed.emplace(session_, ros2::dds_topic_name(options_.topic + "/compressed"), options_.qos,
-                       compressed_);
-    encoder.emplace(*options_.jpeg_quality);
+    auto created = imaging::JpegEncoder::create(*options_.jpeg_quality);
+    if (created) {
+      compressed.emplace(session_, ros2::dds_topic_name(options_.topic + "/compressed"),
+                         options_.qos, compressed_);
+      encoder.emplace(std::move(created.value()));
+    } else {
+      compressed_.problem(options_.stream + ": " + created.error().message);
+    }
   }
   RateLimit rate(options_.max_rate_hz);
   std::optional<Reader> reader;
@@ -145,7 +150,7 @@ void Outbound::run() {
       continue;
     }
     const bool can_compress = compressed && *type == ros2::MessageType::image &&
-                              jpeg_can_encode(reader->layout().image.format);
+                              imaging::JpegEncoder::encodes(reader->layout().image.format);
     if (compressed && !can_compress && !compress_refused) {
       compressed_.problem(options_.stream + ": --compress jpeg needs a mono8, bgr8, rgb8, bgra8 "
                           "or rgba8 image stream; no CompressedImage is published");
@@ -193,7 +198,8 @@ void Outbound::run() {
       }
     }
     if (jpeg_wanted && info.layout.kind == LayoutKind::image &&
-        jpeg_can_encode(info.layout.image.format)) {
+        imaging::JpegEncoder::encodes(info.layout.image.format)) {
+      // Into the encoder's own buffer, from which serializing is the JPEG's one copy.
       auto jpeg = encoder->encode(info.layout.image, borrow.bytes().first(info.size));
       if (!borrow.still_valid()) {  // the encoder read a slot being overwritten: drop its output
         compressed_.count(compressed_.torn);

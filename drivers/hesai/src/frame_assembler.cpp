@@ -1,12 +1,15 @@
 // SPDX-License-Identifier: Apache-2.0
-// Point formula (reference §1.1): x = d·cos(el)·sin(az), y = d·cos(el)·cos(az), z = d·sin(el),
-// az = block azimuth + channel azimuth offset. The multi-return filters and the per-point cut
-// follow nebula's decoder so its reference clouds are reproduced exactly
-// (../shared/data/lidar/SOURCES.md).
+// Point formula (docs/hesai.md, "Sensor frame"): x = d·cos(el)·sin(az), y = d·cos(el)·cos(az),
+// z = d·sin(el), az = block azimuth + channel azimuth offset. The multi-return filters and the
+// per-point cut follow nebula's decoder so its reference clouds are reproduced exactly
+// (tests/hesai/data/NOTICE.md: how they were made).
 #include "sim/hesai/frame_assembler.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstddef>
+#include <cstring>
 #include <limits>
 #include <numbers>
 #include <string>
@@ -38,6 +41,187 @@ int severity(LidarState state) noexcept {
   return 4;
 }
 bool worse(LidarState a, LidarState b) noexcept { return severity(a) > severity(b); }
+
+// One firing group (one firing of every channel, up to three returns) decoded into one array
+// per quantity, so that each quantity is computed by a plain loop over channels (see
+// decode_group). About 13 KiB, on the stack.
+constexpr unsigned group_channels = 128;
+constexpr unsigned group_returns = 3;
+struct GroupScratch {
+  template <typename T>
+  using PerReturn = std::array<std::array<T, group_channels>, group_returns>;
+  PerReturn<std::uint16_t> raw;
+  PerReturn<std::uint8_t> reflectivity;
+  PerReturn<float> distance;
+  PerReturn<std::uint8_t> keep;  // 1: the point passes every filter
+  // Each point's first 16 bytes (x, y, z, intensity) and last 8 (time offset, ring, return
+  // index, reserved) as they lie in a LidarPoint: copying a kept point is then two moves.
+  struct Xyzi {
+    float x, y, z, intensity;
+  };
+  PerReturn<Xyzi> xyzi;
+  PerReturn<std::uint64_t> tail;
+  std::array<float, group_channels> sin_az;
+  std::array<float, group_channels> cos_az;
+};
+static_assert(sizeof(GroupScratch::Xyzi) == offsetof(LidarPoint, time_offset_ns) &&
+              sizeof(LidarPoint) == sizeof(GroupScratch::Xyzi) + sizeof(std::uint64_t));
+// The tail word is built with shifts: time offset in the low bytes, as in memory on the
+// little-endian CPUs SIM runs on (x86-64, aarch64).
+static_assert(std::endian::native == std::endian::little);
+std::uint64_t point_tail(std::uint32_t time_offset_ns, unsigned ring,
+                         unsigned return_index) noexcept {
+  return std::uint64_t{time_offset_ns} | std::uint64_t{ring} << 32 |
+         std::uint64_t{return_index} << 48;
+}
+
+// The unit size (3 or 4 bytes) as a constant, so the loop reads at a fixed stride instead of
+// multiplying by a runtime value per channel.
+template <std::size_t unit_size>
+void read_units(const std::uint8_t* units, unsigned channels, std::uint16_t* raw,
+                std::uint8_t* reflectivity) noexcept {
+  unsigned ch = 0;
+  if constexpr (unit_size == 3) {
+    // 3-byte units do not vectorize without byte shuffles (SSSE3, not in baseline x86-64):
+    // four channels at a time from three 32-bit words instead, 3 loads and 2 stores for what
+    // is 8 loads and 8 stores one channel at a time.
+    for (; ch + 4 <= channels; ch += 4) {
+      std::uint32_t w[3];
+      std::memcpy(w, units + ch * 3, sizeof w);
+      const std::uint64_t r4 = std::uint64_t{w[0] & 0xFFFF} |
+                               std::uint64_t{(w[0] >> 24) | ((w[1] & 0xFF) << 8)} << 16 |
+                               std::uint64_t{w[1] >> 16} << 32 |
+                               std::uint64_t{(w[2] >> 8) & 0xFFFF} << 48;
+      const std::uint32_t f4 = ((w[0] >> 16) & 0xFF) | (w[1] & 0xFF00) |
+                               (w[2] & 0xFF) << 16 | (w[2] & 0xFF00'0000);
+      std::memcpy(raw + ch, &r4, sizeof r4);
+      std::memcpy(reflectivity + ch, &f4, sizeof f4);
+    }
+  }
+  for (; ch < channels; ++ch) {
+    const std::uint8_t* unit = units + ch * unit_size;
+    raw[ch] = static_cast<std::uint16_t>(unit[0] | (unit[1] << 8));
+    reflectivity[ch] = unit[2];
+  }
+}
+
+// What pass 1 reads: the group's blocks (one per return) and the assembler's per-channel
+// tables and options.
+struct GroupInput {
+  std::array<const std::uint8_t*, group_returns> units;  // Packet::units of each return's block
+  unsigned unit_size;
+  unsigned channels;
+  float sin_block;
+  float cos_block;
+  float distance_unit_m;
+  float min_range_m;
+  float max_range_m;
+  float threshold_m;
+  bool drop_zero;
+  bool drop_identical;
+  const float* cos_elevation;
+  const float* sin_elevation;
+  const float* cos_azimuth_offset;
+  const float* sin_azimuth_offset;
+};
+
+// Pass 1 of decode_group: every point of the group, kept or not, one quantity at a time in
+// loops with no branch and no call, which the compiler turns into SIMD code. The float
+// operations are the same, in the same order, as for one point at a time, so the results are
+// bit for bit those of the scalar formula. `returns` is a constant so the loops over returns
+// unroll.
+template <unsigned returns>
+void compute_points(const GroupInput& in, GroupScratch& g) noexcept {
+  // Locals, not reads through `in`: the compiler cannot prove that the stores into `g` leave
+  // `in` unchanged, and would reload every field inside the loops instead of vectorizing them.
+  const unsigned n = in.channels;
+  const float sin_block = in.sin_block;
+  const float cos_block = in.cos_block;
+  const float unit = in.distance_unit_m;
+  const float min_range = in.min_range_m;
+  const float max_range = in.max_range_m;
+  const float threshold = in.threshold_m;
+  const bool drop_zero = in.drop_zero;
+  const bool drop_identical = in.drop_identical;
+  const float* const cos_elevation = in.cos_elevation;
+  const float* const sin_elevation = in.sin_elevation;
+  const float* const cos_azimuth_offset = in.cos_azimuth_offset;
+  const float* const sin_azimuth_offset = in.sin_azimuth_offset;
+
+  for (unsigned r = 0; r < returns; ++r) {
+    if (in.unit_size == 4) {
+      read_units<4>(in.units[r], n, g.raw[r].data(), g.reflectivity[r].data());
+    } else {
+      read_units<3>(in.units[r], n, g.raw[r].data(), g.reflectivity[r].data());
+    }
+  }
+  // Each channel's direction: the block azimuth turned by the channel's azimuth offset.
+  for (unsigned ch = 0; ch < n; ++ch) {
+    g.sin_az[ch] = sin_block * cos_azimuth_offset[ch] + cos_block * sin_azimuth_offset[ch];
+    g.cos_az[ch] = cos_block * cos_azimuth_offset[ch] - sin_block * sin_azimuth_offset[ch];
+  }
+  // The filters, as nebula applies them: no return, out of range, and for every return but
+  // the last one of a multi-return group, a duplicate of another return of the group.
+  for (unsigned r = 0; r < returns; ++r) {
+    for (unsigned ch = 0; ch < n; ++ch) {
+      const float distance = static_cast<float>(g.raw[r][ch]) * unit;
+      g.distance[r][ch] = distance;
+      g.keep[r][ch] = static_cast<std::uint8_t>(unsigned{g.raw[r][ch] != 0 || !drop_zero} &
+                                                unsigned{!(distance < min_range)} &
+                                                unsigned{!(distance > max_range)});
+    }
+  }
+  for (unsigned r = 0; r + 1 < returns; ++r) {
+    for (unsigned other = 0; other < returns; ++other) {
+      if (other == r) continue;
+      for (unsigned ch = 0; ch < n; ++ch) {
+        // Bitwise on 0/1 values, not && and ||: no branch in the loop.
+        const unsigned identical = unsigned{drop_identical} &
+                                   unsigned{g.raw[other][ch] == g.raw[r][ch]} &
+                                   unsigned{g.reflectivity[other][ch] == g.reflectivity[r][ch]};
+        const unsigned close =
+            unsigned{std::fabs(g.distance[other][ch] - g.distance[r][ch]) < threshold};
+        g.keep[r][ch] = static_cast<std::uint8_t>(g.keep[r][ch] & ~(identical | close) & 1u);
+      }
+    }
+  }
+  for (unsigned r = 0; r < returns; ++r) {
+    for (unsigned ch = 0; ch < n; ++ch) {
+      const float distance = g.distance[r][ch];
+      const float horizontal = distance * cos_elevation[ch];
+      g.xyzi[r][ch] = {horizontal * g.sin_az[ch], horizontal * g.cos_az[ch],
+                       distance * sin_elevation[ch], static_cast<float>(g.reflectivity[r][ch])};
+    }
+  }
+}
+
+// Pass 2 of decode_group, common case: the whole group goes to one frame whose storage has
+// room for every point of it. Each point is written unconditionally at the end of the frame
+// and the end moves on only for a kept one: no branch to mispredict on the data. (A point
+// written but not kept lies past the frame's point count, in storage the frame owns, and is
+// overwritten by the next one.) Returns the number of points kept.
+template <unsigned returns>
+std::size_t copy_kept_points(GroupScratch& g, unsigned n, std::uint32_t time_base,
+                             const std::int32_t* channel_offset_ns, LidarPoint* out) noexcept {
+  for (unsigned r = 0; r < returns; ++r) {
+    for (unsigned ch = 0; ch < n; ++ch) {
+      // The caller checked that base + offset lies in [0, 2^32): modulo 2^32 is exact.
+      g.tail[r][ch] =
+          point_tail(time_base + static_cast<std::uint32_t>(channel_offset_ns[ch]), ch, r);
+    }
+  }
+  auto* bytes = reinterpret_cast<std::byte*>(out);
+  std::size_t count = 0;
+  for (unsigned ch = 0; ch < n; ++ch) {
+    for (unsigned r = 0; r < returns; ++r) {
+      std::byte* point = bytes + count * sizeof(LidarPoint);
+      std::memcpy(point, &g.xyzi[r][ch], sizeof(GroupScratch::Xyzi));
+      std::memcpy(point + sizeof(GroupScratch::Xyzi), &g.tail[r][ch], sizeof(std::uint64_t));
+      count += g.keep[r][ch];
+    }
+  }
+  return count;
+}
 
 }  // namespace
 
@@ -100,6 +284,8 @@ FrameAssembler::FrameAssembler(Calibration calibration, AssemblerOptions options
 
   constexpr double deg = std::numbers::pi / 180.0;
   earliest_channel_offset_ns_ = std::numeric_limits<std::int32_t>::max();
+  min_channel_offset_ns_.fill(std::numeric_limits<std::int32_t>::max());
+  max_channel_offset_ns_.fill(std::numeric_limits<std::int32_t>::min());
   for (unsigned ch = 0; ch < channels_; ++ch) {
     const double elevation = calibration_[ch].elevation_deg * deg;
     cos_elevation_[ch] = static_cast<float>(std::cos(elevation));
@@ -114,6 +300,8 @@ FrameAssembler::FrameAssembler(Calibration calibration, AssemblerOptions options
       }
       channel_offset_ns_[loop][ch] = offset;
       earliest_channel_offset_ns_ = std::min(earliest_channel_offset_ns_, offset);
+      min_channel_offset_ns_[loop] = std::min(min_channel_offset_ns_[loop], offset);
+      max_channel_offset_ns_[loop] = std::max(max_channel_offset_ns_[loop], offset);
     }
   }
   update_azimuth_offsets(0);
@@ -405,6 +593,7 @@ void FrameAssembler::decode_group(const Packet& packet, unsigned first_block,
   };
   std::array<Sink, 3> sinks{};
   std::array<std::uint8_t, max_channels> target{};
+  static_assert(group_channels >= max_channels);
 
   // Common case: every channel of the group falls in the same revolution.
   const bool straddles =
@@ -426,8 +615,12 @@ void FrameAssembler::decode_group(const Packet& packet, unsigned first_block,
     std::fill_n(target.begin(), channels_, target_of(group_revolution));
   }
   bool used[2] = {false, false};
-  for (unsigned ch = 0; ch < channels_; ++ch) {
-    if (target[ch] < 2) used[target[ch]] = true;
+  if (straddles) {
+    for (unsigned ch = 0; ch < channels_; ++ch) {
+      if (target[ch] < 2) used[target[ch]] = true;
+    }
+  } else if (target[0] < 2) {
+    used[target[0]] = true;
   }
   if (used[0]) {
     if (!current_.started) begin(current_, packet, first_block, host_ns, false);
@@ -471,69 +664,87 @@ void FrameAssembler::decode_group(const Packet& packet, unsigned first_block,
     }
   }
 
-  const unsigned returns = packet.returns();
-  const float unit = packet.distance_unit_m();
-  const double azimuth_rad = packet.azimuth(first_block) * (std::numbers::pi / 18000.0);
-  const auto sin_block = static_cast<float>(std::sin(azimuth_rad));
-  const auto cos_block = static_cast<float>(std::cos(azimuth_rad));
-  const std::int64_t group_time = packet.time_ns() + packet.block_offset_ns(first_block);
-  const std::array<std::int32_t, max_channels>& channel_offset_ns =
-      channel_offset_ns_[packet.firing_loop(first_block)];
-  const std::int64_t time_base[2] = {group_time - current_.stamp_ns, group_time - next_.stamp_ns};
-  const float threshold = options_.multi_return_distance_threshold_m;
-  const bool drop_identical = options_.drop_identical_returns;
-  const bool drop_zero = options_.drop_zero_distance;
-  const float min_range = min_range_m_;
-  const float max_range = max_range_m_;
+  // Every point of the group belongs to a frame already handed out.
+  if (!sinks[0].active && !sinks[1].active) return;
 
-  for (unsigned ch = 0; ch < channels_; ++ch) {
-    Sink& sink = sinks[target[ch]];
-    if (!sink.active) continue;
-    std::array<std::uint16_t, 3> raw{};
-    std::array<std::uint8_t, 3> reflectivity{};
-    for (unsigned r = 0; r < returns; ++r) {
-      raw[r] = packet.raw_distance(first_block + r, ch);
-      reflectivity[r] = packet.reflectivity(first_block + r, ch);
+  const unsigned n = channels_;
+  const unsigned returns = packet.returns();
+  const double azimuth_rad = packet.azimuth(first_block) * (std::numbers::pi / 18000.0);
+  const std::int64_t group_time = packet.time_ns() + packet.block_offset_ns(first_block);
+  const unsigned loop = packet.firing_loop(first_block);
+  const std::array<std::int32_t, max_channels>& channel_offset_ns = channel_offset_ns_[loop];
+  const std::int64_t time_base[2] = {group_time - current_.stamp_ns, group_time - next_.stamp_ns};
+
+  // Pass 1: every point of the group, kept or not, one quantity at a time (see GroupScratch).
+  GroupInput input{{},
+                   packet.unit_size(),
+                   n,
+                   static_cast<float>(std::sin(azimuth_rad)),
+                   static_cast<float>(std::cos(azimuth_rad)),
+                   packet.distance_unit_m(),
+                   min_range_m_,
+                   max_range_m_,
+                   options_.multi_return_distance_threshold_m,
+                   options_.drop_zero_distance,
+                   options_.drop_identical_returns,
+                   cos_elevation_.data(),
+                   sin_elevation_.data(),
+                   cos_azimuth_offset_.data(),
+                   sin_azimuth_offset_.data()};
+  for (unsigned r = 0; r < returns; ++r) input.units[r] = packet.units(first_block + r);
+  GroupScratch g;  // not zeroed: each loop writes the [returns][n] part the next ones read
+  switch (returns) {
+    case 1: compute_points<1>(input, g); break;
+    case 2: compute_points<2>(input, g); break;
+    default: compute_points<3>(input, g); break;
+  }
+
+  // Pass 2: the kept points, in channel then return order, into their frame's storage.
+  // Common case: the whole group goes to one frame, its storage has room for every point of
+  // the group, and every time offset fits without the clamp.
+  const std::uint8_t first_target = target[0];
+  const bool one_target =
+      !straddles || std::all_of(target.begin(), target.begin() + n,
+                                [first_target](std::uint8_t t) { return t == first_target; });
+  if (one_target && first_target < 2 && sinks[first_target].active &&
+      sinks[first_target].capacity - sinks[first_target].count >= std::size_t{n} * returns &&
+      time_base[first_target] + min_channel_offset_ns_[loop] >= 0 &&
+      time_base[first_target] + max_channel_offset_ns_[loop] <=
+          std::int64_t{std::numeric_limits<std::uint32_t>::max()}) {
+    Sink& sink = sinks[first_target];
+    // Base + offset lies in [0, 2^32): the sum modulo 2^32 is the exact value.
+    const auto base = static_cast<std::uint32_t>(time_base[first_target]);
+    LidarPoint* out = sink.out + sink.count;
+    switch (returns) {
+      case 1: sink.count += copy_kept_points<1>(g, n, base, channel_offset_ns.data(), out); break;
+      case 2: sink.count += copy_kept_points<2>(g, n, base, channel_offset_ns.data(), out); break;
+      default: sink.count += copy_kept_points<3>(g, n, base, channel_offset_ns.data(), out); break;
     }
-    const float sin_az = sin_block * cos_azimuth_offset_[ch] + cos_block * sin_azimuth_offset_[ch];
-    const float cos_az = cos_block * cos_azimuth_offset_[ch] - sin_block * sin_azimuth_offset_[ch];
-    const float cos_el = cos_elevation_[ch];
-    const float sin_el = sin_elevation_[ch];
-    // Offsets are ≥ 0 by the stamp's choice; clamped only against a clock that jumps.
-    const auto time_offset = static_cast<std::uint32_t>(
-        std::clamp<std::int64_t>(time_base[target[ch]] + channel_offset_ns[ch], 0,
-                                 std::numeric_limits<std::uint32_t>::max()));
-    for (unsigned r = 0; r < returns; ++r) {
-      if (raw[r] == 0 && drop_zero) continue;
-      const float distance = static_cast<float>(raw[r]) * unit;
-      if (distance < min_range || distance > max_range) continue;
-      if (r + 1 != returns) {
-        // Only a non-last return of a multi-return group can be dropped as a duplicate.
-        bool duplicate = false;
-        for (unsigned other = 0; other < returns; ++other) {
-          if (other == r) continue;
-          if (drop_identical && raw[other] == raw[r] && reflectivity[other] == reflectivity[r]) {
-            duplicate = true;
-          }
-          if (std::fabs(static_cast<float>(raw[other]) * unit - distance) < threshold) {
-            duplicate = true;
-          }
+  } else {
+    // Near the cut, a frame's storage nearly full, a clock that jumped: point by point.
+    for (unsigned ch = 0; ch < n; ++ch) {
+      Sink& sink = sinks[target[ch]];
+      if (!sink.active) continue;
+      // Offsets are ≥ 0 by the stamp's choice; clamped only against a clock that jumps.
+      const auto time_offset = static_cast<std::uint32_t>(
+          std::clamp<std::int64_t>(time_base[target[ch]] + channel_offset_ns[ch], 0,
+                                   std::numeric_limits<std::uint32_t>::max()));
+      for (unsigned r = 0; r < returns; ++r) {
+        if (!g.keep[r][ch]) continue;
+        if (sink.count >= sink.capacity) {
+          ++sink.dropped;
+          continue;
         }
-        if (duplicate) continue;
+        const GroupScratch::Xyzi& p = g.xyzi[r][ch];
+        sink.out[sink.count++] = LidarPoint{p.x,
+                                            p.y,
+                                            p.z,
+                                            p.intensity,
+                                            time_offset,
+                                            static_cast<std::uint16_t>(ch),
+                                            static_cast<std::uint8_t>(r),
+                                            0};
       }
-      if (sink.count >= sink.capacity) {
-        ++sink.dropped;
-        continue;
-      }
-      const float horizontal = distance * cos_el;
-      sink.out[sink.count++] = LidarPoint{horizontal * sin_az,
-                                          horizontal * cos_az,
-                                          distance * sin_el,
-                                          static_cast<float>(reflectivity[r]),
-                                          time_offset,
-                                          static_cast<std::uint16_t>(ch),
-                                          static_cast<std::uint8_t>(r),
-                                          0};
     }
   }
 

@@ -9,10 +9,9 @@
 
 #include "replay_loop.hpp"
 #include "replays.hpp"
+#include "sim/apps/hesai_options.hpp"
 #include "sim/clock.hpp"
 #include "sim/hesai/lidar_stream.hpp"
-#include "sim/hesai/stream_options.hpp"
-#include "sim/names.hpp"
 
 namespace sim::pcap {
 namespace {
@@ -117,32 +116,28 @@ int run_hesai_replay(int argc, char** argv) {
       "captures: the model is detected and --calibration is required. Unitree L1/L2 captures: "
       "--model unitree-l2 (see sim_replay_pcap --model unitree-l2 --help).");
   ReplayArgs r;
-  hesai::StreamOptions s;
+  apps::HesaiStreamOptions s;
   add_replay_options(cli, r);
-  // The Hesai options (sim::hesai_stream) take CLI11 directly until drivers/hesai moves onto
-  // apps/common as well.
-  hesai::add_stream_options(cli.app(), s);
+  apps::add_hesai_stream_options(cli, s);
   if (auto code = cli.parse(argc, argv)) return *code;
-  if (auto problem = stream_name_problem(s.config.stream); !problem.empty()) {
-    return cli.usage_error(problem);
-  }
-  if (s.config.calibration.empty()) {
+  if (s.calibration.empty()) {
     return cli.usage_error(
         "no calibration file given; pass the recorded unit's angle-correction CSV with "
         "--calibration (every unit has its own)");
   }
-  s.config.heartbeat_period = std::chrono::milliseconds(500);
+  hesai::LidarStreamConfig config = apps::hesai_stream_config(s);
+  config.heartbeat_period = std::chrono::milliseconds(500);
   // Before the stream exists: a reader may see it and stop us at once.
   const auto& stop = apps::StopSignal::install();
 
-  auto detected = detect(r, s.model);
+  auto detected = detect(r, apps::hesai_model(s));
   if (!detected) return cli.fail(std::string_view(detected.error().message));
-  s.config.assembler.model = detected->model;
-  s.config.returns = std::max(s.config.returns, detected->returns);
+  config.assembler.model = detected->model;
+  config.returns = std::max(config.returns, detected->returns);
 
-  auto stream = hesai::LidarStream::create(s.config);
+  auto stream = hesai::LidarStream::create(config);
   if (!stream) return cli.fail(std::string_view(stream.error().message));
-  if (auto placed = hesai::apply_thread_placement(s); !placed) return cli.fail(placed.error());
+  if (auto code = cli.apply_placement(s.placement)) return *code;
   HesaiTarget target(std::move(*stream), r.restamp);
 
   const ReplayResult result = replay(r, target, stop, cli.tool());

@@ -30,8 +30,8 @@ void add_replay_options(apps::CommandLine& cli, ReplayArgs& r) {
                    ->check(CLI::PositiveNumber);
   app.add_flag("--max-rate", r.max_rate, "as fast as possible, no pacing")->excludes(rate);
   app.add_flag("--loop", r.loop,
-               "start over at the end of the capture until stopped; later passes replay whole "
-               "revolutions (or scans) only, so the frame rate stays the sensor's");
+               "start over at the end of the capture until stopped; every pass publishes the "
+               "capture's whole revolutions (or scans), one sensor period apart across the wrap");
   app.add_option("--start", r.start_s, "skip the first S seconds of the capture")
       ->check(CLI::NonNegativeNumber)
       ->type_name("S");
@@ -46,6 +46,29 @@ void add_replay_options(apps::CommandLine& cli, ReplayArgs& r) {
   app.add_flag("-q,--quiet", r.quiet, "no progress line");
 }
 
+namespace {
+
+// Where frames end in the window, learnt on the first pass: the window index and capture time
+// of the datagram that completed the first frame and of the one that completed the last.
+struct FrameEnds {
+  std::uint64_t frames = 0;
+  std::uint64_t last_index = 0;
+  std::int64_t first_ns = 0;
+  std::int64_t last_ns = 0;
+
+  void add(std::uint64_t index, std::int64_t capture_ns) {
+    if (frames++ == 0) first_ns = capture_ns;
+    last_index = index;
+    last_ns = capture_ns;
+  }
+  // The sensor's frame period as the capture shows it (needs two frames).
+  std::int64_t period_ns() const {
+    return frames > 1 ? (last_ns - first_ns) / static_cast<std::int64_t>(frames - 1) : 0;
+  }
+};
+
+}  // namespace
+
 ReplayResult replay(const ReplayArgs& r, ReplayTarget& target, const apps::StopSignal& stop,
                     const std::string& tool) {
   ReplayResult result;
@@ -54,14 +77,14 @@ ReplayResult replay(const ReplayArgs& r, ReplayTarget& target, const apps::StopS
   const auto start_ns = static_cast<std::int64_t>(r.start_s * 1e9);
   const auto end_ns = r.duration_s > 0 ? start_ns + static_cast<std::int64_t>(r.duration_s * 1e9)
                                        : INT64_MAX;
-  // Where frames end in the window, learnt on the first pass (datagram index and capture time):
-  // later passes replay from the first frame boundary to the last, so the frame in progress at
-  // the wrap continues into the next pass instead of being cut (a 0.4 s capture of a 10 Hz
-  // sensor would otherwise lose a revolution at every wrap and show 5 Hz).
-  std::optional<std::uint64_t> first_boundary;
-  std::uint64_t last_boundary = 0;
-  std::int64_t first_boundary_ts = 0;
-  std::int64_t last_boundary_ts = 0;
+  // Every pass publishes exactly the frames of the first, and nothing else. A later pass starts
+  // from a fresh decoder at the window's start, as the first did (the datagrams before the first
+  // boundary only lead into the first frame: a partial revolution is never published), and
+  // stops at the datagram that completed the first pass's last frame (the frame cut short by
+  // the end of the capture is left out). Splicing the capture's end onto its start instead would
+  // publish revolutions that never existed: the points of one pass's last packets in the next
+  // pass's first revolution.
+  FrameEnds ends;
   for (;;) {
     ++result.passes;
     auto reader = CaptureReader::open(r.file, r.capture_options());
@@ -69,9 +92,10 @@ ReplayResult replay(const ReplayArgs& r, ReplayTarget& target, const apps::StopS
       result.read_error = reader.error().message;
       break;
     }
-    const bool trimmed = result.passes > 1 && first_boundary && last_boundary > *first_boundary;
+    const bool later_pass = result.passes > 1 && ends.frames > 0;
     const std::uint64_t packets_before = target.decoded_packets();
     std::optional<std::int64_t> first_ts;
+    std::int64_t window_first_ts = 0;
     std::int64_t last_ts = 0;
     std::int64_t last_seen_ts = 0;
     std::uint64_t in_window = 0;
@@ -84,19 +108,12 @@ ReplayResult replay(const ReplayArgs& r, ReplayTarget& target, const apps::StopS
       if (since_first < start_ns) continue;
       if (since_first > end_ns) break;
       const std::uint64_t index = in_window++;
-      if (trimmed && index < *first_boundary) continue;
-      if (trimmed && index >= last_boundary) break;
+      if (later_pass && index > ends.last_index) break;
+      if (index == 0) window_first_ts = datagram.timestamp_ns;
       last_ts = datagram.timestamp_ns;
       if (!pacer.wait(datagram.timestamp_ns, stop)) break;
       const bool completed = target.push(datagram.payload, datagram.timestamp_ns);
-      if (completed && result.passes == 1) {
-        if (!first_boundary) {
-          first_boundary = index;
-          first_boundary_ts = datagram.timestamp_ns;
-        }
-        last_boundary = index;
-        last_boundary_ts = datagram.timestamp_ns;
-      }
+      if (completed && result.passes == 1) ends.add(index, datagram.timestamp_ns);
       const double fraction =
           r.duration_s > 0 ? static_cast<double>(since_first - start_ns) /
                                  static_cast<double>(end_ns - start_ns)
@@ -118,28 +135,23 @@ ReplayResult replay(const ReplayArgs& r, ReplayTarget& target, const apps::StopS
     }
     const bool decoded_any = target.decoded_packets() > packets_before;
     if (!r.loop || stop.requested() || !decoded_any || !first_ts) break;
+    // How far the next pass is moved on, on the schedule and in the stamps.
     std::int64_t shift = 0;
-    if (first_boundary && last_boundary > *first_boundary) {
-      if (result.passes == 1) {
-        // The first pass ran to the end of the window: its unfinished frame is dropped once,
-        // and the next pass begins at the first boundary, one packet interval later.
-        const std::int64_t gap = in_window > 1
-            ? (last_ts - (*first_ts + start_ns)) / static_cast<std::int64_t>(in_window - 1)
-            : 0;
-        shift = std::max<std::int64_t>(last_ts + gap - first_boundary_ts, 0);
-        target.restart();
-      } else {
-        // The pass stopped just before the last boundary; the first boundary takes its place.
-        shift = last_boundary_ts - first_boundary_ts;
-      }
+    if (ends.frames > 1) {
+      // A pass of n frames lasts n frame periods: the next pass's first frame comes one period
+      // after this pass's last, so a 10 Hz sensor replays at 10 Hz. The datagrams that only lead
+      // into that frame fall due about when this pass ended and go out at once.
+      shift = ends.period_ns() * static_cast<std::int64_t>(ends.frames);
     } else {
-      // No frame boundary seen (a window shorter than a frame): start over, as recorded.
-      const std::int64_t span = last_ts - (*first_ts + start_ns);
+      // One frame or none: the next pass follows this one as recorded, one datagram interval
+      // after its last.
+      const std::int64_t span = last_ts - window_first_ts;
+      const std::uint64_t replayed = later_pass ? ends.last_index + 1 : in_window;
       const std::int64_t gap =
-          in_window > 1 ? span / static_cast<std::int64_t>(in_window - 1) : 0;
+          replayed > 1 ? span / static_cast<std::int64_t>(replayed - 1) : 0;
       shift = std::max<std::int64_t>(span + gap, 0);
-      target.restart();
     }
+    target.restart();
     pacer.shift(shift);
     target.shift_stamps(shift);
   }

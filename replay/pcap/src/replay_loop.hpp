@@ -40,7 +40,7 @@ class ReplayTarget {
   virtual ~ReplayTarget() = default;
   // Decodes one datagram; true when it completed a frame (a revolution, a scan).
   virtual bool push(std::span<const std::byte> payload, std::int64_t capture_ns) = 0;
-  // The replay starts over at a point where no frame is in progress: forget the one that is.
+  // The replay starts over (a loop): forget the frame in progress, as a fresh decoder would.
   virtual void restart() = 0;
   // Later datagrams were recorded `shift_ns` earlier than they are now replayed (loops):
   // stamps move by it so they keep increasing, as a sensor's would.

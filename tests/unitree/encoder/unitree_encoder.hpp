@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
-// A test-only encoder for Unitree L1/L2 wire bytes, written from
-// ../shared/reference/lidar-wire-formats.md §7–8 and deliberately sharing no code with the
-// decoder (its own bitwise CRCs, its own offsets), so a mistake in one shows up against the other.
+// A test-only encoder for Unitree L1/L2 wire bytes, written from the official protocol headers
+// (unitreerobotics/unilidar_sdk2 and unilidar_sdk, BSD-3-Clause; docs/unitree.md) and
+// deliberately sharing no code with the decoder (its own bitwise CRCs, its own offsets), so a
+// mistake in one shows up against the other.
 #pragma once
 
 #include <array>

@@ -49,8 +49,9 @@ class CommandLine {
                            std::string_view help);
   // --config FILE: YAML keys set the options of the same long name ("rt_priority" or
   // "rt-priority" for --rt-priority); a map becomes a list of "key=value" items; options given on
-  // the command line override the file.
-  void add_config_file();
+  // the command line override the file. The options named in `path_options` ("calibration")
+  // take file names: a relative one in the file is relative to the file's folder.
+  void add_config_file(std::vector<std::string> path_options = {});
   // --cpu N and --rt-priority P for the program's working thread.
   void add_placement(ThreadPlacement& placement);
   // --trust-owner USER and --trust-group GROUP for a program that reads streams: whose regions it

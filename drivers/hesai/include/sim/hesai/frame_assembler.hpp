@@ -48,7 +48,7 @@ enum class CutBy : std::uint8_t {
 };
 
 // Every choice the decoder makes is an option; the defaults reproduce nebula's reference
-// clouds (see docs/hesai.md and ../shared/data/lidar/SOURCES.md).
+// clouds (see docs/hesai.md and tests/hesai/data/NOTICE.md).
 struct AssemblerOptions {
   Model model = Model::pandar64;
   // A new frame starts where the azimuth reaches this angle (degrees, Hesai frame).
@@ -194,6 +194,10 @@ class FrameAssembler {
   double max_cut_offset_centi_ = 0;
   // Per firing loop (two on the QT128, see Packet::firing_loop), per channel.
   std::array<std::array<std::int32_t, max_channels>, 2> channel_offset_ns_{};
+  // Their range per loop: when a group's time base plus this range fits a point's uint32
+  // time offset, no point of the group needs the clamp.
+  std::array<std::int32_t, 2> min_channel_offset_ns_{};
+  std::array<std::int32_t, 2> max_channel_offset_ns_{};
   std::int32_t earliest_channel_offset_ns_ = 0;
   std::uint16_t compensated_rpm_ = 0;
 

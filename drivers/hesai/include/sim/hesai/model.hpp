@@ -1,8 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The Hesai Pandar models SIM decodes, and the per-model facts every other part needs
 // (packet sizes, channel and block counts, range limits, capacity of one revolution).
-// Byte layouts: docs/hesai.md, ../shared/reference/lidar-wire-formats.md §2–§6 and
-// hesai-qt128-xt32m.md (QT128, XT32M).
+// Byte layouts: docs/hesai.md (read from tier4/nebula's packet structs and Hesai's SDKs).
 #pragma once
 
 #include <array>

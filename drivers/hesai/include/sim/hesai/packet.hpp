@@ -110,6 +110,11 @@ class Packet {
   std::uint8_t reflectivity(unsigned block, unsigned channel) const noexcept {
     return unit_at(block, channel)[2];
   }
+  // The block's channel units back to back, unit_size() bytes each (distance u16 little
+  // endian, reflectivity, and on 4-byte units a confidence or reserved byte): for decoders
+  // that read a whole block in one loop with the unit size as a constant.
+  const std::uint8_t* units(unsigned block) const noexcept { return block_at(block) + units_offset_; }
+  unsigned unit_size() const noexcept { return unit_size_; }
 
   // Firing time of (block, channel) relative to time_ns(), in ns, from the model's built-in
   // tables (Pandar64/40P/XT negative, QT positive). Depends on the return mode: blocks of one

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
-// Unitree L2 packet layout, from the field lists of the official protocol header as corrected in
-// ../shared/reference/lidar-wire-formats.md §7: the official size comments are wrong (a 3D point
-// packet is 1044 B, an IMU packet 80 B) and the CRC-32 covers the data bytes only
-// (offset 12 … packet_size − 13), not the header.
+// Unitree L2 packet layout, from the field lists of the official protocol header
+// (unitreerobotics/unilidar_sdk2, BSD-3-Clause; docs/unitree.md), corrected where it is wrong:
+// its size comments (a 3D point packet is 1044 B, an IMU packet 80 B), and the CRC-32 covers the
+// data bytes only (offset 12 … packet_size − 13), not the header.
 #pragma once
 
 #include <cstddef>
