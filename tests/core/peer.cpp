@@ -14,6 +14,14 @@
 //   stall-in-copy NAME                                          stop inside read()'s copy of a frame
 //   hold-borrow NAME                                            borrow a frame and keep it
 #include <sched.h>
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer) && !defined(__SANITIZE_ADDRESS__)
+#define __SANITIZE_ADDRESS__ 1  // clang says it this way, GCC the other
+#endif
+#endif
+#if defined(__SANITIZE_ADDRESS__)
+#include <sanitizer/asan_interface.h>
+#endif
 #include <signal.h>
 #include <sys/mman.h>
 #include <time.h>
@@ -237,6 +245,13 @@ int run_remove(const std::string& name) {
 // The page after the copy buffer's first byte is inaccessible, so read() faults inside its copy
 // of the frame; the handler reports that and waits there to be killed. A kill that follows the
 // report provably lands in the middle of a copy.
+// An address range that may have held ASan's own memory before this mapping: its shadow says so.
+void unpoison_for_asan([[maybe_unused]] std::byte* begin, [[maybe_unused]] std::size_t size) {
+#if defined(__SANITIZE_ADDRESS__)
+  __asan_unpoison_memory_region(begin, size);
+#endif
+}
+
 int mid_copy_report_fd = -1;
 void report_mid_copy(int) {
   static const char kLine[] = "mid-copy\n";
@@ -250,21 +265,24 @@ int run_stall_in_copy(const std::string& name) {
     std::printf("error=%s\n", reader.error().message.c_str());
     return 1;
   }
-  const long page = sysconf(_SC_PAGESIZE);
+  // The buffer spans a whole frame, all of it ours, but only its first page is writable: the copy
+  // runs into the guard after one page. Under AddressSanitizer the memcpy interceptor checks the
+  // whole range first, so it must not reach past this mapping (ASan's own memory lies around it).
+  const auto page = static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+  const std::size_t size = std::max(2 * page, (reader->capacity() + page - 1) / page * page);
   auto* buffer = static_cast<std::byte*>(
-      mmap(nullptr, static_cast<std::size_t>(2 * page), PROT_READ | PROT_WRITE,
-           MAP_PRIVATE | MAP_ANONYMOUS, -1, 0));
-  if (buffer == MAP_FAILED || mprotect(buffer + page, static_cast<std::size_t>(page), PROT_NONE) != 0) {
+      mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0));
+  if (buffer == MAP_FAILED || mprotect(buffer + page, size - page, PROT_NONE) != 0) {
     std::printf("error=cannot map the copy buffer\n");
     return 1;
   }
+  unpoison_for_asan(buffer, size);
   mid_copy_report_fd = STDOUT_FILENO;
   struct sigaction on_fault {};
   on_fault.sa_handler = report_mid_copy;
   sigaction(SIGSEGV, &on_fault, nullptr);
   std::printf("ready\n");
   std::fflush(stdout);
-  // Claims room for a whole frame: the copy runs past the first page into the guard page.
   const std::span<std::byte> out(buffer, reader->capacity());
   for (;;) {
     FrameInfo info;
