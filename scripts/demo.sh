@@ -19,7 +19,7 @@ cmake -S . -B build/release -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSIM_BUILD_BENCH=
 cmake --build build/release -j"${SIM_JOBS:-2}" --target sim_replay_pcap sim_replay_video sim_echo sim_ls sim_rm
 cmake --build build/release -j"${SIM_JOBS:-2}" --target sim_foxglove  # the live view
 bin=build/release
-data=tests/hesai/data
+data=tests/drivers/hesai/data
 streams=(/lidar_top /camera_front)
 
 # A live writer owns one of our names (a real driver, another demo): leave it alone.

@@ -24,8 +24,8 @@ cleanup() {
 }
 trap cleanup EXIT
 
-"$build/replay/pcap/sim_replay_pcap" "$root/tests/hesai/data/pandar64_dual.pcap" --stream "$lidar" \
-  --calibration "$root/tests/hesai/data/pandar64.calibration.csv" --loop --quiet &
+"$build/replay/pcap/sim_replay_pcap" "$root/tests/drivers/hesai/data/pandar64_dual.pcap" --stream "$lidar" \
+  --calibration "$root/tests/drivers/hesai/data/pandar64.calibration.csv" --loop --quiet &
 pids+=($!)
 echo "pattern compression camera_fps input_MB_per_s camera_frames camera_missed lidar_frames lidar_missed file_MB"
 for pattern in $patterns; do

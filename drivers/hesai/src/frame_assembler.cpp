@@ -2,7 +2,7 @@
 // Point formula (docs/hesai.md, "Sensor frame"): x = d·cos(el)·sin(az), y = d·cos(el)·cos(az),
 // z = d·sin(el), az = block azimuth + channel azimuth offset. The multi-return filters and the
 // per-point cut follow nebula's decoder so its reference clouds are reproduced exactly
-// (tests/hesai/data/NOTICE.md: how they were made).
+// (tests/drivers/hesai/data/NOTICE.md: how they were made).
 #include "sim/hesai/frame_assembler.hpp"
 
 #include <algorithm>

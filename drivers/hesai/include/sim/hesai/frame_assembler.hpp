@@ -48,7 +48,7 @@ enum class CutBy : std::uint8_t {
 };
 
 // Every choice the decoder makes is an option; the defaults reproduce nebula's reference
-// clouds (see docs/hesai.md and tests/hesai/data/NOTICE.md).
+// clouds (see docs/hesai.md and tests/drivers/hesai/data/NOTICE.md).
 struct AssemblerOptions {
   Model model = Model::pandar64;
   // A new frame starts where the azimuth reaches this angle (degrees, Hesai frame).

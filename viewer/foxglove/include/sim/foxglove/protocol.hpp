@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The Foxglove WebSocket protocol (foxglove.websocket.v1) as plain values: the JSON a client
 // sends, parsed into requests; the JSON and binary headers the server sends, built from values.
-// No sockets here, so the parser of outside bytes is fuzzed on its own (tests/foxglove).
+// No sockets here, so the parser of outside bytes is fuzzed on its own (tests/viewer/foxglove).
 #pragma once
 
 #include <array>

@@ -13,7 +13,7 @@
 // contracts a·b + c into one fma) the test skips; the 1 mm reference tests still run there.
 //
 // To re-record (only when an output change is intended, and say why in the commit):
-//   SIM_HESAI_WRITE_GOLDEN=$PWD/tests/hesai/data/golden_frames.txt build/.../test_hesai_golden
+//   SIM_HESAI_WRITE_GOLDEN=$PWD/tests/drivers/hesai/data/golden_frames.txt build/.../test_hesai_golden
 #include <gtest/gtest.h>
 
 #include <cstdint>

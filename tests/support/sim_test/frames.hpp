@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-// What the core tests share: unique stream names and frames whose content proves they are
-// whole. Child processes: tests/support/sim_test/process.hpp.
+// Frames whose content proves they are whole (any mix of two frames fails check_frame), and the
+// peer's "key=value" output. Unique names and guards: streams.hpp; child processes: process.hpp.
 #pragma once
 
 #include <unistd.h>

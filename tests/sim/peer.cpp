@@ -40,7 +40,7 @@
 #include "sim/reader.hpp"
 #include "sim/wait_set.hpp"
 #include "sim/writer.hpp"
-#include "support.hpp"
+#include "sim_test/frames.hpp"
 
 using namespace sim;
 using namespace std::chrono_literals;
@@ -324,6 +324,6 @@ int main(int argc, char** argv) {
   if (args.size() == 2 && args[0] == "remove") return run_remove(args[1]);
   if (args.size() == 2 && args[0] == "stall-in-copy") return run_stall_in_copy(args[1]);
   if (args.size() == 2 && args[0] == "hold-borrow") return run_hold_borrow(args[1]);
-  std::fprintf(stderr, "usage: see the comment at the top of tests/core/peer.cpp\n");
+  std::fprintf(stderr, "usage: see the comment at the top of tests/sim/peer.cpp\n");
   return 2;
 }

@@ -8,7 +8,7 @@ import os from "node:os";
 import path from "node:path";
 import zlib from "node:zlib";
 
-// Paths come from CTest (tests/foxglove/CMakeLists.txt).
+// Paths come from CTest (tests/viewer/foxglove/CMakeLists.txt).
 export const bin = {
   foxglove: need("SIM_FOXGLOVE"),
   replayPcap: need("SIM_REPLAY_PCAP"),
@@ -21,7 +21,7 @@ export const hesaiData = need("SIM_HESAI_DATA");
 function need(name) {
   const value = process.env[name];
   if (!value) {
-    console.error(`${name} is not set: run this test through ctest (tests/foxglove).`);
+    console.error(`${name} is not set: run this test through ctest (tests/viewer/foxglove).`);
     process.exit(2);
   }
   return value;

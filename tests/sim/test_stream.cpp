@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "sim/sim.hpp"
-#include "support.hpp"
+#include "sim_test/frames.hpp"
 
 using namespace sim;
 using namespace std::chrono_literals;

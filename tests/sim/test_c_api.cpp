@@ -6,7 +6,7 @@
 #include <thread>
 
 #include "sim/sim.h"
-#include "support.hpp"
+#include "sim_test/frames.hpp"
 
 using sim::test::StreamGuard;
 using sim::test::unique_name;

@@ -11,7 +11,7 @@
 
 #include "../../sim/region.hpp"
 #include "sim/sim.hpp"
-#include "support.hpp"
+#include "sim_test/frames.hpp"
 
 using namespace sim;
 using sim::detail::Identity;

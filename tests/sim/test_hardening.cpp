@@ -25,7 +25,7 @@
 #include "sim/sim.h"
 #include "sim/sim.hpp"
 #include "sim_test/process.hpp"
-#include "support.hpp"
+#include "sim_test/frames.hpp"
 
 using namespace sim;
 using namespace std::chrono_literals;
@@ -583,7 +583,8 @@ TEST(Hardening, AReaderKilledInsideItsCopyOrHoldingABorrowAffectsNobody) {
   ASSERT_EQ(w.write(std::span<const std::byte>(frame), 0), WriteStatus::ok);
   Process in_copy({kPeer, "stall-in-copy", g.name});
   ASSERT_EQ(in_copy.next_line().value_or(""), "ready");
-  ASSERT_EQ(in_copy.next_line().value_or(""), "mid-copy");  // inside Reader::read's copy
+  // Inside Reader::read's copy; if not, what the peer said (a sanitizer report, say) is the why.
+  ASSERT_EQ(in_copy.next_line().value_or(""), "mid-copy") << (in_copy.wait(), in_copy.err());
   Process borrower({kPeer, "hold-borrow", g.name});
   ASSERT_EQ(borrower.next_line().value_or("").rfind("holding seq=1", 0), 0u);
   in_copy.signal(SIGKILL);

@@ -8,7 +8,7 @@
 
 #include "sim/sim.hpp"
 #include "sim_test/process.hpp"
-#include "support.hpp"
+#include "sim_test/frames.hpp"
 
 using namespace sim;
 using namespace std::chrono_literals;

@@ -20,7 +20,7 @@ struct UdpPayload {
 // Throws std::runtime_error with libpcap's message when the file cannot be read.
 std::vector<UdpPayload> read_udp_payloads(const std::filesystem::path& path);
 
-// Test data folder (tests/hesai/data), from the HESAI_TEST_DATA compile definition.
+// Test data folder (tests/drivers/hesai/data), from the HESAI_TEST_DATA compile definition.
 std::filesystem::path data_path(const std::string& name);
 
 // Whole file as bytes / text.
