@@ -15,10 +15,6 @@
 // Run it as root so it can use a private network namespace (loopback only); otherwise it runs on
 // the machine's interfaces. Speed is reported, never asserted.
 #include <dirent.h>
-#include <net/if.h>
-#include <sched.h>
-#include <sys/ioctl.h>
-#include <sys/socket.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -43,6 +39,7 @@
 #include "sim/clock.hpp"
 #include "sim/ros2/encode.hpp"
 #include "sim/writer.hpp"
+#include "sim_test/network.hpp"
 #include "sim_test/process.hpp"
 
 namespace {
@@ -293,21 +290,6 @@ int plain_publisher(const std::string& name, const Case& c, double seconds, bool
   return 0;
 }
 
-void enter_private_network() {
-  if (unshare(CLONE_NEWNET) != 0) {
-    std::fprintf(stderr, "bench_bridge: not root: running on this machine's interfaces\n");
-    return;
-  }
-  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
-  ifreq request{};
-  std::snprintf(request.ifr_name, IFNAMSIZ, "lo");
-  ioctl(fd, SIOCGIFFLAGS, &request);
-  request.ifr_flags = static_cast<short>(request.ifr_flags | IFF_UP | IFF_MULTICAST);
-  ioctl(fd, SIOCSIFFLAGS, &request);
-  close(fd);
-  std::system("ip route add 224.0.0.0/4 dev lo 2>/dev/null");
-}
-
 // Two-sided 95 % quantile of Student's t for `dof` degrees of freedom.
 double t95(std::size_t dof) {
   static const double table[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262,
@@ -359,7 +341,9 @@ int main(int argc, char** argv) {
     if (!plain_name.empty() && c.name == only) return plain_publisher(plain_name, c, seconds, reliable);
   }
   if (!plain_name.empty()) return 2;
-  enter_private_network();
+  if (auto why = sim::testing::enter_private_network(sim::testing::Multicast::on)) {
+    std::fprintf(stderr, "bench_bridge: %s: running on this machine's interfaces\n", why->c_str());
+  }
   const std::string self = "/proc/self/exe";
   char path[4096] = {};
   const ssize_t n = readlink("/proc/self/exe", path, sizeof path - 1);

@@ -6,12 +6,8 @@
 #include <arv.h>
 #include <fcntl.h>
 #include <gtest/gtest.h>
-#include <net/if.h>
-#include <sched.h>
 #include <signal.h>
 #include <spawn.h>
-#include <sys/ioctl.h>
-#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -23,30 +19,14 @@
 #include <vector>
 
 #include "sim/sim.hpp"
+#include "sim_test/network.hpp"
 
 namespace {
 
 using namespace std::chrono_literals;
 
-std::string g_skip_reason;  // set when the private network namespace is not available
-
-// Runs before any thread exists: unshare(CLONE_NEWNET) applies to the calling thread only.
-void enter_private_network() {
-  if (unshare(CLONE_NEWNET) != 0) {
-    g_skip_reason = "cannot create a network namespace (needs root or CAP_SYS_ADMIN)";
-    return;
-  }
-  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
-  ifreq request{};
-  std::snprintf(request.ifr_name, IFNAMSIZ, "lo");
-  if (fd < 0 || ioctl(fd, SIOCGIFFLAGS, &request) != 0) {
-    g_skip_reason = "cannot read the loopback interface in the new namespace";
-  } else {
-    request.ifr_flags = static_cast<short>(request.ifr_flags | IFF_UP);
-    if (ioctl(fd, SIOCSIFFLAGS, &request) != 0) g_skip_reason = "cannot bring loopback up";
-  }
-  if (fd >= 0) close(fd);
-}
+// Set in main(): why this process has no private network (its tests then skip).
+std::optional<std::string> g_skip_reason;
 
 // Mono8: a pattern each pixel can be checked against. BayerRG8: a pure red scene.
 void fill(ArvBuffer* buffer, void* data, guint32, guint32, ArvPixelFormat format) {
@@ -91,7 +71,7 @@ class FakeGvCamera {
 class AravisDriver : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (!g_skip_reason.empty()) GTEST_SKIP() << g_skip_reason;
+    if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
     static int counter = 0;
     stream = "/test_camera_aravis_" + std::to_string(getpid()) + "_" + std::to_string(counter++);
     log = "/tmp" + stream + ".log";
@@ -282,7 +262,7 @@ TEST_F(AravisDriver, AMissingCameraIsOneSentenceAndExitOne) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  enter_private_network();
+  g_skip_reason = sim::testing::enter_private_network(sim::testing::Multicast::off);
   ::testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
 }
