@@ -52,4 +52,11 @@ TEST(StatusLine, QuietPrintsNothingButNotes) {
   std::fclose(log);
 }
 
+TEST(StatusLine, BandwidthIsShownInTheUnitThatSuitsIt) {
+  EXPECT_EQ(sim::apps::bandwidth(22'412'000), "22.4 MB/s");
+  EXPECT_EQ(sim::apps::bandwidth(3'140), "3.1 kB/s");
+  EXPECT_EQ(sim::apps::bandwidth(12), "12 B/s");
+  EXPECT_EQ(sim::apps::bandwidth(0), "0 B/s");
+}
+
 }  // namespace

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "sim/apps/status_line.hpp"
+
 namespace sim::echo {
 
 void Spread::add(double value) noexcept {
@@ -64,22 +66,6 @@ double FrameStats::latency_percentile_us(double p) const {
   return sorted[k];
 }
 
-namespace {
-
-std::string bytes_text(double bytes_per_s) {
-  char text[48];
-  if (bytes_per_s >= 1e6) {
-    std::snprintf(text, sizeof text, "%.1f MB/s", bytes_per_s / 1e6);
-  } else if (bytes_per_s >= 1e3) {
-    std::snprintf(text, sizeof text, "%.1f kB/s", bytes_per_s / 1e3);
-  } else {
-    std::snprintf(text, sizeof text, "%.0f B/s", bytes_per_s);
-  }
-  return text;
-}
-
-}  // namespace
-
 std::string FrameStats::describe() const {
   char text[512];
   std::snprintf(text, sizeof text,
@@ -89,7 +75,7 @@ std::string FrameStats::describe() const {
                 static_cast<unsigned long long>(frames_), rate_hz(), interval_ms_.min(),
                 interval_ms_.max(), interval_ms_.stddev(), latency_percentile_us(0.5),
                 latency_percentile_us(0.99), latency_us_.max(), delay_us_.mean(),
-                bytes_text(bandwidth_bytes_per_s()).c_str(),
+                sim::apps::bandwidth(bandwidth_bytes_per_s()).c_str(),
                 static_cast<unsigned long long>(skipped_));
   return text;
 }

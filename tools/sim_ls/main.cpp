@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "sim/apps/command_line.hpp"
+#include "sim/apps/status_line.hpp"
 #include "sim/apps/stop_signal.hpp"
 #include "sim/clock.hpp"
 #include "sim/reader.hpp"
@@ -68,18 +69,6 @@ std::string age_text(std::int64_t now, std::int64_t then) {
   char text[32];
   std::snprintf(text, sizeof text, seconds < 1 ? "%.0f ms" : "%.1f s",
                 seconds < 1 ? seconds * 1e3 : seconds);
-  return text;
-}
-
-std::string bandwidth_text(double bytes_per_s) {
-  char text[32];
-  if (bytes_per_s >= 1e6) {
-    std::snprintf(text, sizeof text, "%.1f MB/s", bytes_per_s / 1e6);
-  } else if (bytes_per_s >= 1e3) {
-    std::snprintf(text, sizeof text, "%.1f kB/s", bytes_per_s / 1e3);
-  } else {
-    std::snprintf(text, sizeof text, "%.0f B/s", bytes_per_s);
-  }
   return text;
 }
 
@@ -188,7 +177,7 @@ void print_table(const std::vector<Row>& rows, std::int64_t now, bool watch) {
       // The view's own reader is one of the sleepers: do not count it.
       const unsigned sleeping = s.sleeping_readers > 0 ? s.sleeping_readers - 1 : 0;
       std::printf("%-*s %9s %11s %9s %10s %7llu %8u  %-28s %s\n", w, s.name.c_str(), rate,
-                  bandwidth_text(bandwidth).c_str(), age_text(now, s.latest_publish_ns).c_str(),
+                  sim::apps::bandwidth(bandwidth).c_str(), age_text(now, s.latest_publish_ns).c_str(),
                   latency, static_cast<unsigned long long>(seen.skipped), sleeping,
                   writer_text(s).c_str(), s.layout.describe().c_str());
     } else {

@@ -28,6 +28,12 @@ std::string number(double value, int decimals) {
   return text;
 }
 
+std::string bandwidth(double bytes_per_s) {
+  if (bytes_per_s >= 1e6) return number(bytes_per_s / 1e6) + " MB/s";
+  if (bytes_per_s >= 1e3) return number(bytes_per_s / 1e3) + " kB/s";
+  return number(bytes_per_s, 0) + " B/s";
+}
+
 StatusLine::StatusLine(std::string tool, bool live, bool quiet, std::FILE* out)
     : tool_(std::move(tool)), live_(live && !quiet), quiet_(quiet), out_(out) {}
 

@@ -18,6 +18,8 @@ namespace sim::apps {
 std::string fields(std::initializer_list<std::pair<std::string_view, std::string>> items);
 // A number with `decimals` digits after the point ("10.0").
 std::string number(double value, int decimals = 1);
+// A data rate in the unit that suits it: "22.4 MB/s", "3.1 kB/s", "12 B/s" (SI, as sensors quote).
+std::string bandwidth(double bytes_per_s);
 
 class StatusLine {
  public:
