@@ -2,6 +2,7 @@
 // sim_echo, sim_ls and sim_rm run as real processes against real streams.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -141,7 +142,7 @@ TEST(SimLs, ListsAStreamWithItsWriter) {
   StreamGuard g{unique_name("ls")};
   auto writer = start_writer(g.name, 10, 1000, 60000);
   EXPECT_EQ(writer->next_line().value_or("").rfind("done", 0), 0u);
-  Process ls({kLs, "--json"});
+  Process ls({kLs, "--json"});  // every stream on the machine, this test's among them
   ls.wait();
   const std::string out = ls.out();
   std::string mine;
@@ -182,6 +183,28 @@ TEST(SimRm, KeepsLiveStreamsUnlessForcedAndClearsDeadOnes) {
   EXPECT_EQ(nothing.wait(), 2);
 }
 
+TEST(SimLs, ListsOnlyTheStreamsNamedAndFailsOnAMissingOne) {
+  StreamGuard g{unique_name("lsnamed")};
+  StreamGuard other{unique_name("lsother")};
+  auto writer = start_writer(g.name, 3, 1000, 60000);
+  EXPECT_EQ(writer->next_line().value_or("").rfind("done", 0), 0u);
+  { ASSERT_TRUE(Writer::create({.name = other.name, .capacity = 64})); }
+
+  Process ls({kLs, "--json", "--window", "0", g.name});
+  EXPECT_EQ(ls.wait(), 0) << ls.err();
+  EXPECT_NE(ls.out().find("\"name\":\"" + g.name + "\""), std::string::npos) << ls.out();
+  EXPECT_EQ(ls.out().find(other.name), std::string::npos) << ls.out();
+  EXPECT_EQ(std::count(ls.out().begin(), ls.out().end(), '\n'), 1) << ls.out();
+
+  const std::string missing = unique_name("lsmissing");
+  Process absent({kLs, "--window", "0", g.name, missing});
+  EXPECT_EQ(absent.wait(), 1);
+  EXPECT_NE(absent.out().find(missing), std::string::npos) << absent.out();
+
+  Process bad({kLs, "no_slash"});
+  EXPECT_EQ(bad.wait(), 2);
+}
+
 TEST(SimLs, ShowsTheWritersProgramNameUntruncated) {
   // A copy of the peer under a name longer than the kernel's 15-character process name.
   const std::string long_name = "/tmp/sim_test_peer_with_a_long_name_" + std::to_string(getpid());
@@ -190,8 +213,9 @@ TEST(SimLs, ShowsTheWritersProgramNameUntruncated) {
   {
     Process writer({long_name, "writer", g.name, "1", "1000", "64", "1024", "60000"});
     ASSERT_TRUE(writer.wait_for_line("done").has_value());
-    Process ls({kLs, "--json", "--window", "0"});
-    EXPECT_EQ(ls.wait(), 0);
+    // Named: other tests' streams (a fuzzer's garbage region, say) are not this test's business.
+    Process ls({kLs, "--json", "--window", "0", g.name});
+    EXPECT_EQ(ls.wait(), 0) << ls.err();
     const std::string expected = long_name.substr(5);
     EXPECT_NE(ls.out().find("\"writer\":\"" + expected + "\""), std::string::npos) << ls.out();
   }

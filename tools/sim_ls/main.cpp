@@ -26,6 +26,7 @@ struct Options {
   bool watch = false;
   double interval_s = 1.0;
   double window_s = 0.5;
+  std::vector<std::string> streams;  // only these; empty: every stream on the machine
 };
 
 std::string json_escape(const std::string& in) {
@@ -190,16 +191,20 @@ void print_table(const std::vector<Row>& rows, std::int64_t now, bool watch) {
   }
 }
 
-std::vector<Row> look(RateMeter& rates) {
+// The named streams, or every stream: then one that vanished between listing and looking (its
+// writer removed it) is simply gone, not a problem; a named one that is missing is.
+std::vector<Row> look(RateMeter& rates, const std::vector<std::string>& named) {
   std::vector<Row> rows;
   const std::int64_t now = sim::monotonic_ns();
-  for (const auto& name : sim::list_streams()) {
+  for (const auto& name : named.empty() ? sim::list_streams() : named) {
     Row row;
     row.name = name;
     auto status = sim::inspect(name);
     if (status) {
       row.rate_hz = rates.update(*status, now);
       row.status = std::move(*status);
+    } else if (named.empty() && status.error().code == sim::ErrorCode::not_found) {
+      continue;
     } else {
       row.error = status.error().message;
     }
@@ -214,10 +219,11 @@ int main(int argc, char** argv) {
   Options o;
   sim::apps::CommandLine cli(
       "sim_ls",
-      "List every SIM stream on this machine: layout, capacity, frames, rate (over a recent "
-      "window), age of the newest frame, sleeping readers, writer and checksum. --watch keeps a "
-      "live view: rate, bandwidth, age, latency (publish to read), skipped frames, sleeping "
-      "readers and writer of every stream, refreshed in place until stopped.");
+      "List the SIM streams on this machine (every stream, or the ones named): layout, "
+      "capacity, frames, rate (over a recent window), age of the newest frame, sleeping readers, "
+      "writer and checksum. --watch keeps a live view: rate, bandwidth, age, latency (publish to "
+      "read), skipped frames, sleeping readers and writer of each stream, refreshed in place "
+      "until stopped.");
   auto& app = cli.app();
   app.add_flag("--json", o.json, "one JSON object per stream (per refresh with --watch)");
   app.add_flag("--watch,-w", o.watch, "live view, refreshed every --interval until stopped");
@@ -225,14 +231,15 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.05, 3600.0));
   app.add_option("--window", o.window_s, "seconds over which a single listing measures rates")
       ->check(CLI::Range(0.0, 60.0));
+  cli.add_streams("streams", o.streams, "only these streams (default: every stream)");
   if (auto code = cli.parse(argc, argv)) return *code;
   const auto& stop = sim::apps::StopSignal::install();
 
   RateMeter rates;
   if (!o.watch) {
-    look(rates);  // the first look of the rate window
+    look(rates, o.streams);  // the first look of the rate window
     if (o.window_s > 0 && !stop.sleep_for_seconds(o.window_s)) return 0;
-    const auto rows = look(rates);
+    const auto rows = look(rates, o.streams);
     const std::int64_t now = sim::monotonic_ns();
     int problems = 0;
     if (o.json) {
@@ -247,9 +254,9 @@ int main(int argc, char** argv) {
   const bool terminal = ::isatty(STDOUT_FILENO) != 0 && !o.json;
   std::map<std::string, std::unique_ptr<sim::ls::StreamWatch>> watches;
   std::int64_t last = sim::monotonic_ns();
-  look(rates);
+  look(rates, o.streams);
   while (stop.sleep_for_seconds(o.interval_s)) {
-    auto rows = look(rates);
+    auto rows = look(rates, o.streams);
     const std::int64_t now = sim::monotonic_ns();
     std::map<std::string, std::unique_ptr<sim::ls::StreamWatch>> kept;
     for (auto& row : rows) {
