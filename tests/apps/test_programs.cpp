@@ -47,7 +47,7 @@ std::vector<Program> programs() {
   list.push_back({SIM_PROGRAM_sim_echo, {}, ""});
 #endif
 #ifdef SIM_PROGRAM_sim_ls
-  list.push_back({SIM_PROGRAM_sim_ls, {}, "-"});
+  list.push_back({SIM_PROGRAM_sim_ls, {}, ""});
 #endif
 #ifdef SIM_PROGRAM_sim_rm
   list.push_back({SIM_PROGRAM_sim_rm, {}, ""});
