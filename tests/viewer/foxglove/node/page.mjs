@@ -51,14 +51,13 @@ try {
   assert.ok(rows.some((r) => r.includes(lidar) && r.includes("points lidar_point")), rows.join("\n"));
   assert.ok(rows.some((r) => r.includes(camera) && r.includes("bgr8")), rows.join("\n"));
 
-  // Each view shows a picture that is not blank: many distinct colours, not one flat fill.
+  // Each view shows a picture that is not blank: many distinct colours, not one flat fill. The
+  // page swaps each <img>'s source as frames come, so the check that a picture is loaded and its
+  // measurement run in one step inside the page (no new source can start loading in between).
   const spread = async (name) => {
-    await page.waitForFunction((n) => {
+    const measured = await page.waitForFunction((n) => {
       const img = document.querySelector(`.view[data-stream="${n}"] img`);
-      return img && img.complete && img.naturalWidth > 0;
-    }, { timeout: 60_000 }, name);
-    return page.evaluate((n) => {
-      const img = document.querySelector(`.view[data-stream="${n}"] img`);
+      if (!img || !img.complete || img.naturalWidth === 0) return null;
       const canvas = document.createElement("canvas");
       canvas.width = img.naturalWidth;
       canvas.height = img.naturalHeight;
@@ -72,7 +71,8 @@ try {
         if (data[i] + data[i + 1] + data[i + 2] > 150) ++lit;
       }
       return { width: canvas.width, height: canvas.height, colours: colours.size, lit };
-    }, name);
+    }, { timeout: 60_000, polling: 100 }, name);
+    return measured.jsonValue();
   };
   const cameraPicture = await spread(camera);
   assert.equal(cameraPicture.width, h.image.width);
