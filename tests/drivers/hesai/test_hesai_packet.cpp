@@ -5,9 +5,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <cstdint>
+#include <random>
 #include <string>
 #include <vector>
 
+#include "../../../drivers/hesai/src/crc32_mpeg2.hpp"
 #include "packet_builder.hpp"
 #include "pcap_payloads.hpp"
 #include "sim/hesai/hesai.hpp"
@@ -16,6 +20,40 @@ using namespace sim::hesai;
 using hesai_test::data_path;
 
 namespace {
+
+// CRC-32/MPEG-2 one bit at a time, straight from its definition: the yardstick for both fast ways.
+std::uint32_t crc_bit_by_bit(const std::uint8_t* p, std::size_t n) {
+  std::uint32_t c = 0xFFFF'FFFFu;
+  for (std::size_t i = 0; i < n; ++i) {
+    c ^= std::uint32_t{p[i]} << 24;
+    for (int bit = 0; bit < 8; ++bit) c = (c & 0x8000'0000u) ? (c << 1) ^ 0x04C1'1DB7u : c << 1;
+  }
+  return c;
+}
+
+// The QT128's checks run through carry-less multiplication on x86-64 and through tables on
+// aarch64: both must be the CRC on every length and alignment, not only on the real capture.
+TEST(HesaiCrc, BothWaysAreTheStandardCrcOnEveryLengthAndAlignment) {
+  const std::string check = "123456789";  // the catalogue's check value for CRC-32/MPEG-2
+  const auto* digits = reinterpret_cast<const std::uint8_t*>(check.data());
+  EXPECT_EQ(detail::crc32_mpeg2(digits, check.size()), 0x0376'E6E7u);
+  EXPECT_EQ(detail::crc32_mpeg2_portable(digits, check.size()), 0x0376'E6E7u);
+
+  std::mt19937 random(1071);
+  std::vector<std::uint8_t> bytes(1100);
+  for (auto& b : bytes) b = static_cast<std::uint8_t>(random());
+  for (std::size_t offset = 0; offset < 4; ++offset) {
+    for (std::size_t n = 0; n + offset <= bytes.size(); n += n < 200 ? 1 : 13) {
+      const std::uint8_t* p = bytes.data() + offset;
+      const std::uint32_t expected = crc_bit_by_bit(p, n);
+      ASSERT_EQ(detail::crc32_mpeg2(p, n), expected) << n << " bytes at offset " << offset;
+      ASSERT_EQ(detail::crc32_mpeg2_portable(p, n), expected) << n << " bytes at offset " << offset;
+    }
+  }
+  // The body's own length, on both ways.
+  EXPECT_EQ(detail::crc32_mpeg2(bytes.data(), 1028), crc_bit_by_bit(bytes.data(), 1028));
+  if (!detail::crc32_mpeg2_folds()) std::printf("note: this CPU has no carry-less multiply\n");
+}
 
 std::vector<std::uint8_t> first_payload(const char* file) {
   auto packets = hesai_test::read_udp_payloads(data_path(file));
