@@ -1,0 +1,162 @@
+// SPDX-License-Identifier: Apache-2.0
+// FrameAssembler: turns an Ouster sensor's lidar packets into one point frame per rotation,
+// decoding straight into a span the caller owns (a SIM writer's loaned slot). The live driver
+// and the pcap replay use this same object (through LidarStream).
+//
+//   auto assembler = FrameAssembler::create(metadata, options).value();
+//   assembler.set_output(loan.as<sim::LidarPoint>());
+//   for each lidar payload:
+//     PushResult r = assembler.push(payload, host_receive_ns);
+//     if (r.frame) { commit r.frame->point_count points; set_output(next loan) before the next push }
+//
+// A frame is the columns of one frame_id. It completes on the packet that holds the column
+// window's last column, or (when that packet was lost) on the first packet of the next frame,
+// which then waits in a one-packet buffer until set_output() gives the next span.
+//
+// Points are in the sensor frame as ouster-ros publishes them by default: the metadata's
+// beam angles and lidar_origin_to_beam_origin give each pixel's direction and origin in the
+// lidar frame (firmware user manual, "Lidar Range to XYZ"), lidar_to_sensor_transform moves
+// them to the sensor frame; metres. Every pixel of a column has the column's timestamp.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "sim/lidar_point.hpp"
+#include "sim/ouster/metadata.hpp"
+#include "sim/ouster/packet.hpp"
+#include "sim/result.hpp"
+
+namespace sim::ouster {
+
+enum class CloudLayout : std::uint8_t {
+  // H × W points per return, row-major by beam, destaggered (column c of row u holds the pixel
+  // whose azimuth is column c's, as ouster-ros's organised cloud); no return: x = y = z = 0.
+  // Dual profiles: the second return's H × W image follows the first's.
+  organized,
+  // Only pixels with a return inside the range limits, in packet order.
+  dense,
+};
+
+// Which of the pixel's channels goes into LidarPoint::intensity.
+enum class IntensityField : std::uint8_t {
+  automatic,     // signal when the profile has it (ouster-ros's "intensity"), else reflectivity
+  signal,        // photons of the return
+  reflectivity,  // calibrated reflectivity, 0–255
+  near_ir,       // ambient near-infrared photons
+};
+
+struct AssemblerOptions {
+  CloudLayout layout = CloudLayout::organized;
+  IntensityField intensity = IntensityField::automatic;
+  bool first_return_only = false;  // dual profiles: drop the second return
+  float min_range_m = 0;           // closer returns are dropped (dense) or zeroed (organised)
+  float max_range_m = 0;           // 0: no limit
+  // Publish frames that did not start at the column window's first column (driver start).
+  bool emit_partial_frames = false;
+};
+
+struct CompletedFrame {
+  std::size_t point_count = 0;       // points written at the front of the output span
+  std::int64_t stamp_ns = 0;         // the frame's first valid column, sensor clock
+  std::int64_t host_receive_ns = 0;  // host receive time of the frame's first packet
+  std::uint64_t index = 0;           // frames completed by this assembler
+  std::uint32_t frame_id = 0;        // the sensor's frame counter
+  std::uint32_t packets = 0;
+  std::uint32_t missing_columns = 0;  // columns of the window that never came (lost packets)
+  std::uint32_t invalid_columns = 0;  // columns the sensor marked invalid (status)
+  bool whole = true;                  // began at the window's first column
+};
+
+struct PushResult {
+  PacketError error = PacketError::none;
+  std::optional<CompletedFrame> frame;
+};
+
+struct AssemblerCounters {
+  std::uint64_t packets = 0;       // decoded
+  std::uint64_t malformed = 0;     // rejected: every PacketError
+  std::uint64_t lost_packets = 0;  // estimated from missing columns
+  std::uint64_t duplicate_columns = 0;
+  std::uint64_t invalid_columns = 0;
+  std::uint64_t frames = 0;
+  std::uint64_t partial_frames_dropped = 0;
+  std::uint64_t frames_without_output = 0;
+  std::uint64_t dropped_points = 0;  // no output span, or the span was too small
+  std::array<std::uint64_t, packet_error_count> rejected{};  // by PacketError
+  std::size_t last_rejected_size = 0;  // payload size of the last wrong_size packet
+};
+
+class FrameAssembler {
+ public:
+  // Fails (one sentence) for inverted or negative range limits or pixel shifts the frame
+  // cannot hold.
+  static Expected<FrameAssembler> create(const Metadata& metadata, AssemblerOptions options);
+
+  // Points one frame can hold: H × W × returns.
+  std::size_t max_points() const noexcept;
+
+  void set_output(std::span<LidarPoint> output) noexcept;
+  PushResult push(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns) noexcept;
+  // The frame in progress as a finished frame (end of a recording); nullopt when empty or
+  // partial without emit_partial_frames.
+  std::optional<CompletedFrame> flush() noexcept;
+  // Forget the frame in progress (a loop, a silence).
+  void reset() noexcept;
+
+  const AssemblerCounters& counters() const noexcept { return counters_; }
+  const Metadata& metadata() const noexcept { return metadata_; }
+  const AssemblerOptions& options() const noexcept { return options_; }
+  unsigned returns() const noexcept { return returns_; }
+
+ private:
+  FrameAssembler(const Metadata& metadata, AssemblerOptions options);
+  void build_lookup_table();
+  void begin(const LidarPacket& packet, std::int64_t host_ns) noexcept;
+  void decode(const LidarPacket& packet) noexcept;
+  template <Profile P>
+  void decode_columns(const LidarPacket& packet) noexcept;
+  void write_point(std::size_t index, unsigned row, std::size_t lut, std::uint32_t range_mm,
+                   float intensity, std::uint32_t time_offset, std::uint8_t return_index) noexcept;
+  std::optional<CompletedFrame> close() noexcept;
+  void fill_missing_columns() noexcept;
+
+  Metadata metadata_;
+  AssemblerOptions options_;
+  unsigned beams_ = 0;
+  unsigned columns_ = 0;
+  unsigned returns_ = 1;
+  std::uint32_t min_range_mm_ = 0;
+  std::uint32_t max_range_mm_ = 0;
+  IntensityField intensity_ = IntensityField::signal;
+  // Per (measurement_id, beam): xyz = range_mm · direction + origin, metres, sensor frame.
+  std::vector<float> direction_;  // 3 per pixel
+  std::vector<float> origin_;
+  // Per (measurement_id, beam): the destaggered column's index row-major, u·W + (m + shift) % W.
+  std::vector<std::uint32_t> organized_index_;
+
+  // The frame in progress.
+  bool open_ = false;
+  bool whole_ = false;
+  std::uint32_t frame_id_ = 0;
+  std::int64_t stamp_ns_ = 0;
+  bool have_stamp_ = false;
+  std::int64_t host_ns_ = 0;
+  std::uint32_t packets_ = 0;
+  std::uint32_t invalid_columns_ = 0;
+  std::vector<std::uint8_t> received_;  // per measurement_id
+  std::size_t dense_count_ = 0;
+
+  std::span<LidarPoint> output_;
+  bool attached_ = false;
+  // The first packet of the next frame when it arrived before the last one of this frame.
+  std::vector<std::uint8_t> pending_;
+  std::size_t pending_size_ = 0;
+  std::int64_t pending_host_ns_ = 0;
+  std::uint64_t frame_index_ = 0;
+  AssemblerCounters counters_;
+};
+
+}  // namespace sim::ouster
