@@ -108,15 +108,22 @@ struct Reader::Impl {
   std::map<std::uint16_t, Channel> channels;
   std::optional<Statistics> statistics;
   bool has_summary = false;
+  bool has_footer = false;       // the file ends with an intact Footer and magic
+  bool channels_known = false;   // every Channel record of the file has been read
+  std::optional<std::uint64_t> earliest_log_time;  // of the messages delivered so far
+  std::optional<std::uint64_t> start_time;         // the file's earliest log time, when known
 
   std::size_t data_end = 0;  // where the data section stops being read
   std::size_t pos = 0;
   bool finished = false;
   std::uint32_t data_crc = 0;  // running CRC from the file's first byte to `pos`
+  bool data_end_seen = false;  // this pass met the Data End record
+  std::uint64_t messages_seen = 0;  // Message records met in this pass, intact or not
 
   std::unique_ptr<std::byte[]> chunk_buffer;
   std::size_t chunk_capacity = 0;
   std::span<const std::byte> chunk;  // the current chunk's records
+  std::size_t chunk_offset = 0;      // where the current chunk's record starts in the file
   std::vector<std::pair<std::uint64_t, std::uint32_t>> order;  // (log time, record offset)
   std::size_t order_next = 0;
 
@@ -137,19 +144,43 @@ struct Reader::Impl {
     skipped_chunks.insert(offset);
   }
 
+  // A Schema or Channel may be repeated (the summary copies them) but never redefined: the
+  // first definition stays, and a different one with the same id is damage worth a sentence.
   void add_schema(std::span<const std::byte> content, std::size_t offset) {
-    if (auto s = parse_schema(content)) {
-      schemas.try_emplace(s->id, std::move(*s));
-    } else {
+    auto s = parse_schema(content);
+    if (!s) {
       note("the schema record" + at(offset) + " is malformed; messages that need it cannot be decoded");
+      return;
+    }
+    const auto [it, added] = schemas.try_emplace(s->id, *s);
+    if (!added && (it->second.name != s->name || it->second.encoding != s->encoding ||
+                   it->second.data != s->data)) {
+      note("the schema record" + at(offset) + " redefines schema id " + std::to_string(s->id) +
+           " differently, which MCAP forbids; the first definition is used");
     }
   }
   void add_channel(std::span<const std::byte> content, std::size_t offset) {
-    if (auto c = parse_channel(content)) {
-      channels.try_emplace(c->id, std::move(*c));
-    } else {
+    auto c = parse_channel(content);
+    if (!c) {
       note("the channel record" + at(offset) + " is malformed; its messages are skipped");
+      return;
     }
+    const auto [it, added] = channels.try_emplace(c->id, *c);
+    if (!added && (it->second.topic != c->topic || it->second.schema_id != c->schema_id ||
+                   it->second.message_encoding != c->message_encoding)) {
+      note("the channel record" + at(offset) + " redefines channel id " + std::to_string(c->id) +
+           " (topic " + printable(c->topic) + ") differently, which MCAP forbids; its messages "
+           "play as the first definition (topic " + printable(it->second.topic) + ")");
+    }
+  }
+
+  // Whether the summary repeats every Channel and the Schema of each: writers may leave them out
+  // (the summary is optional, and so are its copies), and then the data section must be read.
+  bool summary_lists_every_channel() const {
+    if (channels.empty()) return false;
+    return std::all_of(channels.begin(), channels.end(), [&](const auto& entry) {
+      return entry.second.schema_id == 0 || schemas.count(entry.second.schema_id) > 0;
+    });
   }
 
   // Reads the Footer, and the summary it points to, when the file ends as it should.
@@ -174,6 +205,7 @@ struct Reader::Impl {
       return;
     }
     data_end = footer;
+    has_footer = true;
     if (summary_start == 0) return;  // a file without a summary is valid MCAP
     if (summary_start < kMagic.size() || summary_start > footer ||
         (summary_offset_start != 0 &&
@@ -242,7 +274,7 @@ struct Reader::Impl {
     if (r.failed()) return skip_chunk(offset, "is malformed (its fields overrun it)");
     const auto compression = parse_compression(compression_name);
     if (!compression) {
-      return skip_chunk(offset, "uses compression \"" + std::string(compression_name) +
+      return skip_chunk(offset, "uses compression \"" + printable(compression_name) +
                                     "\", which SIM cannot read (zstd, lz4 or none)");
     }
     if (uncompressed_size > kMaxChunkBytes) {
@@ -287,7 +319,12 @@ struct Reader::Impl {
       }
       if (op == Opcode::schema) add_schema(record, offset);
       if (op == Opcode::channel) add_channel(record, offset);
+      if (op == Opcode::chunk) {
+        note("the chunk" + at(offset) + " holds another chunk, which MCAP does not allow; the "
+             "inner chunk was skipped");
+      }
       if (op == Opcode::message) {
+        ++messages_seen;
         if (record.size() < kMessagePrefix) {
           note("the message" + at(offset) + " is too short to be one; it was skipped");
         } else if (p <= UINT32_MAX) {
@@ -302,17 +339,46 @@ struct Reader::Impl {
                      [](const auto& a, const auto& b) { return a.first < b.first; });
   }
 
+  // A message on a channel the file defines; one on an undefined channel is damage (noted) and
+  // is not delivered, since nobody could know what it holds.
+  std::optional<MessageView> deliver(std::optional<MessageView> m, std::size_t offset) {
+    if (!m) return m;
+    if (channels_known && channels.count(m->header.channel_id) == 0) {
+      note("the message" + at(offset) + " is on channel " + std::to_string(m->header.channel_id) +
+           ", which the file never defines; such messages were skipped");
+      return std::nullopt;
+    }
+    earliest_log_time = std::min(earliest_log_time.value_or(UINT64_MAX), m->header.log_time);
+    return m;
+  }
+
+  // At the end of a pass over the data section: what a whole file would have shown.
+  void check_pass_complete() {
+    if (has_footer && !data_end_seen && pos >= data_end) {
+      note("the data section ends" + at(data_end) + " without its Data End record (the file is "
+           "damaged), so its CRC could not be checked");
+    }
+    if (statistics && messages_seen < statistics->message_count) {
+      note("the summary counts " + std::to_string(statistics->message_count) + " messages but only " +
+           std::to_string(messages_seen) + " were found (the file is damaged where the others were)");
+    }
+  }
+
   std::optional<MessageView> next() {
     for (;;) {
       if (order_next < order.size()) {
         const std::uint32_t p = order[order_next++].second;
         std::uint64_t length;
         std::memcpy(&length, chunk.data() + p + 1, sizeof length);
-        return parse_message(chunk.subspan(p + kRecordPrefix, static_cast<std::size_t>(length)));
+        auto m = deliver(parse_message(chunk.subspan(p + kRecordPrefix, static_cast<std::size_t>(length))),
+                         chunk_offset);
+        if (m) return m;
+        continue;
       }
       if (finished) return std::nullopt;
       if (pos >= data_end) {
         finished = true;
+        check_pass_complete();
         continue;
       }
       if (data_end - pos < kRecordPrefix) {
@@ -339,7 +405,9 @@ struct Reader::Impl {
         if (!r.failed() && stored != 0 && stored != data_crc) {
           note("the data section fails its CRC check (the file is damaged); intact chunks were read");
         }
+        data_end_seen = true;
         finished = true;
+        check_pass_complete();
         continue;
       }
       data_crc = detail::crc32(file.subspan(record_start, pos - record_start), data_crc);
@@ -351,12 +419,24 @@ struct Reader::Impl {
           break;
         case Opcode::schema: add_schema(content, record_start); break;
         case Opcode::channel: add_channel(content, record_start); break;
-        case Opcode::chunk: open_chunk(content, record_start); break;
-        case Opcode::message:
-          if (auto m = parse_message(content)) return m;
-          note("the message" + at(record_start) + " is too short to be one; it was skipped");
+        case Opcode::chunk:
+          chunk_offset = record_start;
+          open_chunk(content, record_start);
           break;
-        case Opcode::footer: finished = true; break;
+        case Opcode::message:
+          ++messages_seen;
+          if (auto m = parse_message(content)) {
+            if (auto delivered = deliver(std::move(m), record_start)) return delivered;
+          } else {
+            note("the message" + at(record_start) + " is too short to be one; it was skipped");
+          }
+          break;
+        case Opcode::footer:
+          // The real Footer is past data_end: this one is a damaged record. Its length still
+          // holds, so reading goes on after it.
+          note("a Footer record" + at(record_start) + " lies inside the data section, so the file "
+               "is damaged there; the records around it were read");
+          break;
         default: break;  // header, indexes, attachments, metadata: nothing to play
       }
     }
@@ -366,6 +446,8 @@ struct Reader::Impl {
     pos = kMagic.size();
     data_crc = detail::crc32(file.subspan(0, kMagic.size()));
     finished = false;
+    data_end_seen = false;
+    messages_seen = 0;
     chunk = {};
     order.clear();
     order_next = 0;
@@ -394,17 +476,22 @@ Expected<Reader> Reader::from_bytes(std::span<const std::byte> bytes) {
   }
   impl->read_summary();
   impl->rewind();
-  if (!impl->has_summary) {
-    // Without a summary the channels are only known by reading the whole data section once.
+  if (!impl->has_summary || !impl->summary_lists_every_channel()) {
+    // Without them in the summary, the channels are only known by reading the data section once.
     while (impl->next()) {
     }
     impl->rewind();
+    impl->start_time = impl->earliest_log_time;
+  } else if (impl->statistics && impl->statistics->message_count > 0) {
+    impl->start_time = impl->statistics->message_start_time;
   }
+  impl->channels_known = true;
   return Reader(std::move(impl));
 }
 
 Expected<Reader> Reader::open(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  // O_NONBLOCK: a FIFO must not block the open (it is refused below); a regular file ignores it.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
   if (fd < 0) {
     return Error{errno == ENOENT ? ErrorCode::not_found : ErrorCode::system_error,
                  "cannot open " + path + ": " + std::strerror(errno) + "; check the path"};
@@ -446,6 +533,7 @@ const Schema* Reader::schema_of(const Channel& channel) const noexcept {
   return it == impl_->schemas.end() ? nullptr : &it->second;
 }
 const std::optional<Statistics>& Reader::statistics() const noexcept { return impl_->statistics; }
+std::optional<std::uint64_t> Reader::start_time() const noexcept { return impl_->start_time; }
 bool Reader::has_summary() const noexcept { return impl_->has_summary; }
 std::optional<MessageView> Reader::next() { return impl_->next(); }
 void Reader::rewind() { impl_->rewind(); }

@@ -2,6 +2,7 @@
 #include "sim/mcap/writer.hpp"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -42,7 +43,8 @@ struct Writer::Impl {
   std::optional<Error> failure;  // the first write error; the writer stops there
   bool closed = false;
 
-  std::uint64_t offset = 0;  // bytes in the file
+  std::uint64_t offset = 0;  // bytes in the file, once everything emitted is written
+  std::uint64_t written = 0;  // bytes write(2) took
   std::uint32_t crc = 0;     // running CRC of the section being written (data, then summary)
   std::vector<std::byte> out;  // small records waiting for one write(2)
 
@@ -53,6 +55,8 @@ struct Writer::Impl {
   std::vector<std::byte> chunk;  // the open chunk's uncompressed records
   std::vector<std::byte> compressed;
   std::map<std::uint16_t, IndexEntries> chunk_entries;
+  std::map<std::uint16_t, std::uint64_t> chunk_message_bytes;  // per channel, in the open chunk
+  std::map<std::uint16_t, StoredMessages> stored;              // per channel, in written chunks
   std::uint64_t chunk_start_time = 0;
   std::uint64_t chunk_end_time = 0;
   std::vector<ChunkIndex> chunk_indexes;
@@ -78,6 +82,7 @@ struct Writer::Impl {
         return;
       }
       data = data.subspan(static_cast<std::size_t>(n));
+      written += static_cast<std::uint64_t>(n);
     }
   }
   void flush_out() {
@@ -196,8 +201,17 @@ struct Writer::Impl {
     index.message_index_length = offset - indexes_start;
     chunk_indexes.push_back(std::move(index));
     ++stats.chunk_count;
+    // The chunk is in the file only once written: then its messages count as stored.
+    flush_out();
+    if (!failure) {
+      for (const auto& [channel_id, entries] : chunk_entries) {
+        stored[channel_id].messages += entries.size();
+        stored[channel_id].bytes += chunk_message_bytes[channel_id];
+      }
+    }
     chunk.clear();
     chunk_entries.clear();
+    chunk_message_bytes.clear();
   }
 
   void write_summary() {
@@ -229,10 +243,10 @@ struct Writer::Impl {
       groups.push_back({op, start, offset - start});
     };
     group(Opcode::schema, [&](detail::ByteWriter& w) {
-      for (const auto& s : schemas) put_schema(w, s);
+      if (options.repeat_schemas) for (const auto& s : schemas) put_schema(w, s);
     });
     group(Opcode::channel, [&](detail::ByteWriter& w) {
-      for (const auto& c : channels) put_channel(w, c);
+      if (options.repeat_channels) for (const auto& c : channels) put_channel(w, c);
     });
     group(Opcode::statistics, [&](detail::ByteWriter& w) {
       const auto at = w.open_record(Opcode::statistics);
@@ -316,7 +330,14 @@ Expected<Writer> Writer::create(const std::string& path, const WriterOptions& op
   auto impl = std::make_unique<Impl>();
   impl->path = path;
   impl->options = options;
-  impl->fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  // A FIFO would block the open until someone reads it, and a recording is no stream of bytes.
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && (S_ISFIFO(st.st_mode) || S_ISSOCK(st.st_mode))) {
+    return Error{ErrorCode::invalid_argument,
+                 path + " is a FIFO or socket, not a file; choose a file path with -o"};
+  }
+  impl->fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC | O_NONBLOCK, 0644);
+  if (impl->fd >= 0) ::fcntl(impl->fd, F_SETFL, ::fcntl(impl->fd, F_GETFL) & ~O_NONBLOCK);
   if (impl->fd < 0) {
     return Error{errno == EACCES ? ErrorCode::permission_denied : ErrorCode::system_error,
                  "cannot create " + path + ": " + std::strerror(errno) +
@@ -366,6 +387,7 @@ std::optional<Error> Writer::write(const MessageHeader& header, std::span<const 
   m.chunk_start_time = std::min(m.chunk_start_time, header.log_time);
   m.chunk_end_time = std::max(m.chunk_end_time, header.log_time);
   m.chunk_entries[header.channel_id].emplace_back(header.log_time, m.chunk.size());
+  m.chunk_message_bytes[header.channel_id] += data.size();
   detail::ByteWriter w(m.chunk);
   w.put(static_cast<std::uint8_t>(Opcode::message));
   w.put(static_cast<std::uint64_t>(2 + 4 + 8 + 8 + data.size()));
@@ -399,6 +421,13 @@ std::optional<Error> Writer::close() {
 }
 
 const Statistics& Writer::statistics() const noexcept { return impl_->stats; }
-std::uint64_t Writer::bytes_written() const noexcept { return impl_->offset; }
+std::uint64_t Writer::bytes_written() const noexcept {
+  // After a failure, only what write(2) took; else also the records still buffered.
+  return impl_->failure ? impl_->written : impl_->offset;
+}
+StoredMessages Writer::stored(std::uint16_t channel_id) const {
+  const auto it = impl_->stored.find(channel_id);
+  return it == impl_->stored.end() ? StoredMessages{} : it->second;
+}
 
 }  // namespace sim::mcap

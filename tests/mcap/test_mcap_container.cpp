@@ -3,6 +3,7 @@
 // channels, statistics and summary; damaged files (cut short, bad CRC, wrong magic, absurd
 // lengths) give one sentence and every intact message.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cstring>
 #include <numeric>
@@ -229,6 +230,191 @@ TEST(McapReader, ReadsTheDataSectionWhenTheSummaryIsDamaged) {
   EXPECT_NE(reader->problem().find("summary"), std::string::npos) << reader->problem();
   EXPECT_EQ(reader->channels().size(), 2u);
   EXPECT_EQ(read_all(*reader).size(), sent.size());
+}
+
+// Files of other writers may leave the Schema and Channel copies out of the summary (Go's
+// SkipRepeatedChannelInfos, Python's repeat_channels=False): the channels are in the data section.
+struct SummaryCopies {
+  bool schemas;
+  bool channels;
+};
+class SummaryWithout : public ::testing::TestWithParam<SummaryCopies> {};
+
+TEST_P(SummaryWithout, TheChannelsAndSchemasAreReadFromTheDataSection) {
+  TempFile file;
+  const auto sent = make_messages(12);
+  {
+    sim::mcap::WriterOptions options;
+    options.repeat_schemas = GetParam().schemas;
+    options.repeat_channels = GetParam().channels;
+    auto writer = sim::mcap::Writer::create(file.path(), options);
+    ASSERT_TRUE(writer);
+    const auto cloud = writer->add_schema("sensor_msgs/msg/PointCloud2", "ros2msg", "uint32 height\n");
+    const auto image = writer->add_schema("sensor_msgs/msg/Image", "ros2msg", "uint32 width\n");
+    writer->add_channel(cloud, "/lidar_top", "cdr", {{"sim.kind", "points"}});
+    writer->add_channel(image, "/camera_front", "cdr", {{"sim.kind", "image"}});
+    for (const auto& m : sent) ASSERT_FALSE(writer->write(m.header, m.data));
+    ASSERT_FALSE(writer->close());
+  }
+  auto reader = sim::mcap::Reader::open(file.path());
+  ASSERT_TRUE(reader);
+  EXPECT_TRUE(reader->has_summary());
+  ASSERT_EQ(reader->channels().size(), 2u);
+  const auto* schema = reader->schema_of(reader->channels().at(2));
+  ASSERT_NE(schema, nullptr);
+  EXPECT_EQ(schema->name, "sensor_msgs/msg/Image");
+  EXPECT_EQ(reader->channels().at(1).topic, "/lidar_top");
+  EXPECT_EQ(read_all(*reader).size(), sent.size());
+  EXPECT_EQ(reader->problem(), "");
+}
+
+INSTANTIATE_TEST_SUITE_P(Mcap, SummaryWithout,
+                         ::testing::Values(SummaryCopies{false, false}, SummaryCopies{true, false},
+                                           SummaryCopies{false, true}));
+
+// Where the Schema record is in a file write_file made: after the magic and the Header.
+std::size_t schema_record_offset(const std::vector<std::byte>& bytes) {
+  std::uint64_t header_length;
+  std::memcpy(&header_length, bytes.data() + 9, 8);
+  return 8 + 9 + header_length;
+}
+
+TEST(McapReader, AFooterInsideTheDataSectionIsDamageThatIsSaidAndReadAround) {
+  TempFile file;
+  const auto sent = make_messages(10);
+  write_file(file.path(), sent, Compression::zstd);
+  auto bytes = sim::testing::read_bytes(file.path());
+  const std::size_t at = schema_record_offset(bytes);
+  ASSERT_EQ(bytes[at], std::byte{0x03});
+  bytes[at] = std::byte{0x02};  // one flipped bit: the Schema record reads as a Footer
+  sim::testing::write_bytes(file.path(), bytes);
+  auto reader = sim::mcap::Reader::open(file.path());
+  ASSERT_TRUE(reader);
+  EXPECT_EQ(read_all(*reader).size(), sent.size());  // the summary still has the schema
+  EXPECT_NE(reader->problem().find("Footer record at byte " + std::to_string(at)), std::string::npos)
+      << reader->problem();
+}
+
+TEST(McapReader, SaysWhenTheDataEndRecordIsMissing) {
+  TempFile file;
+  write_file(file.path(), make_messages(6), Compression::lz4);
+  auto bytes = sim::testing::read_bytes(file.path());
+  std::uint64_t summary_start;
+  std::memcpy(&summary_start, bytes.data() + bytes.size() - 8 - 20, 8);
+  const std::size_t data_end = summary_start - 13;  // opcode, length 4, the CRC
+  ASSERT_EQ(bytes[data_end], std::byte{0x0F});
+  bytes[data_end] = std::byte{0x1F};  // an unknown opcode, skipped as the spec says
+  sim::testing::write_bytes(file.path(), bytes);
+  auto reader = sim::mcap::Reader::open(file.path());
+  ASSERT_TRUE(reader);
+  EXPECT_EQ(read_all(*reader).size(), 6u);
+  EXPECT_NE(reader->problem().find("without its Data End record"), std::string::npos) << reader->problem();
+}
+
+TEST(McapReader, SaysWhenTheFileHoldsFewerMessagesThanItsSummaryCounts) {
+  TempFile file;
+  const auto sent = make_messages(20);
+  {
+    sim::mcap::WriterOptions options;
+    options.crc = false;  // no CRC gives the damage away: only the count can
+    options.compression = Compression::none;
+    options.chunk_size = 1024;
+    auto writer = sim::mcap::Writer::create(file.path(), options);
+    ASSERT_TRUE(writer);
+    writer->add_channel(writer->add_schema("s", "ros2msg", ""), "/a", "cdr", {});
+    writer->add_channel(1, "/b", "cdr", {});
+    for (const auto& m : sent) ASSERT_FALSE(writer->write(m.header, m.data));
+    ASSERT_FALSE(writer->close());
+  }
+  auto bytes = sim::testing::read_bytes(file.path());
+  std::size_t pos = schema_record_offset(bytes);
+  while (bytes[pos] != std::byte{0x06}) {  // the first chunk
+    std::uint64_t length;
+    std::memcpy(&length, bytes.data() + pos + 1, 8);
+    pos += 9 + length;
+  }
+  bytes[pos] = std::byte{0x46};  // now an unknown record, skipped
+  sim::testing::write_bytes(file.path(), bytes);
+  auto reader = sim::mcap::Reader::open(file.path());
+  ASSERT_TRUE(reader);
+  const auto got = read_all(*reader);
+  EXPECT_LT(got.size(), sent.size());
+  EXPECT_NE(reader->problem().find("the summary counts 20 messages but only " + std::to_string(got.size())),
+            std::string::npos)
+      << reader->problem();
+}
+
+std::vector<std::byte> payload(std::uint8_t value) { return std::vector<std::byte>(8, std::byte{value}); }
+
+TEST(McapReader, SaysWhenAChannelIdIsRedefinedOrAMessageHasNoChannel) {
+  sim::testing::RawMcap raw;
+  raw.schema(1, "sensor_msgs/msg/Image", "").channel(1, 1, "/first").message(1, 0, 10, payload(1));
+  raw.channel(1, 1, "/second").message(1, 1, 20, payload(2)).message(9, 2, 30, payload(3));
+  const auto bytes = raw.finish();
+  auto reader = sim::mcap::Reader::from_bytes(bytes);
+  ASSERT_TRUE(reader);
+  const auto got = read_all(*reader);
+  ASSERT_EQ(got.size(), 2u);  // the one on channel 9 is not delivered
+  EXPECT_EQ(reader->channels().at(1).topic, "/first");
+  EXPECT_NE(reader->problem().find("redefines channel id 1 (topic /second)"), std::string::npos)
+      << reader->problem();
+  EXPECT_EQ(reader->problem_count(), 2u);
+}
+
+TEST(McapReader, SaysWhenAChunkHoldsAChunk) {
+  using Raw = sim::testing::RawMcap;
+  const auto message = Raw::encode(0x05, Raw::message_fields(1, 0, 10, payload(1)));
+  Raw inner_file;
+  inner_file.chunk(message);
+  // The inner chunk record is what follows the magic and the Header in inner_file.
+  const auto& inner_bytes = inner_file.bytes();
+  std::uint64_t header_length;
+  std::memcpy(&header_length, inner_bytes.data() + 9, 8);
+  const std::vector<std::byte> inner(inner_bytes.begin() + static_cast<std::ptrdiff_t>(8 + 9 + header_length),
+                                     inner_bytes.end());
+  Raw raw;
+  raw.schema(1, "sensor_msgs/msg/Image", "").channel(1, 1, "/a").chunk(inner).message(1, 1, 20, payload(2));
+  const auto bytes = raw.finish();
+  auto reader = sim::mcap::Reader::from_bytes(bytes);
+  ASSERT_TRUE(reader);
+  EXPECT_EQ(read_all(*reader).size(), 1u);
+  EXPECT_NE(reader->problem().find("holds another chunk"), std::string::npos) << reader->problem();
+}
+
+TEST(McapReader, RefusesAFifoWithoutWaitingForAWriter) {
+  TempFile fifo(".fifo");
+  ASSERT_EQ(::mkfifo(fifo.path().c_str(), 0600), 0);
+  auto reader = sim::mcap::Reader::open(fifo.path());  // blocked forever in open() before
+  ASSERT_FALSE(reader);
+  EXPECT_NE(reader.error().message.find("not a regular file"), std::string::npos) << reader.error().message;
+}
+
+TEST(McapWriter, RefusesAFifoWithoutWaitingForAReader) {
+  TempFile fifo(".fifo");
+  ASSERT_EQ(::mkfifo(fifo.path().c_str(), 0600), 0);
+  auto writer = sim::mcap::Writer::create(fifo.path());
+  ASSERT_FALSE(writer);
+  EXPECT_NE(writer.error().message.find("FIFO"), std::string::npos) << writer.error().message;
+}
+
+TEST(McapWriter, CountsAsStoredOnlyTheMessagesOfChunksThatReachedTheFile) {
+  sim::mcap::WriterOptions options;
+  options.chunk_size = 1024;
+  auto writer = sim::mcap::Writer::create("/dev/full", options);
+  ASSERT_TRUE(writer);  // the header is still buffered
+  writer->add_channel(writer->add_schema("s", "ros2msg", ""), "/a", "cdr", {});
+  const auto sent = make_messages(3);
+  EXPECT_TRUE(writer->write({1, 0, 1, 1}, sent[0].data));  // a whole chunk: written, fails
+  EXPECT_TRUE(writer->close());
+  EXPECT_EQ(writer->stored(1).messages, 0u);
+  EXPECT_EQ(writer->bytes_written(), 0u);
+}
+
+TEST(McapText, FileStringsCannotSendControlSequencesToATerminal) {
+  EXPECT_EQ(sim::mcap::printable("/cam\x1b]0;owned\x07"), "/cam\\x1b]0;owned\\x07");
+  EXPECT_EQ(sim::mcap::printable("z\xfftd"), "z\\xfftd");
+  EXPECT_EQ(sim::mcap::printable("\xc2\x9b" "2J"), "\\xc2\\x9b2J");  // C1 CSI in UTF-8
+  EXPECT_EQ(sim::mcap::printable("caméra/front"), "caméra/front");  // UTF-8 letters stay
 }
 
 TEST(McapWriter, SaysWhyItCannotCreateAFile) {

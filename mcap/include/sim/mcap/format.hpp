@@ -44,6 +44,11 @@ std::string_view to_string(Compression compression) noexcept;
 // Accepts the chunk names and "none"; nullopt for anything else.
 std::optional<Compression> parse_compression(std::string_view name) noexcept;
 
+// A string from a file (topic, schema name, compression name…) made safe to print on a terminal:
+// control characters (C0, DEL, C1) and bytes that are not UTF-8 become \xNN, so a crafted file
+// cannot send escape sequences to the user's terminal.
+std::string printable(std::string_view text);
+
 struct Schema {
   std::uint16_t id = 0;  // never 0
   std::string name;      // "sensor_msgs/msg/PointCloud2"

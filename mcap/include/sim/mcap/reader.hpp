@@ -39,16 +39,22 @@ class Reader {
 
   const std::string& profile() const noexcept;
   const std::string& library() const noexcept;
-  // Every schema and channel of the file: from its summary when the summary is intact, else
-  // from a first pass over its data section.
+  // Every schema and channel of the file: from its summary when the summary is intact and
+  // repeats every channel with its schema, else (the summary is optional, and so are its copies)
+  // from a first pass over its data section, merged with what the summary holds.
   const std::map<std::uint16_t, Schema>& schemas() const noexcept;
   const std::map<std::uint16_t, Channel>& channels() const noexcept;
   const Schema* schema_of(const Channel& channel) const noexcept;
   // The Statistics record of an intact summary.
   const std::optional<Statistics>& statistics() const noexcept;
   bool has_summary() const noexcept;
+  // The earliest log time of the file: from the first pass over the data section when one was
+  // needed, else from the summary's Statistics; nullopt when neither knows.
+  std::optional<std::uint64_t> start_time() const noexcept;
 
-  // The next intact message, or nullopt at the end of what can be read.
+  // The next intact message, or nullopt at the end of what can be read. Damage met on the way is
+  // noted: a record that cannot be one there (a Footer inside the data section), a message on a
+  // channel the file never defines, a missing Data End, fewer messages than the summary counts.
   std::optional<MessageView> next();
   // Back to the first message.
   void rewind();

@@ -28,6 +28,16 @@ struct WriterOptions {
   std::uint64_t chunk_size = 4u << 20;
   int zstd_level = 1;  // fastest: a recorder must keep up with the sensors first
   bool crc = true;     // CRCs of chunks, the data section and the summary (0 = not computed)
+  // Copies of the Schema and Channel records in the summary (MCAP makes them optional; other
+  // writers may leave them out, and readers must then read the data section).
+  bool repeat_schemas = true;
+  bool repeat_channels = true;
+};
+
+// Messages of one channel whose chunk reached the file, and the bytes of their data.
+struct StoredMessages {
+  std::uint64_t messages = 0;
+  std::uint64_t bytes = 0;
 };
 
 class Writer {
@@ -53,7 +63,10 @@ class Writer {
   std::optional<Error> close();
 
   const Statistics& statistics() const noexcept;
-  std::uint64_t bytes_written() const noexcept;  // file size so far
+  std::uint64_t bytes_written() const noexcept;  // file size so far (after a failure: what reached it)
+  // What of a channel is in the file: messages of chunks written whole (a message in the open
+  // chunk, or in a chunk whose write failed, is not).
+  StoredMessages stored(std::uint16_t channel_id) const;
 
   struct Impl;
 
