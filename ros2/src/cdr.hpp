@@ -35,6 +35,11 @@ class Writer {
   void u16(std::uint16_t v) noexcept { aligned_le(v); }
   void u32(std::uint32_t v) noexcept { aligned_le(v); }
   void i32(std::int32_t v) noexcept { aligned_le(static_cast<std::uint32_t>(v)); }
+  void f64(double v) noexcept {
+    std::uint64_t bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    aligned_le(bits);
+  }
   // uint32 length counting the terminating NUL, the characters, the NUL.
   void string(std::string_view s) noexcept {
     u32(static_cast<std::uint32_t>(s.size() + 1));
@@ -98,6 +103,12 @@ class Reader {
     return static_cast<std::int32_t>(read_le<std::uint32_t>(what));
   }
   bool boolean(const char* what) noexcept { return u8(what) != 0; }
+  double f64(const char* what) noexcept {
+    const std::uint64_t bits = read_le<std::uint64_t>(what);
+    double v;
+    std::memcpy(&v, &bits, sizeof v);
+    return v;
+  }
   // A CDR string; its length must fit the message and its last byte must be the NUL.
   std::string_view string(const char* what) noexcept {
     const std::uint32_t n = u32(what);
@@ -145,7 +156,8 @@ class Reader {
     }
     T v = 0;
     for (std::size_t i = 0; i < sizeof(T); ++i) {
-      v = static_cast<T>(v | static_cast<T>(std::to_integer<unsigned>(in_[pos + i]) << (8 * i)));
+      const auto byte = static_cast<T>(std::to_integer<unsigned>(in_[pos + i]));
+      v = static_cast<T>(v | static_cast<T>(byte << (8 * i)));
     }
     pos_ = pos + sizeof(T);
     return v;

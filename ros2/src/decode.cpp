@@ -8,32 +8,17 @@
 #include <string>
 
 #include "cdr.hpp"
+#include "wire.hpp"
 #include "sim/lidar_point.hpp"
 
 namespace sim::ros2 {
 
 namespace {
 
-Error malformed(MessageType type, std::string why) {
-  return Error{ErrorCode::invalid_argument,
-               "dropped a malformed " + std::string(ros_type_name(type)) + ": " + std::move(why)};
-}
+using wire::malformed;
 
-Error read_failure(MessageType type, const cdr::Reader& r) {
-  if (r.failure_is_sentence()) return malformed(type, r.failure());
-  return malformed(type, std::string("its field '") + r.failure() +
-                             "' runs past the end of the message or is not a valid CDR value; the "
-                             "publisher sent bad bytes");
-}
-
-Header read_header(cdr::Reader& r) {
-  Header h;
-  h.stamp.sec = r.i32("header.stamp.sec");
-  h.stamp.nanosec = r.u32("header.stamp.nanosec");
-  h.frame_id = r.string("header.frame_id");
-  if (r.ok() && h.stamp.nanosec >= 1'000'000'000u) r.fail("header.stamp.nanosec");
-  return h;
-}
+using wire::read_failure;
+using wire::read_header;
 
 std::string dims(std::uint64_t a, std::uint64_t b) {
   return std::to_string(a) + " x " + std::to_string(b);
@@ -55,6 +40,7 @@ Expected<ImageView> decode_image(std::span<const std::byte> message) {
     v.data = r.bytes("data");
   }
   if (!r.ok()) return read_failure(type, r);
+  if (auto e = wire::stamp_problem(ros_type_name(type), v.header)) return *e;
   if (std::uint64_t{v.step} * v.height != v.data.size()) {
     return malformed(type, "step × height (" + dims(v.step, v.height) + ") is not the " +
                                std::to_string(v.data.size()) + " bytes of data it carries");
@@ -79,6 +65,7 @@ Expected<CompressedImageView> decode_compressed_image(std::span<const std::byte>
     v.data = r.bytes("data");
   }
   if (!r.ok()) return read_failure(type, r);
+  if (auto e = wire::stamp_problem(ros_type_name(type), v.header)) return *e;
   return v;
 }
 
@@ -110,6 +97,7 @@ Expected<PointCloud2View> decode_point_cloud2(std::span<const std::byte> message
     v.is_dense = r.boolean("is_dense");
   }
   if (!r.ok()) return read_failure(type, r);
+  if (auto e = wire::stamp_problem(ros_type_name(type), v.header)) return *e;
   if (std::uint64_t{v.row_step} * v.height != v.data.size()) {
     return malformed(type, "row_step × height (" + dims(v.row_step, v.height) + ") is not the " +
                                std::to_string(v.data.size()) + " bytes of data it carries");

@@ -7,23 +7,14 @@
 #include <string>
 
 #include "cdr.hpp"
+#include "wire.hpp"
 
 namespace sim::ros2 {
 
 namespace {
 
-Error invalid(std::string message) { return Error{ErrorCode::invalid_argument, std::move(message)}; }
+using wire::invalid;
 
-std::optional<Error> check_header(const Header& header) {
-  if (header.frame_id.size() > max_frame_id_length) {
-    return invalid("the frame_id is " + std::to_string(header.frame_id.size()) +
-                   " characters long; use at most " + std::to_string(max_frame_id_length));
-  }
-  if (header.frame_id.find('\0') != std::string_view::npos) {
-    return invalid("the frame_id contains a NUL character; use a plain name such as lidar_top");
-  }
-  return std::nullopt;
-}
 
 std::optional<Error> check_payload(std::uint64_t bytes) {
   if (bytes > std::numeric_limits<std::uint32_t>::max()) {
@@ -33,11 +24,7 @@ std::optional<Error> check_payload(std::uint64_t bytes) {
   return std::nullopt;
 }
 
-void write_header(cdr::Writer& w, const Header& header) {
-  w.i32(header.stamp.sec);
-  w.u32(header.stamp.nanosec);
-  w.string(header.frame_id);
-}
+using wire::write_header;
 
 }  // namespace
 
@@ -69,7 +56,7 @@ std::size_t MessagePlan::write(std::span<const std::byte> payload,
 
 Expected<MessagePlan> plan_point_cloud2(const PointLayout& layout, std::uint64_t bytes,
                                         const Header& header) {
-  if (auto e = check_header(header)) return *e;
+  if (auto e = wire::header_problem(header)) return *e;
   if (auto e = check_payload(bytes)) return *e;
   const std::span<const PointField> fields = point_fields(layout.type);
   if (fields.empty() || layout.point_size != point_size(layout.type)) {
@@ -101,7 +88,7 @@ Expected<MessagePlan> plan_point_cloud2(const PointLayout& layout, std::uint64_t
 
 Expected<MessagePlan> plan_image(const ImageLayout& layout, std::uint64_t bytes,
                                  const Header& header) {
-  if (auto e = check_header(header)) return *e;
+  if (auto e = wire::header_problem(header)) return *e;
   if (auto e = check_payload(bytes)) return *e;
   const std::string_view encoding = ros_encoding(layout.format);
   if (encoding.empty()) {
@@ -128,7 +115,7 @@ Expected<MessagePlan> plan_image(const ImageLayout& layout, std::uint64_t bytes,
 
 Expected<MessagePlan> plan_compressed_image(std::string_view format, std::uint64_t bytes,
                                             const Header& header) {
-  if (auto e = check_header(header)) return *e;
+  if (auto e = wire::header_problem(header)) return *e;
   if (auto e = check_payload(bytes)) return *e;
   if (format.size() > max_frame_id_length || format.find('\0') != std::string_view::npos) {
     return invalid("the CompressedImage format must be a short name such as jpeg");

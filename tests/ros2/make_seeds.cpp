@@ -10,6 +10,7 @@
 
 #include "sim/lidar_point.hpp"
 #include "sim/ros2/encode.hpp"
+#include "sim/ros2/metadata.hpp"
 
 namespace {
 
@@ -21,6 +22,13 @@ void save(const std::filesystem::path& dir, const std::string& name, const Messa
   std::filesystem::create_directories(dir);
   std::vector<std::byte> out(plan.size());
   plan.write(payload, out);
+  std::ofstream(dir / name, std::ios::binary)
+      .write(reinterpret_cast<const char*>(out.data()), static_cast<std::streamsize>(out.size()));
+}
+
+void save_bytes(const std::filesystem::path& dir, const std::string& name,
+                const std::vector<std::byte>& out) {
+  std::filesystem::create_directories(dir);
   std::ofstream(dir / name, std::ios::binary)
       .write(reinterpret_cast<const char*>(out.data()), static_cast<std::streamsize>(out.size()));
 }
@@ -53,5 +61,17 @@ int main(int argc, char** argv) {
     save(root / "point_cloud2", std::string(to_string(t)) + ".cdr",
          plan_point_cloud2(PointLayout::of(t, 5), points.size(), header).value(), points);
   }
+  CameraCalibration calibration;
+  calibration.width = 640;
+  calibration.height = 480;
+  calibration.d = {-0.1, 0.01, 0.0, 0.0, 0.001};
+  calibration.k = {500, 0, 320, 0, 500, 240, 0, 0, 1};
+  calibration.p = {500, 0, 320, 0, 0, 500, 240, 0, 0, 0, 1, 0};
+  save_bytes(root / "camera_info", "plumb_bob.cdr", encode_camera_info(header, calibration).value());
+  const TransformStamped transforms[] = {
+      {{Time{1700000000, 5}, "base_link"}, "lidar_top", Mounting{{0.1, 0, 1.8}, {0, 0, 0, 1}}},
+      {{Time{1700000000, 5}, "base_link"}, "camera_front", Mounting{{1.2, 0, 1.4}, {0.5, -0.5, 0.5, -0.5}}},
+  };
+  save_bytes(root / "tf_message", "two_mountings.cdr", encode_tf_message(transforms).value());
   return 0;
 }
