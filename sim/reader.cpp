@@ -17,6 +17,7 @@
 
 #include "futex.hpp"
 #include "region_file.hpp"
+#include "sensor_block.hpp"
 #include "shared_copy.hpp"
 #include "sim/clock.hpp"
 #include "reader_wait.hpp"
@@ -351,6 +352,9 @@ struct Reader::Impl {
     info.receive_ns = s.receive_ns;
     info.size = s.size;
     info.layout = layout;
+    // One load of a word in the header page the frame's metadata already brought in. After the
+    // acquire of the frame's slot: a description set before the frame was published is seen.
+    info.sensor_generation = sensor_generation(header->sensor.word.load(std::memory_order_relaxed));
   }
 
   bool checksum_ok(const void* data, const Snapshot& s) noexcept {
@@ -545,7 +549,17 @@ StreamStatus Reader::status() noexcept {
   s.owner_uid = file.owner_uid();
   s.owner_gid = file.owner_gid();
   s.mode = file.mode();
+  auto sensor = read_sensor_block(h.sensor, &s.sensor_generation);
+  if (sensor) {
+    s.sensor = std::move(*sensor);
+  } else {
+    s.sensor_problem = sensor.error().message;
+  }
   return s;
+}
+
+Expected<std::optional<SensorInfo>> Reader::sensor_info() const {
+  return read_sensor_block(impl_->header->sensor);
 }
 
 double StreamStatus::rate_hz(std::int64_t now_monotonic_ns) const noexcept {

@@ -147,14 +147,74 @@ struct alignas(kCacheLine) SlotMeta {
 };
 static_assert(sizeof(SlotMeta) == kCacheLine);
 
+// The sensor description (sim/sensor_info.hpp) as stored: fixed-width fields only. Strings are
+// NUL-terminated and NUL-padded; numbers are native-endian like every other field of the region.
+inline constexpr std::size_t kNameField = 64;    // SensorInfo::kMaxName + its NUL
+inline constexpr std::size_t kSourceField = 128;  // SensorInfo::kMaxSource + its NUL
+inline constexpr std::uint32_t kSensorHasMounting = 1u << 0;
+inline constexpr std::uint32_t kSensorHasCalibration = 1u << 1;
+inline constexpr std::uint32_t kSensorKnownFlags = kSensorHasMounting | kSensorHasCalibration;
+struct SensorRecord {
+  std::uint32_t flags;       // kSensorHas*
+  std::uint32_t time_base;   // TimeBase
+  std::uint32_t point_time;  // PointTime
+  std::uint32_t reserved;
+  char frame_id[kNameField];
+  char parent_frame[kNameField];
+  char vendor[kNameField];
+  char model[kNameField];
+  char serial[kNameField];
+  char firmware[kNameField];
+  char calibration_source[kSourceField];
+  char time_sync[kSourceField];
+  double translation[3];
+  double rotation[4];  // x, y, z, w
+  // The camera calibration, meaningful with kSensorHasCalibration only.
+  std::uint32_t width;
+  std::uint32_t height;
+  char camera_name[kNameField];
+  char distortion_model[kNameField];
+  std::uint32_t distortion_count;  // entries of `d` in use, at most 16
+  std::uint32_t binning_x;
+  std::uint32_t binning_y;
+  std::uint32_t roi_x_offset;
+  std::uint32_t roi_y_offset;
+  std::uint32_t roi_height;
+  std::uint32_t roi_width;
+  std::uint32_t roi_do_rectify;  // 0 or 1
+  double d[16];
+  double k[9];
+  double r[9];
+  double p[12];
+};
+static_assert(sizeof(SensorRecord) == 1248, "the record has no padding: readers compare it bytewise");
+
+// The description and its seqlock word. The word is 0 in a region whose writers never set a
+// description (and in regions of writers that predate it), so the format stays version 1:
+//   bit 0      set while the writer rewrites `record` (readers copy again)
+//   bit 1      a description is present (clear: the writer has none)
+//   bits 2..63 the generation: +1 on every change, carried over when a region is replaced
+// FrameInfo::sensor_generation is the generation while bit 1 is set, else 0.
+inline constexpr std::uint64_t kSensorWriting = 1;
+inline constexpr std::uint64_t kSensorPresent = 2;
+inline constexpr std::uint64_t kSensorGenerationStep = 4;
+struct alignas(kCacheLine) SensorBlock {
+  std::atomic<std::uint64_t> word;
+  std::uint64_t reserved[7];
+  SensorRecord record;
+};
+
 struct alignas(kPage) RegionHeader {
   Identity identity;
   WriterIdentity writer;
   Publication publication;
   Liveness liveness;
   SlotMeta slots[2];
+  // Added in place of padding (zero from older writers: no description).
+  SensorBlock sensor;
 };
 static_assert(sizeof(RegionHeader) == kPage);
+static_assert(offsetof(RegionHeader, sensor) == 448, "the sensor block stays in the old padding");
 
 inline constexpr std::uint64_t kHeaderOffset = kPage;
 inline constexpr std::uint64_t kFirstSlotOffset = 2 * kPage;

@@ -14,6 +14,7 @@
 #include "futex.hpp"
 #include "period_estimate.hpp"
 #include "region_file.hpp"
+#include "sensor_block.hpp"
 #include "sim/clock.hpp"
 
 namespace sim {
@@ -106,8 +107,15 @@ bool compatible(const Identity& id, const StreamSpec& spec, std::uint64_t capaci
          ((id.flags & kFlagChecksum) != 0) == spec.checksum;
 }
 
+// `previous` is the header of the region this one replaces (null for a new stream): frame numbers
+// and the sensor description's generation carry on from it, so readers that reopen the name never
+// see an old number again.
 void initialise_header(RegionHeader& h, std::uint64_t capacity, const StreamSpec& spec,
-                       std::uint64_t first_seq) {
+                       const RegionHeader* previous) {
+  const std::uint64_t first_seq =
+      previous != nullptr ? previous->publication.latest_seq.load(std::memory_order_acquire) : 0;
+  start_sensor_block(h.sensor,
+                     previous != nullptr ? previous->sensor.word.load(std::memory_order_acquire) : 0);
   const Geometry g = geometry_for(capacity);
   Identity& id = h.identity;
   id.version = kVersion;
@@ -159,6 +167,11 @@ Expected<Writer> Writer::create(const StreamSpec& spec) {
   if (const std::string problem = spec.layout.check(capacity); !problem.empty()) {
     return Error{ErrorCode::invalid_argument, "stream " + spec.name + ": " + problem};
   }
+  if (spec.sensor) {
+    if (const std::string problem = sensor_info_problem(*spec.sensor); !problem.empty()) {
+      return Error{ErrorCode::invalid_argument, "stream " + spec.name + ": " + problem};
+    }
+  }
   // Write access to the region is the power to truncate it (SIGBUS for the writer) or to forge
   // frames, so only the owner ever has it; readers of the group never need it (see wakes_every_publish).
   if ((spec.mode & ~0644u) != 0 || (spec.mode & 0600u) != 0600u) {
@@ -179,7 +192,6 @@ Expected<Writer> Writer::create(const StreamSpec& spec) {
   // race for a new name, or when destroy() was removing the region while this writer opened it.
   for (int attempt = 0; attempt < 8; ++attempt) {
     auto existing = RegionFile::open_for_writing(spec.name);
-    std::uint64_t first_seq = 0;
     bool replace = false;
     RegionFile old;
     if (existing) {
@@ -208,9 +220,7 @@ Expected<Writer> Writer::create(const StreamSpec& spec) {
       }
       // Layout or capacity changed, or the region is corrupt or linked twice: build a new one
       // and replace it, keeping the old one locked until then so no other writer can slip in.
-      if (valid && file.map_read_write()) {
-        first_seq = file.header()->publication.latest_seq.load(std::memory_order_acquire);
-      }
+      if (valid) (void)file.map_read_write();  // to carry its numbering on; unmapped: start afresh
       old = std::move(file);
       replace = true;
     } else if (existing.error().code != ErrorCode::not_found) {
@@ -222,7 +232,7 @@ Expected<Writer> Writer::create(const StreamSpec& spec) {
     if (!try_lock_writer(created->fd())) {
       return Error{ErrorCode::system_error, "cannot lock the new region of " + spec.name};
     }
-    initialise_header(*created->header(), capacity, spec, first_seq);
+    initialise_header(*created->header(), capacity, spec, old.header());
     created->reload_identity();
     if (auto published = created->publish_as(spec.name, replace); !published) {
       if (published.error().code == ErrorCode::writer_exists) continue;  // lost the race: look again
@@ -236,7 +246,7 @@ Expected<Writer> Writer::create(const StreamSpec& spec) {
     }
     impl->file = std::move(*created);
     impl->header = impl->file.header();
-    impl->last_seq = first_seq;
+    impl->last_seq = impl->header->publication.latest_seq.load(std::memory_order_relaxed);
     break;
   }
   if (impl->header == nullptr) {
@@ -256,6 +266,11 @@ Expected<Writer> Writer::create(const StreamSpec& spec) {
   h.liveness.period_ns.store(0, std::memory_order_relaxed);
   h.liveness.jitter_ns.store(0, std::memory_order_relaxed);
   h.liveness.frames_this_writer.store(0, std::memory_order_relaxed);
+  // This writer's description replaces whatever the region held (a previous writer's, maybe of
+  // another sensor); a region that never had one is left untouched.
+  if (spec.sensor || h.sensor.word.load(std::memory_order_relaxed) != 0) {
+    write_sensor_block(h.sensor, spec.sensor);
+  }
 
   if (spec.lock_memory && mlock(impl->file.base(), impl->file.file_size()) != 0) {
     return errno_error(ErrorCode::system_error,
@@ -356,6 +371,15 @@ WriteStatus publish(WriterState& w, std::uint64_t size, std::int64_t stamp_ns,
 
 void Writer::heartbeat() noexcept {
   if (impl_) impl_->header->liveness.heartbeat_ns.store(monotonic_ns(), std::memory_order_relaxed);
+}
+
+Expected<void> Writer::set_sensor_info(const SensorInfo& info) {
+  if (!impl_) return Error{ErrorCode::invalid_argument, "this writer was moved from"};
+  if (const std::string problem = sensor_info_problem(info); !problem.empty()) {
+    return Error{ErrorCode::invalid_argument, "stream " + impl_->name + ": " + problem};
+  }
+  write_sensor_block(impl_->header->sensor, info);
+  return {};
 }
 
 const std::string& Writer::name() const noexcept { return impl_->name; }

@@ -16,6 +16,7 @@
 
 #include "sim/layout.hpp"
 #include "sim/result.hpp"
+#include "sim/sensor_info.hpp"
 #include "sim/span.hpp"
 
 namespace sim {
@@ -28,6 +29,10 @@ struct FrameInfo {
                                  // ns), kept beside the sensor's own stamp; 0 if not given
   std::uint64_t size = 0;        // bytes
   Layout layout{};
+  // The generation of the stream's sensor description when the frame was read: 0 when the stream
+  // has none, else a number that changes every time the writer sets one (Writer::set_sensor_info,
+  // a new writer). Compare it with the last one seen to know when to call Reader::sensor_info().
+  std::uint64_t sensor_generation = 0;
 };
 
 enum class ReadStatus {
@@ -135,6 +140,9 @@ struct StreamStatus {
   std::uint32_t owner_uid = 0;         // who owns the region file
   std::uint32_t owner_gid = 0;
   std::uint32_t mode = 0;              // its permission bits (0600, 0640)
+  std::optional<SensorInfo> sensor{};  // the stream's sensor description, if it has a valid one
+  std::string sensor_problem{};        // why `sensor` is empty though the stream has one (damaged)
+  std::uint64_t sensor_generation = 0; // as FrameInfo::sensor_generation
 
   // Frames per second over the current writer's recent frames; 0 when it has not published twice
   // or has not published for three periods (it stopped).
@@ -226,6 +234,11 @@ class Reader {
   bool checksum() const noexcept;
   ReaderStats stats() const noexcept;
   StreamStatus status() noexcept;
+  // The stream's sensor description as its writer set it last: nullopt when it has none; an
+  // Error (one sentence) when the description in the region is damaged, which leaves frames
+  // flowing. Copies about 1 KiB and allocates: call it when FrameInfo::sensor_generation changed,
+  // not per frame.
+  Expected<std::optional<SensorInfo>> sensor_info() const;
 
   struct Impl;
 

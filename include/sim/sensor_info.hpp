@@ -32,6 +32,7 @@ struct Mounting {
   friend bool operator==(const Mounting& a, const Mounting& b) noexcept {
     return a.translation == b.translation && a.rotation == b.rotation;
   }
+  friend bool operator!=(const Mounting& a, const Mounting& b) noexcept { return !(a == b); }
 };
 
 // A camera's intrinsic calibration: everything sensor_msgs/CameraInfo and the
@@ -40,9 +41,9 @@ struct CameraCalibration {
   static constexpr std::size_t kMaxDistortion = 16;
   std::uint32_t width = 0;
   std::uint32_t height = 0;
-  std::string camera_name;                 // "" when the file had none
+  std::string camera_name{};                 // "" when the file had none
   std::string distortion_model = "plumb_bob";  // plumb_bob, rational_polynomial, equidistant, …
-  std::vector<double> d;                   // at most kMaxDistortion coefficients
+  std::vector<double> d{};                   // at most kMaxDistortion coefficients
   std::array<double, 9> k{};
   std::array<double, 9> r{1, 0, 0, 0, 1, 0, 0, 0, 1};
   std::array<double, 12> p{};
@@ -51,9 +52,7 @@ struct CameraCalibration {
   struct RegionOfInterest {
     std::uint32_t x_offset = 0, y_offset = 0, height = 0, width = 0;
     bool do_rectify = false;
-    friend bool operator==(const RegionOfInterest&, const RegionOfInterest&) = default;
-  } roi;
-  friend bool operator==(const CameraCalibration&, const CameraCalibration&) = default;
+  } roi{};
 };
 
 // Which clock the stream's stamps (FrameInfo::stamp_ns) are in.
@@ -75,28 +74,34 @@ const char* to_string(PointTime meaning) noexcept;
 // The unit that makes the stream, where its driver can ask it (Hesai PTC, Aravis device info,
 // V4L2 card and bus). Empty strings are unknown.
 struct SensorIdentity {
-  std::string vendor;
-  std::string model;
-  std::string serial;
-  std::string firmware;
-  friend bool operator==(const SensorIdentity&, const SensorIdentity&) = default;
+  std::string vendor{};
+  std::string model{};
+  std::string serial{};
+  std::string firmware{};
 };
 
 struct SensorInfo {
   static constexpr std::size_t kMaxName = 63;     // frame names and identity strings, bytes
   static constexpr std::size_t kMaxSource = 127;  // calibration_source and time_sync, bytes
 
-  std::string frame_id;                  // the sensor's frame, e.g. "camera_front_optical"
+  std::string frame_id{};                 // the sensor's frame, e.g. "camera_front_optical"
   std::string parent_frame = "base_link";
-  std::optional<Mounting> mounting;      // empty: the mounting is not known
-  std::optional<CameraCalibration> calibration;  // cameras with a calibration only
-  SensorIdentity identity;
-  std::string calibration_source;        // "file:///etc/cam.yaml", "sensor (PTC)", …
+  std::optional<Mounting> mounting{};     // empty: the mounting is not known
+  std::optional<CameraCalibration> calibration{};  // cameras with a calibration only
+  SensorIdentity identity{};
+  std::string calibration_source{};       // "file:///etc/cam.yaml", "sensor (PTC)", …
   TimeBase time_base = TimeBase::unknown;
-  std::string time_sync;                 // the synchronisation state in words: "PTP locked", …
+  std::string time_sync{};                // the synchronisation state in words: "PTP locked", …
   PointTime point_time = PointTime::none;
-  friend bool operator==(const SensorInfo&, const SensorInfo&) = default;
 };
+
+// Field-by-field equality (spelled out: the public headers are C++17, which has no defaulted ==).
+bool operator==(const CameraCalibration::RegionOfInterest& a,
+                const CameraCalibration::RegionOfInterest& b) noexcept;
+bool operator==(const CameraCalibration& a, const CameraCalibration& b) noexcept;
+bool operator==(const SensorIdentity& a, const SensorIdentity& b) noexcept;
+bool operator==(const SensorInfo& a, const SensorInfo& b) noexcept;
+inline bool operator!=(const SensorInfo& a, const SensorInfo& b) noexcept { return !(a == b); }
 
 // One sentence saying what is wrong with `info` (a frame name that is not a ROS 2 frame name, a
 // string too long for the region, a non-finite number, a rotation that is not a unit quaternion,
@@ -104,7 +109,7 @@ struct SensorInfo {
 std::string sensor_info_problem(const SensorInfo& info);
 
 // Empty if `frame` is a valid frame name: 1–63 bytes of [A-Za-z0-9_/], not starting with a
-// digit (ROS 2 names, without the leading slash tf2 refuses).
+// digit or a slash (tf2 refuses the leading slash), with no empty part between slashes.
 std::string frame_id_problem(std::string_view frame);
 
 // "1920x1200 plumb_bob fx=1000.0 fy=1000.0 cx=960.0 cy=600.0", for tools' one-line summaries.

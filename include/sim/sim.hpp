@@ -11,6 +11,7 @@
 #include "sim/pairing.hpp"
 #include "sim/reader.hpp"
 #include "sim/result.hpp"
+#include "sim/sensor_info.hpp"
 #include "sim/span.hpp"
 #include "sim/wait_set.hpp"
 #include "sim/writer.hpp"

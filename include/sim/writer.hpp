@@ -7,11 +7,13 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <type_traits>
 
 #include "sim/layout.hpp"
 #include "sim/result.hpp"
+#include "sim/sensor_info.hpp"
 #include "sim/span.hpp"
 
 namespace sim {
@@ -28,6 +30,10 @@ struct StreamSpec {
   // Refresh the heartbeat from a background thread while no frame is written, so readers can
   // tell an idle writer from a dead one. Zero: the heartbeat moves only with published frames.
   std::chrono::milliseconds heartbeat_period{0};
+  // What the stream says about its sensor (frame, mounting, calibration, identity, time base).
+  // Empty: nothing, and a description a previous writer of the region left is removed. A
+  // description sensor_info_problem() finds fault with makes create() fail with its sentence.
+  std::optional<SensorInfo> sensor{};
 };
 
 enum class WriteStatus {
@@ -118,6 +124,12 @@ class Writer {
 
   // Tells readers the writer is alive without publishing a frame.
   void heartbeat() noexcept;
+
+  // Replaces the stream's sensor description (a recalibration, a remount): readers see it with
+  // their next Reader::sensor_info() and the frames published from now on carry a new
+  // FrameInfo::sensor_generation. Refused with the sentence of sensor_info_problem(). Costs a
+  // copy of about 1 KiB into the header page; publishing frames costs nothing more for it.
+  Expected<void> set_sensor_info(const SensorInfo& info);
 
   const std::string& name() const noexcept;
   std::uint64_t capacity() const noexcept;
