@@ -5,11 +5,13 @@
 #include <chrono>
 #include <cstring>
 #include <new>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "sim/clock.hpp"
 #include "sim/reader.hpp"
+#include "sim/sensor_info.hpp"
 #include "sim/wait_set.hpp"
 #include "sim/writer.hpp"
 
@@ -18,6 +20,7 @@ struct sim_writer {
 };
 struct sim_reader {
   sim::Reader reader;
+  std::uint64_t sensor_generation = 0;  // of the frame SIM_readData delivered last
 };
 struct sim_waitset {
   sim::WaitSet set;
@@ -97,6 +100,120 @@ std::string describe(const sim_reader* r, sim::ReadStatus status) {
   }
 }
 
+template <std::size_t N>
+void put_text(char (&out)[N], const std::string& text) {
+  std::memset(out, 0, N);
+  std::memcpy(out, text.data(), std::min(text.size(), N - 1));
+}
+
+// The text of a C field, or nullopt when it has no NUL within its array.
+template <std::size_t N>
+std::optional<std::string> take_text(const char (&in)[N]) {
+  const void* end = std::memchr(in, '\0', N);
+  if (end == nullptr) return std::nullopt;
+  return std::string(in, static_cast<const char*>(end));
+}
+
+void to_c(const sim::CameraCalibration& c, sim_camera_calibration& out) {
+  out.width = c.width;
+  out.height = c.height;
+  put_text(out.camera_name, c.camera_name);
+  put_text(out.distortion_model, c.distortion_model);
+  out.distortion_count = static_cast<uint32_t>(std::min<std::size_t>(c.d.size(), SIM_DISTORTION_MAX));
+  std::copy_n(c.d.begin(), out.distortion_count, out.d);
+  std::copy(c.k.begin(), c.k.end(), out.k);
+  std::copy(c.r.begin(), c.r.end(), out.r);
+  std::copy(c.p.begin(), c.p.end(), out.p);
+  out.binning_x = c.binning_x;
+  out.binning_y = c.binning_y;
+  out.roi_x_offset = c.roi.x_offset;
+  out.roi_y_offset = c.roi.y_offset;
+  out.roi_height = c.roi.height;
+  out.roi_width = c.roi.width;
+  out.roi_do_rectify = c.roi.do_rectify ? 1 : 0;
+}
+
+void to_c(const sim::SensorInfo& info, sim_sensor_info& out) {
+  std::memset(&out, 0, sizeof out);
+  put_text(out.frame_id, info.frame_id);
+  put_text(out.parent_frame, info.parent_frame);
+  if (info.mounting) {
+    out.has_mounting = 1;
+    std::copy(info.mounting->translation.begin(), info.mounting->translation.end(), out.translation);
+    std::copy(info.mounting->rotation.begin(), info.mounting->rotation.end(), out.rotation);
+  }
+  if (info.calibration) {
+    out.has_calibration = 1;
+    to_c(*info.calibration, out.calibration);
+  }
+  put_text(out.vendor, info.identity.vendor);
+  put_text(out.model, info.identity.model);
+  put_text(out.serial, info.identity.serial);
+  put_text(out.firmware, info.identity.firmware);
+  put_text(out.calibration_source, info.calibration_source);
+  out.time_base = static_cast<int>(info.time_base);
+  put_text(out.time_sync, info.time_sync);
+  out.point_time = static_cast<int>(info.point_time);
+}
+
+// The C description as a SensorInfo, or a sentence naming the field that is not a C string or
+// holds an impossible count or enum (the rest is sensor_info_problem's to judge).
+std::string from_c(const sim_sensor_info& in, sim::SensorInfo& out) {
+  struct Field {
+    std::optional<std::string> text;
+    std::string* into;
+    const char* name;
+  };
+  Field fields[] = {{take_text(in.frame_id), &out.frame_id, "frame_id"},
+                    {take_text(in.parent_frame), &out.parent_frame, "parent_frame"},
+                    {take_text(in.vendor), &out.identity.vendor, "vendor"},
+                    {take_text(in.model), &out.identity.model, "model"},
+                    {take_text(in.serial), &out.identity.serial, "serial"},
+                    {take_text(in.firmware), &out.identity.firmware, "firmware"},
+                    {take_text(in.calibration_source), &out.calibration_source, "calibration_source"},
+                    {take_text(in.time_sync), &out.time_sync, "time_sync"}};
+  for (Field& f : fields) {
+    if (!f.text) return std::string("the sensor description's ") + f.name + " has no NUL within its array";
+    *f.into = std::move(*f.text);
+  }
+  if (in.time_base < 0 || in.time_base > SIM_TIME_BASE_SENSOR_FREE_RUNNING) {
+    return "the sensor description's time_base is not a SIM_TIME_BASE_* value";
+  }
+  if (in.point_time < 0 || in.point_time > SIM_POINT_TIME_AFTER_FRAME_STAMP) {
+    return "the sensor description's point_time is not a SIM_POINT_TIME_* value";
+  }
+  out.time_base = static_cast<sim::TimeBase>(in.time_base);
+  out.point_time = static_cast<sim::PointTime>(in.point_time);
+  if (in.has_mounting != 0) {
+    sim::Mounting m;
+    std::copy(std::begin(in.translation), std::end(in.translation), m.translation.begin());
+    std::copy(std::begin(in.rotation), std::end(in.rotation), m.rotation.begin());
+    out.mounting = m;
+  }
+  if (in.has_calibration == 0) return {};
+  const sim_camera_calibration& c = in.calibration;
+  auto name = take_text(c.camera_name);
+  auto model = take_text(c.distortion_model);
+  if (!name || !model) return "the calibration's camera_name or distortion_model has no NUL within its array";
+  if (c.distortion_count > SIM_DISTORTION_MAX) {
+    return "the calibration's distortion_count is more than SIM_DISTORTION_MAX (16)";
+  }
+  sim::CameraCalibration cal;
+  cal.width = c.width;
+  cal.height = c.height;
+  cal.camera_name = std::move(*name);
+  cal.distortion_model = std::move(*model);
+  cal.d.assign(c.d, c.d + c.distortion_count);
+  std::copy(std::begin(c.k), std::end(c.k), cal.k.begin());
+  std::copy(std::begin(c.r), std::end(c.r), cal.r.begin());
+  std::copy(std::begin(c.p), std::end(c.p), cal.p.begin());
+  cal.binning_x = c.binning_x;
+  cal.binning_y = c.binning_y;
+  cal.roi = {c.roi_x_offset, c.roi_y_offset, c.roi_height, c.roi_width, c.roi_do_rectify != 0};
+  out.calibration = std::move(cal);
+  return {};
+}
+
 }  // namespace
 
 extern "C" {
@@ -159,6 +276,7 @@ long long SIM_readData(sim_reader* r, void* buf, size_t size, sim_frame_info* in
     if (info != nullptr) {
       *info = {frame.seq, frame.stamp_ns, frame.publish_ns, frame.size, frame.receive_ns};
     }
+    r->sensor_generation = frame.sensor_generation;
     clear_last_error();
     return static_cast<long long>(frame.size);  // 0 for an empty frame: info->seq says it is one
   }
@@ -181,6 +299,34 @@ int SIM_waitData(sim_reader* r, int timeout_ms) {
 }
 
 void SIM_readerClose(sim_reader* r) { delete r; }
+
+int SIM_writerSetSensorInfo(sim_writer* w, const sim_sensor_info* info) {
+  if (w == nullptr || info == nullptr) {
+    return fail(SIM_EINVAL, "SIM_writerSetSensorInfo needs a writer and a description");
+  }
+  sim::SensorInfo description;
+  if (const std::string problem = from_c(*info, description); !problem.empty()) {
+    return fail(SIM_EINVAL, problem + "; terminate every string and use the SIM_* constants");
+  }
+  if (auto set = w->writer.set_sensor_info(description); !set) return fail(SIM_EINVAL, set.error().message);
+  clear_last_error();
+  return 0;
+}
+
+int SIM_readerSensorInfo(sim_reader* r, sim_sensor_info* out) {
+  if (r == nullptr || out == nullptr) return fail(SIM_EINVAL, "SIM_readerSensorInfo needs a reader and a struct");
+  auto info = r->reader.sensor_info();
+  if (!info) return fail(SIM_EREGION, info.error().message);
+  clear_last_error();
+  if (!info->has_value()) {
+    std::memset(out, 0, sizeof *out);
+    return 0;
+  }
+  to_c(**info, *out);
+  return 1;
+}
+
+uint64_t SIM_readerSensorGeneration(const sim_reader* r) { return r != nullptr ? r->sensor_generation : 0; }
 
 int SIM_destroy(const char* name) {
   if (name == nullptr) return fail(SIM_EINVAL, "SIM_destroy needs a stream name");

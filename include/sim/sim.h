@@ -93,6 +93,56 @@ int SIM_notifierFd(const sim_notifier *n);
 int SIM_notifierDrain(sim_notifier *n, int *arrived, size_t count);
 void SIM_notifierClose(sim_notifier *n);
 
+/* The sensor that makes a stream's frames (sim::SensorInfo): its frame and mounting, a camera's
+ * calibration, the unit's identity and the time base of its stamps. Strings are NUL-terminated
+ * within their arrays; matrices are row-major. */
+enum { SIM_NAME_MAX = 64, SIM_SOURCE_MAX = 128, SIM_DISTORTION_MAX = 16 };
+enum {
+  SIM_TIME_BASE_UNKNOWN = 0,
+  SIM_TIME_BASE_HOST = 1,                /* the host's CLOCK_REALTIME when the data arrived */
+  SIM_TIME_BASE_SENSOR_SYNCHRONIZED = 2, /* the sensor's clock, synchronised (PTP, PPS) to UTC */
+  SIM_TIME_BASE_SENSOR_FREE_RUNNING = 3  /* the sensor's own clock, not synchronised */
+};
+enum { SIM_POINT_TIME_NONE = 0, SIM_POINT_TIME_AFTER_FRAME_STAMP = 1 };
+typedef struct sim_camera_calibration {
+  uint32_t width, height;
+  char camera_name[SIM_NAME_MAX];
+  char distortion_model[SIM_NAME_MAX]; /* "plumb_bob", "rational_polynomial", "equidistant", ... */
+  uint32_t distortion_count;           /* entries of d in use, at most SIM_DISTORTION_MAX */
+  double d[SIM_DISTORTION_MAX];
+  double k[9];
+  double r[9];
+  double p[12];
+  uint32_t binning_x, binning_y;
+  uint32_t roi_x_offset, roi_y_offset, roi_height, roi_width;
+  int roi_do_rectify;
+} sim_camera_calibration;
+typedef struct sim_sensor_info {
+  char frame_id[SIM_NAME_MAX];     /* the sensor's frame, e.g. "lidar_top" */
+  char parent_frame[SIM_NAME_MAX]; /* e.g. "base_link" */
+  int has_mounting;                /* 1: translation (m) and rotation (x, y, z, w) are known */
+  double translation[3];
+  double rotation[4];
+  int has_calibration; /* 1: a camera with a calibration */
+  sim_camera_calibration calibration;
+  char vendor[SIM_NAME_MAX], model[SIM_NAME_MAX], serial[SIM_NAME_MAX], firmware[SIM_NAME_MAX];
+  char calibration_source[SIM_SOURCE_MAX];
+  int time_base; /* SIM_TIME_BASE_* */
+  char time_sync[SIM_SOURCE_MAX];
+  int point_time; /* SIM_POINT_TIME_* */
+} sim_sensor_info;
+/* Sets (or replaces) the stream's sensor description: 0, or SIM_EINVAL with SIM_lastError saying
+ * what is wrong with it (a bad frame name, a non-unit quaternion, ...). Frames published from now
+ * on carry a new sensor generation. */
+int SIM_writerSetSensorInfo(sim_writer *w, const sim_sensor_info *info);
+/* Copies the stream's sensor description into *out: 1 copied, 0 the stream has none, SIM_EREGION
+ * when the description in the stream is damaged (frames still flow; SIM_lastError says what). */
+int SIM_readerSensorInfo(sim_reader *r, sim_sensor_info *out);
+/* The sensor generation of the frame SIM_readData delivered last (0: none, or the stream has no
+ * description). It changes whenever the writer sets a new description: call SIM_readerSensorInfo
+ * again then. (Not in sim_frame_info, whose size programs built against older headers rely on.) */
+uint64_t SIM_readerSensorGeneration(const sim_reader *r);
+
 /* Removes the stream's region; refused (<0) while its writer is alive. */
 int SIM_destroy(const char *name);
 /* The last error of this thread, in one sentence; "" after a call that succeeded. The pointer
