@@ -59,7 +59,10 @@ CLI::Option* CommandLine::add_streams(std::string_view name, std::vector<std::st
 }
 
 void CommandLine::add_config_file(std::vector<std::string> path_options) {
+  for (std::string& name : path_options_) path_options.push_back(std::move(name));
+  path_options_.clear();
   auto config = std::make_shared<YamlConfig>(std::move(path_options));
+  config_ = config;
   app_.config_formatter(config);
   app_.allow_config_extras(CLI::config_extras_mode::error);  // a typo in the file is an error
   app_.set_config("--config", "",
@@ -74,6 +77,14 @@ void CommandLine::add_config_file(std::vector<std::string> path_options) {
             return std::string();
           },
           "", "config file"));
+}
+
+void CommandLine::add_path_option(std::string name) {
+  if (config_) {
+    config_->add_path_option(std::move(name));
+  } else {
+    path_options_.push_back(std::move(name));
+  }
 }
 
 void CommandLine::add_placement(ThreadPlacement& placement) {

@@ -30,6 +30,8 @@ YamlConfig::YamlConfig(std::vector<std::string> path_options) {
   for (auto& name : path_options) path_options_.push_back(dashed(std::move(name)));
 }
 
+void YamlConfig::add_path_option(std::string name) { path_options_.push_back(dashed(std::move(name))); }
+
 void YamlConfig::set_file(const std::string& path) {
   folder_ = std::filesystem::path(path).parent_path().string();
 }
@@ -63,7 +65,8 @@ std::vector<CLI::ConfigItem> YamlConfig::from_config(std::istream& input) const 
     if (!folder_.empty() &&
         std::find(path_options_.begin(), path_options_.end(), item.name) != path_options_.end()) {
       for (std::string& file : item.inputs) {
-        if (!file.empty() && std::filesystem::path(file).is_relative()) {
+        const bool url = file.find("://") != std::string::npos;
+        if (!file.empty() && !url && std::filesystem::path(file).is_relative()) {
           file = (std::filesystem::path(folder_) / file).string();
         }
       }

@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -34,6 +35,8 @@ CLI::Validator stream_name_validator();
 CLI::Validator validator(std::function<std::string(const std::string&)> problem,
                          std::string type_name);
 
+class YamlConfig;
+
 class CommandLine {
  public:
   // `tool` prefixes every message ("sim_echo"); `description` is the first paragraph of --help.
@@ -52,6 +55,9 @@ class CommandLine {
   // the command line override the file. The options named in `path_options` ("calibration")
   // take file names: a relative one in the file is relative to the file's folder.
   void add_config_file(std::vector<std::string> path_options = {});
+  // One more option whose value in a config file is a file name (before or after
+  // add_config_file; add_sensor_options adds "camera-info").
+  void add_path_option(std::string name);
   // --cpu N and --rt-priority P for the program's working thread.
   void add_placement(ThreadPlacement& placement);
   // --trust-owner USER and --trust-group GROUP for a program that reads streams: whose regions it
@@ -75,6 +81,8 @@ class CommandLine {
  private:
   std::string tool_;
   CLI::App app_;
+  std::vector<std::string> path_options_;
+  std::shared_ptr<YamlConfig> config_;  // set by add_config_file
   Trust* trust_ = nullptr;
   std::string trust_owner_;
   std::string trust_group_;

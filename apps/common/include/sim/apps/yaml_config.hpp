@@ -6,7 +6,7 @@
 //   roi: [0, 0, 640, 480]     -> --roi 0 0 640 480
 //   controls: {gain: 3}       -> --controls gain=3  (a map becomes "key=value" items, in order)
 // Options named as paths take a relative file name relative to the config file's folder, so a
-// file and the calibration beside it move together:
+// file and the calibration beside it move together (a URL, "file:///…", is left as it is):
 //   calibration: unit.csv     -> --calibration /etc/sim/hesai/unit.csv  (for /etc/sim/hesai/x.yaml)
 #pragma once
 
@@ -26,6 +26,8 @@ class YamlConfig final : public CLI::Config {
   // The file about to be read: its folder anchors relative paths. (CLI::Config::from_file is not
   // virtual in CLI11 2.1, so CommandLine tells the folder when it checks the --config value.)
   void set_file(const std::string& path);
+  // One more option whose values are file names.
+  void add_path_option(std::string name);
 
   // Writing a config file back (--write-config) is not offered.
   std::string to_config(const CLI::App*, bool, bool, std::string) const override { return {}; }
