@@ -1,0 +1,64 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "sim/apps/ouster_options.hpp"
+
+namespace sim::apps {
+namespace {
+
+std::optional<ouster::IntensityField> parse_intensity(const std::string& name) {
+  if (name == "auto") return ouster::IntensityField::automatic;
+  if (name == "signal") return ouster::IntensityField::signal;
+  if (name == "reflectivity") return ouster::IntensityField::reflectivity;
+  if (name == "near-ir") return ouster::IntensityField::near_ir;
+  return std::nullopt;
+}
+
+}  // namespace
+
+void add_ouster_stream_options(CommandLine& cli, OusterStreamOptions& o) {
+  CLI::App& app = cli.app();
+  cli.add_stream("--stream", o.stream, "SIM stream to publish the points on");
+  cli.add_stream("--imu-stream", o.imu_stream, "SIM stream for the IMU samples [<stream>.imu]");
+  app.add_flag("--no-imu", o.no_imu, "publish no IMU stream");
+  app.add_option("--calibration,--metadata", o.calibration,
+                 "the sensor's metadata JSON (what http://SENSOR/api/v1/sensor/metadata returns)")
+      ->type_name("FILE.json");
+  app.add_option("--layout", o.layout,
+                 "organized: H x W points per return, destaggered, no return at the origin; "
+                 "dense: only points with a return")
+      ->check(CLI::IsMember({"organized", "dense"}));
+  app.add_option("--intensity", o.intensity,
+                 "the channel in each point's intensity: signal, reflectivity, near-ir, or auto "
+                 "(signal, reflectivity for the RNG15 profiles)")
+      ->check(CLI::IsMember({"auto", "signal", "reflectivity", "near-ir"}));
+  app.add_flag("--first-return-only", o.first_return_only, "dual-return profiles: drop the second return");
+  app.add_option("--min-range", o.min_range, "returns closer than this (m) count as none")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--max-range", o.max_range, "returns farther than this (m) count as none; 0: no limit")
+      ->check(CLI::NonNegativeNumber);
+  app.add_flag("--partial-frames", o.partial_frames,
+               "also publish frames that did not start at the first column (start, gaps)");
+  app.add_flag("--checksum", o.checksum, "add an XXH3 checksum to every frame, verified by readers");
+  app.add_flag("--lock-memory", o.lock_memory, "mlock the stream's shared memory");
+  add_sensor_options(cli, o.sensor, SensorKind::lidar);
+  cli.add_placement(o.placement);
+}
+
+Expected<ouster::LidarStreamConfig> ouster_stream_config(const OusterStreamOptions& o) {
+  ouster::LidarStreamConfig config;
+  config.stream = o.stream;
+  if (!o.no_imu) config.imu_stream = o.imu_stream.empty() ? ouster::default_imu_stream(o.stream) : o.imu_stream;
+  config.assembler.layout = o.layout == "dense" ? ouster::CloudLayout::dense : ouster::CloudLayout::organized;
+  config.assembler.intensity = parse_intensity(o.intensity).value_or(ouster::IntensityField::automatic);
+  config.assembler.first_return_only = o.first_return_only;
+  config.assembler.min_range_m = o.min_range;
+  config.assembler.max_range_m = o.max_range;
+  config.assembler.emit_partial_frames = o.partial_frames;
+  config.checksum = o.checksum;
+  config.lock_memory = o.lock_memory;
+  auto info = sensor_info_from(o.sensor, o.stream);
+  if (!info) return info.error();
+  config.sensor = *info;
+  return config;
+}
+
+}  // namespace sim::apps

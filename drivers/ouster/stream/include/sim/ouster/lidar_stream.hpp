@@ -1,0 +1,99 @@
+// SPDX-License-Identifier: Apache-2.0
+// LidarStream: the one path from an Ouster sensor's packets to SIM streams, shared by the live
+// driver (sim_lidar_ouster) and the capture replay (sim_replay_pcap). It owns the point writer
+// and the FrameAssembler (points are decoded straight into the writer's loaned slot) and, on its
+// own stream, the IMU writer. No allocation per packet.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+
+#include "sim/ouster/ouster.hpp"
+#include "sim/result.hpp"
+#include "sim/sensor_info.hpp"
+#include "sim/writer.hpp"
+
+namespace sim::ouster {
+
+// One IMU packet as published on the IMU stream (one SIM frame per packet, raw layout), in the
+// IMU's frame (the metadata's imu_to_sensor_transform relates it to the sensor frame), SI units.
+struct ImuSample {
+  std::int64_t stamp_ns = 0;        // accelerometer read time, sensor clock
+  std::int64_t gyro_stamp_ns = 0;   // gyroscope read time, sensor clock
+  float linear_acceleration[3] = {0, 0, 0};  // m/s²
+  float angular_velocity[3] = {0, 0, 0};     // rad/s
+};
+static_assert(sizeof(ImuSample) == 40, "ImuSample is the IMU stream's frame layout");
+
+ImuSample to_sample(const ImuPacket& packet) noexcept;
+
+// "/lidar_top" -> "/lidar_top.imu".
+std::string default_imu_stream(const std::string& points_stream);
+
+struct LidarStreamConfig {
+  std::string stream = "/lidar_top";
+  std::string imu_stream;  // empty: no IMU stream
+  AssemblerOptions assembler;
+  // The stream's description (frame, mounting; see apps/common sensor_options.hpp); the stream
+  // adds the identity, the calibration source and the point time. nullopt: none.
+  std::optional<SensorInfo> sensor;
+  std::string metadata_source;  // "file:///…/os1.json", "sensor http://…"
+  bool checksum = false;
+  bool lock_memory = false;
+  std::chrono::milliseconds heartbeat_period{0};
+};
+
+struct PublishCounters {
+  std::uint64_t frames = 0;
+  std::uint64_t points = 0;          // in those frames (organised: with and without a return)
+  std::uint64_t partial_frames = 0;  // frames that did not start at the window's first column
+  std::uint64_t failed = 0;          // commits the writer refused
+  std::uint64_t imu_samples = 0;
+  std::uint64_t imu_malformed = 0;   // IMU datagrams that were not 48-byte IMU packets
+};
+
+class LidarStream {
+ public:
+  // Creates the SIM streams sized for the metadata (H × W × returns points). Every failure is
+  // one sentence naming the stream.
+  static Expected<LidarStream> create(const LidarStreamConfig& config, const Metadata& metadata);
+
+  LidarStream(LidarStream&&) noexcept;
+  LidarStream& operator=(LidarStream&&) noexcept;
+  LidarStream(const LidarStream&) = delete;
+  LidarStream& operator=(const LidarStream&) = delete;
+  ~LidarStream();
+
+  // One lidar payload; publishes the frame it completes, if any.
+  PushResult push_lidar(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns) noexcept;
+  // One IMU payload; true when it was a sample (published when the IMU stream exists).
+  bool push_imu(std::span<const std::uint8_t> payload) noexcept;
+  // End of input: the frame in progress, when partial frames are enabled or it is whole.
+  std::optional<CompletedFrame> finish() noexcept;
+  void reset() noexcept;
+  // Added to every published stamp (replay loops, --restamp); zero publishes the sensor's time.
+  void set_stamp_offset(std::int64_t offset_ns) noexcept;
+  std::int64_t stamp_offset() const noexcept;
+
+  const Metadata& metadata() const noexcept;
+  const AssemblerCounters& counters() const noexcept;
+  const PublishCounters& published() const noexcept;
+  // One sentence when lidar packets did not fit the metadata (beam count, columns, profile,
+  // another sensor), for the user; empty while none did.
+  std::string mismatch_problem() const;
+  // "frames 12 packets 768 lost 0 malformed 0 imu 1200 points/frame 32768"; key=value pairs
+  // with `machine`.
+  std::string describe_counters(bool machine = false) const;
+
+  struct Impl;
+
+ private:
+  explicit LidarStream(std::unique_ptr<Impl> impl) noexcept;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace sim::ouster

@@ -1,0 +1,193 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "sim/ouster/lidar_stream.hpp"
+
+#include <numbers>
+#include <sstream>
+#include <utility>
+
+namespace sim::ouster {
+
+ImuSample to_sample(const ImuPacket& packet) noexcept {
+  constexpr float g = 9.80665F;
+  constexpr float radians_per_degree = static_cast<float>(std::numbers::pi / 180.0);
+  ImuSample s;
+  s.stamp_ns = static_cast<std::int64_t>(packet.accel_ns);
+  s.gyro_stamp_ns = static_cast<std::int64_t>(packet.gyro_ns);
+  for (unsigned i = 0; i < 3; ++i) {
+    s.linear_acceleration[i] = packet.acceleration_g[i] * g;
+    s.angular_velocity[i] = packet.angular_velocity_dps[i] * radians_per_degree;
+  }
+  return s;
+}
+
+std::string default_imu_stream(const std::string& points_stream) { return points_stream + ".imu"; }
+
+struct LidarStream::Impl {
+  Impl(Writer w, std::optional<Writer> i, FrameAssembler a)
+      : writer(std::move(w)), imu(std::move(i)), assembler(std::move(a)) {}
+
+  // The loan points at the writer: Impl lives on the heap and never moves.
+  Writer writer;
+  std::optional<Writer> imu;
+  FrameAssembler assembler;
+  Loan loan;
+  PublishCounters published;
+  std::size_t last_points = 0;
+  std::int64_t stamp_offset_ns = 0;
+
+  void attach() noexcept {
+    loan = Loan{};
+    loan = writer.loan();
+    assembler.set_output(loan.as<LidarPoint>());
+  }
+
+  void publish(const CompletedFrame& frame) noexcept {
+    const WriteStatus status = std::move(loan).commit(
+        frame.point_count * sizeof(LidarPoint), frame.stamp_ns + stamp_offset_ns, frame.host_receive_ns);
+    if (status == WriteStatus::ok) {
+      ++published.frames;
+      published.points += frame.point_count;
+      if (!frame.whole) ++published.partial_frames;
+      last_points = frame.point_count;
+    } else {
+      ++published.failed;
+    }
+    attach();
+  }
+};
+
+namespace {
+
+SensorInfo describe_sensor(const LidarStreamConfig& config, const Metadata& m) {
+  SensorInfo info = *config.sensor;
+  info.identity.vendor = "Ouster";
+  info.identity.model = m.prod_line.substr(0, SensorInfo::kMaxName);
+  info.identity.serial = m.serial.substr(0, SensorInfo::kMaxName);
+  info.identity.firmware = m.firmware.substr(0, SensorInfo::kMaxName);
+  info.calibration_source = config.metadata_source.substr(0, SensorInfo::kMaxSource);
+  info.point_time = PointTime::after_frame_stamp;
+  return info;
+}
+
+}  // namespace
+
+Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config, const Metadata& metadata) {
+  auto assembler = FrameAssembler::create(metadata, config.assembler);
+  if (!assembler) return assembler.error();
+
+  StreamSpec spec;
+  spec.name = config.stream;
+  spec.layout = Layout::of(PointLayout::of(PointType::lidar_point, assembler->max_points()));
+  spec.checksum = config.checksum;
+  spec.lock_memory = config.lock_memory;
+  spec.heartbeat_period = config.heartbeat_period;
+  if (config.sensor) spec.sensor = describe_sensor(config, metadata);
+  auto writer = Writer::create(spec);
+  if (!writer) return writer.error();
+
+  std::optional<Writer> imu;
+  if (!config.imu_stream.empty()) {
+    StreamSpec imu_spec;
+    imu_spec.name = config.imu_stream;
+    imu_spec.capacity = sizeof(ImuSample);
+    imu_spec.layout = Layout::raw();
+    imu_spec.checksum = config.checksum;
+    imu_spec.heartbeat_period = config.heartbeat_period;
+    auto imu_writer = Writer::create(imu_spec);
+    if (!imu_writer) return imu_writer.error();
+    imu.emplace(std::move(imu_writer.value()));
+  }
+  auto impl = std::make_unique<Impl>(std::move(writer.value()), std::move(imu), std::move(assembler.value()));
+  impl->attach();
+  return LidarStream(std::move(impl));
+}
+
+LidarStream::LidarStream(std::unique_ptr<Impl> impl) noexcept : impl_(std::move(impl)) {}
+LidarStream::LidarStream(LidarStream&&) noexcept = default;
+LidarStream& LidarStream::operator=(LidarStream&&) noexcept = default;
+LidarStream::~LidarStream() = default;
+
+PushResult LidarStream::push_lidar(std::span<const std::uint8_t> payload,
+                                   std::int64_t host_receive_ns) noexcept {
+  PushResult result = impl_->assembler.push(payload, host_receive_ns);
+  if (result.frame) impl_->publish(*result.frame);
+  return result;
+}
+
+bool LidarStream::push_imu(std::span<const std::uint8_t> payload) noexcept {
+  const auto packet = parse_imu(payload);
+  if (!packet) {
+    ++impl_->published.imu_malformed;
+    return false;
+  }
+  ++impl_->published.imu_samples;
+  if (impl_->imu) {
+    ImuSample sample = to_sample(*packet);
+    sample.stamp_ns += impl_->stamp_offset_ns;
+    sample.gyro_stamp_ns += impl_->stamp_offset_ns;
+    (void)impl_->imu->write(std::span<const ImuSample>(&sample, 1), sample.stamp_ns);
+  }
+  return true;
+}
+
+std::optional<CompletedFrame> LidarStream::finish() noexcept {
+  std::optional<CompletedFrame> frame = impl_->assembler.flush();
+  if (frame) impl_->publish(*frame);
+  return frame;
+}
+
+void LidarStream::reset() noexcept { impl_->assembler.reset(); }
+void LidarStream::set_stamp_offset(std::int64_t offset_ns) noexcept { impl_->stamp_offset_ns = offset_ns; }
+std::int64_t LidarStream::stamp_offset() const noexcept { return impl_->stamp_offset_ns; }
+const Metadata& LidarStream::metadata() const noexcept { return impl_->assembler.metadata(); }
+const AssemblerCounters& LidarStream::counters() const noexcept { return impl_->assembler.counters(); }
+const PublishCounters& LidarStream::published() const noexcept { return impl_->published; }
+
+std::string LidarStream::mismatch_problem() const {
+  const AssemblerCounters& c = impl_->assembler.counters();
+  const Metadata& m = impl_->assembler.metadata();
+  const auto rejected = [&](PacketError e) { return c.rejected[static_cast<unsigned>(e)]; };
+  if (rejected(PacketError::wrong_size) != 0) return describe_mismatch(c.last_rejected_size, m.format);
+  if (rejected(PacketError::bad_measurement_id) != 0) {
+    return "lidar packets hold column indices beyond the metadata's " + std::to_string(m.columns()) +
+           " columns per frame: the lidar mode changed; give the sensor's current metadata";
+  }
+  if (rejected(PacketError::init_id_mismatch) != 0) {
+    return "lidar packets carry another initialization id than the metadata's (" +
+           std::to_string(m.init_id) + "): the sensor was reconfigured or restarted since; fetch "
+           "its metadata again";
+  }
+  if (rejected(PacketError::not_lidar) != 0) {
+    return "datagrams of the lidar packet size arrive with a packet type other than lidar; check "
+           "the port";
+  }
+  return {};
+}
+
+std::string LidarStream::describe_counters(bool machine) const {
+  const AssemblerCounters& c = impl_->assembler.counters();
+  const PublishCounters& p = impl_->published;
+  std::ostringstream out;
+  const char* sep = machine ? "=" : " ";
+  out << "frames" << sep << p.frames << " packets" << sep << c.packets << " lost" << sep
+      << c.lost_packets << " malformed" << sep << c.malformed << " imu" << sep << p.imu_samples;
+  if (machine) {
+    out << " points=" << p.points << " partial_frames=" << p.partial_frames
+        << " partial_frames_dropped=" << c.partial_frames_dropped
+        << " invalid_columns=" << c.invalid_columns << " duplicate_columns=" << c.duplicate_columns
+        << " dropped_points=" << c.dropped_points << " publish_failures=" << p.failed
+        << " imu_malformed=" << p.imu_malformed;
+    for (unsigned e = 1; e < packet_error_count; ++e) {
+      std::string name = to_string(static_cast<PacketError>(e));
+      for (char& ch : name) ch = ch == ' ' ? '_' : ch;
+      out << " " << name << "=" << c.rejected[e];
+    }
+  } else {
+    out << " points/frame " << impl_->last_points;
+    if (p.imu_malformed != 0) out << " imu-malformed " << p.imu_malformed;
+    if (c.invalid_columns != 0) out << " invalid-columns " << c.invalid_columns;
+  }
+  return out.str();
+}
+
+}  // namespace sim::ouster
