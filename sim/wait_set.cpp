@@ -117,6 +117,14 @@ Expected<std::size_t> WaitSet::add(Reader& reader) {
     return Error{ErrorCode::invalid_argument,
                  "a wait set holds at most 128 readers; split the streams over two sets"};
   }
+  // A reader counts itself as a sleeper once per sleep of the set; twice in the set, it would count
+  // twice and take itself out once, raising the stream's sleeper count for good.
+  const auto& readers = impl_->readers;
+  if (const auto found = std::find(readers.begin(), readers.end(), &reader); found != readers.end()) {
+    return Error{ErrorCode::invalid_argument,
+                 "the reader of " + reader.name() + " is already in the wait set (index " +
+                     std::to_string(found - readers.begin()) + "); add each reader once"};
+  }
   impl_->readers.push_back(&reader);
   return impl_->readers.size() - 1;
 }

@@ -140,6 +140,24 @@ INSTANTIATE_TEST_SUITE_P(BothKernels, WaitSetStrategies,
                                                                              : std::string("RoundRobin");
                          });
 
+// Review M5: the same reader twice counted itself as a sleeper twice per sleep and took itself out
+// once, so the stream's sleeper count grew with every sleep and never came back down.
+TEST_P(WaitSetStrategies, TheSameReaderTwiceIsRefusedAndSleepsLeaveNoSleeperBehind) {
+  auto s = make_stream("ws_dup");
+  ASSERT_TRUE(s);
+  WaitSet set({.strategy = GetParam()});
+  ASSERT_TRUE(set.add(s->reader));
+  auto again = set.add(s->reader);
+  ASSERT_FALSE(again) << "a reader was added twice";
+  EXPECT_NE(again.error().message.find("already in the wait set (index 0)"), std::string::npos)
+      << again.error().message;
+  EXPECT_EQ(set.size(), 1u);
+  for (int i = 0; i < 3; ++i) EXPECT_FALSE(set.wait(1ms));
+  auto status = inspect(s->guard.name);
+  ASSERT_TRUE(status);
+  EXPECT_EQ(status->sleeping_readers, 0u);
+}
+
 TEST(WaitSet, AutomaticPicksFutexWaitvOnlyWhereTheKernelHasIt) {
   const WaitSet set;
   // Where the kernel lacks futex_waitv the set falls back; either way it is one of the two.
