@@ -8,6 +8,11 @@
 //   if (reader.read_next(buffer, info, 1s) == sim::ReadStatus::new_frame)
 //     sim::to_pcl(sim::span(buffer).first(info.size), info, cloud);
 //
+// For deskewing pipelines (LIO-SAM, FAST-LIO…) use sim::PointXYZIRT: LIO-SAM's PointXYZIRT
+// layout (x y z intensity ring time), registered with PCL, filled from every LiDAR family:
+// ring is LidarPoint::ring, time the point's seconds after the frame's stamp
+// (LidarPoint::time_offset_ns · 1e-9, as the Velodyne ROS driver's "time" field).
+//
 // Points keep the sensor frame of the driver (for Hesai: y forward at azimuth 0, x right, z up;
 // see sim/lidar_point.hpp). The cloud is resized in place, so reusing one cloud per stream
 // allocates only when a frame is larger than any before it. Only this header needs PCL: the
@@ -17,9 +22,11 @@
 
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
+#include <pcl/register_point_struct.h>
 
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <cstring>
 #include <string>
 #include <type_traits>
@@ -31,6 +38,17 @@
 #include "sim/span.hpp"
 
 namespace sim {
+
+// x y z intensity ring time, field for field LIO-SAM's VelodynePointXYZIRT (and the Velodyne
+// ROS driver's PointXYZIRT), so a cloud converts to theirs by field name.
+struct EIGEN_ALIGN16 PointXYZIRT {
+  PCL_ADD_POINT4D;
+  float intensity;
+  std::uint16_t ring;
+  float time;  // seconds after the frame's stamp
+  PCL_MAKE_ALIGNED_OPERATOR_NEW
+};
+
 namespace pcl_detail {
 
 // Whether a PCL point type has an intensity field (PointXYZI does, PointXYZ does not).
@@ -39,12 +57,29 @@ struct has_intensity : std::false_type {};
 template <typename PointT>
 struct has_intensity<PointT, std::void_t<decltype(std::declval<PointT&>().intensity)>> : std::true_type {};
 
+template <typename PointT, typename = void>
+struct has_ring : std::false_type {};
 template <typename PointT>
-void set_point(PointT& out, float x, float y, float z, float intensity) noexcept {
+struct has_ring<PointT, std::void_t<decltype(std::declval<PointT&>().ring)>> : std::true_type {};
+template <typename PointT, typename = void>
+struct has_time : std::false_type {};
+template <typename PointT>
+struct has_time<PointT, std::void_t<decltype(std::declval<PointT&>().time)>> : std::true_type {};
+
+template <typename PointT>
+void set_point(PointT& out, float x, float y, float z, float intensity, std::uint16_t ring = 0,
+               std::uint32_t time_offset_ns = 0) noexcept {
   out.x = x;
   out.y = y;
   out.z = z;
   if constexpr (has_intensity<PointT>::value) out.intensity = intensity;
+  if constexpr (has_ring<PointT>::value) out.ring = ring;
+  if constexpr (has_time<PointT>::value) out.time = static_cast<float>(time_offset_ns * 1e-9);
+}
+
+template <typename PointT>
+void set_point(PointT& out, const LidarPoint& p) noexcept {
+  set_point(out, p.x, p.y, p.z, p.intensity, p.ring, p.time_offset_ns);
 }
 
 template <typename PointT>
@@ -62,15 +97,14 @@ void finish(pcl::PointCloud<PointT>& cloud, const FrameInfo* info) {
 
 }  // namespace pcl_detail
 
-// The points of a lidar_point frame into a PointXYZI or PointXYZ cloud (an unorganised cloud:
+// The points of a lidar_point frame into a PointXYZI, PointXYZ or PointXYZIRT cloud (an unorganised cloud:
 // height 1, width = number of points).
 template <typename PointT>
 void to_pcl(span<const LidarPoint> points, pcl::PointCloud<PointT>& cloud,
             const FrameInfo* info = nullptr) {
   cloud.resize(points.size());  // sets width = size, height = 1
   for (std::size_t i = 0; i < points.size(); ++i) {
-    const LidarPoint& p = points[i];
-    pcl_detail::set_point(cloud.points[i], p.x, p.y, p.z, p.intensity);
+    pcl_detail::set_point(cloud.points[i], points[i]);
   }
   pcl_detail::finish(cloud, info);
 }
@@ -93,7 +127,7 @@ bool to_pcl(span<const std::byte> frame, const FrameInfo& info,
       for (std::size_t i = 0; i < count; ++i) {
         LidarPoint p;
         std::memcpy(&p, frame.data() + i * size, sizeof p);
-        pcl_detail::set_point(cloud.points[i], p.x, p.y, p.z, p.intensity);
+        pcl_detail::set_point(cloud.points[i], p);
       }
       break;
     }
@@ -114,3 +148,7 @@ bool to_pcl(span<const std::byte> frame, const FrameInfo& info,
 }
 
 }  // namespace sim
+
+POINT_CLOUD_REGISTER_POINT_STRUCT(sim::PointXYZIRT,
+                                  (float, x, x)(float, y, y)(float, z, z)(float, intensity, intensity)(
+                                      std::uint16_t, ring, ring)(float, time, time))

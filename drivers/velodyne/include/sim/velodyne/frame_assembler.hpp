@@ -1,0 +1,233 @@
+// SPDX-License-Identifier: Apache-2.0
+// FrameAssembler: Velodyne data packets -> one frame per revolution, decoded straight into a
+// span the caller owns (a SIM writer's loaned slot). The live driver and the pcap replay use
+// this same object, as the Hesai family does (sim/hesai/frame_assembler.hpp):
+//
+//   auto assembler = FrameAssembler::create(calibration, options).value();
+//   assembler.set_output(loan.as<sim::LidarPoint>());
+//   PushResult r = assembler.push(payload, host_receive_ns);
+//   if (r.frame) { commit r.frame->point_count points; set_output(next loan); }
+//
+// A point belongs to the revolution its own azimuth falls in (block azimuth + firing-time
+// interpolation − the laser's rot_correction, rounded to 0.01°): a frame holds exactly the
+// points with azimuth in [cut, cut + 360°). Near the cut, points of the next revolution wait
+// in a carry-over buffer sized at create(); nothing is allocated after create().
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "sim/lidar_point.hpp"
+#include "sim/result.hpp"
+#include "sim/velodyne/calibration.hpp"
+#include "sim/velodyne/model.hpp"
+#include "sim/velodyne/packet.hpp"
+
+namespace sim::velodyne {
+
+// How a point's azimuth between two block azimuths is found.
+enum class AzimuthInterpolation : std::uint8_t {
+  // By its firing time within the sequence (the manuals' tables), between this sequence's
+  // azimuth and the next one's. The default.
+  firing_time,
+  // As nebula does it (its reference clouds): the difference to the next *block* even where
+  // that block is the same sequence (VLS-128 banks, dual-return pairs), so most VLS-128 lasers
+  // and dual-return second blocks get no interpolation. For comparing with nebula only.
+  nebula,
+};
+
+// Where a revolution ends.
+enum class CutBy : std::uint8_t {
+  // Each point by its own azimuth: a frame holds exactly the points in [cut, cut + 360°).
+  point_azimuth,
+  // As nebula cuts (its reference clouds): whole packets, the frame ends with the packet whose
+  // block azimuths wrap past the cut; only that packet's trailing points less than 2° past the
+  // cut move to the next frame. Lasers with a large rot_correction (VLS-128: up to ±6°) then
+  // spill across the cut. For comparing with nebula only.
+  packet,
+};
+
+// Which returns of a dual-return packet become points. Single-return packets are unaffected.
+enum class ReturnFilter : std::uint8_t {
+  both,       // the last return, and the strongest when it is another return
+  last,       // the even blocks only
+  strongest,  // the odd blocks only (the strongest, or the second strongest when that is last)
+};
+
+struct AssemblerOptions {
+  Model model = Model::vlp16;
+  double cut_azimuth_deg = 0.0;        // where one revolution ends, degrees (Velodyne azimuth)
+  std::optional<float> min_range_m;    // nullopt: the model's limits
+  std::optional<float> max_range_m;
+  ReturnFilter returns = ReturnFilter::both;
+  // Dual return, both: drop the second block's point when its distance equals the first's
+  // (the sensor repeats a firing's only return).
+  bool drop_identical_returns = true;
+  // The frame before the first cut (driver start, after a gap) covers part of a revolution.
+  bool emit_partial_frames = false;
+  AzimuthInterpolation interpolation = AzimuthInterpolation::firing_time;
+  CutBy cut_by = CutBy::point_azimuth;
+  // Keep only points whose azimuth lies in [min, max] degrees (min > max: the window wraps
+  // through 0°); nullopt keeps the whole circle. nebula's tests decode with [0°, 359°].
+  struct AzimuthWindow {
+    double min_deg = 0;
+    double max_deg = 360;
+    // nebula also drops every point of a block whose own azimuth is outside the window.
+    bool block_azimuth_too = false;
+  };
+  std::optional<AzimuthWindow> azimuth_window;
+};
+
+struct CompletedFrame {
+  std::size_t point_count = 0;       // points at the front of the output span
+  std::int64_t stamp_ns = 0;         // sensor time of the frame's first point, ns since epoch
+  std::int64_t host_receive_ns = 0;  // host receive time of the frame's first packet
+  std::uint64_t index = 0;           // frames completed by this assembler so far
+  std::uint32_t packets = 0;
+  std::uint32_t lost_packets = 0;    // estimated from the packets' timestamps
+  std::uint32_t dropped_points = 0;  // did not fit in the output span
+  bool whole_revolution = true;
+};
+
+struct PushResult {
+  PacketError error = PacketError::none;
+  std::optional<CompletedFrame> frame;
+};
+
+struct AssemblerCounters {
+  std::uint64_t packets = 0;        // decoded
+  std::uint64_t malformed = 0;      // cut short, bad flags, azimuth or return mode
+  std::uint64_t wrong_model = 0;    // another model's (or another vendor's) packet
+  std::uint64_t lost_packets = 0;   // estimated from timestamp gaps
+  std::uint64_t frames = 0;
+  std::uint64_t partial_frames_dropped = 0;
+  std::uint64_t dropped_points = 0;  // output or carry-over full, or arrived after their frame
+  std::array<std::uint64_t, packet_error_count> rejected{};
+};
+
+// The packet's time: `timestamp_us` past the top of the hour, in the hour that puts it closest
+// to `reference_ns` (the host's receive time, or a capture's timestamp), ns since the epoch.
+std::int64_t packet_time_ns(std::uint32_t timestamp_us, std::int64_t reference_ns) noexcept;
+
+class FrameAssembler {
+ public:
+  // Fails (one sentence) when the calibration's laser count is not the model's or the range
+  // limits are inverted.
+  static Expected<FrameAssembler> create(Calibration calibration, AssemblerOptions options);
+
+  // Where the frame's points go; call before the first push and after every completed frame.
+  void set_output(std::span<LidarPoint> output) noexcept;
+
+  // Decodes one UDP payload. `time_reference_ns` picks the hour of the packet's timestamp
+  // (0: host_receive_ns). At most one frame completes per call.
+  PushResult push(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns,
+                  std::int64_t time_reference_ns = 0) noexcept;
+
+  // The frame in progress as a partial frame (end of a recording); nullopt when empty.
+  std::optional<CompletedFrame> flush() noexcept;
+  // Forget the frame in progress and the loss-detection state (a loop, a silence).
+  void reset() noexcept;
+
+  const AssemblerCounters& counters() const noexcept { return counters_; }
+  const AssemblerOptions& options() const noexcept { return options_; }
+  const Calibration& calibration() const noexcept { return calibration_; }
+  std::size_t pending_points() const noexcept { return output_attached_ ? output_count_ : carry_count_; }
+  // Return mode of the last decoded packet (nullopt before the first).
+  std::optional<ReturnMode> return_mode() const noexcept { return last_mode_; }
+
+ private:
+  FrameAssembler(Calibration calibration, AssemblerOptions options);
+
+  struct FrameState {
+    bool started = false;
+    bool whole = false;
+    std::int64_t stamp_ns = 0;
+    std::int64_t host_ns = 0;
+    std::uint32_t packets = 0;
+    std::uint32_t lost = 0;
+    std::uint32_t dropped = 0;
+  };
+  // Per block of the packet being decoded: the azimuth its points start from and the azimuth
+  // change over one sequence (0.01°).
+  struct BlockAzimuth {
+    std::uint16_t base = 0;
+    float step = 0;
+  };
+
+  void block_azimuths(const Packet& packet, std::array<BlockAzimuth, blocks_per_packet>& out) noexcept;
+  void nebula_block_azimuths(const Packet& packet, std::array<BlockAzimuth, blocks_per_packet>& out) const noexcept;
+  void decode_block(const Packet& packet, unsigned block, const BlockAzimuth& azimuth,
+                    std::int64_t block_position, std::int64_t packet_ns, std::int64_t host_ns) noexcept;
+  void emit(const LidarPoint& point, std::int64_t revolution, std::int64_t point_ns,
+            std::int64_t host_ns) noexcept;
+  void start(FrameState& frame, std::int64_t point_ns, std::int64_t host_ns, bool whole) noexcept;
+  void complete(PushResult& result) noexcept;
+  bool starts_whole(std::int64_t revolution) const noexcept;
+  void move_packet_tail_to_next() noexcept;
+  bool in_window(std::int32_t azimuth_centi) const noexcept;
+  void abandon_current() noexcept;
+  void count_packet(std::int64_t packet_ns) noexcept;
+
+  static constexpr std::size_t max_lasers = 128;
+
+  Calibration calibration_;
+  AssemblerOptions options_;
+  const ModelInfo* info_ = nullptr;
+  float min_range_m_ = 0;
+  float max_range_m_ = 0;
+  std::uint16_t cut_centi_ = 0;
+  bool windowed_ = false;
+  std::int32_t window_min_centi_ = 0;
+  std::int32_t window_max_centi_ = 0;
+  std::vector<float> cos_table_;  // 36,000 entries: cos/sin of 0.00°…359.99°
+  std::vector<float> sin_table_;
+  // Per laser, computed once.
+  std::array<float, max_lasers> cos_vert_{};
+  std::array<float, max_lasers> sin_vert_{};
+  std::array<double, max_lasers> rot_centi_{};   // rot_correction in 0.01°
+  std::array<float, max_lasers> dist_correction_{};
+  std::array<std::uint32_t, max_lasers> firing_ns_{};
+  std::array<bool, max_lasers> full_model_{};
+  std::array<bool, max_lasers> intensity_model_{};
+  // Per bank (block flag) and unit: the fraction of the sequence's azimuth step the unit's
+  // firing comes after its block azimuth (VLP-16: two sequences per block, up to 2).
+  std::array<std::array<float, units_per_block>, 4> unit_fraction_{};
+  double min_point_delta_centi_ = 0;  // smallest (interpolation − rot_correction) any point gets
+  double max_point_delta_centi_ = 0;
+
+  FrameState current_;
+  FrameState next_;
+  std::int64_t current_revolution_ = 0;
+  std::span<LidarPoint> output_;
+  bool output_attached_ = false;
+  std::size_t output_count_ = 0;
+  std::vector<LidarPoint> carry_;  // next_'s points (current_'s while no output is attached)
+  std::size_t carry_count_ = 0;
+  bool next_is_whole_ = false;     // the frame after a completed one starts at the cut
+
+  bool have_block_ = false;
+  std::int64_t block_revolution_ = 0;
+  std::uint16_t last_phase_ = 0;
+  std::int64_t last_block_position_ = 0;
+  std::int64_t first_position_ = 0;  // of the first block since the start (or a reset)
+  float last_step_ = 0;               // azimuth per sequence, learned, for the packet's last blocks
+  std::uint16_t last_packet_azimuth_ = 0;
+  std::int64_t last_packet_ns_ = 0;
+  // CutBy::packet: the previous packet's first block phase, and where this packet's points
+  // start in the output with their azimuth phase (for moving the tail to the next frame).
+  std::uint16_t last_packet_phase_ = 0;
+  std::uint32_t packets_since_cut_ = 0;
+  std::size_t packet_first_point_ = 0;
+  std::array<std::uint16_t, blocks_per_packet * units_per_block> packet_point_phase_{};
+  std::size_t packet_points_ = 0;
+  bool have_packet_ = false;
+  std::optional<ReturnMode> last_mode_;
+  std::uint64_t frame_index_ = 0;
+  AssemblerCounters counters_;
+};
+
+}  // namespace sim::velodyne

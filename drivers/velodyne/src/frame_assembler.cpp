@@ -1,0 +1,545 @@
+// SPDX-License-Identifier: Apache-2.0
+// Decoding (docs/velodyne.md has the formulas and their sources):
+//   distance  d = raw · unit + dist_correction                       (unit from the model)
+//   azimuth   a = block azimuth + step · fraction(laser) − rot_correction, rounded to 0.01°
+//             (fraction: the laser's firing time over the sequence, from the manual's table)
+//   ROS frame x = d·cos(vert)·cos(a), y = −d·cos(vert)·sin(a), z = d·sin(vert)
+// with the HDL-64E's offsets and two-point correction where the calibration has them. The
+// 0.01° rounding is what nebula and ros-drivers/velodyne do (36,000-entry sin/cos tables): a
+// point moves by at most 0.005° against exact trigonometry.
+#include "sim/velodyne/frame_assembler.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace sim::velodyne {
+namespace {
+
+constexpr std::int64_t hour_ns = 3'600'000'000'000;
+constexpr std::int32_t full_turn = 36000;  // 0.01°
+constexpr double pi = 3.14159265358979323846;
+// A step between sequences above this (1°) is a gap in the data, not the motor's motion.
+constexpr float max_plausible_step = 100.0f;
+
+std::int64_t floor_div(std::int64_t a, std::int64_t b) noexcept {
+  const std::int64_t q = a / b;
+  return (a % b != 0 && (a < 0) != (b < 0)) ? q - 1 : q;
+}
+
+std::int32_t wrap_signed(std::int32_t centi) noexcept {
+  centi %= full_turn;
+  if (centi >= full_turn / 2) centi -= full_turn;
+  if (centi < -full_turn / 2) centi += full_turn;
+  return centi;
+}
+
+// Fraction of the step between sequences (VLP-16: between blocks, two sequences) at which the
+// unit of bank `bank` fires, from the manuals' firing tables.
+float unit_fraction(Model model, unsigned bank, unsigned unit) noexcept {
+  switch (model) {
+    case Model::vlp16:
+    case Model::puck_hires: {
+      const auto laser = static_cast<float>(unit % 16);
+      const auto firing = static_cast<float>(unit / 16);
+      return (laser * 2.304f + firing * 55.296f) / 110.592f;
+    }
+    case Model::vlp32c: return (static_cast<float>(unit / 2) * 2.304f) / 55.296f;
+    case Model::hdl32e: return (static_cast<float>(unit) * 1.152f) / 46.08f;
+    case Model::vls128: {
+      const unsigned group = (bank * 32 + unit) / 8;
+      return (2.665f / 53.3f) * static_cast<float>(group + group / 8);
+    }
+    case Model::hdl64e: return 0.0f;
+  }
+  return 0.0f;
+}
+
+std::uint32_t clamp_offset(std::int64_t ns) noexcept {
+  if (ns < 0) return 0;
+  if (ns > std::numeric_limits<std::uint32_t>::max()) return std::numeric_limits<std::uint32_t>::max();
+  return static_cast<std::uint32_t>(ns);
+}
+
+}  // namespace
+
+std::int64_t packet_time_ns(std::uint32_t timestamp_us, std::int64_t reference_ns) noexcept {
+  const std::int64_t top = floor_div(reference_ns, hour_ns) * hour_ns;
+  std::int64_t t = top + std::int64_t{timestamp_us} * 1000;
+  if (t - reference_ns > hour_ns / 2) t -= hour_ns;
+  if (reference_ns - t > hour_ns / 2) t += hour_ns;
+  return t;
+}
+
+Expected<FrameAssembler> FrameAssembler::create(Calibration calibration, AssemblerOptions options) {
+  const ModelInfo& i = info(options.model);
+  if (calibration.lasers() != i.lasers) {
+    return Error{ErrorCode::invalid_argument,
+                 "the calibration has " + std::to_string(calibration.lasers()) + " lasers but a " +
+                     std::string(to_string(options.model)) + " has " + std::to_string(i.lasers) +
+                     "; give the file of this sensor (--calibration)."};
+  }
+  const float min = options.min_range_m.value_or(i.min_range_m);
+  const float max = options.max_range_m.value_or(i.max_range_m);
+  if (!(min >= 0) || !(max > min)) {
+    return Error{ErrorCode::invalid_argument,
+                 "the range limits are inverted or negative; --min-range must be below --max-range."};
+  }
+  if (!(options.cut_azimuth_deg >= 0 && options.cut_azimuth_deg < 360)) {
+    return Error{ErrorCode::invalid_argument, "the cut azimuth must be in [0, 360) degrees."};
+  }
+  return FrameAssembler(std::move(calibration), std::move(options));
+}
+
+FrameAssembler::FrameAssembler(Calibration calibration, AssemblerOptions options)
+    : calibration_(std::move(calibration)), options_(std::move(options)), info_(&info(options_.model)) {
+  min_range_m_ = options_.min_range_m.value_or(info_->min_range_m);
+  max_range_m_ = options_.max_range_m.value_or(info_->max_range_m);
+  cut_centi_ = static_cast<std::uint16_t>(std::lround(options_.cut_azimuth_deg * 100) % full_turn);
+  if (options_.azimuth_window) {
+    windowed_ = true;
+    window_min_centi_ = static_cast<std::int32_t>(std::lround(options_.azimuth_window->min_deg * 100));
+    window_max_centi_ = static_cast<std::int32_t>(std::lround(options_.azimuth_window->max_deg * 100));
+  }
+  cos_table_.resize(full_turn);
+  sin_table_.resize(full_turn);
+  for (std::int32_t a = 0; a < full_turn; ++a) {
+    const auto radians = static_cast<float>(0.01 * a * pi / 180.0);
+    cos_table_[a] = std::cos(radians);
+    sin_table_[a] = std::sin(radians);
+  }
+  min_point_delta_centi_ = 0;
+  max_point_delta_centi_ = 0;
+  for (std::size_t l = 0; l < calibration_.lasers(); ++l) {
+    const LaserCorrection& c = calibration_[l];
+    cos_vert_[l] = static_cast<float>(std::cos(c.vert_correction));
+    sin_vert_[l] = static_cast<float>(std::sin(c.vert_correction));
+    rot_centi_[l] = c.rot_correction * 180.0 / pi * 100.0;
+    dist_correction_[l] = static_cast<float>(c.dist_correction);
+    firing_ns_[l] = laser_firing_ns(options_.model, static_cast<unsigned>(l));
+    full_model_[l] = c.needs_full_model();
+    intensity_model_[l] = c.corrects_intensity();
+    min_point_delta_centi_ = std::min(min_point_delta_centi_, -rot_centi_[l]);
+    max_point_delta_centi_ = std::max(max_point_delta_centi_, -rot_centi_[l]);
+  }
+  // Rounding, and the interpolation (at most two steps of a plausible size) on top.
+  min_point_delta_centi_ -= 1;
+  max_point_delta_centi_ += 1 + 2 * max_plausible_step;
+  for (unsigned bank = 0; bank < 4; ++bank) {
+    for (unsigned u = 0; u < units_per_block; ++u) unit_fraction_[bank][u] = unit_fraction(options_.model, bank, u);
+  }
+  // Points of the next revolution decoded before the current one completes: those within the
+  // laser offsets' spread of the cut (VLS-128: about 12°, 20 packets) plus two packets.
+  const double spread_centi = max_point_delta_centi_ - min_point_delta_centi_;
+  const double packets_in_spread = spread_centi / 10.0 + 2;  // ≥ 0.1° per packet at any rpm
+  carry_.resize(static_cast<std::size_t>(packets_in_spread) * info_->max_points_per_packet());
+}
+
+void FrameAssembler::set_output(std::span<LidarPoint> output) noexcept {
+  if (output_attached_) {
+    // Mid-frame: the points already in the old span stay there; this frame restarts.
+    output_count_ = 0;
+    current_.whole = false;
+  }
+  output_ = output;
+  output_attached_ = true;
+  // The frame in progress waited in the carry-over buffer: move it to the front.
+  const std::size_t n = std::min(carry_count_, output_.size());
+  std::copy_n(carry_.begin(), n, output_.begin());
+  if (n < carry_count_) {
+    current_.dropped += static_cast<std::uint32_t>(carry_count_ - n);
+    counters_.dropped_points += carry_count_ - n;
+  }
+  output_count_ = n;
+  carry_count_ = 0;
+}
+
+bool FrameAssembler::starts_whole(std::int64_t revolution) const noexcept {
+  if (options_.cut_by == CutBy::packet) return next_is_whole_;
+  // Whole when no point of it can have come before the first block decoded since the start.
+  return static_cast<double>(revolution * full_turn) > static_cast<double>(first_position_) + max_point_delta_centi_;
+}
+
+void FrameAssembler::start(FrameState& frame, std::int64_t point_ns, std::int64_t host_ns, bool whole) noexcept {
+  frame = FrameState{};
+  frame.started = true;
+  frame.whole = whole;
+  frame.stamp_ns = point_ns;
+  frame.host_ns = host_ns;
+}
+
+void FrameAssembler::emit(const LidarPoint& point, std::int64_t revolution, std::int64_t point_ns,
+                          std::int64_t host_ns) noexcept {
+  if (!current_.started) {
+    current_revolution_ = revolution;
+    start(current_, point_ns, host_ns, starts_whole(revolution));
+  } else if (revolution > current_revolution_ + 1 ||
+             (revolution == current_revolution_ + 1 && !output_attached_)) {
+    // Half a revolution or more went missing (or no span to keep two frames apart): the frame
+    // in progress can never be whole; drop it and start over at this point.
+    abandon_current();
+    current_revolution_ = revolution;
+    start(current_, point_ns, host_ns, false);
+  }
+  FrameState* frame = &current_;
+  LidarPoint* slot = nullptr;
+  if (revolution == current_revolution_) {
+    if (output_attached_) {
+      if (output_count_ < output_.size()) slot = &output_[output_count_++];
+    } else if (carry_count_ < carry_.size()) {
+      slot = &carry_[carry_count_++];
+    }
+  } else if (revolution == current_revolution_ + 1) {
+    if (!next_.started) start(next_, point_ns, host_ns, starts_whole(revolution));
+    frame = &next_;
+    if (carry_count_ < carry_.size()) slot = &carry_[carry_count_++];
+  }  // else: a point of a revolution already published (it came too late)
+  if (slot == nullptr) {
+    ++frame->dropped;
+    ++counters_.dropped_points;
+    return;
+  }
+  *slot = point;
+  slot->time_offset_ns = clamp_offset(point_ns - frame->stamp_ns);
+}
+
+void FrameAssembler::abandon_current() noexcept {
+  if (current_.started) ++counters_.partial_frames_dropped;
+  current_ = FrameState{};
+  next_ = FrameState{};
+  output_count_ = 0;
+  carry_count_ = 0;
+  next_is_whole_ = false;
+}
+
+void FrameAssembler::complete(PushResult& result) noexcept {
+  ++current_revolution_;
+  const bool publish = current_.whole || options_.emit_partial_frames;
+  if (publish && output_attached_) {
+    CompletedFrame frame;
+    frame.point_count = output_count_;
+    frame.stamp_ns = current_.stamp_ns;
+    frame.host_receive_ns = current_.host_ns;
+    frame.index = frame_index_++;
+    frame.packets = current_.packets;
+    frame.lost_packets = current_.lost;
+    frame.dropped_points = current_.dropped;
+    frame.whole_revolution = current_.whole;
+    result.frame = frame;
+    ++counters_.frames;
+    output_attached_ = false;  // the span is the caller's until set_output; next_ is in carry_
+    output_count_ = 0;
+  } else {
+    if (current_.started) ++counters_.partial_frames_dropped;
+    // Reuse the span: the next frame's points move to its front.
+    if (output_attached_) {
+      const std::size_t n = std::min(carry_count_, output_.size());
+      std::copy_n(carry_.begin(), n, output_.begin());
+      output_count_ = n;
+      carry_count_ = 0;
+    }
+  }
+  current_ = next_;
+  next_ = FrameState{};
+  next_is_whole_ = true;
+}
+
+void FrameAssembler::move_packet_tail_to_next() noexcept {
+  // nebula's rule: from the end, points less than 2 whole degrees past the cut.
+  std::size_t keep = packet_points_;
+  while (keep > 0 && packet_point_phase_[keep - 1] < 200) --keep;
+  const std::size_t moved = packet_points_ - keep;
+  if (moved == 0 || !output_attached_ || output_count_ < moved || moved > carry_.size()) return;
+  const std::size_t first = output_count_ - moved;
+  const std::int64_t first_ns = current_.stamp_ns + output_[first].time_offset_ns;
+  start(next_, first_ns, current_.host_ns, true);
+  for (std::size_t i = 0; i < moved; ++i) {
+    LidarPoint p = output_[first + i];
+    p.time_offset_ns = clamp_offset(current_.stamp_ns + p.time_offset_ns - first_ns);
+    carry_[i] = p;
+  }
+  carry_count_ = moved;
+  output_count_ = first;
+}
+
+void FrameAssembler::count_packet(std::int64_t packet_ns) noexcept {
+  const auto sequences = static_cast<unsigned>(blocks_per_packet * info_->sequences_per_block / info_->blocks_per_sequence);
+  const std::int64_t period = std::int64_t{info_->sequence_ns} * sequences / (last_mode_ == ReturnMode::dual ? 2 : 1);
+  if (have_packet_ && period > 0) {
+    const std::int64_t gap = packet_ns - last_packet_ns_;
+    if (gap > period * 3 / 2 && gap < 1'000'000'000) {
+      const auto lost = static_cast<std::uint32_t>((gap + period / 2) / period - 1);
+      counters_.lost_packets += lost;
+      if (current_.started) current_.lost += lost;
+    }
+  }
+  last_packet_ns_ = packet_ns;
+}
+
+void FrameAssembler::block_azimuths(const Packet& packet, std::array<BlockAzimuth, blocks_per_packet>& out) noexcept {
+  const unsigned blocks = packet.blocks();
+  const unsigned per_slot = info_->blocks_per_sequence * (packet.dual() ? 2U : 1U);
+  // The sensor's step between sequences, learned across packets for the packet's last slot
+  // (and the VLS-128's dual-return packets, which hold one sequence).
+  if (have_packet_) {
+    const auto across = static_cast<float>((full_turn + packet.azimuth(0) - last_packet_azimuth_) % full_turn);
+    const unsigned slots = blocks / per_slot;
+    const float step = slots > 0 ? across / static_cast<float>(slots) : 0.0f;
+    if (step <= max_plausible_step && blocks == per_slot) last_step_ = step;
+  }
+  for (unsigned first = 0; first < blocks; first += per_slot) {
+    const std::uint16_t az = packet.azimuth(first);
+    float step = last_step_;
+    if (first + per_slot < blocks) {
+      const auto next = static_cast<float>((full_turn + packet.azimuth(first + per_slot) - az) % full_turn);
+      if (next <= max_plausible_step) step = last_step_ = next;
+    }
+    // VLP-16: a block holds two sequences; the fractions are of the block's step.
+    for (unsigned b = first; b < first + per_slot && b < blocks; ++b) out[b] = {az, step};
+  }
+}
+
+void FrameAssembler::nebula_block_azimuths(const Packet& packet,
+                                           std::array<BlockAzimuth, blocks_per_packet>& out) const noexcept {
+  // nebula walks the blocks with the azimuth of "the next block" (the next pair in dual
+  // return), carrying it forward; the differences it takes follow from that walk.
+  const unsigned dual = packet.dual() ? 1 : 0;
+  const unsigned stride = 1 + dual;
+  const unsigned zero_block = options_.model == Model::vls128 ? packet.blocks() - 1 : blocks_per_packet - dual - 1;
+  float last_diff = 0;
+  std::uint16_t next = 0;
+  for (unsigned b = 0; b < packet.blocks(); ++b) {
+    const std::uint16_t az = b == 0 ? packet.azimuth(0) : next;
+    float diff;
+    if (b < blocks_per_packet - stride) {
+      next = packet.azimuth(b + stride);
+      diff = static_cast<float>((full_turn + next - az) % full_turn);
+      last_diff = diff;
+    } else {
+      diff = b == zero_block ? 0.0f : last_diff;
+    }
+    out[b] = {az, diff};
+  }
+}
+
+PushResult FrameAssembler::push(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns,
+                                std::int64_t time_reference_ns) noexcept {
+  PushResult result;
+  Packet packet;
+  result.error = Packet::parse(payload, options_.model, packet);
+  if (result.error != PacketError::none) {
+    ++counters_.rejected[static_cast<std::size_t>(result.error)];
+    if (result.error == PacketError::wrong_model) {
+      ++counters_.wrong_model;
+    } else {
+      ++counters_.malformed;
+    }
+    return result;
+  }
+  ++counters_.packets;
+  last_mode_ = packet.return_mode();
+  const std::int64_t packet_ns =
+      packet_time_ns(packet.timestamp_us(), time_reference_ns != 0 ? time_reference_ns : host_receive_ns);
+  count_packet(packet_ns);
+
+  std::array<BlockAzimuth, blocks_per_packet> azimuths{};
+  block_azimuths(packet, azimuths);  // also learns the step across packets
+  if (options_.interpolation == AzimuthInterpolation::nebula) nebula_block_azimuths(packet, azimuths);
+
+  const unsigned per_slot = info_->blocks_per_sequence * (packet.dual() ? 2U : 1U);
+  const bool by_packet = options_.cut_by == CutBy::packet;
+  const auto phase_of = [&](std::uint16_t az) {
+    return static_cast<std::uint16_t>((full_turn + az - cut_centi_) % full_turn);
+  };
+  packet_first_point_ = output_count_;
+  packet_points_ = 0;
+  bool wrapped = false;
+  std::int64_t slot_position = 0;
+  for (unsigned b = 0; b < packet.blocks(); ++b) {
+    if (b % per_slot == 0) {
+      const std::uint16_t phase = phase_of(packet.azimuth(b));
+      if (have_block_ && phase + full_turn / 2 < last_phase_) {
+        ++block_revolution_;
+        wrapped = true;
+      }
+      last_phase_ = phase;
+      slot_position = block_revolution_ * full_turn + phase;
+      if (!have_block_) first_position_ = slot_position;
+      have_block_ = true;
+    }
+    decode_block(packet, b, azimuths[b], by_packet ? current_revolution_ * full_turn : slot_position,
+                 packet_ns, host_receive_ns);
+  }
+  if (current_.started) ++current_.packets;
+  if (next_.started) ++next_.packets;
+  last_block_position_ = slot_position;
+  last_packet_azimuth_ = packet.azimuth(0);
+  have_packet_ = true;
+
+  if (by_packet) {
+    // nebula: the scan ends with the packet whose blocks wrap, or that starts below the
+    // previous packet's start.
+    const std::uint16_t first_phase = phase_of(packet.azimuth(0));
+    ++packets_since_cut_;
+    const bool ends = packets_since_cut_ > 1 && (wrapped || first_phase < last_packet_phase_);
+    last_packet_phase_ = first_phase;
+    if (ends) packets_since_cut_ = 0;
+    if (ends && current_.started) {
+      move_packet_tail_to_next();
+      complete(result);
+    }
+    return result;
+  }
+  const double boundary = static_cast<double>((current_revolution_ + 1) * full_turn);
+  if (current_.started && static_cast<double>(slot_position) + min_point_delta_centi_ >= boundary) {
+    complete(result);
+  }
+  return result;
+}
+
+bool FrameAssembler::in_window(std::int32_t azimuth_centi) const noexcept {
+  return window_min_centi_ <= window_max_centi_
+             ? (azimuth_centi >= window_min_centi_ && azimuth_centi <= window_max_centi_)
+             : (azimuth_centi >= window_min_centi_ || azimuth_centi <= window_max_centi_);
+}
+
+void FrameAssembler::decode_block(const Packet& packet, unsigned block, const BlockAzimuth& azimuth,
+                                  std::int64_t slot_position, std::int64_t packet_ns,
+                                  std::int64_t host_ns) noexcept {
+  const bool second = packet.dual() && (block % 2) == 1;
+  if (packet.dual()) {
+    if (options_.returns == ReturnFilter::last && second) return;
+    if (options_.returns == ReturnFilter::strongest && !second) return;
+  }
+  const bool skip_identical = second && options_.returns == ReturnFilter::both && options_.drop_identical_returns;
+  const bool by_packet = options_.cut_by == CutBy::packet;
+  const unsigned bank = packet.laser(block, 0) / 32 % 4;
+  const std::int32_t real_azimuth = packet.azimuth(block - block % (info_->blocks_per_sequence * (packet.dual() ? 2U : 1U)));
+  if (windowed_ && options_.azimuth_window->block_azimuth_too && !in_window(azimuth.base)) return;
+  const float unit_m = info_->distance_unit_m;
+  const std::int64_t sequence_ns = info_->sequence_ns;
+  for (unsigned u = 0; u < units_per_block; ++u) {
+    const std::uint16_t raw = packet.raw_distance(block, u);
+    if (raw == 0) continue;  // no return
+    if (skip_identical && raw == packet.raw_distance(block - 1, u)) continue;
+    const unsigned laser = packet.laser(block, u);
+    const float distance = static_cast<float>(raw) * unit_m + dist_correction_[laser];
+    if (!(distance > min_range_m_ && distance < max_range_m_)) continue;
+
+    // Azimuth in 0.01°, rounded as nebula and ros-drivers do (see the top of this file).
+    const float interpolated = static_cast<float>(azimuth.base) + azimuth.step * unit_fraction_[bank][u];
+    float corrected = static_cast<float>(static_cast<double>(interpolated) - rot_centi_[laser]);
+    const bool negative = corrected < 0.0f;
+    if (negative) corrected += static_cast<float>(full_turn);
+    auto rounded = static_cast<std::int32_t>(corrected + 0.5f);
+    const auto table = static_cast<std::uint16_t>(rounded % full_turn);
+    if (negative) rounded -= full_turn;
+
+    if (windowed_ && !in_window(table)) continue;
+
+    LidarPoint p;
+    const float cos_a = cos_table_[table];
+    const float sin_a = sin_table_[table];
+    float intensity = packet.reflectivity(block, u);
+    if (!full_model_[laser]) {
+      const float xy = distance * cos_vert_[laser];
+      p.x = xy * cos_a;
+      p.y = -(xy * sin_a);
+      p.z = distance * sin_vert_[laser];
+    } else {
+      // The HDL-64E model (ros-drivers/velodyne rawdata.cc): optical-centre offsets and the
+      // two-point distance correction, in the sensor's frame (x right, y forward), then ROS.
+      const LaserCorrection& c = calibration_[laser];
+      const auto vo = static_cast<float>(c.vert_offset_correction);
+      const auto ho = static_cast<float>(c.horiz_offset_correction);
+      float xy = distance * cos_vert_[laser] - vo * sin_vert_[laser];
+      const float xx = std::abs(xy * sin_a - ho * cos_a);
+      const float yy = std::abs(xy * cos_a + ho * sin_a);
+      float corr_x = 0;
+      float corr_y = 0;
+      if (c.two_point()) {
+        const auto dc = static_cast<float>(c.dist_correction);
+        corr_x = (dc - static_cast<float>(c.dist_correction_x)) * (xx - 2.4f) / (25.04f - 2.4f) +
+                 static_cast<float>(c.dist_correction_x) - dc;
+        corr_y = (dc - static_cast<float>(c.dist_correction_y)) * (yy - 1.93f) / (25.04f - 1.93f) +
+                 static_cast<float>(c.dist_correction_y) - dc;
+      }
+      xy = (distance + corr_x) * cos_vert_[laser] - vo * sin_vert_[laser];
+      const float vx = xy * sin_a - ho * cos_a;
+      xy = (distance + corr_y) * cos_vert_[laser] - vo * sin_vert_[laser];
+      const float vy = xy * cos_a + ho * sin_a;
+      p.x = vy;
+      p.y = -vx;
+      p.z = (distance + corr_y) * sin_vert_[laser] + vo * cos_vert_[laser];
+    }
+    if (intensity_model_[laser]) {
+      const LaserCorrection& c = calibration_[laser];
+      const double focal = 1.0 - c.focal_distance / 13100.0;
+      const double scaled = 1.0 - static_cast<double>(raw) / 65535.0;
+      double value = intensity + c.focal_slope * std::abs(256.0 * focal * focal - 256.0 * scaled * scaled);
+      value = std::clamp(value, c.min_intensity, c.max_intensity);
+      intensity = static_cast<float>(value);
+    }
+    p.intensity = intensity;
+    p.time_offset_ns = 0;
+    p.ring = calibration_.ring(laser);
+    p.return_index = second ? 1 : 0;
+    p.reserved = 0;
+
+    std::int64_t revolution;
+    if (by_packet) {
+      revolution = current_.started ? current_revolution_ : 0;
+    } else {
+      const std::int64_t position = slot_position + wrap_signed(rounded - real_azimuth);
+      revolution = floor_div(position, full_turn);
+    }
+    const std::int64_t point_ns = packet_ns + packet.sequence(block, u) * sequence_ns + firing_ns_[laser];
+    const std::size_t before = output_count_;
+    emit(p, revolution, point_ns, host_ns);
+    if (by_packet && output_attached_ && output_count_ == before + 1 &&
+        packet_points_ < packet_point_phase_.size()) {
+      packet_point_phase_[packet_points_++] =
+          static_cast<std::uint16_t>((full_turn + table - cut_centi_) % full_turn);
+    }
+  }
+}
+
+std::optional<CompletedFrame> FrameAssembler::flush() noexcept {
+  if (!current_.started || !output_attached_) {
+    reset();
+    return std::nullopt;
+  }
+  CompletedFrame frame;
+  frame.point_count = output_count_;
+  frame.stamp_ns = current_.stamp_ns;
+  frame.host_receive_ns = current_.host_ns;
+  frame.index = frame_index_++;
+  frame.packets = current_.packets;
+  frame.lost_packets = current_.lost;
+  frame.dropped_points = current_.dropped;
+  frame.whole_revolution = false;
+  ++counters_.frames;
+  output_attached_ = false;
+  output_count_ = 0;
+  current_ = FrameState{};
+  next_ = FrameState{};
+  carry_count_ = 0;
+  have_block_ = false;
+  have_packet_ = false;
+  next_is_whole_ = false;
+  return frame;
+}
+
+void FrameAssembler::reset() noexcept {
+  current_ = FrameState{};
+  next_ = FrameState{};
+  output_count_ = 0;
+  carry_count_ = 0;
+  next_is_whole_ = false;
+  have_block_ = false;
+  have_packet_ = false;
+  block_revolution_ = 0;
+  current_revolution_ = 0;
+}
+
+}  // namespace sim::velodyne

@@ -1,0 +1,194 @@
+// SPDX-License-Identifier: Apache-2.0
+// Data packet: 12 blocks × (flag u16, azimuth u16 in 0.01°, 32 × (distance u16, reflectivity
+// u8)), timestamp u32 at 1200, return mode at 1204, product ID at 1205. Position packet:
+// timestamp at 198, PPS state at 202, NMEA sentence from 206.
+#include "sim/velodyne/packet.hpp"
+
+#include <array>
+#include <cstring>
+#include <ctime>
+
+namespace sim::velodyne {
+namespace {
+
+// Block flags as read little-endian: FF EE reads 0xEEFF.
+constexpr std::array<std::uint16_t, 4> bank_flags{0xEEFF, 0xDDFF, 0xCCFF, 0xBBFF};
+
+// The flag block `block` must carry for `model` (dual: VLS-128 pairs are one bank).
+std::uint16_t expected_flag(Model model, unsigned block, bool dual) noexcept {
+  switch (model) {
+    case Model::vls128: return bank_flags[(dual ? block / 2 : block) % 4];
+    case Model::hdl64e: return bank_flags[block % 2];
+    default: return bank_flags[0];
+  }
+}
+
+}  // namespace
+
+const char* to_string(ReturnMode mode) noexcept {
+  switch (mode) {
+    case ReturnMode::strongest: return "strongest";
+    case ReturnMode::last: return "last";
+    case ReturnMode::dual: return "dual";
+  }
+  return "?";
+}
+
+const char* to_string(PacketError error) noexcept {
+  switch (error) {
+    case PacketError::none: return "no error";
+    case PacketError::bad_size: return "a datagram that is not a 1206-byte Velodyne data packet";
+    case PacketError::wrong_model: return "a packet of another model than the stream's";
+    case PacketError::bad_flag: return "a block that does not start with the flag the model sends there";
+    case PacketError::bad_azimuth: return "a block azimuth of 360 degrees or more";
+    case PacketError::bad_return_mode: return "a return-mode byte that is none of 0x37, 0x38, 0x39";
+  }
+  return "unknown packet error";
+}
+
+PacketError Packet::parse(std::span<const std::uint8_t> payload, Model model, Packet& out) noexcept {
+  if (payload.size() != packet_size) return PacketError::bad_size;
+  const std::uint8_t* data = payload.data();
+  if (const auto detected = detect_model(payload); detected && *detected != model) {
+    return PacketError::wrong_model;
+  }
+  // The HDL-64E sends no product ID (bytes 1204-1205 are its rotating status); every other
+  // model names itself.
+  if (model != Model::hdl64e && data[product_id_offset] != info(model).product_id) {
+    return PacketError::wrong_model;
+  }
+  ReturnMode mode = ReturnMode::strongest;
+  if (model != Model::hdl64e) {
+    const std::uint8_t byte = data[return_mode_offset];
+    if (byte < 0x37 || byte > 0x39) return PacketError::bad_return_mode;
+    mode = static_cast<ReturnMode>(byte);
+  }
+  const bool dual = mode == ReturnMode::dual;
+  const unsigned blocks = (model == Model::vls128 && dual) ? 8 : blocks_per_packet;
+  for (unsigned b = 0; b < blocks; ++b) {
+    const std::uint8_t* block = data + b * block_size;
+    if (read_u16(block) != expected_flag(model, b, dual)) return PacketError::bad_flag;
+    if (read_u16(block + 2) >= 36000) return PacketError::bad_azimuth;
+  }
+  out.data_ = data;
+  out.model_ = model;
+  out.return_mode_ = mode;
+  out.blocks_ = static_cast<std::uint8_t>(blocks);
+  return PacketError::none;
+}
+
+unsigned Packet::laser(unsigned block, unsigned unit) const noexcept {
+  switch (model_) {
+    case Model::vlp16:
+    case Model::puck_hires: return unit % 16;
+    case Model::vls128: return (dual() ? (block / 2) % 4 : block % 4) * 32 + unit;
+    case Model::hdl64e: return (block % 2) * 32 + unit;
+    default: return unit;
+  }
+}
+
+unsigned Packet::sequence(unsigned block, unsigned unit) const noexcept {
+  const unsigned slot = dual() ? block / 2 : block;  // the two blocks of a pair fire together
+  switch (model_) {
+    case Model::vlp16:
+    case Model::puck_hires: return slot * 2 + unit / 16;
+    case Model::vls128: return dual() ? 0 : block / 4;
+    case Model::hdl64e: return block / 2;
+    default: return slot;
+  }
+}
+
+const char* to_string(PpsState state) noexcept {
+  switch (state) {
+    case PpsState::absent: return "absent";
+    case PpsState::synchronizing: return "synchronizing";
+    case PpsState::locked: return "locked";
+    case PpsState::error: return "error";
+    case PpsState::unknown: return "unknown";
+  }
+  return "unknown";
+}
+
+namespace {
+
+int hex_digit(char c) noexcept {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  return -1;
+}
+
+bool two_digits(std::string_view s, std::size_t at, int& out) noexcept {
+  if (at + 2 > s.size()) return false;
+  const char a = s[at];
+  const char b = s[at + 1];
+  if (a < '0' || a > '9' || b < '0' || b > '9') return false;
+  out = (a - '0') * 10 + (b - '0');
+  return true;
+}
+
+// Days since 1970-01-01 of a proleptic Gregorian date (Howard Hinnant's algorithm).
+std::int64_t days_from_civil(int y, unsigned m, unsigned d) noexcept {
+  y -= m <= 2 ? 1 : 0;
+  const int era = (y >= 0 ? y : y - 399) / 400;
+  const unsigned yoe = static_cast<unsigned>(y - era * 400);
+  const unsigned doy = (153 * (m + (m > 2 ? -3 : 9)) + 2) / 5 + d - 1;
+  const unsigned doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+  return std::int64_t{era} * 146097 + static_cast<std::int64_t>(doe) - 719468;
+}
+
+// "$GPRMC,hhmmss[.ss],A,lat,N,lon,E,speed,course,ddmmyy,…*CS": status and UTC.
+void parse_rmc(std::string_view sentence, PositionReport& report) noexcept {
+  const std::size_t star = sentence.rfind('*');
+  if (sentence.size() < 7 || star == std::string_view::npos || star + 3 > sentence.size()) return;
+  if (sentence.substr(0, 1) != "$" || sentence.substr(3, 3) != "RMC") return;
+  unsigned sum = 0;
+  for (std::size_t i = 1; i < star; ++i) sum ^= static_cast<unsigned char>(sentence[i]);
+  const int hi = hex_digit(sentence[star + 1]);
+  const int lo = hex_digit(sentence[star + 2]);
+  if (hi < 0 || lo < 0 || static_cast<unsigned>(hi * 16 + lo) != sum) return;
+  report.has_gprmc = true;
+  std::array<std::string_view, 10> fields{};
+  std::size_t count = 0;
+  std::string_view rest = sentence.substr(0, star);
+  while (count < fields.size()) {
+    const std::size_t comma = rest.find(',');
+    fields[count++] = rest.substr(0, comma);
+    if (comma == std::string_view::npos) break;
+    rest.remove_prefix(comma + 1);
+  }
+  if (count < 10) return;
+  report.gprmc_valid = fields[2] == "A";
+  int hh = 0, mi = 0, ss = 0, dd = 0, mo = 0, yy = 0;
+  if (!two_digits(fields[1], 0, hh) || !two_digits(fields[1], 2, mi) || !two_digits(fields[1], 4, ss) ||
+      !two_digits(fields[9], 0, dd) || !two_digits(fields[9], 2, mo) || !two_digits(fields[9], 4, yy)) {
+    return;
+  }
+  if (hh > 23 || mi > 59 || ss > 60 || dd < 1 || dd > 31 || mo < 1 || mo > 12) return;
+  // Two-digit years: 80–99 are 1980–1999, the rest 2000–2079.
+  const std::int64_t days = days_from_civil(yy >= 80 ? 1900 + yy : 2000 + yy, static_cast<unsigned>(mo), static_cast<unsigned>(dd));
+  report.gprmc_utc_s = days * 86400 + hh * 3600 + mi * 60 + ss;
+}
+
+}  // namespace
+
+std::optional<PositionReport> parse_position_packet(std::span<const std::uint8_t> payload) noexcept {
+  constexpr std::size_t nmea_offset = 206;
+  if (payload.size() != 512 && payload.size() != 554) return std::nullopt;
+  PositionReport report;
+  report.timestamp_us = Packet::read_u32(payload.data() + 198);
+  if (payload.size() == 554) {
+    const std::uint8_t pps = payload[202];
+    report.pps = pps <= 3 ? static_cast<PpsState>(pps) : PpsState::unknown;
+  }
+  const std::size_t room = payload.size() - nmea_offset;
+  const auto* text = reinterpret_cast<const char*>(payload.data() + nmea_offset);
+  std::size_t length = 0;
+  while (length < room && length < 128 && text[length] != '\0' && text[length] != '\r' && text[length] != '\n') {
+    ++length;
+  }
+  parse_rmc(std::string_view(text, length), report);
+  return report;
+}
+
+}  // namespace sim::velodyne
