@@ -1,0 +1,559 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
+"""The soak test of the whole vehicle (issue 23): scripts/soak.sh builds what it needs and runs this.
+
+    tests/soak/soak.py --build build/release --seconds 120 [--json soak.json] [--seed N]
+
+Seven 1920x1200 bgr8 camera streams at 30 Hz and two LiDAR streams, readers of every kind, and a
+chaos loop that kills and restarts readers and writers (SIGKILL and SIGTERM), replaces a stream's
+layout and removes dead streams. It checks continuously and reports at the end as a table and as
+JSON; exit 0 only if every check passed. What is checked and why it is fair on a loaded machine:
+tests/soak/README.md.
+"""
+import argparse
+import ctypes
+import json
+import os
+import random
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+HESAI = os.path.join(ROOT, "tests", "drivers", "hesai", "data")
+CAMERA_PERIOD_MS = 1000 / 30
+LIDAR_PERIOD_MS = 100.0
+STOP_GRACE_S = 15  # a process asked to stop with SIGTERM must be gone by then (else: a hang)
+SILENCE_S = 20     # a reader that prints nothing for this long hangs
+
+_libc = ctypes.CDLL(None, use_errno=True)
+
+
+def _die_with_parent():
+    """In the child: SIGKILL when the soak itself dies, so nothing is left behind."""
+    _libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+
+
+class Child:
+    """One process of the soak: its JSON lines (stats, violations) read on a thread."""
+
+    def __init__(self, soak, name, argv, long_lived, env=None):
+        self.soak, self.name, self.argv, self.long_lived = soak, name, argv, long_lived
+        self.log_path = os.path.join(soak.workdir, f"{name}.{len(soak.history.get(name, []))}.log")
+        self.log = open(self.log_path, "w")
+        self.proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=self.log, text=True,
+                                     env=env, preexec_fn=_die_with_parent)
+        self.pid = self.proc.pid
+        self.started = time.monotonic()
+        self.last_line = self.started
+        self.stats = None
+        self.other = []  # JSON lines that are neither stats nor violations (sim_foxglove's port)
+        self.signalled = None
+        self.ended_reported = False
+        self.reader = threading.Thread(target=self._read, daemon=True)
+        self.reader.start()
+
+    def _read(self):
+        for line in self.proc.stdout:
+            self.last_line = time.monotonic()
+            try:
+                record = json.loads(line)
+            except ValueError:
+                continue
+            if record.get("kind") == "violation":
+                self.soak.violation(self.name, record)
+            elif record.get("kind") == "stats":
+                self.stats = record
+            else:
+                self.other.append(record)
+
+    def alive(self):
+        return self.proc.poll() is None
+
+    def send(self, sig):
+        self.signalled = sig
+        try:
+            self.proc.send_signal(sig)
+        except ProcessLookupError:
+            pass
+
+    def stop(self, sig=signal.SIGTERM):
+        """Signals it and waits; the exit code, or None if it hung (then it is killed)."""
+        self.send(sig)
+        try:
+            code = self.proc.wait(STOP_GRACE_S)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+            code = None
+        self.reader.join(5)
+        self.log.close()
+        return code
+
+    def stderr_tail(self):
+        self.log.flush()
+        with open(self.log_path, errors="replace") as f:
+            return f.read()[-400:].strip()
+
+
+class Soak:
+    def __init__(self, args):
+        self.args = args
+        self.rng = random.Random(args.seed)
+        self.bin = lambda rel: os.path.join(args.build, rel)
+        self.workdir = tempfile.mkdtemp(prefix="sim_soak_")
+        tag = f"{os.getpid()}"
+        self.cameras = [f"/soak{tag}_cam{i}" for i in range(7)]
+        self.lidars = [f"/soak{tag}_lidar{i}" for i in range(2)]
+        self.streams = self.cameras + self.lidars
+        self.period = {s: CAMERA_PERIOD_MS for s in self.cameras}
+        self.period.update({s: LIDAR_PERIOD_MS for s in self.lidars})
+        self.children = {}   # name -> Child (the current incarnation)
+        self.history = {}    # name -> [Child] (every incarnation, for the totals)
+        self.violations = []
+        self.lock = threading.Lock()
+        self.failures = []   # crashes and hangs: (process, what)
+        self.chaos = {"SIGKILL": 0, "SIGTERM": 0, "layout_replaced": 0, "sim_rm_dead": 0,
+                      "sim_rm_dead_removed": 0, "record_segments": 0}
+        self.events = []     # (due, action, args)
+        self.resources = {}
+
+    # ---- processes ---------------------------------------------------------------------------
+    def start(self, name, argv, long_lived=False, env=None):
+        child = Child(self, name, argv, long_lived, env)
+        self.children[name] = child
+        self.history.setdefault(name, []).append(child)
+        return child
+
+    def violation(self, process, record):
+        with self.lock:
+            self.violations.append({"process": process, **record})
+        print(f"soak: VIOLATION in {process}: {json.dumps(record)}", flush=True)
+
+    def fail(self, process, what):
+        self.failures.append({"process": process, "what": what})
+        print(f"soak: FAILURE of {process}: {what}", flush=True)
+
+    def writer_argv(self, stream, layout="normal"):
+        i = self.streams.index(stream)
+        if layout == "other":  # a writer of another layout under the same name
+            return [self.bin("tests/soak/sim_soak_agent"), "writer", "--stream", stream, "--hz", "30",
+                    "--points", "50000"]
+        if stream in self.lidars:
+            capture, calibration = [("pandar64_dual.pcap", "pandar64.calibration.csv"),
+                                    ("pandarxt32_dual.pcap", "pandarxt32.calibration.csv")][i - 7]
+            return [self.bin("replay/pcap/sim_replay_pcap"), os.path.join(HESAI, capture), "--stream", stream,
+                    "--calibration", os.path.join(HESAI, calibration), "--loop", "--restamp", "--checksum",
+                    "--quiet"]
+        if i < self.args.video_cameras:
+            return [self.bin("replay/video/sim_replay_video"), self.pictures, "--stream", stream, "--fps", "30",
+                    "--loop", "--checksum", "--quiet"]
+        return [self.bin("tests/soak/sim_soak_agent"), "writer", "--stream", stream, "--hz", "30",
+                "--image", "1920x1200"]
+
+    def arg(self, stream):
+        return f"{stream}:{self.period[stream]:.3f}"
+
+    def reader_argvs(self):
+        agent = self.bin("tests/soak/sim_soak_agent")
+        every = [self.arg(s) for s in self.streams]
+        cams, lids = self.cameras, self.lidars
+        python = [sys.executable, os.path.join(HERE, "soak_py_reader.py")]
+        return {
+            # Long-lived: their resources are measured at the start and the end.
+            "read_block": ([agent, "read", "--mode", "block", *every], True),
+            "read_borrow": ([agent, "read", "--mode", "borrow", *every], True),
+            "read_waitset": ([agent, "waitset", *every], True),
+            # The chaos loop kills and restarts these.
+            "read_adaptive": ([agent, "read", "--mode", "adaptive", self.arg(cams[0]), self.arg(cams[4]),
+                               self.arg(lids[0])], False),
+            "read_c_camera": ([self.bin("tests/soak/sim_soak_c_reader"), cams[1]], False),
+            "read_c_lidar": ([self.bin("tests/soak/sim_soak_c_reader"), lids[1]], False),
+            "read_python_camera": (python + [cams[5]], False),
+            "read_python_lidar": (python + [lids[0]], False),
+        }
+
+    def start_everything(self):
+        os.makedirs(self.pictures, exist_ok=True)
+        subprocess.run([self.bin("tests/soak/sim_soak_agent"), "make-pictures", self.pictures, "--frames", "4",
+                        "--width", "1920", "--height", "1200"], check=True)
+        for s in self.streams:
+            self.start("writer" + s, self.writer_argv(s))
+        for name, (argv, long_lived) in self.reader_argvs().items():
+            self.start(name, argv, long_lived, self.python_env if "python" in name else None)
+        self.start_foxglove()
+        self.start_dds()
+        self.start_record()
+
+    def start_foxglove(self):
+        fox = self.start("sim_foxglove", [self.bin("viewer/foxglove/sim_foxglove"), "--port", "0", "--json",
+                                          "--max-rate", "5", *self.streams], True)
+        deadline = time.monotonic() + 30
+        while not fox.other and fox.alive() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        port = fox.other[0].get("port") if fox.other else None  # {"event":"listening",…,"port":N}
+        if not port:
+            self.fail("sim_foxglove", f"did not say where it listens: {fox.stderr_tail()}")
+            return
+        self.start("foxglove_client", ["node", os.path.join(HERE, "soak_foxglove_client.mjs"), str(port),
+                                       self.cameras[2], self.lidars[1]], True)
+
+    def start_dds(self):
+        dds = self.bin("tests/soak/sim_soak_dds")
+        if not os.path.exists(dds):
+            self.fail("sim_soak_dds", "was not built (Cyclone DDS missing?)")
+            return
+        bridge = [self.bin("bridge/dds/sim_dds_bridge"), "--quiet"]
+        for s in self.lidars:
+            bridge += ["--publish", s]
+        self.start("dds", [dds, *self.lidars, "--", *bridge], True)
+
+    def start_record(self):
+        out = os.path.join(self.workdir, "segment.mcap")
+        self.start("sim_record", [self.bin("tools/sim_record/sim_record"), "-o", out, "--duration", "10",
+                                  "--wait-for-streams", "--quiet", "--json", *self.lidars])
+
+    # ---- resources of the long-lived processes -----------------------------------------------
+    def long_lived_pids(self):
+        pids = {n: c.pid for n, c in self.children.items() if c.long_lived and c.alive()}
+        dds = self.children.get("dds")
+        if dds and dds.stats and dds.stats.get("bridge_pid"):
+            pids["sim_dds_bridge"] = dds.stats["bridge_pid"]
+        return pids
+
+    @staticmethod
+    def sample(pid):
+        try:
+            status = open(f"/proc/{pid}/status").read()
+            fields = dict(line.split(":", 1) for line in status.splitlines() if ":" in line)
+            kib = lambda k: int(fields.get(k, "0 kB").split()[0])
+            shm = set()
+            for line in open(f"/proc/{pid}/maps"):
+                if "/dev/shm/" in line:
+                    shm.add(line.split(None, 5)[-1].strip())
+            return {"rss_kib": kib("VmRSS"), "rss_anon_kib": kib("RssAnon"), "threads": int(fields["Threads"]),
+                    "fds": len(os.listdir(f"/proc/{pid}/fd")), "shm_regions": len(shm)}
+        except (OSError, KeyError, ValueError):
+            return None
+
+    def sample_all(self, when):
+        for name, pid in self.long_lived_pids().items():
+            s = self.sample(pid)
+            if s:
+                self.resources.setdefault(name, {})[when] = s
+        self.resources.setdefault("/dev/shm", {})[when] = {"shm_regions": self.our_regions()}
+
+    def our_regions(self):
+        return sum(1 for s in self.streams if os.path.exists("/dev/shm/sim." + s[1:]))
+
+    # ---- the chaos loop ----------------------------------------------------------------------
+    def check_stopped(self, child, sig, code):
+        """A SIGTERM must end a program with exit 0 in time; a SIGKILL ends it by that signal."""
+        if code is None:
+            self.fail(child.name, f"still running {STOP_GRACE_S} s after {sig.name}")
+        elif sig == signal.SIGTERM and code != 0:
+            self.fail(child.name, f"exit {code} after SIGTERM: {child.stderr_tail()}")
+        elif sig == signal.SIGKILL and code not in (-signal.SIGKILL, 0):
+            self.fail(child.name, f"ended with {code} before the SIGKILL: {child.stderr_tail()}")
+
+    def restart(self, name, argv, sig, pause, long_lived=False, env=None):
+        child = self.children[name]
+        self.check_stopped(child, sig, child.stop(sig))
+        self.chaos[sig.name] += 1
+        time.sleep(pause)
+        if self.running:
+            self.start(name, argv, long_lived, env)
+
+    def kill_writer(self, stream):
+        sig = self.rng.choice([signal.SIGKILL, signal.SIGTERM])
+        child = self.children["writer" + stream]
+        self.check_stopped(child, sig, child.stop(sig))
+        self.chaos[sig.name] += 1
+        time.sleep(self.rng.uniform(0.2, 3.0))
+        if self.rng.random() < 0.5:  # the stream is dead now: remove it, a new region will be made
+            rm = subprocess.run([self.bin("tools/sim_rm"), "--dead", stream], capture_output=True, text=True)
+            self.chaos["sim_rm_dead"] += 1
+            if rm.returncode != 0:
+                self.fail("sim_rm", f"--dead {stream}: exit {rm.returncode}: {rm.stderr.strip()}")
+            elif "removed" in rm.stdout:
+                self.chaos["sim_rm_dead_removed"] += 1
+        self.start("writer" + stream, self.writer_argv(stream))
+
+    def replace_layout(self, stream):
+        """A writer of another layout takes the name over, then the stream's own writer again."""
+        for layout in ("other", "normal"):
+            child = self.children["writer" + stream]
+            self.check_stopped(child, signal.SIGTERM, child.stop(signal.SIGTERM))
+            self.start("writer" + stream, self.writer_argv(stream, layout))
+            self.chaos["layout_replaced"] += 1
+            time.sleep(self.rng.uniform(2.0, 5.0) if layout == "other" else 0)
+
+    def kill_reader(self, name):
+        argv, long_lived = self.reader_argvs()[name]
+        sig = self.rng.choice([signal.SIGKILL, signal.SIGTERM])
+        self.restart(name, argv, sig, self.rng.uniform(0.2, 2.0), long_lived,
+                     self.python_env if "python" in name else None)
+
+    def chaos_loop(self, until):
+        busy = set()
+        threads = []
+        victims = [n for n, (_, long_lived) in self.reader_argvs().items() if not long_lived]
+        while time.monotonic() < until:
+            time.sleep(self.rng.uniform(0.5, 2.0))
+            threads = [t for t in threads if t.is_alive()]
+            busy = {t.name for t in threads}
+            roll = self.rng.random()
+            if roll < 0.45:
+                target, action = self.rng.choice(self.streams), self.kill_writer
+            elif roll < 0.55:
+                target, action = self.rng.choice(self.cameras), self.replace_layout
+            else:
+                target, action = self.rng.choice(victims), self.kill_reader
+            if target in busy:
+                continue
+            t = threading.Thread(target=action, args=(target,), name=target, daemon=True)
+            t.start()
+            threads.append(t)
+        for t in threads:
+            t.join()
+
+    def record_loop(self):
+        """sim_record in segments of 10 s (the files stay small), now and then stopped early."""
+        while self.running:
+            child = self.children["sim_record"]
+            if self.rng.random() < 0.3:
+                time.sleep(self.rng.uniform(1, 8))
+                sig = self.rng.choice([signal.SIGKILL, signal.SIGTERM])
+                self.check_stopped(child, sig, child.stop(sig))
+                self.chaos[sig.name] += 1
+            else:
+                try:
+                    code = child.proc.wait(10 + 60)
+                except subprocess.TimeoutExpired:
+                    code = child.stop(signal.SIGTERM)
+                    self.fail("sim_record", "did not end 60 s after its --duration")
+                if code != 0:
+                    self.fail("sim_record", f"exit {code} at the end of its --duration: {child.stderr_tail()}")
+                self.chaos["record_segments"] += 1
+            for f in os.listdir(self.workdir):
+                if f.endswith(".mcap"):
+                    os.remove(os.path.join(self.workdir, f))
+            if self.running:
+                self.start_record()
+
+    # ---- watching ----------------------------------------------------------------------------
+    def watch(self):
+        """Crashes (a process that ended without being asked) and hangs (silent readers)."""
+        while self.running:
+            time.sleep(0.5)
+            for name, child in list(self.children.items()):
+                if child.signalled is not None or child.ended_reported or name == "sim_record":
+                    continue
+                if not child.alive():
+                    child.ended_reported = True
+                    self.fail(name, f"ended by itself with {child.proc.returncode}: {child.stderr_tail()}")
+                elif (child.stats is not None or name.startswith("read") or name in ("dds", "foxglove_client")) \
+                        and time.monotonic() - child.last_line > SILENCE_S:
+                    child.ended_reported = True
+                    self.fail(name, f"printed nothing for {SILENCE_S} s (hung)")
+
+    def progress(self):
+        """Frames each long-lived consumer has had so far, per stream."""
+        seen = {}
+        for name in ("read_block", "read_borrow", "read_waitset"):
+            c = self.children.get(name)
+            for stream, counters in ((c.stats or {}).get("streams", {}) if c else {}).items():
+                seen[(name, stream)] = counters["frames"]
+        for name, key, count in (("foxglove_client", "topics", "messages"), ("dds", "topics", "clouds")):
+            c = self.children.get(name)
+            for topic, counters in ((c.stats or {}).get(key, {}) if c else {}).items():
+                seen[(name, topic)] = counters[count]
+        return seen
+
+    # ---- the run -----------------------------------------------------------------------------
+    def run(self):
+        seconds = self.args.seconds
+        warmup = max(10.0, 0.08 * seconds)
+        settle = max(12.0, min(30.0, 0.05 * seconds))
+        self.pictures = os.path.join(self.workdir, "pictures")
+        self.python_env = dict(os.environ, PYTHONPATH=self.bin("python"), PYTHONDONTWRITEBYTECODE="1")
+        self.running = True
+        self.t0 = time.monotonic()
+        self.start_everything()
+        watcher = threading.Thread(target=self.watch, daemon=True)
+        watcher.start()
+        recorder = threading.Thread(target=self.record_loop, daemon=True)
+        recorder.start()
+        time.sleep(warmup)
+        self.sample_all("start")
+        print(f"soak: everything runs; chaos for {seconds - warmup - settle:.0f} s", flush=True)
+        self.chaos_loop(self.t0 + seconds - settle)
+        # Settled: every writer is back. Every long-lived consumer must still get frames.
+        time.sleep(max(2.0, settle - 7))
+        before = self.progress()
+        time.sleep(5)
+        after = self.progress()
+        for key, count in before.items():
+            if after.get(key, count) <= count:
+                self.fail(key[0], f"got no frame of {key[1]} in the last 5 s although its writer runs (hung)")
+        for name in ("read_block", "read_borrow", "read_waitset"):
+            for stream in self.streams:
+                if (name, stream) not in after:
+                    self.fail(name, f"never reported {stream}")
+        self.sample_all("end")
+        self.running = False
+        record = self.children["sim_record"]
+        if record.alive():
+            self.check_stopped(record, signal.SIGTERM, record.stop(signal.SIGTERM))
+        recorder.join(STOP_GRACE_S + 5)
+        self.stop_everything()
+        self.elapsed = time.monotonic() - self.t0
+
+    def stop_everything(self):
+        order = sorted(self.children.values(), key=lambda c: (c.name.startswith("writer"), c.name == "sim_foxglove"))
+        for child in order:  # readers first, so they report their last counters; writers last
+            if child.name == "sim_record" and not child.alive():
+                continue
+            if not child.alive() and child.signalled is None:
+                continue  # already reported as a crash
+            code = child.stop(signal.SIGTERM)
+            self.check_stopped(child, signal.SIGTERM, code)
+        dds = self.children.get("dds")
+        if dds and dds.stats and dds.stats.get("bridge_exit") not in (None, "exit 0"):
+            self.fail("sim_dds_bridge", f"{dds.stats['bridge_exit']} after SIGTERM")
+        subprocess.run([self.bin("tools/sim_rm"), "--dead", *self.streams], capture_output=True)
+        self.left_behind = self.our_regions()
+        shutil.rmtree(self.workdir, ignore_errors=True)
+
+    # ---- the report --------------------------------------------------------------------------
+    def totals(self):
+        """Counters of every incarnation of every reader, by kind of reader."""
+        kinds = {}
+        for name, incarnations in self.history.items():
+            for child in incarnations:
+                stats = child.stats or {}
+                per = stats.get("streams") or stats.get("topics") or {}
+                k = kinds.setdefault(name, {"processes": 0})
+                k["processes"] += 1
+                for counters in per.values():
+                    for key, value in counters.items():
+                        if isinstance(value, (int, float)) and key != "worst_stall_ms":
+                            k[key] = k.get(key, 0) + value
+                        elif key == "worst_stall_ms":
+                            k[key] = max(k.get(key, 0), value)
+                if name == "foxglove_client" and stats.get("page"):
+                    for key, value in stats["page"].items():
+                        k["page_" + key] = k.get("page_" + key, 0) + value
+        return kinds
+
+    def resource_checks(self):
+        rows = []
+        for name, when in sorted(self.resources.items()):
+            if "start" not in when or "end" not in when:
+                if name != "/dev/shm":
+                    self.fail(name, "was not running at both resource samples")
+                continue
+            a, b = when["start"], when["end"]
+            node = name == "foxglove_client"
+            limits = {"rss_anon_kib": max(65536 if node else 16384, (0.5 if node else 0.25) * a.get("rss_anon_kib", 0)),
+                      "fds": 2, "threads": 2, "shm_regions": 0 if name == "/dev/shm" else 1}
+            for key, limit in limits.items():
+                if key in a:
+                    rows.append({"process": name, "what": key, "start": a[key], "end": b[key],
+                                 "limit": f"+{limit:.0f}", "ok": b[key] - a[key] <= limit})
+            if "rss_kib" in a:
+                rows.append({"process": name, "what": "rss_kib (with shared memory touched)", "start": a["rss_kib"],
+                             "end": b["rss_kib"], "limit": "shown", "ok": True})
+        return rows
+
+    def report(self):
+        kinds = self.totals()
+        count = lambda what: sum(1 for v in self.violations if v.get("what") == what)
+        timed = sum(k.get("timed", 0) for k in kinds.values())
+        untimed = sum(k.get("untimed", 0) for k in kinds.values())
+        worst = max([k.get("worst_stall_ms", 0) for k in kinds.values()] or [0])
+        frames = sum(k.get("frames", 0) for k in kinds.values())
+        resources = self.resource_checks()
+        other = [v for v in self.violations if v.get("what") not in ("torn", "out_of_order", "missed", "backwards")]
+        checks = [
+            ("torn frames (pattern, structure or checksum)", count("torn"), f"{frames} frames read"),
+            ("out-of-order frames (SIM sequence, DDS and Foxglove stamps)",
+             count("out_of_order") + count("backwards") + sum(k.get("out_of_order", 0) for n, k in kinds.items() if n == "dds"),
+             ""),
+            ("blocked reader missed the newest frame > 2 periods", count("missed"),
+             f"{timed} waits timed, {untimed} not timeable, worst net stall {worst:.1f} ms"),
+            ("crashes or hangs", len(self.failures), ""),
+            ("other violations (DDS malformed, Foxglove undecodable, page errors)",
+             len(other) + sum(k.get("malformed", 0) for k in kinds.values()), ""),
+            ("resources of long-lived processes outside tolerance", sum(1 for r in resources if not r["ok"]),
+             f"{len({r['process'] for r in resources})} processes"),
+            ("our /dev/shm regions left behind", self.left_behind, ""),
+        ]
+        ok = all(value == 0 for _, value, _ in checks)
+        lines = [f"SIM soak: {self.elapsed:.0f} s, seed {self.args.seed}, {len(self.streams)} streams",
+                 "", "| check | result | detail |", "|---|---|---|"]
+        lines += [f"| {what} | {value} | {detail} |" for what, value, detail in checks]
+        lines += ["", "| reader | processes | frames | torn | out of order | missed | overwritten (borrow) |",
+                  "|---|---|---|---|---|---|---|"]
+        for name, k in sorted(kinds.items()):
+            if name.startswith("read"):
+                lines.append(f"| {name} | {k['processes']} | {k.get('frames', 0)} | {k.get('torn', 0)} | "
+                             f"{k.get('out_of_order', 0)} | {k.get('missed', '-')} | {k.get('overwritten', '-')} |")
+        fox, dds = kinds.get("foxglove_client", {}), kinds.get("dds", {})
+        lines += ["", f"Foxglove client: {fox.get('messages', 0)} messages, {fox.get('page_fetches', 0)} page fetches "
+                      f"({fox.get('page_failures', 0)} failed, {fox.get('page_image_unavailable', 0)} images between writers); "
+                      f"DDS (Cyclone, private network): {dds.get('clouds', 0)} clouds; sim_record: "
+                      f"{self.chaos['record_segments']} segments ended by --duration",
+                  "Chaos: " + ", ".join(f"{k} {v}" for k, v in self.chaos.items()),
+                  "", "| process | resource | start | end | allowed growth | ok |", "|---|---|---|---|---|---|"]
+        lines += [f"| {r['process']} | {r['what']} | {r['start']} | {r['end']} | {r['limit']} | {'yes' if r['ok'] else 'NO'} |"
+                  for r in resources]
+        lines += ["", "PASS" if ok else "FAIL"]
+        for f in self.failures:
+            lines.append(f"  failure: {f['process']}: {f['what']}")
+        for v in self.violations[:20]:
+            lines.append(f"  violation: {json.dumps(v)}")
+        print("\n".join(lines), flush=True)
+        result = {"seconds": round(self.elapsed, 1), "seed": self.args.seed, "pass": ok,
+                  "checks": [{"check": w, "value": v, "detail": d} for w, v, d in checks],
+                  "readers": kinds, "chaos": self.chaos, "resources": resources,
+                  "failures": self.failures, "violations": self.violations}
+        if self.args.json:
+            with open(self.args.json, "w") as f:
+                json.dump(result, f, indent=1)
+        return ok
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--build", required=True, help="the build folder (build/release)")
+    parser.add_argument("--seconds", type=float, default=120, help="how long the whole soak runs")
+    parser.add_argument("--seed", type=int, default=int(time.time()), help="the chaos loop's random seed")
+    parser.add_argument("--json", help="also write the result as JSON to this file")
+    parser.add_argument("--video-cameras", type=int, default=2,
+                        help="cameras written by sim_replay_video (the rest by the soak writer)")
+    args = parser.parse_args()
+    if args.seconds < 40:
+        parser.error("--seconds must be at least 40 (warm-up, chaos and the settled end)")
+    soak = Soak(args)
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: sys.exit(130))
+    try:
+        soak.run()
+        ok = soak.report()
+    finally:
+        for child in soak.children.values():
+            if child.alive():
+                child.proc.kill()
+        subprocess.run([soak.bin("tools/sim_rm"), "--force", *soak.streams], capture_output=True)
+        shutil.rmtree(soak.workdir, ignore_errors=True)
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,183 @@
+// SPDX-License-Identifier: Apache-2.0
+// What every soak reader checks about the frames it gets, and the "blocked reader missed the
+// newest frame" measurement (docs in README.md, "Soak", and tests/soak/README.md).
+#pragma once
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cinttypes>
+#include <cstdint>
+#include <cstdio>
+#include <ctime>
+#include <mutex>
+#include <string>
+
+#include "sim/reader.hpp"
+#include "soak_frames.hpp"
+
+namespace soak {
+
+inline std::int64_t monotonic_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+// How long a thread has been runnable without running (the second field of schedstat): time a
+// loaded machine, not the code under test, kept it from running.
+class RunDelay {
+ public:
+  RunDelay() = default;
+  explicit RunDelay(const std::string& path) : fd_(::open(path.c_str(), O_RDONLY | O_CLOEXEC)) {}
+  RunDelay(RunDelay&& o) noexcept : fd_(o.fd_) { o.fd_ = -1; }
+  RunDelay& operator=(RunDelay&& o) noexcept {
+    std::swap(fd_, o.fd_);
+    return *this;
+  }
+  RunDelay(const RunDelay&) = delete;
+  RunDelay& operator=(const RunDelay&) = delete;
+  ~RunDelay() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  static RunDelay this_thread() { return RunDelay("/proc/thread-self/schedstat"); }
+  static RunDelay of_process(int pid) {
+    return RunDelay("/proc/" + std::to_string(pid) + "/schedstat");  // its main thread
+  }
+  // Nanoseconds, or -1 when unknown (no such process).
+  std::int64_t now() const {
+    if (fd_ < 0) return -1;
+    char text[128];
+    const ssize_t n = ::pread(fd_, text, sizeof text - 1, 0);
+    if (n <= 0) return -1;
+    text[n] = '\0';
+    unsigned long long run = 0, delay = 0;
+    if (std::sscanf(text, "%llu %llu", &run, &delay) != 2) return -1;
+    return static_cast<std::int64_t>(delay);
+  }
+
+ private:
+  int fd_ = -1;
+};
+
+// Counters of one stream in one reader; printed as JSON by the agent.
+struct StreamCounters {
+  std::uint64_t frames = 0;
+  std::uint64_t torn = 0;           // a delivered frame that fails its pattern (or checksum)
+  std::uint64_t out_of_order = 0;   // a sequence number not above the previous one
+  std::uint64_t missed = 0;         // blocked while a newer frame waited for more than 2 periods
+  std::uint64_t timed = 0;          // deliveries the missed-newest measurement could time
+  std::uint64_t untimed = 0;        // deliveries it could not (publish time of the first unseen
+                                    // frame unknown: a replay's frames skipped while asleep)
+  std::uint64_t overwritten = 0;    // borrowed frames the writer reused meanwhile (discarded)
+  std::uint64_t reopens = 0;        // opened by name (first open included)
+  std::uint64_t replacements = 0;   // regions replaced under the reader and followed
+  std::int64_t worst_stall_ns = 0;  // the largest measured stall
+};
+
+// One delivery to check: the wait that preceded it and the frame it delivered.
+struct Wait {
+  std::int64_t start_ns = 0;           // when wait() was called
+  std::int64_t end_ns = 0;             // when it returned
+  std::int64_t own_delay_ns = 0;       // this thread's run delay during it
+  std::int64_t writer_delay_ns = 0;    // the writer's main thread's run delay during it, 0 unknown
+  bool newer_at_start = false;         // a frame newer than the last delivered existed at start
+};
+
+// The order and missed-newest bookkeeping of one stream (one region incarnation at a time).
+class StreamCheck {
+ public:
+  StreamCheck(std::string name, std::int64_t period_ns) : name_(std::move(name)), period_ns_(period_ns) {}
+  const std::string& name() const { return name_; }
+  std::int64_t period_ns() const { return period_ns_; }
+  // A region replaced under the same name (another layout): the reader followed it, and the new
+  // region carries the numbering on (docs/protocol.md), so the order check goes on across it.
+  void replaced() {
+    std::lock_guard lock(mutex_);
+    ++counters_.replacements;
+  }
+  // Opened by name (first, or again after the stream was removed and created anew): a new
+  // region's numbering may start again.
+  void restart() {
+    std::lock_guard lock(mutex_);
+    ++counters_.reopens;
+    last_seq_ = 0;
+    last_publish_ns_ = 0;
+  }
+  std::int64_t last_publish_ns() const { return last_publish_ns_; }
+  std::uint64_t last_seq() const { return last_seq_; }
+
+  // A frame delivered after `wait`. `carried_first_unseen` is the publish time of frame
+  // last_seq+1 when the frame carries it (soak writer), else 0.
+  void delivered(const sim::FrameInfo& info, bool whole, const Wait& wait,
+                 std::int64_t carried_first_unseen) {
+    std::lock_guard lock(mutex_);
+    ++counters_.frames;
+    if (!whole) report("torn", info.seq, 0);
+    if (last_seq_ != 0 && info.seq <= last_seq_) report("out_of_order", info.seq, 0);
+    if (last_seq_ != 0 && info.seq > last_seq_) time_delivery(info, wait, carried_first_unseen);
+    last_seq_ = info.seq;
+    last_publish_ns_ = info.publish_ns;
+  }
+  // wait() timed out although a frame newer than the last delivered had been published
+  // `waiting_ns` before the timeout (net of run delays): a lost wake-up if over two periods.
+  void timed_out_with_newer(std::int64_t waiting_ns, std::uint64_t newest_seq) {
+    std::lock_guard lock(mutex_);
+    if (waiting_ns > 2 * period_ns_) {
+      counters_.worst_stall_ns = std::max(counters_.worst_stall_ns, waiting_ns);
+      report("missed", newest_seq, waiting_ns);
+    }
+  }
+  void torn_checksum(std::uint64_t seq) {
+    std::lock_guard lock(mutex_);
+    report("torn", seq, 0);
+  }
+  void overwritten() {
+    std::lock_guard lock(mutex_);
+    ++counters_.overwritten;
+  }
+  StreamCounters snapshot() const {
+    std::lock_guard lock(mutex_);
+    return counters_;
+  }
+
+ private:
+  void time_delivery(const sim::FrameInfo& info, const Wait& wait, std::int64_t carried) {
+    std::int64_t became_readable = 0;  // when frame last_seq+1 was published
+    if (wait.newer_at_start) {
+      became_readable = wait.start_ns;  // it was there already: the wait must return at once
+    } else if (info.seq == last_seq_ + 1) {
+      became_readable = info.publish_ns;
+    } else if (carried > 0) {
+      became_readable = carried;
+    } else {
+      ++counters_.untimed;
+      return;
+    }
+    ++counters_.timed;
+    const std::int64_t stall = wait.end_ns - std::max(wait.start_ns, became_readable) -
+                               wait.own_delay_ns - wait.writer_delay_ns;
+    counters_.worst_stall_ns = std::max(counters_.worst_stall_ns, stall);
+    if (stall > 2 * period_ns_) report("missed", info.seq, stall);
+  }
+  void report(const char* what, std::uint64_t seq, std::int64_t stall_ns) {
+    if (what[0] == 't') ++counters_.torn;
+    if (what[0] == 'o') ++counters_.out_of_order;
+    if (what[0] == 'm') ++counters_.missed;
+    std::printf("{\"kind\":\"violation\",\"what\":\"%s\",\"stream\":\"%s\",\"seq\":%" PRIu64
+                ",\"last_seq\":%" PRIu64 ",\"stall_ms\":%.3f,\"period_ms\":%.3f}\n",
+                what, name_.c_str(), seq, last_seq_, static_cast<double>(stall_ns) / 1e6, static_cast<double>(period_ns_) / 1e6);
+    std::fflush(stdout);
+  }
+
+  std::string name_;
+  std::int64_t period_ns_;
+  mutable std::mutex mutex_;
+  StreamCounters counters_;
+  std::uint64_t last_seq_ = 0;
+  std::int64_t last_publish_ns_ = 0;
+};
+
+}  // namespace soak
