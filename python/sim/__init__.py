@@ -14,42 +14,63 @@
 LiDAR frames are structured arrays of LIDAR_POINT_DTYPE (x, y, z, intensity, time_offset_ns,
 ring, return_index: the fields of the C++ sim::LidarPoint). Errors raise SimError whose message
 is the library's one-sentence explanation.
+
+A stream may describe its sensor: `reader.sensor_info` is None or a SensorInfo (frame_id,
+parent_frame, mounting, calibration with numpy K/R/P, identity, time base); a frame's
+`info.sensor_generation` changes whenever the writer sets a new one (Writer(..., sensor=…),
+writer.set_sensor_info(…)).
 """
 
 from ._sim import (
     LIDAR_POINT_DTYPE,
     Borrow,
+    CameraCalibration,
     Frame,
     FrameInfo,
     Layout,
     LayoutKind,
     Loan,
+    Mounting,
     PixelFormat,
+    PointTime,
     PointType,
     Reader,
     ReaderStats,
     ReadStatus,
+    RegionOfInterest,
+    SensorIdentity,
+    SensorInfo,
     SimError,
+    TimeBase,
     Writer,
     destroy,
+    frame_id_problem,
     list_streams,
 )
 
 __all__ = [
     "LIDAR_POINT_DTYPE",
     "Borrow",
+    "CameraCalibration",
     "Frame",
     "FrameInfo",
     "Layout",
     "LayoutKind",
     "Loan",
+    "Mounting",
     "PixelFormat",
+    "PointTime",
     "PointType",
     "Reader",
     "ReaderStats",
     "ReadStatus",
+    "RegionOfInterest",
+    "SensorIdentity",
+    "SensorInfo",
     "SimError",
+    "TimeBase",
     "Writer",
     "destroy",
+    "frame_id_problem",
     "list_streams",
 ]

@@ -106,6 +106,9 @@ class FrameInfo:
     def size(self) -> int: ...
     @property
     def layout(self) -> Layout: ...
+    @property
+    def sensor_generation(self) -> int:
+        """0 when the stream has no sensor description; changes whenever the writer sets one."""
     def as_dict(self) -> dict[str, int]: ...
 
 class ReaderStats:
@@ -166,6 +169,10 @@ class Reader:
     def layout(self) -> Layout: ...
     @property
     def stats(self) -> ReaderStats: ...
+    @property
+    def sensor_info(self) -> Optional[SensorInfo]:
+        """The stream's description (a copy) or None; raises SimError (code 'region_invalid') when
+        the description in the stream is damaged, while frames keep flowing."""
     def __enter__(self) -> Reader: ...
     def __exit__(self, *args: object) -> None: ...
 
@@ -190,7 +197,9 @@ class Writer:
         checksum: bool = False,
         mode: int = 0o600,
         heartbeat_period: float = 0.0,
+        sensor: Optional[SensorInfo] = None,
     ) -> None: ...
+    def set_sensor_info(self, info: SensorInfo) -> None: ...
     def write(self, frame: Any, *, stamp_ns: Optional[int] = None, receive_ns: int = 0) -> None: ...
     def loan(self) -> Loan: ...
     def close(self) -> None: ...
@@ -207,5 +216,106 @@ class Writer:
     def __enter__(self) -> Writer: ...
     def __exit__(self, *args: object) -> None: ...
 
+class TimeBase(enum.Enum):
+    unknown = 0
+    host = 1
+    sensor_synchronized = 2
+    sensor_free_running = 3
+
+class PointTime(enum.Enum):
+    none = 0
+    after_frame_stamp = 1
+
+class Mounting:
+    """The sensor's frame in its parent: translation (m), rotation (x, y, z, w). Numpy copies."""
+
+    def __init__(self, translation: Any = (0.0, 0.0, 0.0), rotation: Any = (0.0, 0.0, 0.0, 1.0)) -> None: ...
+    @staticmethod
+    def from_xyz_rpy(x: float, y: float, z: float, roll: float, pitch: float, yaw: float) -> Mounting: ...
+    translation: npt.NDArray[np.float64]
+    rotation: npt.NDArray[np.float64]
+    def __eq__(self, other: object) -> bool: ...
+
+class RegionOfInterest:
+    def __init__(
+        self, *, x_offset: int = 0, y_offset: int = 0, height: int = 0, width: int = 0, do_rectify: bool = False
+    ) -> None: ...
+    x_offset: int
+    y_offset: int
+    height: int
+    width: int
+    do_rectify: bool
+    def __eq__(self, other: object) -> bool: ...
+
+class CameraCalibration:
+    """sensor_msgs/CameraInfo's calibration; d, k (3x3), r (3x3), p (3x4) are numpy copies."""
+
+    def __init__(
+        self,
+        *,
+        width: int = 0,
+        height: int = 0,
+        camera_name: str = "",
+        distortion_model: str = "plumb_bob",
+        d: Any = (),
+        k: Any = None,
+        r: Any = None,
+        p: Any = None,
+        binning_x: int = 0,
+        binning_y: int = 0,
+        roi: Optional[RegionOfInterest] = None,
+    ) -> None: ...
+    width: int
+    height: int
+    camera_name: str
+    distortion_model: str
+    d: npt.NDArray[np.float64]
+    k: npt.NDArray[np.float64]
+    r: npt.NDArray[np.float64]
+    p: npt.NDArray[np.float64]
+    binning_x: int
+    binning_y: int
+    roi: RegionOfInterest
+    def summary(self) -> str: ...
+    def __eq__(self, other: object) -> bool: ...
+
+class SensorIdentity:
+    def __init__(self, *, vendor: str = "", model: str = "", serial: str = "", firmware: str = "") -> None: ...
+    vendor: str
+    model: str
+    serial: str
+    firmware: str
+    def __eq__(self, other: object) -> bool: ...
+
+class SensorInfo:
+    """What a stream says about its sensor (C++ sim::SensorInfo)."""
+
+    def __init__(
+        self,
+        *,
+        frame_id: str,
+        parent_frame: str = "base_link",
+        mounting: Optional[Mounting] = None,
+        calibration: Optional[CameraCalibration] = None,
+        identity: Optional[SensorIdentity] = None,
+        calibration_source: str = "",
+        time_base: TimeBase = TimeBase.unknown,
+        time_sync: str = "",
+        point_time: PointTime = PointTime.none,
+    ) -> None: ...
+    frame_id: str
+    parent_frame: str
+    mounting: Optional[Mounting]
+    calibration: Optional[CameraCalibration]
+    identity: SensorIdentity
+    calibration_source: str
+    time_base: TimeBase
+    time_sync: str
+    point_time: PointTime
+    def problem(self) -> str:
+        """Why a writer would refuse this description, in one sentence, or ""."""
+    def __eq__(self, other: object) -> bool: ...
+
+def frame_id_problem(frame: str) -> str: ...
 def list_streams() -> list[str]: ...
 def destroy(name: str, *, force: bool = False) -> None: ...

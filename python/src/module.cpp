@@ -11,6 +11,8 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <cstring>
@@ -104,6 +106,19 @@ py::array shaped_array(const sim::Layout& layout, const std::byte* data, std::ui
   return array;
 }
 
+// How long one wait of a Python call lasts at most: between two, the call takes the GIL back to
+// let Ctrl-C (and other signals) raise, and gives the reader's mutex to other threads.
+constexpr std::chrono::nanoseconds kPythonWaitSlice = std::chrono::milliseconds(50);
+
+// Runs `call` (without the GIL) with `mutex` held, as a caller holding the GIL: the GIL is given
+// up while the mutex is awaited, so a thread waiting on the same object never stops the others.
+template <typename Mutex, typename Call>
+auto locked(Mutex& mutex, Call&& call) {
+  py::gil_scoped_release release;
+  std::lock_guard lock(mutex);
+  return call();
+}
+
 // Seconds from Python (None: forever) as nanoseconds, saturating like the C++ API's timeouts.
 std::chrono::nanoseconds to_ns(std::optional<double> seconds) {
   if (!seconds) return sim::kForever;
@@ -120,12 +135,31 @@ struct ReaderState {
   std::mutex mutex;  // one call into the sim::Reader at a time (calls run without the GIL)
   std::optional<sim::Reader> reader;
   bool open = true;
-  sim::ReadStatus last_status = sim::ReadStatus::no_new_frame;
+  std::atomic<sim::ReadStatus> last_status{sim::ReadStatus::no_new_frame};  // read without the mutex
+  std::string name;  // fixed at open: readable without the mutex
+
+  // What other threads may ask while one waits in the reader for seconds (review M4, L9): copied
+  // after every call into the reader, read under their own short-lived lock.
+  struct Snapshot {
+    sim::ReaderStats stats;
+    std::uint64_t capacity = 0;
+    sim::Layout layout;
+  };
+  mutable std::mutex snapshot_mutex;
+  Snapshot snapshot;
 
   // Called with `mutex` held.
   sim::Reader& usable() {
     if (!open) throw SimException("the reader is closed: open a new sim.Reader", "closed");
     return *reader;
+  }
+  void take_snapshot() {  // with `mutex` held: the reader may have moved to a new region
+    std::lock_guard lock(snapshot_mutex);
+    snapshot = {reader->stats(), reader->capacity(), reader->layout()};
+  }
+  Snapshot latest() const {
+    std::lock_guard lock(snapshot_mutex);
+    return snapshot;
   }
 };
 
@@ -161,14 +195,32 @@ class ReaderObject {
     auto reader = sim::Reader::open(name, options);
     if (!reader) raise(reader.error());
     state_->reader.emplace(std::move(reader.value()));
+    state_->name = name;
+    state_->take_snapshot();
     buffer_ = py::array_t<std::uint8_t>(py::ssize_t(state_->reader->capacity()));
   }
 
-  py::object read() { return read_impl(std::nullopt); }
-  py::object read_next(std::optional<double> timeout) { return read_impl(to_ns(timeout)); }
+  // Runs `call(reader)` with the reader's mutex held and the GIL released, then refreshes what
+  // other threads read without the mutex.
+  template <typename Call>
+  auto with_reader(Call&& call) {
+    return locked(state_->mutex, [&] {
+      sim::Reader& reader = state_->usable();
+      auto result = call(reader);
+      state_->take_snapshot();
+      return result;
+    });
+  }
+
+  py::object read() { return read_copy(); }
+  // wait() (in slices, interruptible), then read().
+  py::object read_next(std::optional<double> timeout) {
+    if (!wait(timeout)) return py::none();
+    return read_copy();
+  }
 
   // A copy: each frame gets its own numpy buffer (the last one is reused only if nobody kept it).
-  py::object read_impl(std::optional<std::chrono::nanoseconds> timeout) {
+  py::object read_copy() {
     for (int attempt = 0; attempt < 2; ++attempt) {
       py::array_t<std::uint8_t> out = fresh_buffer();
       auto span = std::span<std::byte>(reinterpret_cast<std::byte*>(out.mutable_data()),
@@ -176,14 +228,12 @@ class ReaderObject {
       sim::FrameInfo info;
       sim::ReadStatus status;
       std::uint64_t capacity = 0;
-      {
-        py::gil_scoped_release release;
-        std::lock_guard lock(state_->mutex);
-        sim::Reader& reader = state_->usable();
-        status = timeout ? reader.read_next(span, info, *timeout) : reader.read(span, info);
+      with_reader([&](sim::Reader& reader) {
+        status = reader.read(span, info);
         state_->last_status = status;
         capacity = reader.capacity();
-      }
+        return 0;
+      });
       if (status == sim::ReadStatus::buffer_too_small) {  // a new writer made the stream larger
         buffer_ = py::array_t<std::uint8_t>(py::ssize_t(capacity));
         continue;
@@ -201,23 +251,33 @@ class ReaderObject {
     return py::none();
   }
 
+  // Waits in slices of kPythonWaitSlice; between them the GIL is taken back so a signal
+  // (KeyboardInterrupt) raises at once, and the mutex is let go so other threads' calls on this
+  // reader wait one slice at most.
   bool wait(std::optional<double> timeout) {
-    const std::chrono::nanoseconds ns = to_ns(timeout);
-    py::gil_scoped_release release;
-    std::lock_guard lock(state_->mutex);
-    const sim::ReadStatus status = state_->usable().wait(ns);
-    state_->last_status = status;
-    return status == sim::ReadStatus::new_frame;
+    const std::chrono::nanoseconds budget = to_ns(timeout);
+    const auto start = std::chrono::steady_clock::now();
+    for (;;) {
+      const std::chrono::nanoseconds elapsed = std::chrono::steady_clock::now() - start;
+      const std::chrono::nanoseconds left = budget == sim::kForever ? sim::kForever : budget - elapsed;
+      const std::chrono::nanoseconds slice = std::max(std::min(left, kPythonWaitSlice), std::chrono::nanoseconds(0));
+      const sim::ReadStatus status = with_reader([&](sim::Reader& reader) {
+        const sim::ReadStatus waited = reader.wait(slice);
+        state_->last_status = waited;
+        return waited;
+      });
+      if (status == sim::ReadStatus::new_frame) return true;
+      if (left <= slice) return false;  // the whole timeout has passed
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+    }
   }
 
   py::object borrow() {
-    sim::Borrow borrow;
-    {
-      py::gil_scoped_release release;
-      std::lock_guard lock(state_->mutex);
-      borrow = state_->usable().borrow();
-      state_->last_status = borrow.status();
-    }
+    sim::Borrow borrow = with_reader([&](sim::Reader& reader) {
+      sim::Borrow b = reader.borrow();
+      state_->last_status = b.status();
+      return b;
+    });
     if (borrow.status() == sim::ReadStatus::region_invalid) {
       throw SimException("the stream " + name() + " no longer passes validation: open it again",
                          "region_invalid");
@@ -227,30 +287,32 @@ class ReaderObject {
   }
 
   bool writer_alive() {
-    py::gil_scoped_release release;
-    std::lock_guard lock(state_->mutex);
-    return state_->usable().writer_alive();
+    return with_reader([](sim::Reader& reader) { return reader.writer_alive(); });
+  }
+
+  // nullopt: the stream has no description; raises SimError when it is damaged.
+  std::optional<sim::SensorInfo> sensor_info() {
+    auto info = with_reader([](sim::Reader& reader) { return reader.sensor_info(); });
+    if (!info) raise(info.error());
+    return std::move(*info);
   }
 
   void close() {
-    py::gil_scoped_release release;
-    std::lock_guard lock(state_->mutex);
-    state_->open = false;  // the mapping itself goes with the last borrow
+    locked(state_->mutex, [&] { state_->open = false; });  // the mapping goes with the last borrow
   }
   bool closed() const { return !state_->open; }
   sim::ReadStatus last_status() const { return state_->last_status; }
-  std::string name() const { return state_->reader->name(); }
-  std::uint64_t capacity() const { return state_->reader->capacity(); }
-  sim::Layout layout() const { return state_->reader->layout(); }
-  sim::ReaderStats stats() {
-    std::lock_guard lock(state_->mutex);
-    return state_->reader->stats();
-  }
+  std::string name() const { return state_->name; }
+  // As of the last call into the reader: they never wait for a thread waiting in read_next.
+  std::uint64_t capacity() const { return state_->latest().capacity; }
+  sim::Layout layout() const { return state_->latest().layout; }
+  sim::ReaderStats stats() const { return state_->latest().stats; }
 
  private:
+
   py::array_t<std::uint8_t> fresh_buffer() {
     if (buffer_.size() == 0 || buffer_.ref_count() > 1) {
-      buffer_ = py::array_t<std::uint8_t>(py::ssize_t(state_->reader->capacity()));
+      buffer_ = py::array_t<std::uint8_t>(py::ssize_t(capacity()));
     }
     return buffer_;
   }
@@ -296,8 +358,7 @@ class LoanObject {
   LoanObject(const LoanObject&) = delete;
   LoanObject& operator=(const LoanObject&) = delete;
   ~LoanObject() {
-    std::lock_guard lock(state_->mutex);  // giving the loan up touches the writer's state
-    loan_ = sim::Loan();
+    locked(state_->mutex, [&] { loan_ = sim::Loan(); });  // giving it up touches the writer's state
   }
 
   // A writable view of the whole slot; its base is this Loan, which keeps the mapping alive.
@@ -312,13 +373,13 @@ class LoanObject {
     const std::uint64_t size = nbytes.value_or(default_size());
     const std::int64_t stamp = stamp_ns.value_or(sim::realtime_ns());
     const std::uint64_t slot_capacity = capacity();
-    sim::WriteStatus status;
-    {
-      py::gil_scoped_release release;
-      std::lock_guard lock(state_->mutex);
-      // commit() ends the loan whatever the outcome.
-      status = std::move(loan_).commit(size, stamp, receive_ns);
-    }
+    const sim::WriteStatus status = locked(state_->mutex, [&] {
+      if (!state_->open) {  // a closed writer publishes nothing more (review L8)
+        loan_ = sim::Loan();
+        return sim::WriteStatus::closed;
+      }
+      return std::move(loan_).commit(size, stamp, receive_ns);  // ends the loan whatever the outcome
+    });
     raise_if_failed(status, size, slot_capacity);
   }
 
@@ -336,9 +397,11 @@ class LoanObject {
 class WriterObject {
  public:
   WriterObject(const std::string& name, const sim::Layout& layout, std::uint64_t capacity,
-               bool checksum, std::uint32_t mode, double heartbeat_period)
+               bool checksum, std::uint32_t mode, double heartbeat_period,
+               std::optional<sim::SensorInfo> sensor)
       : state_(std::make_shared<WriterState>()) {
     sim::StreamSpec spec;
+    spec.sensor = std::move(sensor);
     spec.name = name;
     spec.layout = layout;
     spec.capacity = capacity;
@@ -382,11 +445,18 @@ class WriterObject {
   }
 
   std::unique_ptr<LoanObject> loan() {
-    std::lock_guard lock(state_->mutex);
-    sim::Writer& writer = state_->usable();
-    sim::Loan loan = writer.loan();
+    sim::Layout layout;
+    sim::Loan loan = locked(state_->mutex, [&] {
+      sim::Writer& writer = state_->usable();
+      layout = writer.layout();
+      return writer.loan();
+    });
     if (!loan.valid()) raise_if_failed(sim::WriteStatus::loan_open, 0, 0);
-    return std::make_unique<LoanObject>(state_, std::move(loan), writer.layout());
+    return std::make_unique<LoanObject>(state_, std::move(loan), layout);
+  }
+
+  void set_sensor_info(const sim::SensorInfo& info) {
+    raise_if_error(locked(state_->mutex, [&] { return state_->usable().set_sensor_info(info); }));
   }
 
   void close() {
@@ -433,7 +503,186 @@ py::dict info_to_dict(const sim::FrameInfo& info) {
   d["publish_ns"] = info.publish_ns;
   d["receive_ns"] = info.receive_ns;
   d["size"] = info.size;
+  d["sensor_generation"] = info.sensor_generation;
   return d;
+}
+
+// ---- the sensor description: fixed-size C++ arrays as numpy arrays (copies) ----
+
+py::array_t<double> numpy_of(const double* values, std::vector<py::ssize_t> shape) {
+  py::array_t<double> out(shape);
+  std::copy(values, values + out.size(), out.mutable_data());
+  return out;
+}
+
+// Any array-like of `N` numbers (a 3x3 nested list for K, a flat tuple…), row-major.
+template <std::size_t N>
+std::array<double, N> numbers(const py::handle& values, const char* what) {
+  const auto array = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(values);
+  if (!array || std::size_t(array.size()) != N) {
+    throw py::value_error(std::string(what) + " takes " + std::to_string(N) + " numbers");
+  }
+  std::array<double, N> out{};
+  std::copy(array.data(), array.data() + N, out.begin());
+  return out;
+}
+
+std::vector<double> number_list(const py::handle& values, const char* what) {
+  const auto array = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(values);
+  if (!array || array.ndim() > 1) throw py::value_error(std::string(what) + " takes a list of numbers");
+  return {array.data(), array.data() + array.size()};
+}
+
+void bind_sensor_info(py::module_& m) {
+  py::enum_<sim::TimeBase>(m, "TimeBase", "Which clock a stream's stamps are in.")
+      .value("unknown", sim::TimeBase::unknown)
+      .value("host", sim::TimeBase::host)
+      .value("sensor_synchronized", sim::TimeBase::sensor_synchronized)
+      .value("sensor_free_running", sim::TimeBase::sensor_free_running);
+  py::enum_<sim::PointTime>(m, "PointTime", "What a LiDAR point's time_offset_ns means.")
+      .value("none", sim::PointTime::none)
+      .value("after_frame_stamp", sim::PointTime::after_frame_stamp);
+
+  py::class_<sim::Mounting>(m, "Mounting",
+                            "Where the sensor sits in its parent frame: translation (m) and rotation "
+                            "(unit quaternion x, y, z, w), numpy copies; assign whole arrays to change them.")
+      .def(py::init([](const py::object& translation, const py::object& rotation) {
+             sim::Mounting mounting;
+             mounting.translation = numbers<3>(translation, "translation");
+             mounting.rotation = numbers<4>(rotation, "rotation");
+             return mounting;
+           }),
+           py::arg("translation") = py::make_tuple(0.0, 0.0, 0.0),
+           py::arg("rotation") = py::make_tuple(0.0, 0.0, 0.0, 1.0))
+      .def_static("from_xyz_rpy", &sim::Mounting::from_xyz_rpy, py::arg("x"), py::arg("y"), py::arg("z"),
+                  py::arg("roll"), py::arg("pitch"), py::arg("yaw"),
+                  "From metres and radians as static_transform_publisher takes them (tf2's setRPY).")
+      .def_property(
+          "translation", [](const sim::Mounting& mnt) { return numpy_of(mnt.translation.data(), {3}); },
+          [](sim::Mounting& mnt, const py::object& v) { mnt.translation = numbers<3>(v, "translation"); })
+      .def_property(
+          "rotation", [](const sim::Mounting& mnt) { return numpy_of(mnt.rotation.data(), {4}); },
+          [](sim::Mounting& mnt, const py::object& v) { mnt.rotation = numbers<4>(v, "rotation"); })
+      .def(py::self == py::self);
+
+  using Roi = sim::CameraCalibration::RegionOfInterest;
+  py::class_<Roi>(m, "RegionOfInterest", "A calibration's region of interest (all 0: the whole image).")
+      .def(py::init([](std::uint32_t x_offset, std::uint32_t y_offset, std::uint32_t height,
+                       std::uint32_t width, bool do_rectify) {
+             return Roi{x_offset, y_offset, height, width, do_rectify};
+           }),
+           py::kw_only(), py::arg("x_offset") = 0, py::arg("y_offset") = 0, py::arg("height") = 0,
+           py::arg("width") = 0, py::arg("do_rectify") = false)
+      .def_readwrite("x_offset", &Roi::x_offset)
+      .def_readwrite("y_offset", &Roi::y_offset)
+      .def_readwrite("height", &Roi::height)
+      .def_readwrite("width", &Roi::width)
+      .def_readwrite("do_rectify", &Roi::do_rectify)
+      .def(py::self == py::self);
+
+  using Calibration = sim::CameraCalibration;
+  py::class_<Calibration>(m, "CameraCalibration",
+                          "A camera's calibration as sensor_msgs/CameraInfo holds it. d, k (3x3), r (3x3) "
+                          "and p (3x4) are numpy copies; assign whole arrays to change them.")
+      .def(py::init([](std::uint32_t width, std::uint32_t height, const std::string& camera_name,
+                       const std::string& distortion_model, const py::object& d, const py::object& k,
+                       const py::object& r, const py::object& p, std::uint32_t binning_x,
+                       std::uint32_t binning_y, const std::optional<Roi>& roi) {
+             Calibration c;
+             c.width = width;
+             c.height = height;
+             c.camera_name = camera_name;
+             c.distortion_model = distortion_model;
+             c.d = number_list(d, "d");
+             if (!k.is_none()) c.k = numbers<9>(k, "k");
+             if (!r.is_none()) c.r = numbers<9>(r, "r");
+             if (!p.is_none()) c.p = numbers<12>(p, "p");
+             c.binning_x = binning_x;
+             c.binning_y = binning_y;
+             if (roi) c.roi = *roi;
+             return c;
+           }),
+           py::kw_only(), py::arg("width") = 0, py::arg("height") = 0, py::arg("camera_name") = "",
+           py::arg("distortion_model") = "plumb_bob", py::arg("d") = py::tuple(), py::arg("k") = py::none(),
+           py::arg("r") = py::none(), py::arg("p") = py::none(), py::arg("binning_x") = 0,
+           py::arg("binning_y") = 0, py::arg("roi") = py::none())
+      .def_readwrite("width", &Calibration::width)
+      .def_readwrite("height", &Calibration::height)
+      .def_readwrite("camera_name", &Calibration::camera_name)
+      .def_readwrite("distortion_model", &Calibration::distortion_model)
+      .def_property(
+          "d", [](const Calibration& c) { return numpy_of(c.d.data(), {py::ssize_t(c.d.size())}); },
+          [](Calibration& c, const py::object& v) { c.d = number_list(v, "d"); })
+      .def_property(
+          "k", [](const Calibration& c) { return numpy_of(c.k.data(), {3, 3}); },
+          [](Calibration& c, const py::object& v) { c.k = numbers<9>(v, "k"); })
+      .def_property(
+          "r", [](const Calibration& c) { return numpy_of(c.r.data(), {3, 3}); },
+          [](Calibration& c, const py::object& v) { c.r = numbers<9>(v, "r"); })
+      .def_property(
+          "p", [](const Calibration& c) { return numpy_of(c.p.data(), {3, 4}); },
+          [](Calibration& c, const py::object& v) { c.p = numbers<12>(v, "p"); })
+      .def_readwrite("binning_x", &Calibration::binning_x)
+      .def_readwrite("binning_y", &Calibration::binning_y)
+      .def_readwrite("roi", &Calibration::roi)
+      .def("summary", &sim::summary, "\"1920x1200 plumb_bob fx=… fy=… cx=… cy=…\"")
+      .def(py::self == py::self);
+
+  py::class_<sim::SensorIdentity>(m, "SensorIdentity", "The unit that makes the stream; \"\" is unknown.")
+      .def(py::init([](std::string vendor, std::string model, std::string serial, std::string firmware) {
+             return sim::SensorIdentity{std::move(vendor), std::move(model), std::move(serial),
+                                        std::move(firmware)};
+           }),
+           py::kw_only(), py::arg("vendor") = "", py::arg("model") = "", py::arg("serial") = "",
+           py::arg("firmware") = "")
+      .def_readwrite("vendor", &sim::SensorIdentity::vendor)
+      .def_readwrite("model", &sim::SensorIdentity::model)
+      .def_readwrite("serial", &sim::SensorIdentity::serial)
+      .def_readwrite("firmware", &sim::SensorIdentity::firmware)
+      .def(py::self == py::self);
+
+  py::class_<sim::SensorInfo>(m, "SensorInfo",
+                              "What a stream says about its sensor: frame, mounting, calibration, identity, "
+                              "time base (C++ sim::SensorInfo).")
+      .def(py::init([](std::string frame_id, std::string parent_frame, std::optional<sim::Mounting> mounting,
+                       std::optional<Calibration> calibration, std::optional<sim::SensorIdentity> identity,
+                       std::string calibration_source, sim::TimeBase time_base, std::string time_sync,
+                       sim::PointTime point_time) {
+             sim::SensorInfo info;
+             info.frame_id = std::move(frame_id);
+             info.parent_frame = std::move(parent_frame);
+             info.mounting = std::move(mounting);
+             info.calibration = std::move(calibration);
+             if (identity) info.identity = std::move(*identity);
+             info.calibration_source = std::move(calibration_source);
+             info.time_base = time_base;
+             info.time_sync = std::move(time_sync);
+             info.point_time = point_time;
+             return info;
+           }),
+           py::kw_only(), py::arg("frame_id"), py::arg("parent_frame") = "base_link",
+           py::arg("mounting") = py::none(), py::arg("calibration") = py::none(),
+           py::arg("identity") = py::none(), py::arg("calibration_source") = "",
+           py::arg("time_base") = sim::TimeBase::unknown, py::arg("time_sync") = "",
+           py::arg("point_time") = sim::PointTime::none)
+      .def_readwrite("frame_id", &sim::SensorInfo::frame_id)
+      .def_readwrite("parent_frame", &sim::SensorInfo::parent_frame)
+      .def_readwrite("mounting", &sim::SensorInfo::mounting, "A Mounting, or None when it is not known.")
+      .def_readwrite("calibration", &sim::SensorInfo::calibration, "A CameraCalibration, or None.")
+      .def_readwrite("identity", &sim::SensorInfo::identity)
+      .def_readwrite("calibration_source", &sim::SensorInfo::calibration_source)
+      .def_readwrite("time_base", &sim::SensorInfo::time_base)
+      .def_readwrite("time_sync", &sim::SensorInfo::time_sync)
+      .def_readwrite("point_time", &sim::SensorInfo::point_time)
+      .def("problem", &sim::sensor_info_problem,
+           "One sentence saying why a writer would refuse this description, or \"\".")
+      .def(py::self == py::self)
+      .def("__repr__", [](const sim::SensorInfo& i) {
+        return "<sim.SensorInfo frame_id=" + i.frame_id + " parent_frame=" + i.parent_frame +
+               (i.calibration ? " calibration=" + sim::summary(*i.calibration) : std::string()) + ">";
+      });
+  m.def("frame_id_problem", &sim::frame_id_problem, py::arg("frame"),
+        "One sentence saying why `frame` is not a valid frame name, or \"\".");
 }
 
 }  // namespace
@@ -526,6 +775,9 @@ PYBIND11_MODULE(_sim, m) {
                     "When the host received its first data (CLOCK_REALTIME, ns); 0 if not given.")
       .def_readonly("size", &sim::FrameInfo::size, "Bytes.")
       .def_readonly("layout", &sim::FrameInfo::layout)
+      .def_readonly("sensor_generation", &sim::FrameInfo::sensor_generation,
+                    "0 when the stream has no sensor description, else a number that changes whenever the "
+                    "writer sets one: read Reader.sensor_info again when it changed.")
       .def("as_dict", &info_to_dict)
       .def("__repr__", [](const sim::FrameInfo& i) {
         return "<sim.FrameInfo seq=" + std::to_string(i.seq) + " size=" + std::to_string(i.size) +
@@ -585,6 +837,9 @@ PYBIND11_MODULE(_sim, m) {
       .def_property_readonly("capacity", &ReaderObject::capacity)
       .def_property_readonly("layout", &ReaderObject::layout)
       .def_property_readonly("stats", &ReaderObject::stats)
+      .def_property_readonly("sensor_info", &ReaderObject::sensor_info,
+                             "The stream's SensorInfo (a copy), or None when it has none. Raises SimError "
+                             "when the description in the stream is damaged (frames still flow).")
       .def("__enter__", [](py::object self) { return self; })
       .def("__exit__", [](ReaderObject& r, py::args) { r.close(); });
 
@@ -600,10 +855,15 @@ PYBIND11_MODULE(_sim, m) {
            "Publishes the first `nbytes` bytes (default: a full frame of the layout). stamp_ns defaults to now.");
 
   py::class_<WriterObject>(m, "Writer", "The one writer of a stream.")
-      .def(py::init<const std::string&, const sim::Layout&, std::uint64_t, bool, std::uint32_t, double>(),
+      .def(py::init<const std::string&, const sim::Layout&, std::uint64_t, bool, std::uint32_t, double,
+                    std::optional<sim::SensorInfo>>(),
            py::arg("name"), py::arg("layout") = sim::Layout::raw(), py::kw_only(), py::arg("capacity") = 0,
            py::arg("checksum") = false, py::arg("mode") = 0600, py::arg("heartbeat_period") = 0.0,
-           "Creates (or takes over) the stream `name`. capacity 0 takes the layout's frame size.")
+           py::arg("sensor") = py::none(),
+           "Creates (or takes over) the stream `name`. capacity 0 takes the layout's frame size; `sensor` "
+           "(a SensorInfo) describes the stream's sensor.")
+      .def("set_sensor_info", &WriterObject::set_sensor_info, py::arg("info"),
+           "Replaces the stream's sensor description (a recalibration); SimError when it is invalid.")
       .def("write", &WriterObject::write, py::arg("frame"), py::kw_only(), py::arg("stamp_ns") = py::none(),
            py::arg("receive_ns") = 0,
            "Copies a C-contiguous buffer (numpy array, bytes) in and publishes it. stamp_ns defaults to now.")
@@ -617,6 +877,7 @@ PYBIND11_MODULE(_sim, m) {
       .def("__enter__", [](py::object self) { return self; })
       .def("__exit__", [](WriterObject& w, py::args) { w.close(); });
 
+  bind_sensor_info(m);
   m.def("list_streams", &sim::list_streams, "Names of every SIM stream on this machine, sorted.");
   m.def(
       "destroy", [](const std::string& name, bool force) { raise_if_error(sim::destroy(name, force)); },
