@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // Fuzzes what a reader does with a region file it must not trust: open (header validation),
-// read, borrow, wait and status. Any crash or out-of-bounds access is a finding.
+// read, borrow, wait, status and the sensor description (a damaged one must come back as an
+// Error sentence, never a crash). Any crash or out-of-bounds access is a finding. Seeds: a region
+// with a checksum, and one with a full camera description (corpus/region).
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -11,6 +13,7 @@
 #include <vector>
 
 #include "sim/reader.hpp"
+#include "sim/sensor_info.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static const std::string name = "/fuzz_region_" + std::to_string(getpid());
@@ -35,6 +38,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     (void)reader->wait(std::chrono::nanoseconds(0));
     (void)reader->status();
+    auto sensor = reader->sensor_info();
+    if (sensor && sensor->has_value()) {
+      // What the reader accepted must be a description a writer could have stored.
+      if (!sim::sensor_info_problem(**sensor).empty()) __builtin_trap();
+    } else if (!sensor && sensor.error().message.empty()) {
+      __builtin_trap();  // a refusal always says why
+    }
   }
   unlink(path.c_str());
   return 0;
