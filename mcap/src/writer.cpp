@@ -333,7 +333,7 @@ Expected<Writer> Writer::create(const std::string& path, const WriterOptions& op
   // A FIFO would block the open until someone reads it, and a recording is no stream of bytes.
   struct stat st {};
   if (::stat(path.c_str(), &st) == 0 && (S_ISFIFO(st.st_mode) || S_ISSOCK(st.st_mode))) {
-    return Error{ErrorCode::invalid_argument,
+    return Error{ErrorCode::system_error,
                  path + " is a FIFO or socket, not a file; choose a file path with -o"};
   }
   impl->fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC | O_NONBLOCK, 0644);

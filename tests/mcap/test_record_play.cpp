@@ -5,7 +5,10 @@
 // Damaged recordings play as far as they are intact and say what was wrong; JPEG CompressedImage
 // files without SIM metadata play too.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <turbojpeg.h>
+
+#include <cstring>
 
 #include "mcap_test_files.hpp"
 #include "record_play_support.hpp"
@@ -213,6 +216,157 @@ TEST(SimPlay, PlaysJpegCompressedImagesOfAFileWithoutSimMetadata) {
     EXPECT_EQ(f.layout.image.height, 48u);
     EXPECT_EQ(f.stamp_ns, 1'700'000'200'000'000'000 + static_cast<std::int64_t>(f.seq - 1) * 50'000'000);
   }
+}
+
+}  // namespace
+
+namespace {
+
+// Small files of one Image topic for the review's cases (docs/mcap.md, "Damaged files").
+constexpr std::uint32_t kTinyWidth = 4, kTinyHeight = 2;
+
+std::vector<std::byte> tiny_image_message(std::uint32_t index, std::int64_t stamp_ns) {
+  const auto layout = sim::ImageLayout::packed(kTinyWidth, kTinyHeight, sim::PixelFormat::rgb8);
+  std::vector<std::byte> pixels(layout.frame_bytes(), static_cast<std::byte>(index + 1));
+  auto plan = sim::ros2::plan_image(layout, pixels.size(), {sim::ros2::Time::from_ns(stamp_ns), "cam"});
+  std::vector<std::byte> message(plan ? plan->size() : 0);
+  if (plan) plan->write(pixels, message);
+  return message;
+}
+
+std::string image_schema() {
+  return std::string(sim::ros2::ros2msg_schema(sim::ros2::MessageType::image));
+}
+
+constexpr std::uint64_t kTinyStart = 1'700'000'300'000'000'000;
+
+TEST(SimPlay, PlaysAFileWhoseSummaryDoesNotRepeatTheChannels) {
+  sim::testing::TempFile file;
+  {
+    sim::mcap::WriterOptions options;
+    options.repeat_channels = false;  // like Go's SkipRepeatedChannelInfos
+    auto writer = sim::mcap::Writer::create(file.path(), options);
+    ASSERT_TRUE(writer);
+    const auto schema = writer->add_schema("sensor_msgs/msg/Image", "ros2msg", image_schema());
+    const auto channel = writer->add_channel(schema, "/tiny", "cdr", {});
+    for (std::uint32_t i = 0; i < 5; ++i) {
+      const std::uint64_t t = kTinyStart + i * 10'000'000ull;
+      ASSERT_FALSE(writer->write({channel, i, t, t}, tiny_image_message(i, static_cast<std::int64_t>(t))));
+    }
+    ASSERT_FALSE(writer->close());
+  }
+  sim::testing::StreamCleanup cleanup;
+  const std::string out = unique_stream("nosum");
+  cleanup.names = {out};
+  const auto played = sim::testing::run({SIM_PLAY, file.path(), "--remap", "/tiny=" + out, "--max-rate"});
+  EXPECT_EQ(played.code, 0) << played.err;
+  EXPECT_NE(played.err.find(out + " 5"), std::string::npos) << played.err;  // the summary line
+}
+
+TEST(SimPlay, PlaysEveryMessageOfAFileWhoseMessagesAreOutOfOrder) {
+  sim::testing::TempFile file;
+  sim::testing::RawMcap raw;
+  raw.schema(1, "sensor_msgs/msg/Image", image_schema()).channel(1, 1, "/tiny");
+  for (const std::uint64_t second : {2, 1, 3}) {  // no Statistics tell where the file starts
+    const std::uint64_t t = kTinyStart + second * 1'000'000'000ull;
+    raw.message(1, static_cast<std::uint32_t>(second), t, tiny_image_message(0, static_cast<std::int64_t>(t)));
+  }
+  sim::testing::write_bytes(file.path(), raw.finish());
+  sim::testing::StreamCleanup cleanup;
+  const std::string out = unique_stream("order");
+  cleanup.names = {out};
+  const auto played = sim::testing::run({SIM_PLAY, file.path(), "--remap", "/tiny=" + out, "--max-rate"});
+  EXPECT_EQ(played.code, 0) << played.err;
+  EXPECT_NE(played.err.find(out + " 3"), std::string::npos) << played.err;
+}
+
+TEST(SimPlay, ADamagedRecordIsSaidAndTheFramesAroundItPlayWithExitCode1) {
+  sim::testing::TempFile file;
+  {
+    auto writer = sim::mcap::Writer::create(file.path());
+    ASSERT_TRUE(writer);
+    const auto schema = writer->add_schema("sensor_msgs/msg/Image", "ros2msg", image_schema());
+    const auto channel = writer->add_channel(schema, "/tiny", "cdr", {});
+    for (std::uint32_t i = 0; i < 6; ++i) {
+      const std::uint64_t t = kTinyStart + i * 10'000'000ull;
+      ASSERT_FALSE(writer->write({channel, i, t, t}, tiny_image_message(i, static_cast<std::int64_t>(t))));
+    }
+    ASSERT_FALSE(writer->close());
+  }
+  auto bytes = sim::testing::read_bytes(file.path());
+  std::uint64_t header_length;
+  std::memcpy(&header_length, bytes.data() + 9, 8);
+  ASSERT_EQ(bytes[8 + 9 + header_length], std::byte{0x03});
+  bytes[8 + 9 + header_length] = std::byte{0x02};  // the Schema record now reads as a Footer
+  sim::testing::write_bytes(file.path(), bytes);
+  sim::testing::StreamCleanup cleanup;
+  const std::string out = unique_stream("footer");
+  cleanup.names = {out};
+  const auto played = sim::testing::run({SIM_PLAY, file.path(), "--remap", "/tiny=" + out, "--max-rate"});
+  EXPECT_EQ(played.code, 1) << played.err;
+  EXPECT_NE(played.err.find("Footer record"), std::string::npos) << played.err;
+  EXPECT_NE(played.err.find(out + " 6"), std::string::npos) << played.err;
+}
+
+TEST(SimPlay, ATinyFileCannotReserveGigabytesOfSharedMemory) {
+  sim::testing::TempFile file;
+  sim::testing::StreamCleanup cleanup;
+  const std::string out = unique_stream("huge");
+  cleanup.names = {out};
+  sim::testing::RawMcap raw;
+  raw.schema(1, "sensor_msgs/msg/Image", image_schema())
+      .channel(1, 1, out, {{"sim.kind", "bytes"}, {"sim.capacity", std::to_string(1ull << 30)}});
+  sim::testing::write_bytes(file.path(), raw.finish());
+  const auto played = sim::testing::run({SIM_PLAY, file.path(), "--max-rate"});
+  EXPECT_EQ(played.code, 1) << played.err;
+  EXPECT_NE(played.err.find("--max-capacity"), std::string::npos) << played.err;
+  EXPECT_FALSE(sim::inspect(out)) << "a 1 GiB stream was created";
+}
+
+TEST(SimPlayAndRecord, RefuseAFifoInsteadOfWaitingForIt) {
+  sim::testing::TempFile fifo(".fifo");
+  ASSERT_EQ(::mkfifo(fifo.path().c_str(), 0600), 0);
+  Process player({SIM_PLAY, fifo.path()});
+  EXPECT_EQ(player.wait(std::chrono::seconds(20)), 1) << player.err();
+  EXPECT_NE(player.err().find("not a regular file"), std::string::npos) << player.err();
+
+  sim::testing::StreamCleanup cleanup;
+  const std::string camera_stream = unique_stream("fifo_cam");
+  cleanup.names = {camera_stream};
+  Process camera({MCAP_TEST_CAMERA, "--stream", camera_stream, "--width", "8", "--height", "8",
+                  "--frames", "0", "--fps", "30"});
+  ASSERT_TRUE(camera.wait_for_line("ready"));
+  Process recorder({SIM_RECORD, "-o", fifo.path(), "--duration", "1", camera_stream});
+  EXPECT_EQ(recorder.wait(std::chrono::seconds(20)), 1) << recorder.err();
+  EXPECT_NE(recorder.err().find("FIFO"), std::string::npos) << recorder.err();
+  camera.signal(SIGTERM);
+}
+
+TEST(SimPlay, PrintsTheTopicsOfAFileWithoutTheirControlCharacters) {
+  sim::testing::TempFile file;
+  sim::testing::RawMcap raw;
+  raw.schema(1, "sensor_msgs/msg/Image", image_schema()).channel(1, 1, "/cam\x1b]0;owned\x07");
+  sim::testing::write_bytes(file.path(), raw.finish());
+  const auto played = sim::testing::run({SIM_PLAY, file.path()});
+  EXPECT_EQ(played.code, 1);
+  EXPECT_EQ(played.err.find('\x1b'), std::string::npos) << played.err;
+  EXPECT_EQ(played.err.find('\x07'), std::string::npos) << played.err;
+  EXPECT_NE(played.err.find("/cam\\x1b]0;owned\\x07"), std::string::npos) << played.err;
+}
+
+TEST(SimRecord, ExitsWith1WhenTheLastChunkCannotBeWritten) {
+  sim::testing::StreamCleanup cleanup;
+  const std::string camera_stream = unique_stream("full_cam");
+  cleanup.names = {camera_stream};
+  Process camera({MCAP_TEST_CAMERA, "--stream", camera_stream, "--width", "64", "--height", "48",
+                  "--frames", "0", "--fps", "30"});
+  ASSERT_TRUE(camera.wait_for_line("ready"));
+  // Every frame fits in the one chunk written at the end, when /dev/full refuses it.
+  Process recorder({SIM_RECORD, "-o", "/dev/full", "--duration", "1", "--json", camera_stream});
+  EXPECT_EQ(recorder.wait(), 1) << recorder.err();
+  EXPECT_NE(recorder.err().find("No space left"), std::string::npos) << recorder.err();
+  EXPECT_EQ(json_number(recorder.out(), camera_stream, "frames"), 0u) << recorder.out();  // none reached it
+  camera.signal(SIGTERM);
 }
 
 }  // namespace

@@ -46,9 +46,11 @@ PointType repack_type(const ros2::PointCloud2View& cloud) {
 }  // namespace
 
 Expected<ChannelPlayer> ChannelPlayer::for_channel(const mcap::Channel& channel,
-                                                   const mcap::Schema* schema, std::string stream) {
+                                                   const mcap::Schema* schema, std::string stream,
+                                                   std::uint64_t max_capacity) {
+  const std::string topic = mcap::printable(channel.topic);
   if (channel.message_encoding != "cdr") {
-    return bad("topic " + channel.topic + " is encoded as \"" + channel.message_encoding +
+    return bad("topic " + topic + " is encoded as \"" + mcap::printable(channel.message_encoding) +
                "\", not ROS 2 CDR; it is skipped");
   }
   const std::string name = schema != nullptr ? schema->name : "";
@@ -61,11 +63,11 @@ Expected<ChannelPlayer> ChannelPlayer::for_channel(const mcap::Channel& channel,
     if (name == ros2::ros_type_name(t) || name == shortened) type = t;
   }
   if (!type) {
-    return bad("topic " + channel.topic + " carries " + (name.empty() ? "no schema" : name) +
+    return bad("topic " + topic + " carries " + (name.empty() ? "no schema" : mcap::printable(name)) +
                ", which SIM cannot play (PointCloud2, Image or CompressedImage); it is skipped");
   }
   auto shape = mcap::stream_shape(channel.metadata);
-  return ChannelPlayer(*type, channel.topic, std::move(stream), shape);
+  return ChannelPlayer(*type, topic, std::move(stream), shape, max_capacity);
 }
 
 std::optional<Error> ChannelPlayer::create_stream() {
@@ -76,6 +78,11 @@ std::optional<Error> ChannelPlayer::create_stream() {
 std::optional<Error> ChannelPlayer::ensure_writer(const mcap::StreamShape& wanted) {
   if (writer_ && writer_->layout() == wanted.layout && writer_->capacity() == wanted.capacity) {
     return std::nullopt;
+  }
+  if (wanted.capacity > max_capacity_) {
+    return bad("stream " + stream_ + " would need " + std::to_string(wanted.capacity >> 20) +
+               " MiB per frame, more than --max-capacity " + std::to_string(max_capacity_ >> 20) +
+               " MiB; raise it if you trust the recording");
   }
   writer_.reset();  // a changed shape replaces the region; readers follow
   StreamSpec spec;
@@ -114,7 +121,7 @@ std::optional<Error> ChannelPlayer::learn_shape(std::span<const std::byte> messa
       auto image = ros2::decode_compressed_image(message);
       if (!image) return image.error();
       if (!is_jpeg(image->format)) {
-        return bad("topic " + topic_ + " holds \"" + std::string(image->format) +
+        return bad("topic " + topic_ + " holds \"" + mcap::printable(image->format) +
                    "\" images; SIM plays JPEG only");
       }
       const auto size = jpeg_size(image->data);

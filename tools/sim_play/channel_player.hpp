@@ -23,8 +23,10 @@ namespace sim::play {
 class ChannelPlayer {
  public:
   // Checks the channel can be played (ROS 2 CDR of a type SIM has) without creating anything.
+  // `max_capacity`: bytes per slot the stream may take at most, whatever the file says (a file
+  // of a few bytes must not reserve gigabytes of shared memory).
   static Expected<ChannelPlayer> for_channel(const mcap::Channel& channel, const mcap::Schema* schema,
-                                             std::string stream);
+                                             std::string stream, std::uint64_t max_capacity);
 
   const std::string& stream() const noexcept { return stream_; }
   const std::string& topic() const noexcept { return topic_; }
@@ -43,8 +45,9 @@ class ChannelPlayer {
 
  private:
   ChannelPlayer(ros2::MessageType type, std::string topic, std::string stream,
-                std::optional<mcap::StreamShape> shape)
-      : type_(type), topic_(std::move(topic)), stream_(std::move(stream)), shape_(shape) {}
+                std::optional<mcap::StreamShape> shape, std::uint64_t max_capacity)
+      : type_(type), topic_(std::move(topic)), stream_(std::move(stream)), shape_(shape),
+        max_capacity_(max_capacity) {}
   std::optional<Error> ensure_writer(const mcap::StreamShape& wanted);
   std::optional<Error> commit(Loan&& loan, std::uint64_t size, std::int64_t stamp_ns);
 
@@ -52,6 +55,7 @@ class ChannelPlayer {
   std::string topic_;
   std::string stream_;
   std::optional<mcap::StreamShape> shape_;
+  std::uint64_t max_capacity_;
   std::optional<Writer> writer_;
   std::uint64_t frames_ = 0;
 };

@@ -2,6 +2,9 @@
 // sim_play: plays an MCAP recording (sim_record's, or any ROS 2 MCAP with PointCloud2, Image or
 // CompressedImage topics) into SIM streams on the recording's own schedule, so consumers cannot
 // tell it from the live sensors.
+//
+// The steps, each a function below: read the command line; open the file; make one player per
+// playable channel; create the streams; play the messages (paced, looped); report.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -21,13 +24,121 @@
 
 namespace {
 
-struct Remap {
-  std::map<std::string, std::string> topics;  // "/a" -> "/b"
+using Players = std::map<std::uint16_t, sim::play::ChannelPlayer>;  // by MCAP channel id
+
+struct PlayOptions {
+  std::string file;
+  double rate = 1.0;
+  bool max_rate = false;
+  bool loop = false;
+  double start_s = 0;
+  std::map<std::string, std::string> remap;  // "/topic" -> "/stream"
+  bool wait_readers = false;
+  bool quiet = false;
+  std::uint64_t max_capacity_mib = 256;
+
   std::string stream_for(const std::string& topic) const {
-    const auto it = topics.find(topic);
-    return it == topics.end() ? topic : it->second;
+    const auto it = remap.find(topic);
+    return it == remap.end() ? topic : it->second;
   }
 };
+
+// Every sentence goes through here: they quote topics and names from the file, which must not
+// reach the terminal as control sequences.
+void say(sim::apps::StatusLine& status, const std::string& sentence) {
+  status.note(sim::mcap::printable(sentence));
+}
+
+// The command line; returns an exit code when the program must end now (--help, usage error).
+std::optional<int> parse_command_line(sim::apps::CommandLine& cli, int argc, char** argv, PlayOptions& o) {
+  CLI::App& app = cli.app();
+  std::vector<std::string> remaps;
+  app.add_option("file", o.file, "the MCAP file")->required()->type_name("FILE");
+  auto* rate_option = app.add_option("--rate", o.rate, "speed factor: 2 plays twice as fast")
+                          ->check(CLI::PositiveNumber)
+                          ->capture_default_str();
+  app.add_flag("--max-rate", o.max_rate, "as fast as possible, no pacing")->excludes(rate_option);
+  app.add_flag("--loop", o.loop, "start over at the end until stopped");
+  app.add_option("--start", o.start_s, "skip the first S seconds of the recording")
+      ->check(CLI::Range(0.0, 1e9))
+      ->type_name("S");
+  app.add_option("--remap", remaps, "play topic /a into stream /b (repeatable)")->type_name("/a=/b");
+  app.add_flag("--wait-for-readers", o.wait_readers,
+               "create the streams, then wait until a reader waits on each before playing");
+  app.add_option("--max-capacity", o.max_capacity_mib,
+                 "MiB per frame a stream may take at most (a recording cannot reserve more shared memory)")
+      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 20))
+      ->capture_default_str()
+      ->type_name("MIB");
+  app.add_flag("--quiet", o.quiet, "no progress line and no summary");
+  cli.add_config_file();
+  if (auto code = cli.parse(argc, argv)) return code;
+  for (const auto& r : remaps) {
+    const auto eq = r.find('=');
+    if (eq == std::string::npos) return cli.usage_error("--remap takes /topic=/stream, not \"" + r + "\"");
+    const std::string to = r.substr(eq + 1);
+    if (const auto problem = sim::stream_name_problem(to); !problem.empty()) return cli.usage_error(problem);
+    o.remap[r.substr(0, eq)] = to;
+  }
+  return std::nullopt;
+}
+
+// One player per playable channel; several channels of one topic (a stream whose layout
+// changed while recording) share its stream name.
+Players make_players(const sim::mcap::Reader& reader, const PlayOptions& o, sim::apps::StatusLine& status) {
+  Players players;
+  for (const auto& [id, channel] : reader.channels()) {
+    std::string stream = o.stream_for(channel.topic);
+    if (!sim::stream_name_problem(stream).empty()) {
+      say(status, "topic " + channel.topic + " is not a SIM stream name; give it one with --remap " +
+                      channel.topic + "=/name");
+      continue;
+    }
+    auto player = sim::play::ChannelPlayer::for_channel(channel, reader.schema_of(channel), stream,
+                                                        o.max_capacity_mib << 20);
+    if (!player) {
+      say(status, player.error().message);
+      continue;
+    }
+    players.emplace(id, std::move(*player));
+  }
+  return players;
+}
+
+// Creates every stream before playing: from the metadata, or from each topic's first message.
+// A stream that cannot be created is said and its channels dropped; returns the streams made.
+std::vector<std::string> create_streams(sim::mcap::Reader& reader, Players& players,
+                                        sim::apps::StatusLine& status, bool& failed) {
+  const bool need_first_messages =
+      std::any_of(players.begin(), players.end(), [](const auto& p) { return !p.second.shape_known(); });
+  if (need_first_messages) {
+    while (auto m = reader.next()) {
+      auto it = players.find(m->header.channel_id);
+      if (it != players.end() && !it->second.shape_known()) {
+        if (auto error = it->second.learn_shape(m->data)) say(status, error->message);
+      }
+    }
+    reader.rewind();
+  }
+  std::vector<std::string> streams;
+  for (auto it = players.begin(); it != players.end();) {
+    auto& player = it->second;
+    const bool made = std::find(streams.begin(), streams.end(), player.stream()) != streams.end();
+    if (!player.shape_known() || made) {
+      ++it;
+      continue;
+    }
+    if (auto error = player.create_stream()) {
+      say(status, error->message);
+      failed = true;
+      it = players.erase(it);
+      continue;
+    }
+    streams.push_back(player.stream());
+    ++it;
+  }
+  return streams;
+}
 
 // Waits until a reader sleeps on every stream (--wait-for-readers); false when stopped.
 bool wait_for_readers(const std::vector<std::string>& streams, const sim::apps::StopSignal& stop) {
@@ -41,6 +152,111 @@ bool wait_for_readers(const std::vector<std::string>& streams, const sim::apps::
   return true;
 }
 
+// Plays the file once or, with --loop, until stopped: each pass continues one mean message
+// interval after the last, with times and stamps shifted so they keep going forward.
+class Playback {
+ public:
+  Playback(sim::mcap::Reader& reader, Players& players, const PlayOptions& o,
+           const sim::apps::StopSignal& stop, sim::apps::StatusLine& status)
+      : reader_(reader), players_(players), options_(o), stop_(stop), status_(status),
+        pacer_(o.max_rate ? 0.0 : o.rate) {}
+
+  void run() {
+    while (!stop_.requested()) {
+      ++passes_;
+      const Pass pass = play_pass();
+      if (!options_.loop || stop_.requested() || pass.messages == 0) break;
+      const std::uint64_t span = pass.last - pass.first;
+      const std::uint64_t gap = pass.messages > 1 ? span / (pass.messages - 1) : 0;
+      pacer_.shift(static_cast<std::int64_t>(span + gap));
+      shift_ns_ += static_cast<std::int64_t>(span + gap);
+      reader_.rewind();
+    }
+  }
+
+  std::uint64_t played() const noexcept { return played_; }
+  std::uint64_t undecodable() const noexcept { return undecodable_; }
+  unsigned passes() const noexcept { return passes_; }
+
+ private:
+  struct Pass {
+    std::uint64_t first = UINT64_MAX, last = 0, messages = 0;  // log times of what was played
+  };
+
+  // Messages logged before this are skipped (--start). Without --start nothing is: a file whose
+  // messages are out of order plays the early ones late, at once, rather than dropping them.
+  std::uint64_t skip_before(std::uint64_t first_in_file_order) const {
+    if (options_.start_s <= 0) return 0;
+    const std::uint64_t start = reader_.start_time().value_or(first_in_file_order);
+    return start + static_cast<std::uint64_t>(options_.start_s * 1e9);
+  }
+
+  Pass play_pass() {
+    Pass pass;
+    std::optional<std::uint64_t> window;
+    while (!stop_.requested()) {
+      auto m = reader_.next();
+      if (!m) break;
+      if (!window) window = skip_before(m->header.log_time);
+      if (m->header.log_time < *window) continue;
+      auto it = players_.find(m->header.channel_id);
+      if (it == players_.end()) continue;
+      ++pass.messages;
+      pass.first = std::min(pass.first, m->header.log_time);
+      pass.last = std::max(pass.last, m->header.log_time);
+      if (!pacer_.wait(static_cast<std::int64_t>(m->header.log_time) + shift_ns_, stop_)) break;
+      if (auto error = it->second.play(m->data, shift_ns_)) {
+        if (undecodable_++ == 0) say(status_, error->message);
+        continue;
+      }
+      ++played_;
+      if (status_.due()) show_progress(m->header.log_time, *window);
+    }
+    return pass;
+  }
+
+  void show_progress(std::uint64_t now, std::uint64_t window) {
+    const auto& stats = reader_.statistics();
+    const std::uint64_t from = std::max(window, reader_.start_time().value_or(now));
+    const std::uint64_t to = stats ? stats->message_end_time : now;
+    const double fraction = to > from && now >= from
+                                ? std::min(1.0, static_cast<double>(now - from) / static_cast<double>(to - from))
+                                : 1.0;
+    status_.update(sim::apps::fields({{"played", sim::apps::number(100 * fraction, 0) + " %"},
+                                      {"frames", std::to_string(played_)},
+                                      {"pass", std::to_string(passes_)}}));
+  }
+
+  sim::mcap::Reader& reader_;
+  Players& players_;
+  const PlayOptions& options_;
+  const sim::apps::StopSignal& stop_;
+  sim::apps::StatusLine& status_;
+  sim::apps::Pacer pacer_;
+  std::int64_t shift_ns_ = 0;  // added to times and stamps on each loop
+  std::uint64_t played_ = 0;
+  std::uint64_t undecodable_ = 0;
+  unsigned passes_ = 0;
+};
+
+// The summary line and the sentences of what went wrong; the exit code.
+int report(const Playback& playback, const Players& players, const sim::mcap::Reader& reader,
+           bool streams_failed, sim::apps::StatusLine& status) {
+  std::string summary = sim::apps::fields({{"frames", std::to_string(playback.played())},
+                                           {"passes", std::to_string(playback.passes())}});
+  for (const auto& [id, player] : players) summary += "  " + player.stream() + " " + std::to_string(player.frames());
+  status.finish(summary);
+  if (playback.undecodable() > 0) {
+    say(status, std::to_string(playback.undecodable()) + " messages could not be decoded and were skipped");
+  }
+  if (!reader.problem().empty()) {
+    const auto more = reader.problem_count() - 1;
+    say(status, reader.problem() + (more > 0 ? " (and " + std::to_string(more) + " more problems)" : ""));
+  }
+  const bool failed = !reader.problem().empty() || playback.undecodable() > 0 || streams_failed;
+  return failed ? sim::apps::kExitFailure : sim::apps::kExitOk;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -49,156 +265,29 @@ int main(int argc, char** argv) {
       "Play an MCAP recording into SIM streams on its own schedule: sim_record's files (the "
       "streams come back with their exact layout) or ROS 2 recordings whose topics are "
       "PointCloud2, Image or CompressedImage (JPEG). A damaged file plays as far as it is intact.");
-  CLI::App& app = cli.app();
-  std::string file;
-  double rate = 1.0;
-  bool max_rate = false;
-  bool loop = false;
-  double start_s = 0;
-  std::vector<std::string> remaps;
-  bool wait_readers = false;
-  bool quiet = false;
-  app.add_option("file", file, "the MCAP file")->required()->type_name("FILE");
-  auto* rate_option = app.add_option("--rate", rate, "speed factor: 2 plays twice as fast")
-                          ->check(CLI::PositiveNumber)
-                          ->capture_default_str();
-  app.add_flag("--max-rate", max_rate, "as fast as possible, no pacing")->excludes(rate_option);
-  app.add_flag("--loop", loop, "start over at the end until stopped");
-  app.add_option("--start", start_s, "skip the first S seconds of the recording")
-      ->check(CLI::NonNegativeNumber)
-      ->type_name("S");
-  app.add_option("--remap", remaps, "play topic /a into stream /b (repeatable)")->type_name("/a=/b");
-  app.add_flag("--wait-for-readers", wait_readers,
-               "create the streams, then wait until a reader waits on each before playing");
-  app.add_flag("--quiet", quiet, "no progress line and no summary");
-  cli.add_config_file();
-  if (auto code = cli.parse(argc, argv)) return *code;
-
-  Remap remap;
-  for (const auto& r : remaps) {
-    const auto eq = r.find('=');
-    if (eq == std::string::npos) return cli.usage_error("--remap takes /topic=/stream, not \"" + r + "\"");
-    const std::string to = r.substr(eq + 1);
-    if (const auto problem = sim::stream_name_problem(to); !problem.empty()) return cli.usage_error(problem);
-    remap.topics[r.substr(0, eq)] = to;
-  }
+  PlayOptions options;
+  if (auto code = parse_command_line(cli, argc, argv, options)) return *code;
 
   auto& stop = sim::apps::StopSignal::install();
-  auto status = sim::apps::StatusLine::for_stderr("sim_play", quiet);
-  auto reader = sim::mcap::Reader::open(file);
-  if (!reader) return cli.fail(reader.error().message);
-  if (!reader->problem().empty()) status.note(reader->problem());
+  auto status = sim::apps::StatusLine::for_stderr("sim_play", options.quiet);
+  auto reader = sim::mcap::Reader::open(options.file);
+  if (!reader) return cli.fail(sim::mcap::printable(reader.error().message));
+  if (!reader->problem().empty()) say(status, reader->problem());
 
-  // One player per playable channel; several channels of one topic (a stream whose layout
-  // changed while recording) share its stream name.
-  std::map<std::uint16_t, sim::play::ChannelPlayer> players;
-  for (const auto& [id, channel] : reader->channels()) {
-    std::string stream = remap.stream_for(channel.topic);
-    if (!sim::stream_name_problem(stream).empty()) {
-      status.note("topic " + channel.topic + " is not a SIM stream name; give it one with --remap " +
-                  channel.topic + "=/name");
-      continue;
-    }
-    auto player = sim::play::ChannelPlayer::for_channel(channel, reader->schema_of(channel), stream);
-    if (!player) {
-      status.note(player.error().message);
-      continue;
-    }
-    players.emplace(id, std::move(*player));
+  Players players = make_players(*reader, options, status);
+  if (players.empty()) {
+    return cli.fail(sim::mcap::printable(options.file) +
+                    " has no topic SIM can play (PointCloud2, Image or CompressedImage in CDR)");
   }
-  if (players.empty()) return cli.fail(file + " has no topic SIM can play (PointCloud2, Image or CompressedImage in CDR)");
-
-  // Streams are created before playing: from the metadata, or from each topic's first message.
-  bool need_first_messages = false;
-  for (auto& [id, player] : players) need_first_messages |= !player.shape_known();
-  if (need_first_messages) {
-    while (auto m = reader->next()) {
-      auto it = players.find(m->header.channel_id);
-      if (it != players.end() && !it->second.shape_known()) {
-        if (auto error = it->second.learn_shape(m->data)) status.note(error->message);
-      }
-    }
-    reader->rewind();
-  }
-  std::vector<std::string> streams;
-  for (auto& [id, player] : players) {
-    if (!player.shape_known()) continue;
-    if (std::find(streams.begin(), streams.end(), player.stream()) != streams.end()) continue;
-    if (auto error = player.create_stream()) return cli.fail(error->message);
-    streams.push_back(player.stream());
-  }
-  std::printf("playing %s into %zu stream%s\n", file.c_str(), streams.size(), streams.size() == 1 ? "" : "s");
+  bool streams_failed = false;
+  const auto streams = create_streams(*reader, players, status, streams_failed);
+  if (players.empty()) return cli.fail("no stream of " + sim::mcap::printable(options.file) + " could be created");
+  std::printf("playing %s into %zu stream%s\n", sim::mcap::printable(options.file).c_str(), streams.size(),
+              streams.size() == 1 ? "" : "s");
   std::fflush(stdout);
-  if (wait_readers && !wait_for_readers(streams, stop)) return sim::apps::kExitOk;
+  if (options.wait_readers && !wait_for_readers(streams, stop)) return sim::apps::kExitOk;
 
-  std::uint64_t first_time = 0;
-  std::uint64_t last_time = 0;
-  if (reader->statistics()) {
-    first_time = reader->statistics()->message_start_time;
-    last_time = reader->statistics()->message_end_time;
-  }
-  const auto window_start = [&](std::uint64_t first) {
-    return first + static_cast<std::uint64_t>(start_s * 1e9);
-  };
-  sim::apps::Pacer pacer(max_rate ? 0.0 : rate);
-  std::int64_t shift_ns = 0;  // added to times and stamps on each loop
-  std::uint64_t played = 0;
-  std::uint64_t undecodable = 0;
-  unsigned pass = 0;
-  while (!stop.requested()) {
-    ++pass;
-    std::uint64_t pass_first = 0, pass_last = 0, in_window = 0;
-    bool have_first = first_time != 0;
-    while (!stop.requested()) {
-      auto m = reader->next();
-      if (!m) break;
-      if (!have_first) {
-        first_time = m->header.log_time;
-        have_first = true;
-      }
-      if (m->header.log_time < window_start(first_time)) continue;
-      auto it = players.find(m->header.channel_id);
-      if (it == players.end()) continue;
-      if (in_window++ == 0) pass_first = m->header.log_time;
-      pass_last = std::max(pass_last, m->header.log_time);
-      if (!pacer.wait(static_cast<std::int64_t>(m->header.log_time) + shift_ns, stop)) break;
-      if (auto error = it->second.play(m->data, shift_ns)) {
-        if (undecodable++ == 0) status.note(error->message);
-        continue;
-      }
-      ++played;
-      if (status.due()) {
-        const std::uint64_t end = std::max(last_time, pass_last);
-        const double fraction = end > window_start(first_time)
-            ? static_cast<double>(m->header.log_time - window_start(first_time)) /
-                  static_cast<double>(end - window_start(first_time))
-            : 1.0;
-        status.update(sim::apps::fields({{"played", sim::apps::number(100 * fraction, 0) + " %"},
-                                         {"frames", std::to_string(played)},
-                                         {"pass", std::to_string(pass)}}));
-      }
-    }
-    if (!loop || stop.requested() || in_window == 0) break;
-    // The next pass continues one mean interval after this one's last message.
-    const std::uint64_t span = pass_last - pass_first;
-    const std::uint64_t gap = in_window > 1 ? span / (in_window - 1) : 0;
-    pacer.shift(static_cast<std::int64_t>(span + gap));
-    shift_ns += static_cast<std::int64_t>(span + gap);
-    reader->rewind();
-  }
-
-  std::string summary = sim::apps::fields({{"frames", std::to_string(played)},
-                                           {"passes", std::to_string(pass)}});
-  for (const auto& [id, player] : players) summary += "  " + player.stream() + " " + std::to_string(player.frames());
-  status.finish(summary);
-  if (undecodable > 0) {
-    status.note(std::to_string(undecodable) + " messages could not be decoded and were skipped");
-  }
-  if (!reader->problem().empty()) {
-    status.note(reader->problem() + (reader->problem_count() > 1
-                                         ? " (and " + std::to_string(reader->problem_count() - 1) + " more problems)"
-                                         : ""));
-    return sim::apps::kExitFailure;
-  }
-  return undecodable > 0 ? sim::apps::kExitFailure : sim::apps::kExitOk;
+  Playback playback(*reader, players, options, stop, status);
+  playback.run();
+  return report(playback, players, *reader, streams_failed, status);
 }

@@ -133,7 +133,9 @@ struct Recorder::Impl {
   std::thread writer_thread;
   std::int64_t start_monotonic_ns = 0;
   std::int64_t realtime_minus_monotonic_ns = 0;  // turns publish times into epoch times
+  std::map<std::uint16_t, std::size_t> channel_streams;  // MCAP channel id -> index in `streams`
   bool stopped = false;
+  bool closed = false;  // the file is closed: the writer knows what reached it
 
   mutable std::mutex problem_mutex;
   std::string problem;
@@ -212,6 +214,7 @@ struct Recorder::Impl {
         const auto id = writer->add_channel(schema->second, name, "cdr",
                                             mcap::stream_metadata(name, item->layout, item->capacity));
         channel = channels.emplace(key, id).first;
+        channel_streams[id] = item->stream;
       }
       item->header.channel_id = channel->second;
       if (auto error = writer->write(item->header, item->data)) {
@@ -228,8 +231,17 @@ struct Recorder::Impl {
     for (const auto& s : streams) {
       StreamCounters c;
       c.name = s->name;
-      c.frames = s->frames.load(std::memory_order_relaxed);
+      c.frames = s->frames.load(std::memory_order_relaxed);  // handed to the writer thread
       c.bytes = s->bytes.load(std::memory_order_relaxed);
+      if (closed) {  // the final report counts what is in the file, not what was sent to it
+        c.frames = c.bytes = 0;
+        for (const auto& [channel, stream] : channel_streams) {
+          if (streams[stream].get() != s.get()) continue;
+          const auto stored = writer->stored(channel);
+          c.frames += stored.messages;
+          c.bytes += stored.bytes;
+        }
+      }
       c.missed = s->skipped.load(std::memory_order_relaxed) + s->lapped.load(std::memory_order_relaxed);
       c.unrecordable = s->unrecordable.load(std::memory_order_relaxed);
       p.streams.push_back(std::move(c));
@@ -247,8 +259,13 @@ struct Recorder::Impl {
     queue.close();
     if (writer_thread.joinable()) writer_thread.join();
     if (writer) {
-      if (auto error = writer->close()) note(error->message);
+      // The last chunk and the summary are written here: a full disk now fails the recording too.
+      if (auto error = writer->close()) {
+        note(error->message);
+        write_failed.store(true);
+      }
       file_bytes.store(writer->bytes_written());
+      closed = true;
     }
   }
 };
