@@ -1,0 +1,98 @@
+// SPDX-License-Identifier: Apache-2.0
+// LidarStream: the one path from Velodyne UDP payloads to a SIM stream, shared by the live
+// driver (sim_lidar_velodyne) and the capture replay (sim_replay_pcap), so a consumer cannot
+// tell them apart. It owns the SIM writer and the FrameAssembler, keeps the assembler's output
+// pointed at the writer's loaned slot, commits each revolution with the sensor time of its first
+// point, and turns position packets (GPRMC, PPS) into the stream's time-sync description.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+
+#include "sim/result.hpp"
+#include "sim/sensor_info.hpp"
+#include "sim/velodyne/velodyne.hpp"
+#include "sim/writer.hpp"
+
+namespace sim::velodyne {
+
+struct LidarStreamConfig {
+  std::string stream = "/lidar_top";
+  std::filesystem::path calibration;  // YAML or db.xml (required)
+  AssemblerOptions assembler;         // assembler.model is the sensor model
+  unsigned returns = 2;               // capacity: returns × packets of a revolution at min_rpm
+  unsigned min_rpm = 300;
+  // The stream's description (frame, mounting; apps/common sensor_options.hpp); the stream adds
+  // the identity, the calibration source, the point time and the time sync. nullopt: none.
+  std::optional<SensorInfo> sensor;
+  bool checksum = false;
+  bool lock_memory = false;
+  std::chrono::milliseconds heartbeat_period{0};
+};
+
+struct PublishCounters {
+  std::uint64_t frames = 0;
+  std::uint64_t points = 0;
+  std::uint64_t partial_frames = 0;
+  std::uint64_t failed = 0;            // commits the writer refused
+  std::uint64_t position_packets = 0;  // GPRMC/PPS reports taken
+  std::uint64_t position_malformed = 0;
+};
+
+// The clock state position packets report, in words for SensorInfo::time_sync and status lines:
+// "PPS locked, GPRMC valid", "PPS absent, GPRMC no fix", "no position packet yet".
+struct TimeSync {
+  TimeBase base = TimeBase::unknown;
+  std::string text = "no position packet yet";
+};
+TimeSync time_sync_of(const PositionReport& report);
+
+class LidarStream {
+ public:
+  // Loads the calibration, checks it against the model, creates the SIM stream sized for the
+  // model. Every failure is one sentence naming the file or stream.
+  static Expected<LidarStream> create(const LidarStreamConfig& config);
+
+  LidarStream(LidarStream&&) noexcept;
+  LidarStream& operator=(LidarStream&&) noexcept;
+  LidarStream(const LidarStream&) = delete;
+  LidarStream& operator=(const LidarStream&) = delete;
+  ~LidarStream();
+
+  // One data packet (port 2368). `time_reference_ns` picks the hour of the packet's timestamp
+  // (0: host_receive_ns; a replay passes the capture's time).
+  PushResult push(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns,
+                  std::int64_t time_reference_ns = 0) noexcept;
+  // One position packet (port 8308): updates the time sync, and the stream's description when
+  // it changed. False when the payload is no position packet (counted).
+  bool push_position(std::span<const std::uint8_t> payload) noexcept;
+  std::optional<CompletedFrame> finish() noexcept;
+  void reset() noexcept;
+  void set_stamp_offset(std::int64_t offset_ns) noexcept;
+  std::int64_t stamp_offset() const noexcept;
+
+  Model model() const noexcept;
+  const AssemblerCounters& counters() const noexcept;
+  const PublishCounters& published() const noexcept;
+  const TimeSync& time_sync() const noexcept;
+  Writer& writer() noexcept;
+  // "frames 12 packets 9000 lost 0 malformed 0 wrong-model 0 points/frame 28800 time PPS locked…"
+  // for status lines; key=value pairs with `machine` for summaries.
+  std::string describe_counters(bool machine = false) const;
+
+  struct Impl;
+
+ private:
+  explicit LidarStream(std::unique_ptr<Impl> impl) noexcept;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Returns announced by a data packet of `model` (1 or 2), or nullopt when it is not one.
+std::optional<unsigned> returns_in(std::span<const std::uint8_t> payload, Model model) noexcept;
+
+}  // namespace sim::velodyne

@@ -1,0 +1,86 @@
+// SPDX-License-Identifier: Apache-2.0
+// LiveReceiver: a Velodyne sensor's UDP packets into a LidarStream, the live end of the driver.
+//
+//   auto receiver = sim::velodyne::LiveReceiver::open({.data_port = 2368});  // sockets only
+//   receiver->publish_to(stream_config, model);     // model nullopt: from the first packet
+//   receiver->run(stop_fd, {.tick = print_status}); // until stop_fd is readable
+//
+// Two sockets: data packets (2368) and position packets (8308, the GPRMC/PPS state). Datagrams
+// are taken in recvmmsg batches with the kernel's arrival stamps (SO_TIMESTAMPNS). A gap
+// between arrival stamps longer than the silence timeout means the sensor stopped: the
+// revolution in progress is dropped and the next packet starts anew. IPv4.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "sim/result.hpp"
+#include "sim/velodyne/lidar_stream.hpp"
+
+namespace sim::velodyne {
+
+struct NetworkConfig {
+  std::string bind = "0.0.0.0";          // local IPv4 address to receive on
+  std::uint16_t data_port = default_data_port;  // 0: a free port, read back with data_port()
+  std::optional<std::uint16_t> position_port = default_position_port;  // nullopt: not listened to
+  std::string multicast_group;           // empty: unicast or broadcast
+  std::string source;                    // empty: packets from any sender
+  int receive_buffer = 8 << 20;          // SO_RCVBUF asked for (SO_RCVBUFFORCE when root)
+  std::chrono::nanoseconds silence_timeout = std::chrono::milliseconds(500);
+};
+
+// What is wrong with an IPv4 address, or "" when it is one (for checking options early).
+std::string address_problem(const std::string& address);
+std::string multicast_group_problem(const std::string& group);
+
+struct ReceiveCounters {
+  std::uint64_t datagrams = 0;     // data and position datagrams taken from the sockets
+  std::uint64_t other_source = 0;  // from another sender than NetworkConfig::source
+  std::uint64_t unrecognised = 0;  // not a Velodyne data packet, before the model was known
+  std::uint64_t resumes = 0;       // packets came back after a silence
+};
+
+struct ReceiverCallbacks {
+  std::function<void(std::string_view)> note;  // one sentence: model detected, resumed…
+  std::chrono::nanoseconds tick_period{0};
+  std::function<void()> tick;                  // every tick_period, for a status line
+};
+
+class LiveReceiver {
+ public:
+  // Opens and binds the sockets (joining the multicast group); creates no stream. Errors:
+  // invalid_argument for an address that is not one, system_error for a port in use.
+  static Expected<LiveReceiver> open(const NetworkConfig& network);
+
+  LiveReceiver(LiveReceiver&&) noexcept;
+  LiveReceiver& operator=(LiveReceiver&&) noexcept;
+  LiveReceiver(const LiveReceiver&) = delete;
+  LiveReceiver& operator=(const LiveReceiver&) = delete;
+  ~LiveReceiver();
+
+  // With a model the stream is created now (its error returned); without, from the first data
+  // packet that names the model (run() returns the error then).
+  Expected<void> publish_to(LidarStreamConfig config, std::optional<Model> model);
+  Expected<void> run(int stop_fd, const ReceiverCallbacks& callbacks = {});
+
+  std::uint16_t data_port() const noexcept;
+  std::uint16_t position_port() const noexcept;  // 0 when not listened to
+  std::string local_address() const;             // "127.0.0.1:2368"
+  int receive_buffer() const noexcept;
+  const ReceiveCounters& counters() const noexcept;
+  const LidarStream* stream() const noexcept;
+  std::int64_t last_packet_ns() const noexcept;  // CLOCK_MONOTONIC of the last data packet
+
+  struct Impl;
+
+ private:
+  explicit LiveReceiver(std::unique_ptr<Impl> impl) noexcept;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace sim::velodyne
