@@ -197,6 +197,27 @@ std::string describe_mismatch(std::size_t payload_bytes, const PacketFormat& for
   return text + "; give the sensor's current metadata";
 }
 
+std::optional<PacketFormat> guess_format(std::span<const std::uint8_t> payload) noexcept {
+  for (const ProfileInfo& p : profiles) {
+    for (unsigned beams : {16u, 32u, 64u, 128u}) {
+      for (unsigned per_packet : {16u, 8u, 4u, 2u, 1u}) {
+        // 4096 columns: the largest lidar mode bounds every measurement_id.
+        auto format = PacketFormat::create(p.profile, beams, per_packet, 4096);
+        if (!format || format->packet_bytes != payload.size()) continue;
+        LidarPacket packet;
+        if (LidarPacket::parse(payload, *format, packet) != PacketError::none) continue;
+        // Consecutive columns: a packet holds neighbouring measurements.
+        bool consecutive = true;
+        for (unsigned c = 1; c < per_packet && consecutive; ++c) {
+          consecutive = packet.column(c).measurement_id == packet.column(c - 1).measurement_id + 1;
+        }
+        if (consecutive) return *format;
+      }
+    }
+  }
+  return std::nullopt;
+}
+
 std::optional<ImuPacket> parse_imu(std::span<const std::uint8_t> payload) noexcept {
   if (payload.size() != imu_packet_bytes) return std::nullopt;
   const std::uint8_t* p = payload.data();

@@ -9,6 +9,8 @@
 #include <limits>
 #include <utility>
 
+#include "ip_reassembly.hpp"
+
 namespace sim::pcap {
 
 struct CaptureReader::Impl {
@@ -19,6 +21,15 @@ struct CaptureReader::Impl {
   CaptureStats stats;
   std::int64_t file_size = -1;
   Error error{ErrorCode::system_error, ""};
+  Ipv4Reassembler reassembler;
+
+  void update_fragment_stats() noexcept {
+    const ReassemblyCounters& c = reassembler.counters();
+    stats.reassembled = c.completed;
+    stats.fragments_reassembled = c.fragments_used;
+    stats.fragments_incomplete = c.incomplete();
+    stats.fragments_refused = c.refused;
+  }
 
   ~Impl() {
     if (handle != nullptr) pcap_close(handle);  // also closes the FILE* it was opened from
@@ -73,7 +84,10 @@ std::string bpf_expression(const CaptureOptions& options, LinkType link) {
   if (options.port) {
     // BPF's "udp" does not look behind IPv6 extension headers, so IPv6 passes this pre-filter
     // and next() checks its port after parsing.
-    const std::string udp = "udp port " + std::to_string(*options.port) + " or ip6";
+    // Later IPv4 fragments carry no UDP header: they pass too, and next() checks the port of
+    // the datagram they rebuild.
+    const std::string udp = "udp port " + std::to_string(*options.port) +
+                            " or ip6 or (udp and ip[6:2] & 0x1fff != 0)";
     // Each "vlan" moves libpcap's offsets by one tag for the rest of the expression, so the
     // tagged alternatives nest instead of repeating "vlan and vlan".
     port_expression = link.dlt == DLT_EN10MB
@@ -131,13 +145,25 @@ CaptureReader::CaptureReader(CaptureReader&&) noexcept = default;
 CaptureReader& CaptureReader::operator=(CaptureReader&&) noexcept = default;
 CaptureReader::~CaptureReader() = default;
 
+namespace {
+// The record's capture time for fragment timeouts (0 when the stamp cannot be one).
+std::int64_t record_ns(const pcap_pkthdr& header) noexcept {
+  if (header.ts.tv_sec < 0 || header.ts.tv_sec > 9'000'000'000 || header.ts.tv_usec < 0) return 0;
+  return std::int64_t{header.ts.tv_sec} * 1'000'000'000 + header.ts.tv_usec;
+}
+}  // namespace
+
 NextStatus CaptureReader::next(Datagram& out) noexcept {
   Impl& s = *impl_;
   for (;;) {
     pcap_pkthdr* header = nullptr;
     const u_char* data = nullptr;
     const int rc = pcap_next_ex(s.handle, &header, &data);
-    if (rc == PCAP_ERROR_BREAK) return NextStatus::end;
+    if (rc == PCAP_ERROR_BREAK) {
+      s.reassembler.finish();  // what is still pending will never complete
+      s.update_fragment_stats();
+      return NextStatus::end;
+    }
     if (rc != 1) {
       // Offline reads fail only on a damaged file: libpcap says "truncated dump file; …".
       s.error = Error{ErrorCode::invalid_argument,
@@ -148,11 +174,22 @@ NextStatus CaptureReader::next(Datagram& out) noexcept {
     }
     ++s.stats.records;
     const std::span<const std::byte> frame(reinterpret_cast<const std::byte*>(data), header->caplen);
-    switch (parse_frame(s.link, frame, out)) {
+    Ipv4Fragment fragment;
+    switch (parse_frame(s.link, frame, out, &fragment)) {
       case FrameStatus::ok: break;
       case FrameStatus::not_ip: ++s.stats.not_ip; continue;
       case FrameStatus::not_udp: ++s.stats.not_udp; continue;
-      case FrameStatus::fragment: ++s.stats.fragments; continue;
+      case FrameStatus::fragment: {
+        ++s.stats.fragments;
+        const auto whole = s.reassembler.add(fragment, record_ns(*header));
+        s.update_fragment_stats();
+        if (whole.empty()) continue;
+        const FrameStatus status = parse_reassembled(fragment, whole, out);
+        if (status == FrameStatus::truncated) ++s.stats.truncated;
+        if (status == FrameStatus::malformed) ++s.stats.malformed;
+        if (status != FrameStatus::ok) continue;
+        break;
+      }
       case FrameStatus::truncated: ++s.stats.truncated; continue;
       case FrameStatus::malformed:
       case FrameStatus::unsupported_link: ++s.stats.malformed; continue;

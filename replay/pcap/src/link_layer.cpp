@@ -66,7 +66,7 @@ FrameStatus parse_udp(Bytes udp, Datagram& out) noexcept {
   return FrameStatus::ok;
 }
 
-FrameStatus parse_ipv4(Bytes ip, Datagram& out) noexcept {
+FrameStatus parse_ipv4(Bytes ip, Datagram& out, Ipv4Fragment* fragment) noexcept {
   if (!ip.has(20)) return FrameStatus::truncated;
   if ((ip.u8(0) >> 4) != 4) return FrameStatus::malformed;
   const std::size_t header_length = std::size_t{ip.u8(0) & 0x0fu} * 4;  // IHL: options included
@@ -78,7 +78,20 @@ FrameStatus parse_ipv4(Bytes ip, Datagram& out) noexcept {
   const bool more_fragments = (flags_fragment & 0x2000u) != 0;
   const bool later_fragment = (flags_fragment & 0x1fffu) != 0;
   if (ip.u8(9) != ip_proto_udp) return FrameStatus::not_udp;
-  if (more_fragments || later_fragment) return FrameStatus::fragment;
+  if (more_fragments || later_fragment) {
+    if (fragment != nullptr) {  // for the reassembler (ip_reassembly.hpp)
+      for (std::size_t i = 0; i < 4; ++i) {
+        fragment->source[i] = ip.u8(12 + i);
+        fragment->destination[i] = ip.u8(16 + i);
+      }
+      fragment->id = ip.be16(4);
+      fragment->protocol = ip.u8(9);
+      fragment->offset = std::uint32_t{flags_fragment & 0x1fffu} * 8;
+      fragment->more = more_fragments;
+      fragment->data = ip.first(total_length).after(header_length).span();
+    }
+    return FrameStatus::fragment;
+  }
   out.source = {};
   out.destination = {};
   out.source.ip_version = out.destination.ip_version = 4;
@@ -128,20 +141,21 @@ FrameStatus parse_ipv6(Bytes ip, Datagram& out) noexcept {
   return FrameStatus::malformed;
 }
 
-FrameStatus parse_ip(Bytes ip, Datagram& out) noexcept {
+FrameStatus parse_ip(Bytes ip, Datagram& out, Ipv4Fragment* fragment) noexcept {
   if (!ip.has(1)) return FrameStatus::truncated;
   switch (ip.u8(0) >> 4) {
-    case 4: return parse_ipv4(ip, out);
+    case 4: return parse_ipv4(ip, out, fragment);
     case 6: return parse_ipv6(ip, out);
     default: return FrameStatus::not_ip;
   }
 }
 
 // Follows VLAN tags (802.1Q, QinQ) from an EtherType to the network layer.
-FrameStatus parse_ethertype(std::uint16_t type, Bytes rest, Datagram& out) noexcept {
+FrameStatus parse_ethertype(std::uint16_t type, Bytes rest, Datagram& out,
+                            Ipv4Fragment* fragment) noexcept {
   for (int tags = 0; tags <= max_vlan_tags; ++tags) {
     switch (type) {
-      case ethertype_ipv4: return parse_ipv4(rest, out);
+      case ethertype_ipv4: return parse_ipv4(rest, out, fragment);
       case ethertype_ipv6: return parse_ipv6(rest, out);
       case ethertype_vlan:
       case ethertype_qinq:
@@ -156,20 +170,21 @@ FrameStatus parse_ethertype(std::uint16_t type, Bytes rest, Datagram& out) noexc
   return FrameStatus::malformed;  // more tags than any real network stacks
 }
 
-FrameStatus parse_ethernet(Bytes frame, Datagram& out) noexcept {
+FrameStatus parse_ethernet(Bytes frame, Datagram& out, Ipv4Fragment* fragment) noexcept {
   if (!frame.has(14)) return FrameStatus::truncated;
   const std::uint16_t type = frame.be16(12);
   if (type <= 1500) return FrameStatus::not_ip;  // an 802.3 length field: LLC/SNAP, not IP here
-  return parse_ethertype(type, frame.after(14), out);
+  return parse_ethertype(type, frame.after(14), out, fragment);
 }
 
-FrameStatus parse_bsd_loopback(Bytes frame, bool network_order, Datagram& out) noexcept {
+FrameStatus parse_bsd_loopback(Bytes frame, bool network_order, Datagram& out,
+                               Ipv4Fragment* fragment) noexcept {
   if (!frame.has(4)) return FrameStatus::truncated;
   // The family is in the capturing host's byte order for DLT_NULL: accept either.
   const std::uint32_t family = network_order ? frame.be32(0) : frame.le32(0);
   const std::uint32_t swapped = network_order ? frame.le32(0) : frame.be32(0);
   auto is = [&](std::uint32_t value) { return family == value || swapped == value; };
-  if (is(2)) return parse_ipv4(frame.after(4), out);
+  if (is(2)) return parse_ipv4(frame.after(4), out, fragment);
   if (is(24) || is(28) || is(30) || is(10)) return parse_ipv6(frame.after(4), out);  // BSDs, Linux
   return FrameStatus::not_ip;
 }
@@ -218,6 +233,18 @@ std::string Endpoint::to_string() const {
   return "?:" + std::to_string(port);
 }
 
+FrameStatus parse_reassembled(const Ipv4Fragment& first, std::span<const std::byte> ip_payload,
+                              Datagram& out) noexcept {
+  out.source = {};
+  out.destination = {};
+  out.source.ip_version = out.destination.ip_version = 4;
+  for (std::size_t i = 0; i < 4; ++i) {
+    out.source.address[i] = first.source[i];
+    out.destination.address[i] = first.destination[i];
+  }
+  return parse_udp(Bytes(ip_payload), out);
+}
+
 const char* to_string(FrameStatus status) noexcept {
   switch (status) {
     case FrameStatus::ok: return "ok";
@@ -231,23 +258,24 @@ const char* to_string(FrameStatus status) noexcept {
   return "unknown";
 }
 
-FrameStatus parse_frame(LinkType link, std::span<const std::byte> frame, Datagram& out) noexcept {
+FrameStatus parse_frame(LinkType link, std::span<const std::byte> frame, Datagram& out,
+                        Ipv4Fragment* fragment) noexcept {
   const Bytes bytes(frame);
   switch (link.dlt) {
-    case dlt_en10mb: return parse_ethernet(bytes, out);
+    case dlt_en10mb: return parse_ethernet(bytes, out, fragment);
     case dlt_linux_sll:
       // packet type, ARPHRD, address length, 8 address bytes, then the protocol (an EtherType).
       if (!bytes.has(16)) return FrameStatus::truncated;
-      return parse_ethertype(bytes.be16(14), bytes.after(16), out);
+      return parse_ethertype(bytes.be16(14), bytes.after(16), out, fragment);
     case dlt_linux_sll2:
       // protocol first, then reserved, ifindex, ARPHRD, packet type, address length, address.
       if (!bytes.has(20)) return FrameStatus::truncated;
-      return parse_ethertype(bytes.be16(0), bytes.after(20), out);
-    case dlt_raw: return parse_ip(bytes, out);
-    case dlt_ipv4: return parse_ipv4(bytes, out);
+      return parse_ethertype(bytes.be16(0), bytes.after(20), out, fragment);
+    case dlt_raw: return parse_ip(bytes, out, fragment);
+    case dlt_ipv4: return parse_ipv4(bytes, out, fragment);
     case dlt_ipv6: return parse_ipv6(bytes, out);
-    case dlt_null: return parse_bsd_loopback(bytes, false, out);
-    case dlt_loop: return parse_bsd_loopback(bytes, true, out);
+    case dlt_null: return parse_bsd_loopback(bytes, false, out, fragment);
+    case dlt_loop: return parse_bsd_loopback(bytes, true, out, fragment);
     default: return FrameStatus::unsupported_link;
   }
 }

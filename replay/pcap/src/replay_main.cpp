@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // sim_replay_pcap: replays a LiDAR capture into a SIM stream through the decoder of the live
-// driver of its family (Hesai, Unitree), paced by the capture's timestamps.
+// driver of its family (Hesai, Ouster, Unitree), paced by the capture's timestamps.
 #include <cstdio>
 #include <string_view>
 
@@ -38,8 +38,9 @@ int finish_replay(const apps::CommandLine& cli, const ReplayArgs& r, const Repla
 
 }  // namespace sim::pcap
 
-// The family is chosen by --model before anything else is parsed: Unitree models take their
-// own options, everything else is Hesai (detected from the capture when --model is absent).
+// The family is chosen before anything else is parsed: Unitree models (--model) take their own
+// options; a metadata JSON (--calibration FILE.json) or a capture of Ouster packets is Ouster;
+// everything else is Hesai (the model detected from the capture when --model is absent).
 int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string_view arg = argv[i];
@@ -50,5 +51,7 @@ int main(int argc, char** argv) {
       return sim::pcap::run_unitree_replay(argc, argv);
     }
   }
+  if (sim::pcap::is_velodyne_replay(argc, argv)) return sim::pcap::run_velodyne_replay(argc, argv);
+  if (sim::pcap::is_ouster_capture(argc, argv)) return sim::pcap::run_ouster_replay(argc, argv);
   return sim::pcap::run_hesai_replay(argc, argv);
 }

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "pcap_payloads.hpp"  // tests/drivers/hesai: the test-only libpcap reader
 #include "sim/ouster/metadata.hpp"
 

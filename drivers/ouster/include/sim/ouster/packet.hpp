@@ -190,6 +190,12 @@ class LidarPacket {
 // packets): the metadata is not this sensor's or its mode changed; give the sensor's own".
 std::string describe_mismatch(std::size_t payload_bytes, const PacketFormat& format);
 
+// Whether a payload looks like an Ouster lidar packet without its metadata: its size fits a
+// profile with 16, 32, 64 or 128 beams and 16 columns per packet (or 8, 4, 2, 1), and every
+// column's measurement_id (and the packet type) is plausible. For telling the family of a
+// capture; decoding still needs the metadata.
+std::optional<PacketFormat> guess_format(std::span<const std::uint8_t> payload) noexcept;
+
 // The LEGACY IMU packet (48 bytes, port 7503).
 inline constexpr std::size_t imu_packet_bytes = 48;
 

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // Reads the UDP datagrams of a capture file (pcap or pcapng, microsecond or nanosecond
-// timestamps) with libpcap, optionally keeping only one UDP port. Frames that hold no
-// datagram (ARP, TCP, fragments, frames cut by the snaplen) are skipped and counted, so a
+// timestamps) with libpcap, optionally keeping only one UDP port. IPv4 fragments are
+// reassembled (ip_reassembly.hpp: bounded memory, capture-time timeouts, absurd ones refused).
+// Frames that hold no datagram (ARP, TCP, frames cut by the snaplen) are skipped and counted, so a
 // mixed capture replays; a file libpcap cannot read, a link type the parser does not know, or a
 // file cut in the middle of a record is an error, with the message saying what to do.
 #pragma once
@@ -32,11 +33,15 @@ struct CaptureStats {
   std::uint64_t other_port = 0;  // UDP datagrams on another port than CaptureOptions::port
   std::uint64_t not_ip = 0;
   std::uint64_t not_udp = 0;
-  std::uint64_t fragments = 0;
+  std::uint64_t fragments = 0;              // IPv4 fragment records
+  std::uint64_t fragments_reassembled = 0;  // of those, the ones that went into datagrams
+  std::uint64_t reassembled = 0;            // datagrams rebuilt from fragments (in `datagrams`)
+  std::uint64_t fragments_incomplete = 0;   // datagrams dropped incomplete (timeout, room, end)
+  std::uint64_t fragments_refused = 0;      // fragments of absurd size or offset
   std::uint64_t truncated = 0;   // records shorter than their headers say (snaplen)
   std::uint64_t malformed = 0;
   std::uint64_t skipped() const noexcept {
-    return other_port + not_ip + not_udp + fragments + truncated + malformed;
+    return other_port + not_ip + not_udp + (fragments - fragments_reassembled) + truncated + malformed;
   }
 };
 

@@ -52,7 +52,7 @@ enum class FrameStatus : std::uint8_t {
   ok,
   not_ip,         // ARP, LLDP, … : not IPv4 or IPv6
   not_udp,        // IP, but TCP, ICMP, …
-  fragment,       // an IP fragment; LiDAR packets are never fragmented, so it is not reassembled
+  fragment,       // an IP fragment: IPv4 UDP ones are reassembled by the capture reader
   truncated,      // the frame ends before its own headers say it does (snaplen or a cut file)
   malformed,      // header fields that cannot be (IHL < 5, UDP length < 8, version ≠ 4/6, …)
   unsupported_link,
@@ -60,9 +60,26 @@ enum class FrameStatus : std::uint8_t {
 
 const char* to_string(FrameStatus status) noexcept;
 
+// One IPv4 fragment of a UDP datagram, for reassembly (the capture reader's ip_reassembly).
+struct Ipv4Fragment {
+  std::array<std::uint8_t, 4> source{};
+  std::array<std::uint8_t, 4> destination{};
+  std::uint16_t id = 0;
+  std::uint8_t protocol = 0;
+  std::uint32_t offset = 0;  // bytes (the header's 13-bit field × 8)
+  bool more = false;         // MF flag
+  std::span<const std::byte> data;  // the fragment's part of the IP payload
+};
+
 // Parses one frame of the given link type. On ok, `out.source`, `out.destination` and
 // `out.payload` are set (the payload as long as the UDP length field says, which the frame is
-// checked to hold); `out.timestamp_ns` is left alone.
-FrameStatus parse_frame(LinkType link, std::span<const std::byte> frame, Datagram& out) noexcept;
+// checked to hold); `out.timestamp_ns` is left alone. On fragment (IPv4 UDP), `fragment`, when
+// given, receives its identification, offset and bytes for reassembly.
+FrameStatus parse_frame(LinkType link, std::span<const std::byte> frame, Datagram& out,
+                        Ipv4Fragment* fragment = nullptr) noexcept;
+
+// The UDP datagram in a reassembled IPv4 payload whose fragments came from `first`'s endpoints.
+FrameStatus parse_reassembled(const Ipv4Fragment& first, std::span<const std::byte> ip_payload,
+                              Datagram& out) noexcept;
 
 }  // namespace sim::pcap

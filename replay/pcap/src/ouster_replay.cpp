@@ -1,0 +1,133 @@
+// SPDX-License-Identifier: Apache-2.0
+// sim_replay_pcap for Ouster captures: the same LidarStream (frame assembler, point and IMU
+// writers) as the live driver sim_lidar_ouster. Ouster packets carry no model or format of
+// their own: the sensor's metadata JSON (--calibration) is required.
+#include <cstdio>
+#include <span>
+#include <string>
+
+#include "replay_loop.hpp"
+#include "replays.hpp"
+#include "sim/apps/ouster_options.hpp"
+#include "sim/clock.hpp"
+#include "sim/hesai/model.hpp"
+#include "sim/ouster/lidar_stream.hpp"
+
+namespace sim::pcap {
+namespace {
+
+std::span<const std::uint8_t> as_u8(std::span<const std::byte> bytes) {
+  return {reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()};
+}
+
+class OusterTarget final : public ReplayTarget {
+ public:
+  OusterTarget(ouster::LidarStream stream, bool restamp) : stream_(std::move(stream)), restamp_(restamp) {}
+
+  bool push(std::span<const std::byte> payload, std::int64_t) override {
+    const auto bytes = as_u8(payload);
+    // IMU packets are the 48-byte ones (port 7503); everything else is offered as lidar.
+    if (bytes.size() == ouster::imu_packet_bytes) {
+      stream_.push_imu(bytes);
+      return false;
+    }
+    if (restamp_ && !restamped_) {
+      // Shift the sensor's clock so the first packet's time is now; loops add to it.
+      ouster::LidarPacket packet;
+      const auto& m = stream_.metadata();
+      if (ouster::LidarPacket::parse(bytes, m.format, packet, m.init_id) == ouster::PacketError::none) {
+        stream_.set_stamp_offset(realtime_ns() - static_cast<std::int64_t>(packet.column(0).timestamp_ns));
+        restamped_ = true;
+      }
+    }
+    return stream_.push_lidar(bytes, realtime_ns()).frame.has_value();
+  }
+  void restart() override { stream_.reset(); }
+  void shift_stamps(std::int64_t shift_ns) override { stream_.set_stamp_offset(stream_.stamp_offset() + shift_ns); }
+  void finish() override { stream_.finish(); }
+  std::uint64_t decoded_packets() const override { return stream_.counters().packets; }
+  std::uint64_t frames() const override { return stream_.published().frames; }
+  std::string status() const override { return stream_.describe_counters(); }
+  std::string summary() const override { return stream_.describe_counters(true); }
+  std::string mismatch_problem() const { return stream_.mismatch_problem(); }
+
+ private:
+  ouster::LidarStream stream_;
+  bool restamp_;
+  bool restamped_ = false;
+};
+
+bool ends_with(std::string_view text, std::string_view end) {
+  return text.size() >= end.size() && text.substr(text.size() - end.size()) == end;
+}
+
+}  // namespace
+
+bool is_ouster_capture(int argc, char** argv) {
+  std::string capture;
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view arg = argv[i];
+    // A metadata JSON names the family: Hesai calibrations are CSV.
+    if ((arg == "--calibration" || arg == "--metadata") && i + 1 < argc && ends_with(argv[i + 1], ".json")) {
+      return true;
+    }
+    if ((arg.rfind("--calibration=", 0) == 0 || arg.rfind("--metadata=", 0) == 0) && ends_with(arg, ".json")) {
+      return true;
+    }
+    if (arg.front() != '-' && (ends_with(arg, ".pcap") || ends_with(arg, ".pcapng"))) capture = arg;
+  }
+  if (capture.empty()) return false;
+  auto reader = CaptureReader::open(capture);
+  if (!reader) return false;  // the Hesai replay explains the file
+  // The first datagrams tell: Ouster-sized lidar packets and not one Hesai packet.
+  Datagram datagram;
+  unsigned ouster = 0;
+  for (unsigned seen = 0; seen < 256 && reader->next(datagram) == NextStatus::datagram; ++seen) {
+    const auto bytes = as_u8(datagram.payload);
+    if (hesai::detect_model(bytes)) return false;
+    if (ouster::guess_format(bytes)) ++ouster;
+  }
+  return ouster > 0;
+}
+
+int run_ouster_replay(int argc, char** argv) {
+  apps::CommandLine cli(
+      "sim_replay_pcap",
+      "Replays an Ouster capture (pcap or pcapng; IPv4 fragments are reassembled) into a SIM "
+      "point stream and its IMU stream, paced by the capture's timestamps, through the same "
+      "frame assembler as the live driver sim_lidar_ouster. The sensor's metadata JSON "
+      "(--calibration) is required.");
+  ReplayArgs r;
+  apps::OusterStreamOptions s;
+  add_replay_options(cli, r);
+  apps::add_ouster_stream_options(cli, s);
+  if (auto code = cli.parse(argc, argv)) return *code;
+  if (s.calibration.empty()) {
+    return cli.usage_error(
+        r.file + " holds Ouster lidar packets, which cannot be decoded without the sensor's "
+        "metadata: give the metadata JSON recorded with it (or saved from "
+        "http://SENSOR/api/v1/sensor/metadata) with --calibration FILE.json");
+  }
+  auto config = apps::ouster_stream_config(s);
+  if (!config) return cli.fail(config.error());
+  auto metadata = ouster::Metadata::load(s.calibration);
+  if (!metadata) return cli.fail(std::string_view(metadata.error().message));
+  config->metadata_source = "file://" + std::filesystem::absolute(s.calibration).string();
+  config->heartbeat_period = std::chrono::milliseconds(500);
+  const auto& stop = apps::StopSignal::install();
+  auto stream = ouster::LidarStream::create(*config, *metadata);
+  if (!stream) return cli.fail(std::string_view(stream.error().message));
+  if (auto code = cli.apply_placement(s.placement)) return *code;
+  OusterTarget target(std::move(*stream), r.restamp);
+
+  const ReplayResult result = replay(r, target, stop, cli.tool());
+  if (target.decoded_packets() == 0 && !target.mismatch_problem().empty() && !stop.requested()) {
+    return cli.fail(target.mismatch_problem() + " (" + s.calibration + " does not fit " + r.file + ")");
+  }
+  return finish_replay(cli, r, result, target,
+                       "with the metadata " + s.calibration + " (" + metadata->describe() +
+                           "); check that it belongs to this capture",
+                       stop);
+}
+
+}  // namespace sim::pcap

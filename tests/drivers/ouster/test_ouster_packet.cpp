@@ -1,0 +1,342 @@
+// SPDX-License-Identifier: Apache-2.0
+// The profiles without a public capture (RNG19 single, RNG15 low data rate, FUSA dual; 64 and
+// 128 beams; FW 3.x nested metadata) through packets of an independent encoder
+// (packet_encoder.hpp), and bad input: metadata that does not fit the packets, truncated and
+// other-vendor datagrams, lost packets. Counted, one sentence, never a wrong frame.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "ouster_test_support.hpp"
+#include "packet_encoder.hpp"
+#include "sim/ouster/ouster.hpp"
+
+namespace {
+
+using namespace sim::ouster;
+using ouster_test::EncodedPixel;
+using ouster_test::Layout;
+using ouster_test::PacketSpec;
+
+// Values every field of `layout` can carry, different per pixel and per field.
+EncodedPixel pixel_value(Layout layout, unsigned m, unsigned u) {
+  // splitmix64: cheap, and different for every pixel and field.
+  std::uint64_t state = std::uint64_t{m} * 1000 + u;
+  auto random = [&state] {
+    state += 0x9E3779B97F4A7C15ULL;
+    std::uint64_t z = state;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    return static_cast<std::uint32_t>(z ^ (z >> 31));
+  };
+  EncodedPixel p;
+  const bool rng15 = layout == Layout::rng15 || layout == Layout::fusa_dual;
+  const std::uint32_t max_range = layout == Layout::legacy ? 0xfffff : rng15 ? 0x7fff * 8 : 0x7ffff;
+  p.range_mm = (random() % (max_range + 1)) & (rng15 ? ~7u : ~0u);
+  if ((m + u) % 7 == 0) p.range_mm = 0;  // no return
+  p.range2_mm = (random() % (max_range + 1)) & (rng15 ? ~7u : ~0u);
+  p.reflectivity = static_cast<std::uint8_t>(random());
+  p.reflectivity2 = static_cast<std::uint8_t>(random());
+  p.signal = static_cast<std::uint16_t>(random());
+  p.signal2 = static_cast<std::uint16_t>(random());
+  p.near_ir = static_cast<std::uint16_t>(rng15 ? (random() % 256) * 16 : random() % 65536);
+  if (layout == Layout::legacy || layout == Layout::rng19 || rng15) p.signal2 = 0;
+  if (layout == Layout::legacy || layout == Layout::rng19 || layout == Layout::rng15) {
+    p.range2_mm = 0;
+    p.reflectivity2 = 0;
+  }
+  if (rng15) p.signal = 0;
+  return p;
+}
+
+struct Case {
+  Layout layout;
+  unsigned beams;
+};
+
+Metadata metadata_for(Layout layout, unsigned beams, unsigned columns = 1024, unsigned per_packet = 16,
+                      std::uint32_t init_id = 0x123456) {
+  auto m = Metadata::parse(ouster_test::nested_metadata(layout, beams, columns, per_packet, init_id));
+  if (!m) throw std::runtime_error(m.error().message);
+  return m.value();
+}
+
+std::vector<std::vector<std::uint8_t>> rotation(Layout layout, unsigned beams, std::uint32_t frame_id,
+                                                unsigned columns = 1024, unsigned per_packet = 16) {
+  std::vector<std::vector<std::uint8_t>> packets;
+  for (unsigned first = 0; first < columns; first += per_packet) {
+    PacketSpec s;
+    s.layout = layout;
+    s.beams = beams;
+    s.columns_per_packet = per_packet;
+    s.frame_id = frame_id;
+    s.first_column = static_cast<std::uint16_t>(first);
+    s.first_timestamp_ns = 5'000'000'000ULL + frame_id * 100'000'000ULL;
+    packets.push_back(ouster_test::encode_packet(s, [&](unsigned m, unsigned u) { return pixel_value(layout, m, u); }));
+  }
+  return packets;
+}
+
+class EveryProfile : public ::testing::TestWithParam<Case> {};
+
+TEST_P(EveryProfile, DecodesEveryFieldTheIndependentEncoderWrote) {
+  const auto [layout, beams] = GetParam();
+  const Metadata m = metadata_for(layout, beams);
+  EXPECT_EQ(to_string(m.format.profile), ouster_test::profile_name(layout));
+  for (const auto& payload : rotation(layout, beams, 7)) {
+    LidarPacket packet;
+    ASSERT_EQ(LidarPacket::parse(payload, m.format, packet, m.init_id), PacketError::none);
+    EXPECT_EQ(packet.frame_id(), 7u);
+    for (unsigned c = 0; c < packet.columns(); ++c) {
+      const Column col = packet.column(c);
+      ASSERT_TRUE(col.valid);
+      for (unsigned u = 0; u < beams; ++u) {
+        const EncodedPixel want = pixel_value(layout, col.measurement_id, u);
+        const Pixel got = packet.pixel(c, u);
+        ASSERT_EQ(got.range_mm, want.range_mm) << "column " << col.measurement_id << " beam " << u;
+        ASSERT_EQ(got.range2_mm, want.range2_mm);
+        ASSERT_EQ(got.reflectivity, want.reflectivity);
+        ASSERT_EQ(got.reflectivity2, want.reflectivity2);
+        ASSERT_EQ(got.signal, want.signal);
+        ASSERT_EQ(got.signal2, want.signal2);
+        ASSERT_EQ(got.near_ir, want.near_ir);
+      }
+    }
+  }
+}
+
+TEST_P(EveryProfile, AWholeRotationBecomesOneFrameWithEveryReturnAtItsRange) {
+  const auto [layout, beams] = GetParam();
+  const Metadata m = metadata_for(layout, beams);
+  AssemblerOptions options;
+  options.intensity = IntensityField::reflectivity;
+  auto assembler = FrameAssembler::create(m, options).value();
+  std::vector<sim::LidarPoint> points(assembler.max_points());
+  assembler.set_output(points);
+  std::optional<CompletedFrame> frame;
+  for (const auto& payload : rotation(layout, beams, 3)) {
+    auto r = assembler.push(payload, 0);
+    ASSERT_EQ(r.error, PacketError::none);
+    if (r.frame) frame = r.frame;
+  }
+  ASSERT_TRUE(frame);
+  const unsigned returns = returns_of(m.format.profile);
+  ASSERT_EQ(frame->point_count, std::size_t{beams} * 1024 * returns);
+  EXPECT_EQ(frame->frame_id, 3u);
+  for (unsigned ret = 0; ret < returns; ++ret) {
+    for (unsigned u = 0; u < beams; ++u) {
+      for (unsigned v = 0; v < 1024; v += 37) {
+        const auto& p = points[(ret * beams + u) * 1024 + v];  // no pixel shift: staggered = destaggered
+        const EncodedPixel want = pixel_value(layout, v, u);
+        const std::uint32_t range = ret == 0 ? want.range_mm : want.range2_mm;
+        // No beam offset, identity transform: the point lies at its range from the origin.
+        EXPECT_NEAR(std::sqrt(p.x * p.x + p.y * p.y + p.z * p.z), range / 1000.0, 2e-3 + range * 1e-6);
+        EXPECT_EQ(p.intensity, ret == 0 ? want.reflectivity : want.reflectivity2);
+        EXPECT_EQ(p.ring, u);
+        EXPECT_EQ(p.time_offset_ns, v * 97'656u);
+      }
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Profiles, EveryProfile,
+    ::testing::Values(Case{Layout::legacy, 64}, Case{Layout::rng19, 32}, Case{Layout::rng19, 128},
+                      Case{Layout::rng19_dual, 64}, Case{Layout::rng15, 128}, Case{Layout::fusa_dual, 32}),
+    [](const auto& param_info) {
+      std::string name = ouster_test::profile_name(param_info.param.layout);
+      name += "_";
+      name += std::to_string(param_info.param.beams);
+      return name;
+    });
+
+TEST(OusterMetadata, NestedFirmware3MetadataReadsLikeTheFlatFirmware2One) {
+  const Metadata flat = Metadata::load(ouster_test::data_path("OS-1-32-G_v2.1.1_1024x10.json")).value();
+  // The same sensor written the FW 3.x way.
+  auto json = nlohmann::json::parse(ouster_test::read_text(ouster_test::data_path("OS-1-32-G_v2.1.1_1024x10.json")));
+  nlohmann::json nested;
+  nested["beam_intrinsics"]["beam_altitude_angles"] = json["beam_altitude_angles"];
+  nested["beam_intrinsics"]["beam_azimuth_angles"] = json["beam_azimuth_angles"];
+  nested["beam_intrinsics"]["lidar_origin_to_beam_origin_mm"] = json["lidar_origin_to_beam_origin_mm"];
+  nested["beam_intrinsics"]["beam_to_lidar_transform"] = {1, 0, 0, json["lidar_origin_to_beam_origin_mm"], 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  nested["lidar_intrinsics"]["lidar_to_sensor_transform"] = json["lidar_to_sensor_transform"];
+  nested["imu_intrinsics"]["imu_to_sensor_transform"] = json["imu_to_sensor_transform"];
+  nested["lidar_data_format"] = json["data_format"];
+  nested["lidar_data_format"]["udp_profile_lidar"] = "LEGACY";
+  nested["config_params"]["lidar_mode"] = json["lidar_mode"];
+  nested["sensor_info"]["prod_line"] = json["prod_line"];
+  nested["sensor_info"]["prod_sn"] = json["prod_sn"];
+  nested["sensor_info"]["build_rev"] = json["build_rev"];
+  const Metadata m = Metadata::parse(nested.dump()).value();
+  EXPECT_EQ(m.describe(), flat.describe());
+  EXPECT_EQ(m.format.packet_bytes, flat.format.packet_bytes);
+  EXPECT_EQ(m.pixel_shift_by_row, flat.pixel_shift_by_row);
+  EXPECT_EQ(m.beam_altitude_deg, flat.beam_altitude_deg);
+  EXPECT_EQ(m.lidar_to_sensor, flat.lidar_to_sensor);
+  EXPECT_EQ(m.beam_to_lidar, flat.beam_to_lidar);
+  EXPECT_EQ(flat.describe(), "OS-1-32-G (sn 992101000280, v2.1.1), LEGACY, 32 beams × 1024 columns at 10 Hz");
+}
+
+TEST(OusterMetadata, BrokenMetadataIsRefusedWithOneSentenceNamingTheKey) {
+  EXPECT_NE(Metadata::parse("{not json").error().message.find("not valid JSON"), std::string::npos);
+  EXPECT_NE(Metadata::parse("{}").error().message.find("data_format"), std::string::npos);
+  auto json = nlohmann::json::parse(ouster_test::read_text(ouster_test::data_path("OS-1-32-G_v2.1.1_1024x10.json")));
+  auto short_table = json;
+  short_table["beam_altitude_angles"].erase(0);
+  EXPECT_NE(Metadata::parse(short_table.dump()).error().message.find("beam_altitude_angles"), std::string::npos);
+  auto huge = json;
+  huge["data_format"]["pixels_per_column"] = 100000;
+  EXPECT_FALSE(Metadata::parse(huge.dump()));
+  auto profile = json;
+  profile["data_format"]["udp_profile_lidar"] = "FIVE_WORD_PIXEL";
+  EXPECT_NE(Metadata::parse(profile.dump()).error().message.find("not supported"), std::string::npos);
+  auto transform = json;
+  transform["lidar_to_sensor_transform"][15] = 2;
+  EXPECT_NE(Metadata::parse(transform.dump()).error().message.find("homogeneous"), std::string::npos);
+  auto nan = json;
+  nan["beam_azimuth_angles"][3] = "x";
+  EXPECT_FALSE(Metadata::parse(nan.dump()));
+}
+
+// Feeds packets and returns the frames the assembler published.
+std::vector<CompletedFrame> feed(FrameAssembler& assembler, const std::vector<std::vector<std::uint8_t>>& packets,
+                                 std::vector<sim::LidarPoint>& points) {
+  std::vector<CompletedFrame> frames;
+  assembler.set_output(points);
+  for (const auto& payload : packets) {
+    if (auto r = assembler.push(payload, 0); r.frame) {
+      frames.push_back(*r.frame);
+      assembler.set_output(points);
+    }
+  }
+  return frames;
+}
+
+TEST(OusterBadInput, MetadataOfAnotherProfileOrBeamCountPublishesNothingAndSaysWhichFits) {
+  // Dual-return 32-beam packets against LEGACY 32-beam metadata, and against 64-beam metadata.
+  const auto packets = rotation(Layout::rng19_dual, 32, 1);
+  for (const Metadata& wrong : {metadata_for(Layout::legacy, 32), metadata_for(Layout::rng19_dual, 64)}) {
+    auto assembler = FrameAssembler::create(wrong, {}).value();
+    std::vector<sim::LidarPoint> points(assembler.max_points());
+    EXPECT_TRUE(feed(assembler, packets, points).empty());
+    EXPECT_EQ(assembler.counters().malformed, packets.size());
+    EXPECT_EQ(assembler.counters().rejected[static_cast<unsigned>(PacketError::wrong_size)], packets.size());
+    const std::string sentence = describe_mismatch(assembler.counters().last_rejected_size, wrong.format);
+    EXPECT_NE(sentence.find("RNG19_RFL8_SIG16_NIR16_DUAL with 32 beams"), std::string::npos) << sentence;
+    EXPECT_EQ(sentence.find('\n'), std::string::npos);
+  }
+}
+
+TEST(OusterBadInput, MetadataWithFewerColumnsThanThePacketsRefusesTheColumnsBeyondIt) {
+  const auto packets = rotation(Layout::rng19, 32, 1, 1024);
+  auto assembler = FrameAssembler::create(metadata_for(Layout::rng19, 32, 512), {}).value();
+  std::vector<sim::LidarPoint> points(assembler.max_points());
+  const auto frames = feed(assembler, packets, points);
+  ASSERT_EQ(frames.size(), 1u) << "columns 0–511 are a whole 512-column frame";
+  EXPECT_EQ(assembler.counters().rejected[static_cast<unsigned>(PacketError::bad_measurement_id)], 32u);
+}
+
+TEST(OusterBadInput, PacketsOfAnotherInitializationAreRefused) {
+  const auto packets = rotation(Layout::rng19, 32, 1);
+  auto assembler = FrameAssembler::create(metadata_for(Layout::rng19, 32, 1024, 16, 42), {}).value();
+  std::vector<sim::LidarPoint> points(assembler.max_points());
+  EXPECT_TRUE(feed(assembler, packets, points).empty());
+  EXPECT_EQ(assembler.counters().rejected[static_cast<unsigned>(PacketError::init_id_mismatch)], packets.size());
+}
+
+TEST(OusterBadInput, TruncatedEmptyOversizedAndOtherVendorDatagramsAreCountedNeverDecoded) {
+  const Metadata m = metadata_for(Layout::rng19, 32);
+  auto assembler = FrameAssembler::create(m, {}).value();
+  std::vector<sim::LidarPoint> points(assembler.max_points());
+  auto good = rotation(Layout::rng19, 32, 1);
+  std::vector<std::vector<std::uint8_t>> bad = {
+      {}, std::vector<std::uint8_t>(good[0].begin(), good[0].end() - 1),
+      std::vector<std::uint8_t>(1198, 0xEE),  // a Hesai-sized datagram
+      std::vector<std::uint8_t>(65507, 0x55), std::vector<std::uint8_t>(48, 0)};
+  for (const auto& b : bad) EXPECT_NE(assembler.push(b, 0).error, PacketError::none);
+  EXPECT_EQ(assembler.counters().malformed, bad.size());
+  EXPECT_EQ(assembler.counters().packets, 0u);
+  // A packet whose type is not lidar, and a column index past the frame, in a packet of the right size.
+  auto not_lidar = good[0];
+  not_lidar[0] = 2;
+  EXPECT_EQ(assembler.push(not_lidar, 0).error, PacketError::not_lidar);
+  auto bad_column = good[0];
+  bad_column[32 + 8] = 0xff;
+  bad_column[32 + 9] = 0xff;
+  EXPECT_EQ(assembler.push(bad_column, 0).error, PacketError::bad_measurement_id);
+}
+
+TEST(OusterFrames, ALostLastPacketEndsTheFrameAtTheNextFramesFirstPacketWhichStartsTheNextFrame) {
+  const Metadata m = metadata_for(Layout::rng19, 32);
+  auto first = rotation(Layout::rng19, 32, 1);
+  first.pop_back();  // the packet with column 1023 never came
+  const auto second = rotation(Layout::rng19, 32, 2);
+  std::vector<std::vector<std::uint8_t>> packets = first;
+  packets.insert(packets.end(), second.begin(), second.end());
+  auto assembler = FrameAssembler::create(m, {}).value();
+  std::vector<sim::LidarPoint> points(assembler.max_points());
+  const auto frames = feed(assembler, packets, points);
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[0].frame_id, 1u);
+  EXPECT_EQ(frames[0].missing_columns, 16u);
+  EXPECT_EQ(frames[1].frame_id, 2u);
+  EXPECT_EQ(frames[1].missing_columns, 0u) << "the packet that ended frame 1 began frame 2";
+  EXPECT_EQ(frames[1].packets, 64u);
+  EXPECT_EQ(assembler.counters().lost_packets, 1u);
+  // The missing columns of frame 1 hold no return: checked on a frame of its own.
+}
+
+TEST(OusterFrames, AFrameJoinedMidRotationIsDroppedUnlessPartialFramesAreAsked) {
+  const Metadata m = metadata_for(Layout::rng19, 32);
+  auto packets = rotation(Layout::rng19, 32, 1);
+  packets.erase(packets.begin(), packets.begin() + 10);
+  for (bool partial : {false, true}) {
+    AssemblerOptions options;
+    options.emit_partial_frames = partial;
+    auto assembler = FrameAssembler::create(m, options).value();
+    std::vector<sim::LidarPoint> points(assembler.max_points());
+    const auto frames = feed(assembler, packets, points);
+    ASSERT_EQ(frames.size(), partial ? 1u : 0u);
+    if (partial) {
+      EXPECT_FALSE(frames[0].whole);
+      // Columns 0–159 never came: no return there.
+      EXPECT_EQ(points[5].x, 0.0F);
+      EXPECT_EQ(points[5].time_offset_ns, 0u);
+    } else {
+      EXPECT_EQ(assembler.counters().partial_frames_dropped, 1u);
+    }
+  }
+}
+
+TEST(OusterFrames, TheFusaHeaderCarriesA32BitFrameId) {
+  const Metadata m = metadata_for(Layout::fusa_dual, 32);
+  PacketSpec s;
+  s.layout = Layout::fusa_dual;
+  s.frame_id = 0x12345678;
+  const auto payload = ouster_test::encode_packet(s, [](unsigned, unsigned) { return EncodedPixel{}; });
+  LidarPacket packet;
+  ASSERT_EQ(LidarPacket::parse(payload, m.format, packet, m.init_id), PacketError::none);
+  EXPECT_EQ(packet.frame_id(), 0x12345678u);
+  EXPECT_EQ(packet.serial(), 992100000001u);
+}
+
+TEST(OusterFrames, AskingForSignalFromAProfileWithoutItIsRefusedWithOneSentence) {
+  AssemblerOptions options;
+  options.intensity = IntensityField::signal;
+  auto created = FrameAssembler::create(metadata_for(Layout::rng15, 32), options);
+  ASSERT_FALSE(created);
+  EXPECT_NE(created.error().message.find("no signal"), std::string::npos);
+}
+
+TEST(OusterFrames, OusterPacketsAreRecognisedWithoutMetadataAndOthersAreNot) {
+  for (Layout l : {Layout::legacy, Layout::rng19, Layout::rng19_dual, Layout::rng15, Layout::fusa_dual}) {
+    const auto packets = rotation(l, 64, 1);
+    EXPECT_TRUE(guess_format(packets[3])) << ouster_test::profile_name(l);
+  }
+  EXPECT_FALSE(guess_format(std::vector<std::uint8_t>(1198, 0xEE)));
+  EXPECT_FALSE(guess_format(std::vector<std::uint8_t>(6464, 0xFF)));
+}
+
+}  // namespace
