@@ -748,7 +748,8 @@ class Bench {
       Transport t;
       if (!parse_transport(name, t)) {
         std::fprintf(stderr, "sim_bench: unknown transport '%s': use sim-poll, sim-block, sim-zero, "
-                             "iceoryx, fastdds or cyclone.\n", name.c_str());
+                             "sim-adaptive, sim-zero-adaptive, sim-poll-described, iceoryx, fastdds or "
+                             "cyclone.\n", name.c_str());
         return 2;
       }
       if (!available(t)) {
@@ -1026,7 +1027,7 @@ int main(int argc, char** argv) {
   if (list) {
     for (const auto t : {Transport::sim_poll, Transport::sim_block, Transport::sim_zero,
                          Transport::sim_adaptive, Transport::sim_zero_adaptive,
-                         Transport::iceoryx, Transport::fastdds, Transport::cyclone}) {
+                         Transport::sim_poll_described, Transport::iceoryx, Transport::fastdds, Transport::cyclone}) {
       if (available(t)) std::printf("%s\n", std::string(to_string(t)).c_str());
     }
     return 0;

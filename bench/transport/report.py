@@ -19,12 +19,13 @@ import statistics
 import sys
 from collections import defaultdict
 
-ORDER = ["memcpy", "sim-poll", "sim-block", "sim-zero", "sim-adaptive", "sim-zero-adaptive", "iceoryx",
+ORDER = ["memcpy", "sim-poll", "sim-poll-described", "sim-block", "sim-zero", "sim-adaptive", "sim-zero-adaptive", "iceoryx",
          "fastdds", "cyclone"]
 PEERS = ["iceoryx", "fastdds", "cyclone"]
 LABEL = {
     "memcpy": "memcpy floor",
     "sim-poll": "SIM poll (copy)",
+    "sim-poll-described": "SIM poll, sensor description",
     "sim-block": "SIM block (copy)",
     "sim-zero": "SIM borrow (zero-copy)",
     "sim-adaptive": "SIM adaptive (copy)",

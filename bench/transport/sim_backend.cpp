@@ -6,6 +6,9 @@
 //               and checks still_valid() after it has read the bytes.
 //   sim-adaptive, sim-zero-adaptive: sim-block and sim-zero with WaitMode::adaptive (sleep until
 //               shortly before the next expected publish, then spin briefly).
+//   sim-poll-described: sim-poll on a stream whose writer set a camera's sensor description; the
+//               reader checks every frame's sensor_generation and fetches the description when it
+//               changes (once), as a consumer does. Side by side with sim-poll: its per-frame cost.
 #include <chrono>
 #include <thread>
 
@@ -74,6 +77,9 @@ class SimSubscriber final : public SubscriberBackend {
         }
       } else {
         status = reader_.read(buffer_, info);
+        if (status == ReadStatus::new_frame && !follow_description(info)) {
+          return {Delivery::Kind::error, {}, "SIM reader: the sensor description is missing or damaged"};
+        }
         if (status == ReadStatus::new_frame) {
           return {Delivery::Kind::frame, std::span<const std::byte>(buffer_).first(info.size), {}};
         }
@@ -83,6 +89,15 @@ class SimSubscriber final : public SubscriberBackend {
       }
       if (std::chrono::steady_clock::now() >= deadline) return {};
     }
+  }
+
+  // What a consumer of a described stream does per frame: compare the generation, and fetch the
+  // description only when it changed. False if a described stream's description cannot be read.
+  bool follow_description(const FrameInfo& info) {
+    if (mode_ != Transport::sim_poll_described || info.sensor_generation == generation_) return true;
+    generation_ = info.sensor_generation;
+    auto description = reader_.sensor_info();
+    return description && description->has_value();
   }
 
   bool release() override { return !zero() || borrow_.still_valid(); }
@@ -95,13 +110,34 @@ class SimSubscriber final : public SubscriberBackend {
   Transport mode_;
   std::vector<std::byte> buffer_;
   Borrow borrow_{};
+  std::uint64_t generation_ = 0;  // sim-poll-described: the description last fetched
 };
+
+// A camera's description, as a driver would set it (sim-poll-described).
+SensorInfo bench_camera() {
+  SensorInfo info;
+  info.frame_id = "camera_front_optical";
+  info.mounting = Mounting::from_xyz_rpy(1.5, 0.0, 1.2, -1.5707963267948966, 0.0, -1.5707963267948966);
+  CameraCalibration c;
+  c.width = 1920;
+  c.height = 1080;
+  c.d = {-0.1, 0.01, 0.0, 0.0, 0.0};
+  c.k = {1000, 0, 960, 0, 1000, 540, 0, 0, 1};
+  c.p = {1000, 0, 960, 0, 0, 1000, 540, 0, 0, 0, 1, 0};
+  info.calibration = c;
+  info.time_base = TimeBase::host;
+  return info;
+}
 
 }  // namespace
 
 std::unique_ptr<PublisherBackend> make_sim_publisher(Transport t, const Endpoint& e,
                                                      std::string& error) {
-  auto writer = Writer::create({.name = region_name(e), .capacity = e.payload});
+  StreamSpec spec;
+  spec.name = region_name(e);
+  spec.capacity = e.payload;
+  if (t == Transport::sim_poll_described) spec.sensor = bench_camera();
+  auto writer = Writer::create(spec);
   if (!writer) {
     error = writer.error().message;
     return nullptr;

@@ -46,6 +46,8 @@ enum class Transport {
   sim_zero,
   sim_adaptive,       // copy-out, WaitMode::adaptive (issue 12)
   sim_zero_adaptive,  // borrow, WaitMode::adaptive
+  sim_poll_described, // sim_poll on a stream with a sensor description; the reader follows its
+                      // generation on every frame (issue 21: what the description costs per frame)
   iceoryx,
   fastdds,
   cyclone

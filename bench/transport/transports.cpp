@@ -7,12 +7,13 @@
 
 namespace sim::bench {
 namespace {
-constexpr std::array<std::pair<Transport, std::string_view>, 8> kNames{{
+constexpr std::array<std::pair<Transport, std::string_view>, 9> kNames{{
     {Transport::sim_poll, "sim-poll"},
     {Transport::sim_block, "sim-block"},
     {Transport::sim_zero, "sim-zero"},
     {Transport::sim_adaptive, "sim-adaptive"},
     {Transport::sim_zero_adaptive, "sim-zero-adaptive"},
+    {Transport::sim_poll_described, "sim-poll-described"},
     {Transport::iceoryx, "iceoryx"},
     {Transport::fastdds, "fastdds"},
     {Transport::cyclone, "cyclone"},
@@ -43,6 +44,7 @@ bool available(Transport t) noexcept {
     case Transport::sim_zero:
     case Transport::sim_adaptive:
     case Transport::sim_zero_adaptive:
+    case Transport::sim_poll_described:
       return true;
     case Transport::iceoryx:
 #ifdef SIM_BENCH_HAVE_ICEORYX
@@ -79,6 +81,7 @@ std::unique_ptr<PublisherBackend> make_publisher(Transport t, const Endpoint& e,
     case Transport::sim_zero:
     case Transport::sim_adaptive:
     case Transport::sim_zero_adaptive:
+    case Transport::sim_poll_described:
       return make_sim_publisher(t, e, error);
 #ifdef SIM_BENCH_HAVE_ICEORYX
     case Transport::iceoryx:
@@ -108,6 +111,7 @@ std::unique_ptr<SubscriberBackend> make_subscriber(Transport t, const Endpoint& 
     case Transport::sim_zero:
     case Transport::sim_adaptive:
     case Transport::sim_zero_adaptive:
+    case Transport::sim_poll_described:
       return make_sim_subscriber(t, e, error);
 #ifdef SIM_BENCH_HAVE_ICEORYX
     case Transport::iceoryx:
