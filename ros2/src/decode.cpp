@@ -138,6 +138,13 @@ Expected<ImageLayout> sim_image_layout(const ImageView& image) {
                  "big-endian " + std::string(image.encoding) +
                      " images are not supported; publish is_bigendian 0"};
   }
+  if ((format == PixelFormat::uyvy || format == PixelFormat::yuyv) && image.width % 2 != 0) {
+    // A 4:2:2 macropixel covers two pixels: an odd row ends in half of one (review L6).
+    return Error{ErrorCode::invalid_argument,
+                 "a " + std::string(image.encoding) + " image of odd width " +
+                     std::to_string(image.width) + " ends in half a 4:2:2 pixel pair; publish an "
+                     "even width"};
+  }
   ImageLayout layout = ImageLayout::packed(image.width, image.height, format);
   layout.stride = image.step;
   const std::string why = Layout::of(layout).check(image.data.size());
@@ -208,21 +215,25 @@ Expected<PointLayout> sim_point_layout(const PointCloud2View& cloud) {
                "repack its points"};
 }
 
+std::string repack_problem(const PointCloud2View& cloud) {
+  if (cloud.is_bigendian) return "big-endian point clouds are not supported; publish is_bigendian false";
+  if (find_field(cloud, {"x"}) == nullptr || find_field(cloud, {"y"}) == nullptr ||
+      find_field(cloud, {"z"}) == nullptr) {
+    return "the cloud has no x, y and z fields, so it cannot become SIM points";
+  }
+  return {};
+}
+
 Expected<std::uint64_t> repack_points(const PointCloud2View& cloud, PointType type,
                                       std::span<std::byte> out) {
-  if (cloud.is_bigendian) {
-    return Error{ErrorCode::invalid_argument,
-                 "big-endian point clouds are not supported; publish is_bigendian false"};
+  if (std::string why = repack_problem(cloud); !why.empty()) {
+    return Error{ErrorCode::invalid_argument, std::move(why)};
   }
   const std::uint32_t out_size = point_size(type);
   if (out_size == 0) return Error{ErrorCode::invalid_argument, "the target point type is unknown"};
   const PointField* x = find_field(cloud, {"x"});
   const PointField* y = find_field(cloud, {"y"});
   const PointField* z = find_field(cloud, {"z"});
-  if (x == nullptr || y == nullptr || z == nullptr) {
-    return Error{ErrorCode::invalid_argument,
-                 "the cloud has no x, y and z fields, so it cannot become SIM points"};
-  }
   const PointField* intensity = find_field(cloud, {"intensity", "i"});
   const PointField* ring = find_field(cloud, {"ring", "channel"});
   const PointField* ret = find_field(cloud, {"return_type"});

@@ -103,7 +103,9 @@ TEST(Ros2Messages, ImageRoundTripsToTheSameLayoutAndPixels) {
                         PixelFormat::bayer_rggb8, PixelFormat::bayer_bggr8, PixelFormat::bayer_gbrg8,
                         PixelFormat::bayer_grbg8}) {
     SCOPED_TRACE(to_string(f));
-    const ImageLayout layout = ImageLayout::packed(33, 7, f);
+    // An odd width everywhere but 4:2:2, whose pixel pairs need an even one (the next test).
+    const bool pairs = f == PixelFormat::yuyv || f == PixelFormat::uyvy;
+    const ImageLayout layout = ImageLayout::packed(pairs ? 34 : 33, 7, f);
     const auto pixels = pattern(layout.frame_bytes());
     auto plan = plan_image(layout, pixels.size(), {Time{-3, 999'999'999}, "front"});
     ASSERT_TRUE(plan.has_value());
@@ -118,6 +120,22 @@ TEST(Ros2Messages, ImageRoundTripsToTheSameLayoutAndPixels) {
     EXPECT_EQ(*back, layout);
     ASSERT_EQ(view->data.size(), pixels.size());
     EXPECT_EQ(std::memcmp(view->data.data(), pixels.data(), pixels.size()), 0);
+  }
+}
+
+// Review L6: a UYVY row of width 3 was accepted; converters then read half a pair past the row.
+TEST(Ros2Messages, A422ImageOfOddWidthHasNoSimLayout) {
+  for (PixelFormat f : {PixelFormat::yuyv, PixelFormat::uyvy}) {
+    ImageLayout layout = ImageLayout::packed(4, 1, f);
+    const auto pixels = pattern(layout.frame_bytes());
+    auto message = serialize(plan_image(layout, pixels.size(), {Time{1, 0}, "cam"}).value(), pixels);
+    put_u32(message, 4 + 8 + 4 + 4 + 4, 3);  // width (after stamp, "cam" and height) becomes 3
+    auto view = decode_image(message);
+    ASSERT_TRUE(view.has_value()) << view.error().message;
+    ASSERT_EQ(view->width, 3u);
+    auto sim_layout = sim_image_layout(*view);
+    ASSERT_FALSE(sim_layout.has_value());
+    EXPECT_NE(sim_layout.error().message.find("even width"), std::string::npos);
   }
 }
 

@@ -21,7 +21,8 @@ struct RawOptions {
   std::vector<std::string> frame_id;   // "/stream=id"
   std::vector<std::string> max_rate;   // "/stream=HZ"
   std::vector<std::string> compress;   // "/stream=jpeg[:quality]"
-  bool reliable = false;
+  bool reliable = false;            // --reliable: the published topics' writers
+  bool reliable_subscribe = false;  // --reliable-subscribe: the subscribed topics' readers
 };
 
 struct BridgePlan {

@@ -5,9 +5,12 @@
 
 #include <atomic>
 #include <cstdint>
+#include <algorithm>
 #include <mutex>
+#include <set>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace sim::bridge {
 
@@ -26,22 +29,30 @@ struct Counters {
 
   void count(std::atomic<std::uint64_t>& c) { c.fetch_add(1, std::memory_order_relaxed); }
 
-  // The last problem worth telling the user, shown once by the main thread; a problem that
-  // repeats (a stream that stays unusable, a flood of the same bad message) is told only once.
+  // A problem worth telling the user, shown by the main thread at its next report. Distinct
+  // sentences are all told (up to max_pending per report; review L3: only the last one of a period
+  // used to be); one that was told already (a stream that stays unusable, a flood of the same bad
+  // message) is not told again.
   void problem(std::string sentence) {
     std::lock_guard lock(mutex_);
-    if (sentence != told_) problem_ = std::move(sentence);
+    if (told_.count(sentence) != 0 || pending_.size() >= max_pending) return;
+    if (std::find(pending_.begin(), pending_.end(), sentence) == pending_.end()) {
+      pending_.push_back(std::move(sentence));
+    }
   }
-  std::string take_problem() {
+  std::vector<std::string> take_problems() {
     std::lock_guard lock(mutex_);
-    if (!problem_.empty()) told_ = problem_;
-    return std::exchange(problem_, {});
+    if (told_.size() > max_told) told_.clear();  // bounded memory under endless distinct input
+    for (const std::string& p : pending_) told_.insert(p);
+    return std::exchange(pending_, {});
   }
 
  private:
+  static constexpr std::size_t max_pending = 8;
+  static constexpr std::size_t max_told = 256;
   std::mutex mutex_;
-  std::string problem_;
-  std::string told_;
+  std::vector<std::string> pending_;
+  std::set<std::string> told_;
 };
 
 }  // namespace sim::bridge

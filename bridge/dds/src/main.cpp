@@ -5,6 +5,7 @@
 // reports. See docs/bridge.md.
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,7 @@
 #include "dds_session.hpp"
 #include "inbound.hpp"
 #include "outbound.hpp"
+#include "static_transforms.hpp"
 #include "sim/apps/command_line.hpp"
 #include "sim/apps/status_line.hpp"
 #include "sim/apps/stop_signal.hpp"
@@ -47,30 +49,32 @@ std::string counters_json(const Counters& c) {
 struct Report {
   std::vector<std::unique_ptr<Outbound>>& outbound;
   std::vector<std::unique_ptr<Inbound>>& inbound;
+  StaticTransforms& transforms;
 
-  // One JSON object: every topic's counters.
+  // One JSON object: every topic's counters (camera_info and /tf_static once they exist).
   std::string json() const {
     std::string out = "{\"topics\":[";
     bool first = true;
-    auto add = [&](const std::string& head, const Counters& c) {
-      out += (first ? "" : ",") + head + counters_json(c) + "}";
+    auto add = [&](const char* direction, const std::string& stream, const std::string& topic,
+                   const Counters& c) {
+      out += std::string(first ? "" : ",") + "{\"direction\":\"" + direction +
+             "\",\"stream\":\"" + stream + "\",\"topic\":\"" + topic + "\"," +
+             counters_json(c) + "}";
       first = false;
     };
     for (const auto& o : outbound) {
       const auto& opt = o->options();
-      add("{\"direction\":\"publish\",\"stream\":\"" + opt.stream + "\",\"topic\":\"" + opt.topic +
-              "\",",
-          o->raw());
-      if (opt.jpeg_quality) {
-        add("{\"direction\":\"publish\",\"stream\":\"" + opt.stream + "\",\"topic\":\"" +
-                opt.topic + "/compressed\",",
-            o->compressed());
+      add("publish", opt.stream, o->raw_topic(), o->raw());
+      if (opt.jpeg_quality) add("publish", opt.stream, o->compressed_topic(), o->compressed());
+      if (o->camera_info().connected.load()) {
+        add("publish", opt.stream, o->camera_info_topic(), o->camera_info());
       }
     }
+    if (transforms.counters().connected.load()) {
+      add("publish", "", tf_static_topic, transforms.counters());
+    }
     for (const auto& i : inbound) {
-      add("{\"direction\":\"subscribe\",\"stream\":\"" + i->options().stream + "\",\"topic\":\"" +
-              i->options().topic + "\",",
-          i->counters());
+      add("subscribe", i->options().stream, i->options().topic, i->counters());
     }
     return out + "]}";
   }
@@ -81,7 +85,7 @@ struct Report {
     std::string out;
     for (const auto& o : outbound) {
       const Counters& c = o->raw();
-      out += (out.empty() ? "" : "  ") + o->options().topic + " → " + std::to_string(c.bridged.load()) +
+      out += (out.empty() ? "" : "  ") + o->raw_topic() + " → " + std::to_string(c.bridged.load()) +
              " sent, " + std::to_string(c.matched.load()) + " readers, " +
              std::to_string(c.skipped_rate.load()) + " rate-skipped";
       if (o->options().jpeg_quality) {
@@ -99,13 +103,14 @@ struct Report {
   // Problems the topic threads met since the last look, one sentence each.
   void problems(apps::StatusLine& status) const {
     auto tell = [&](Counters& c) {
-      std::string p = c.take_problem();
-      if (!p.empty()) status.note(p);
+      for (const std::string& p : c.take_problems()) status.note(p);
     };
     for (const auto& o : outbound) {
       tell(o->raw());
       tell(o->compressed());
+      tell(o->camera_info());
     }
+    tell(transforms.counters());
     for (const auto& i : inbound) tell(i->counters());
   }
 };
@@ -145,7 +150,11 @@ int main(int argc, char** argv) {
                  "(JPEG quality 1-100) [90]")
       ->type_name("STREAM=jpeg[:Q]");
   app.add_flag("--reliable", raw.reliable,
-               "reliable QoS instead of ROS 2's sensor-data profile (best effort)");
+               "publish with reliable QoS instead of ROS 2's sensor-data profile (best effort); "
+               "for subscribers with the default QoS");
+  app.add_flag("--reliable-subscribe", raw.reliable_subscribe,
+               "subscribe with reliable QoS (then best-effort publishers, most drivers, do not "
+               "match) [best effort: matches both]");
   app.add_flag("--json", json, "print every topic's counters as one JSON line per status period on stdout");
   app.add_option("--status-period", status_period, "seconds between status reports")
       ->check(CLI::Range(0.05, 3600.0));
@@ -178,19 +187,24 @@ int main(int argc, char** argv) {
   auto session = DdsSession::create(domain);
   if (!session) return cli.fail(session.error());
 
+  StaticTransforms transforms(**session);
+  std::optional<RemoteTransforms> remote_transforms;
+  if (!plan->inbound.empty()) remote_transforms.emplace(**session);
   std::vector<std::unique_ptr<Outbound>> outbound;
   std::vector<std::unique_ptr<Inbound>> inbound;
   for (auto& o : plan->outbound) {
     o.trust = trust;
-    outbound.push_back(std::make_unique<Outbound>(**session, o));
+    outbound.push_back(std::make_unique<Outbound>(**session, transforms, o));
   }
-  for (auto& i : plan->inbound) inbound.push_back(std::make_unique<Inbound>(**session, i));
-  const Report report{outbound, inbound};
+  for (auto& i : plan->inbound) {
+    inbound.push_back(std::make_unique<Inbound>(**session, *remote_transforms, i));
+  }
+  const Report report{outbound, inbound, transforms};
 
   auto status = apps::StatusLine::for_stderr("sim_dds_bridge", quiet);
   if (!quiet) {
     for (const auto& o : outbound) {
-      status.note(o->options().stream + " → DDS rt" + o->options().topic + " (domain " +
+      status.note(o->options().stream + " → DDS rt" + o->options().topic + "[/image_raw] (domain " +
                   std::to_string(domain) + ")");
     }
     for (const auto& i : inbound) {
@@ -206,6 +220,9 @@ int main(int argc, char** argv) {
     }
     status.update(report.text());
   }
+  // Review L4: the threads stop first, so the last report counts every message they handled.
+  for (auto& o : outbound) o->stop();
+  for (auto& i : inbound) i->stop();
   report.problems(status);
   if (json) std::printf("%s\n", report.json().c_str());
   status.finish(report.text());

@@ -4,11 +4,13 @@
 #include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
 
 #include <chrono>
+#include <vector>
 
 #include "ros_message_type.hpp"
 #include "sim/clock.hpp"
 #include "sim/imaging/jpeg_encoder.hpp"
 #include "sim/reader.hpp"
+#include "sim/ros2/metadata.hpp"
 
 namespace sim::bridge {
 
@@ -19,26 +21,43 @@ namespace {
 
 constexpr auto reopen_period = 200ms;  // how often a missing stream is looked for again
 constexpr auto wait_slice = 100ms;     // how long one wait for a frame lasts, so stop is prompt
+constexpr auto idle_poll = 200ms;      // how often a stream nobody listens to is looked at
 
-// One DDS writer of one topic, recreated when the stream's message type changes.
+std::string image_topic(const std::string& base) { return base + "/image_raw"; }
+std::string jpeg_topic(const std::string& base) { return base + "/image_raw/compressed"; }
+
+// The topic a frame message of `type` goes to.
+std::string topic_for(const std::string& base, ros2::MessageType type) {
+  switch (type) {
+    case ros2::MessageType::point_cloud2: return base;
+    case ros2::MessageType::image: return image_topic(base);
+    case ros2::MessageType::compressed_image: return jpeg_topic(base);
+  }
+  return base;
+}
+
+// One DDS writer of one topic, recreated when the topic or its type changes.
 class TopicWriter {
  public:
-  TopicWriter(DdsSession& session, std::string dds_topic, QosChoice qos, Counters& counters)
-      : session_(session), dds_topic_(std::move(dds_topic)), qos_(qos), counters_(counters) {}
+  TopicWriter(DdsSession& session, QosChoice qos, Counters& counters)
+      : session_(session), qos_(qos), counters_(counters) {}
   ~TopicWriter() { session_.delete_writer(writer_); }
   TopicWriter(const TopicWriter&) = delete;
   TopicWriter& operator=(const TopicWriter&) = delete;
 
   // False (with the reason given to the counters) when no writer could be made.
-  bool ensure(ros2::MessageType type) {
-    if (writer_ != nullptr && type_ == type) return true;
+  bool ensure(const std::string& ros_topic, std::string_view dds_type) {
+    if (writer_ != nullptr && ros_topic == ros_topic_ && dds_type == dds_type_) return true;
     session_.delete_writer(std::exchange(writer_, nullptr));
     std::string error;
-    writer_ = session_.create_writer(dds_topic_, type, qos_, error);
-    type_ = type;
+    ros_topic_ = ros_topic;
+    dds_type_ = dds_type;
+    writer_ = session_.create_writer(ros2::dds_topic_name(ros_topic), dds_type, qos_, error);
     if (writer_ == nullptr) counters_.problem(error);
+    counters_.connected.store(writer_ != nullptr);
     return writer_ != nullptr;
   }
+  bool exists() const { return writer_ != nullptr; }
 
   // Remote readers matched now (one cheap call; Fast DDS keeps the count).
   int matched() {
@@ -49,30 +68,48 @@ class TopicWriter {
     return status.current_count;
   }
 
-  // Serializes (the one copy) and sends.
-  void write(OutgoingMessage& message) {
-    counters_.count(counters_.serialized);
-    const auto rc = writer_->write(&message);
-    if (message.torn) {
-      counters_.count(counters_.torn);
-    } else if (rc) {
-      counters_.count(counters_.bridged);
-    } else {
-      counters_.count(counters_.failed);
+  // Review M4: a remote reader that discovery announced but that did not match is told why, in
+  // one sentence (told once per sentence by the counters).
+  void tell_mismatches() {
+    if (writer_ == nullptr) return;
+    for (const RemoteEndpoint& r : session_.remote_readers(ros2::dds_topic_name(ros_topic_))) {
+      if (r.type_name != dds_type_) {
+        counters_.problem(ros_topic_ + ": a reader expects the type " + r.type_name +
+                          ", but the bridge publishes " + std::string(dds_type_) + " there");
+      } else if (r.reliable && !qos_.reliable) {
+        counters_.problem(ros_topic_ + ": a reader asks for RELIABLE delivery and does not match "
+                          "the bridge's best effort (ROS 2 sensor data); start the bridge with "
+                          "--reliable or subscribe with SensorDataQoS");
+      } else if (!r.xcdr1) {
+        counters_.problem(ros_topic_ + ": a reader accepts only XCDR2 data and does not match; "
+                          "ROS 2 nodes and the bridge use XCDR1");
+      }
     }
+  }
+
+  // Serializes (a frame's one copy) and sends.
+  template <typename Message>
+  void write(Message& message) {
+    counters_.count(counters_.serialized);
+    const bool sent = static_cast<bool>(writer_->write(&message));
+    if constexpr (std::is_same_v<Message, OutgoingMessage>) {
+      if (message.torn) return counters_.count(counters_.torn);
+    }
+    counters_.count(sent ? counters_.bridged : counters_.failed);
   }
 
  private:
   DdsSession& session_;
-  std::string dds_topic_;
   QosChoice qos_;
   Counters& counters_;
   dds::DataWriter* writer_ = nullptr;
-  ros2::MessageType type_ = ros2::MessageType::image;
+  std::string ros_topic_;
+  std::string_view dds_type_;
 };
 
 // --max-rate: a frame goes out when at least one period passed since the last one sent, less a
-// tenth of it, so a 20 Hz stream limited to 10 Hz sends every other frame despite jitter.
+// tenth of it, so a 20 Hz stream limited to 10 Hz sends every other frame despite jitter. The
+// options keep the rate from 0.001 Hz up, so the period fits (review L2).
 class RateLimit {
  public:
   explicit RateLimit(double hz) : period_ns_(hz > 0 ? static_cast<std::int64_t>(1e9 / hz) : 0) {}
@@ -88,36 +125,242 @@ class RateLimit {
 
 }  // namespace
 
-Outbound::Outbound(DdsSession& session, OutboundOptions options)
-    : session_(session), options_(std::move(options)) {
+std::vector<std::string> published_topics(const OutboundOptions& options) {
+  const std::string& base = options.topic.empty() ? options.stream : options.topic;
+  return {base, image_topic(base), jpeg_topic(base), ros2::camera_info_topic_for(image_topic(base))};
+}
+
+// The state of one publication while it runs: the writers, the encoder, the stream's sensor.
+class Publication {
+ public:
+  Publication(DdsSession& session, StaticTransforms& transforms, const OutboundOptions& options,
+              Counters& raw, Counters& compressed, Counters& camera_info)
+      : transforms_(transforms), options_(options), raw_counters_(raw),
+        compressed_counters_(compressed), raw_(session, options.qos, raw),
+        compressed_(session, options.qos, compressed), camera_info_(session, options.qos, camera_info),
+        rate_(options.max_rate_hz), frame_id_(default_frame_id()) {
+    if (options.jpeg_quality) {
+      auto created = imaging::JpegEncoder::create(*options.jpeg_quality);
+      if (created) {
+        encoder_.emplace(std::move(created.value()));
+      } else {
+        compressed.problem(options.stream + ": " + created.error().message);
+      }
+    }
+  }
+
+  // The stream was (re)opened: its writers for its layout, its sensor description.
+  bool opened(Reader& reader, std::string& raw_topic);
+  // Nobody listens: look at the stream without waking per frame. False: reopen it.
+  bool idle(Reader& reader);
+  // Someone listens: wait for the next frame and send it. False: reopen the stream.
+  bool serve(Reader& reader);
+  bool wanted() { return raw_.matched() > 0 || (can_compress_ && compressed_.matched() > 0); }
+
+ private:
+  std::string default_frame_id() const {
+    return options_.frame_id.empty() ? options_.stream.substr(1) : options_.frame_id;
+  }
+  void sensor_changed(const Reader& reader, std::uint64_t generation);
+  void count_frames(const FrameInfo& info, bool sent);
+  void send_raw(const Borrow& borrow);
+  void send_jpeg(const Borrow& borrow);
+  void send_camera_info(std::int64_t stamp_ns);
+
+  StaticTransforms& transforms_;
+  const OutboundOptions& options_;
+  Counters& raw_counters_;
+  Counters& compressed_counters_;
+  TopicWriter raw_;
+  TopicWriter compressed_;
+  TopicWriter camera_info_;
+  std::optional<imaging::JpegEncoder> encoder_;
+  RateLimit rate_;
+  bool can_compress_ = false;
+  bool compress_refused_ = false;
+  bool is_image_ = false;
+  std::uint64_t last_seq_ = 0;
+  std::optional<std::uint64_t> generation_;
+  std::string frame_id_;
+  std::vector<std::byte> camera_info_message_;  // empty: no calibration
+};
+
+bool Publication::opened(Reader& reader, std::string& raw_topic) {
+  auto type = ros2::message_type_for(reader.layout());
+  if (!type) {
+    raw_counters_.problem(options_.stream + ": " + type.error().message);
+    return false;
+  }
+  // Creating the writers as soon as the stream's kind is known makes the topics visible (and
+  // matchable) before the first frame is worth sending.
+  raw_topic = topic_for(options_.topic, *type);
+  if (!raw_.ensure(raw_topic, ros2::dds_type_name(*type))) return false;
+  is_image_ = *type != ros2::MessageType::point_cloud2;
+  can_compress_ = encoder_ && *type == ros2::MessageType::image &&
+                  imaging::JpegEncoder::encodes(reader.layout().image.format);
+  if (options_.jpeg_quality && !can_compress_ && !compress_refused_) {
+    compressed_counters_.problem(options_.stream + ": --compress jpeg needs a mono8, bgr8, rgb8, "
+                                 "bgra8 or rgba8 image stream; no CompressedImage is published");
+    compress_refused_ = true;
+  }
+  if (can_compress_ &&
+      !compressed_.ensure(jpeg_topic(options_.topic), ros2::dds_type_name(ros2::MessageType::compressed_image))) {
+    return false;
+  }
+  generation_.reset();
+  sensor_changed(reader, 0);
+  return true;
+}
+
+// A new sensor description (or the first look at one): the frame id, the CameraInfo message and
+// the mounting on /tf_static follow it.
+void Publication::sensor_changed(const Reader& reader, std::uint64_t generation) {
+  if (generation_ == generation) return;
+  generation_ = generation;
+  auto sensor = reader.sensor_info();
+  if (!sensor) {
+    raw_counters_.problem(options_.stream + ": " + sensor.error().message);
+    return;
+  }
+  const std::optional<SensorInfo>& info = *sensor;
+  frame_id_ = options_.frame_id.empty() && info && !info->frame_id.empty() ? info->frame_id
+                                                                            : default_frame_id();
+  camera_info_message_.clear();
+  if (is_image_ && info && info->calibration) {
+    auto message = ros2::encode_camera_info({ros2::Time{}, frame_id_}, *info->calibration);
+    if (!message) {
+      raw_counters_.problem(options_.stream + ": " + message.error().message);
+    } else {
+      camera_info_message_ = std::move(message.value());
+      camera_info_.ensure(ros2::camera_info_topic_for(image_topic(options_.topic)),
+                          ros2::camera_info_dds_type_name);
+    }
+  }
+  transforms_.set(options_.stream, info);
+}
+
+void Publication::count_frames(const FrameInfo& info, bool sent) {
+  const std::uint64_t frames = last_seq_ == 0 || info.seq <= last_seq_ ? 1 : info.seq - last_seq_;
+  last_seq_ = info.seq;
+  raw_counters_.frames_seen.fetch_add(frames, std::memory_order_relaxed);
+  if (!sent) raw_counters_.no_reader.fetch_add(frames, std::memory_order_relaxed);
+}
+
+bool Publication::idle(Reader& reader) {
+  raw_.tell_mismatches();
+  if (can_compress_) compressed_.tell_mismatches();
+  std::this_thread::sleep_for(idle_poll);
+  const Borrow borrow = reader.borrow();  // no copy: only the frame's number and description
+  if (borrow.status() == ReadStatus::region_invalid) return false;
+  if (borrow.status() == ReadStatus::new_frame) {
+    count_frames(borrow.info(), false);
+    sensor_changed(reader, borrow.info().sensor_generation);
+  }
+  return true;
+}
+
+bool Publication::serve(Reader& reader) {
+  const ReadStatus waited = reader.wait(wait_slice);
+  if (waited == ReadStatus::region_invalid) return false;
+  if (waited != ReadStatus::new_frame) return true;
+  const Borrow borrow = reader.borrow();
+  if (borrow.status() != ReadStatus::new_frame) return true;
+  const FrameInfo& info = borrow.info();
+  sensor_changed(reader, info.sensor_generation);
+  const bool raw_wanted = raw_.matched() > 0;
+  const bool jpeg_wanted = can_compress_ && compressed_.matched() > 0;
+  count_frames(info, raw_wanted || jpeg_wanted);
+  if (!raw_wanted && !jpeg_wanted) return true;
+  const std::int64_t now = monotonic_ns();
+  if (!rate_.due(now)) {
+    raw_counters_.count(raw_counters_.skipped_rate);
+    return true;
+  }
+  rate_.sent(now);
+  if (raw_wanted) send_raw(borrow);
+  if (jpeg_wanted) send_jpeg(borrow);
+  if (is_image_) send_camera_info(info.stamp_ns);
+  return true;
+}
+
+void Publication::send_raw(const Borrow& borrow) {
+  const FrameInfo& info = borrow.info();
+  // The frame's own kind decides the message (a replaced region may have a new layout).
+  auto type = ros2::message_type_for(info.layout);
+  if (!type || !raw_.ensure(topic_for(options_.topic, *type), ros2::dds_type_name(*type))) return;
+  auto plan = ros2::plan_frame(info, frame_id_);
+  if (!plan) {
+    raw_counters_.count(raw_counters_.failed);
+    raw_counters_.problem(options_.stream + ": " + plan.error().message);
+    return;
+  }
+  OutgoingMessage message{&plan.value(), borrow.bytes().first(info.size), &borrow};
+  raw_.write(message);
+}
+
+void Publication::send_jpeg(const Borrow& borrow) {
+  const FrameInfo& info = borrow.info();
+  if (info.layout.kind != LayoutKind::image || !imaging::JpegEncoder::encodes(info.layout.image.format)) {
+    return;
+  }
+  compressed_counters_.count(compressed_counters_.frames_seen);
+  // Into the encoder's own buffer, from which serializing is the JPEG's one copy.
+  auto jpeg = encoder_->encode(info.layout.image, borrow.bytes().first(info.size));
+  if (!borrow.still_valid()) {  // the encoder read a slot being overwritten: drop its output
+    compressed_counters_.count(compressed_counters_.torn);
+  } else if (!jpeg) {
+    compressed_counters_.count(compressed_counters_.failed);
+    compressed_counters_.problem(options_.stream + ": " + jpeg.error().message);
+  } else {
+    const ros2::Header header{ros2::Time::from_ns(info.stamp_ns), frame_id_};
+    auto plan = ros2::plan_compressed_image("jpeg", jpeg->size(), header);
+    if (plan) {
+      OutgoingMessage message{&plan.value(), *jpeg, nullptr};
+      compressed_.write(message);
+    }
+  }
+}
+
+// The calibration beside the image: the identical stamp and frame_id, so image_transport's
+// exact-time synchroniser and Foxglove pair them.
+void Publication::send_camera_info(std::int64_t stamp_ns) {
+  if (camera_info_message_.empty() || !camera_info_.exists() || camera_info_.matched() == 0) return;
+  ros2::restamp(camera_info_message_, ros2::Time::from_ns(stamp_ns));
+  SerializedMessage message{camera_info_message_};
+  camera_info_.write(message);
+}
+
+Outbound::Outbound(DdsSession& session, StaticTransforms& transforms, OutboundOptions options)
+    : session_(session), transforms_(transforms), options_(std::move(options)) {
   if (options_.topic.empty()) options_.topic = options_.stream;
-  if (options_.frame_id.empty()) options_.frame_id = options_.stream.substr(1);
+  raw_topic_ = options_.topic;
   thread_ = std::thread([this] { run(); });
 }
 
-Outbound::~Outbound() {
+Outbound::~Outbound() { stop(); }
+
+void Outbound::stop() {
   stop_.store(true);
   if (thread_.joinable()) thread_.join();
 }
 
-void Outbound::run() {
-  TopicWriter raw(session_, ros2::dds_topic_name(options_.topic), options_.qos, raw_);
-  std::optional<TopicWriter> compressed;
-  std::optional<imaging::JpegEncoder> encoder;
-  if (options_.jpeg_quality) {
-    auto created = imaging::JpegEncoder::create(*options_.jpeg_quality);
-    if (created) {
-      compressed.emplace(session_, ros2::dds_topic_name(options_.topic + "/compressed"),
-                         options_.qos, compressed_);
-      encoder.emplace(std::move(created.value()));
-    } else {
-      compressed_.problem(options_.stream + ": " + created.error().message);
-    }
-  }
-  RateLimit rate(options_.max_rate_hz);
-  std::optional<Reader> reader;
-  bool compress_refused = false;
+std::string Outbound::raw_topic() const {
+  std::lock_guard lock(topic_mutex_);
+  return raw_topic_;
+}
+std::string Outbound::compressed_topic() const { return jpeg_topic(options_.topic); }
+std::string Outbound::camera_info_topic() const {
+  return ros2::camera_info_topic_for(image_topic(options_.topic));
+}
 
+void Outbound::set_raw_topic(std::string topic) {
+  std::lock_guard lock(topic_mutex_);
+  raw_topic_ = std::move(topic);
+}
+
+void Outbound::run() {
+  Publication publication(session_, transforms_, options_, raw_, compressed_, camera_info_);
+  std::optional<Reader> reader;
   while (!stop_.load(std::memory_order_relaxed)) {
     if (!reader) {
       auto opened = Reader::open(options_.stream, {.trust = options_.trust});
@@ -127,93 +370,18 @@ void Outbound::run() {
         std::this_thread::sleep_for(reopen_period);
         continue;
       }
+      std::string topic;
+      if (!publication.opened(*opened, topic)) {  // told once through the counters
+        std::this_thread::sleep_for(reopen_period);
+        continue;
+      }
+      set_raw_topic(std::move(topic));
       reader.emplace(std::move(opened.value()));
-      raw_.connected.store(true);
     }
-    const ReadStatus waited = reader->wait(wait_slice);
-    if (waited == ReadStatus::region_invalid) {
+    const bool ok = publication.wanted() ? publication.serve(*reader) : publication.idle(*reader);
+    if (!ok) {
       raw_.problem("the stream " + options_.stream + " became invalid; opening it again");
       reader.reset();
-      continue;
-    }
-    // Creating the writers as soon as the stream's kind is known makes the topic visible (and
-    // matchable) before the first frame is worth sending.
-    auto type = ros2::message_type_for(reader->layout());
-    if (!type) {
-      raw_.problem(options_.stream + ": " + type.error().message);
-      reader.reset();
-      std::this_thread::sleep_for(reopen_period);
-      continue;
-    }
-    if (!raw.ensure(*type)) {  // told once through the counters; try again later
-      std::this_thread::sleep_for(reopen_period);
-      continue;
-    }
-    const bool can_compress = compressed && *type == ros2::MessageType::image &&
-                              imaging::JpegEncoder::encodes(reader->layout().image.format);
-    if (compressed && !can_compress && !compress_refused) {
-      compressed_.problem(options_.stream + ": --compress jpeg needs a mono8, bgr8, rgb8, bgra8 "
-                          "or rgba8 image stream; no CompressedImage is published");
-      compress_refused = true;
-    }
-    if (can_compress && !compressed->ensure(ros2::MessageType::compressed_image)) {
-      std::this_thread::sleep_for(reopen_period);
-      continue;
-    }
-    if (waited != ReadStatus::new_frame) {
-      raw.matched();
-      if (can_compress) compressed->matched();
-      continue;
-    }
-
-    const Borrow borrow = reader->borrow();
-    if (borrow.status() != ReadStatus::new_frame) continue;
-    raw_.count(raw_.frames_seen);
-    const bool raw_wanted = raw.matched() > 0;
-    const bool jpeg_wanted = can_compress && compressed->matched() > 0;
-    if (!raw_wanted && !jpeg_wanted) {
-      raw_.count(raw_.no_reader);  // nothing serialized, nothing copied
-      continue;
-    }
-    const std::int64_t now = monotonic_ns();
-    if (!rate.due(now)) {
-      raw_.count(raw_.skipped_rate);
-      continue;
-    }
-    rate.sent(now);
-    const FrameInfo& info = borrow.info();
-
-    if (raw_wanted) {
-      // The frame's own kind decides the message (a replaced region may have a new layout).
-      auto frame_type = ros2::message_type_for(info.layout);
-      if (frame_type && raw.ensure(*frame_type)) {
-        auto plan = ros2::plan_frame(info, options_.frame_id);
-        if (!plan) {
-          raw_.count(raw_.failed);
-          raw_.problem(options_.stream + ": " + plan.error().message);
-        } else {
-          OutgoingMessage message{&plan.value(), borrow.bytes().first(info.size), &borrow};
-          raw.write(message);
-        }
-      }
-    }
-    if (jpeg_wanted && info.layout.kind == LayoutKind::image &&
-        imaging::JpegEncoder::encodes(info.layout.image.format)) {
-      // Into the encoder's own buffer, from which serializing is the JPEG's one copy.
-      auto jpeg = encoder->encode(info.layout.image, borrow.bytes().first(info.size));
-      if (!borrow.still_valid()) {  // the encoder read a slot being overwritten: drop its output
-        compressed_.count(compressed_.torn);
-      } else if (!jpeg) {
-        compressed_.count(compressed_.failed);
-        compressed_.problem(options_.stream + ": " + jpeg.error().message);
-      } else {
-        const ros2::Header header{ros2::Time::from_ns(info.stamp_ns), options_.frame_id};
-        auto plan = ros2::plan_compressed_image("jpeg", jpeg->size(), header);
-        if (plan) {
-          OutgoingMessage message{&plan.value(), *jpeg, nullptr};
-          compressed->write(message);
-        }
-      }
     }
   }
 }

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "ros_message_type.hpp"
 
+#include <cstring>
 #include <string>
 
 namespace sim::bridge {
@@ -48,5 +49,36 @@ std::function<std::uint32_t()> RosMessageType::getSerializedSizeProvider(void* d
 
 void* RosMessageType::createData() { return new IncomingMessage; }
 void RosMessageType::deleteData(void* data) { delete static_cast<IncomingMessage*>(data); }
+
+SerializedMessageType::SerializedMessageType(std::string_view dds_type_name) {
+  setName(std::string(dds_type_name).c_str());
+  m_typeSize = 4 * 1024;
+  m_isGetKeyDefined = false;
+}
+
+bool SerializedMessageType::serialize(void* data, SerializedPayload_t* payload) {
+  const auto& message = *static_cast<SerializedMessage*>(data);
+  if (message.bytes.size() < 4 || payload->max_size < message.bytes.size()) return false;
+  std::memcpy(payload->data, message.bytes.data(), message.bytes.size());
+  payload->length = static_cast<std::uint32_t>(message.bytes.size());
+  payload->encapsulation = CDR_LE;
+  return true;
+}
+
+bool SerializedMessageType::deserialize(SerializedPayload_t* payload, void* data) {
+  auto& message = *static_cast<IncomingMessage*>(data);
+  if (message.sink != nullptr) {
+    message.sink->deliver({reinterpret_cast<const std::byte*>(payload->data), payload->length});
+  }
+  return true;
+}
+
+std::function<std::uint32_t()> SerializedMessageType::getSerializedSizeProvider(void* data) {
+  const auto size = static_cast<std::uint32_t>(static_cast<SerializedMessage*>(data)->bytes.size());
+  return [size] { return size; };
+}
+
+void* SerializedMessageType::createData() { return new IncomingMessage; }
+void SerializedMessageType::deleteData(void* data) { delete static_cast<IncomingMessage*>(data); }
 
 }  // namespace sim::bridge

@@ -9,6 +9,7 @@
 
 #include <cstddef>
 #include <span>
+#include <string_view>
 
 #include "sim/reader.hpp"
 #include "sim/ros2/encode.hpp"
@@ -22,6 +23,12 @@ struct OutgoingMessage {
   std::span<const std::byte> payload;  // the frame's bytes (in the SIM slot, or a JPEG buffer)
   const Borrow* borrow = nullptr;      // the slot the payload lies in, checked after the copy
   bool torn = false;                   // set when the SIM writer overwrote the slot meanwhile
+};
+
+// What DataWriter::write() is given for a message serialized beforehand (CameraInfo, TFMessage,
+// ParticipantEntitiesInfo): its whole bytes, encapsulation header first.
+struct SerializedMessage {
+  std::span<const std::byte> bytes;
 };
 
 // Receives the serialized bytes of each message DataReader::take_next_sample() takes.
@@ -56,6 +63,22 @@ class RosMessageType final : public eprosima::fastdds::dds::TopicDataType {
 
  private:
   ros2::MessageType type_;
+};
+
+// The Fast DDS type of a message this layer serializes whole beforehand (small and rare: the
+// calibration, the mountings, the graph). Reading hands the bytes to the sink, as RosMessageType.
+class SerializedMessageType final : public eprosima::fastdds::dds::TopicDataType {
+ public:
+  explicit SerializedMessageType(std::string_view dds_type_name);
+
+  bool serialize(void* data, eprosima::fastrtps::rtps::SerializedPayload_t* payload) override;
+  bool deserialize(eprosima::fastrtps::rtps::SerializedPayload_t* payload, void* data) override;
+  std::function<std::uint32_t()> getSerializedSizeProvider(void* data) override;
+  void* createData() override;
+  void deleteData(void* data) override;
+  bool getKey(void*, eprosima::fastrtps::rtps::InstanceHandle_t*, bool) override { return false; }
+  bool is_bounded() const override { return false; }
+  bool is_plain() const override { return false; }
 };
 
 }  // namespace sim::bridge

@@ -30,17 +30,28 @@ class CycloneParticipant {
   dds_entity_t participant_;
 };
 
-inline dds_qos_t* ros_qos(bool reliable) {
+// The QoS of one endpoint: ROS 2's sensor data by default; reliable and transient local for
+// latched topics (/tf_static, ros_discovery_info); XCDR2 to play a peer ROS 2 does not match.
+struct EndpointQos {
+  bool reliable = false;
+  bool transient_local = false;
+  int depth = 5;
+  bool xcdr2 = false;
+};
+
+inline dds_qos_t* ros_qos(const EndpointQos& q) {
   dds_qos_t* qos = dds_create_qos();
-  if (reliable) {
+  if (q.reliable) {
     dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
   } else {
     dds_qset_reliability(qos, DDS_RELIABILITY_BEST_EFFORT, 0);
   }
-  dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 5);
-  dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
-  dds_data_representation_id_t xcdr1[] = {DDS_DATA_REPRESENTATION_XCDR1};
-  dds_qset_data_representation(qos, 1, xcdr1);
+  dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, q.depth);
+  dds_qset_durability(qos, q.transient_local ? DDS_DURABILITY_TRANSIENT_LOCAL : DDS_DURABILITY_VOLATILE);
+  dds_data_representation_id_t representation[] = {
+      static_cast<dds_data_representation_id_t>(q.xcdr2 ? DDS_DATA_REPRESENTATION_XCDR2
+                                                       : DDS_DATA_REPRESENTATION_XCDR1)};
+  dds_qset_data_representation(qos, 1, representation);
   return qos;
 }
 
@@ -49,9 +60,12 @@ template <typename Sample>
 class CycloneReader {
  public:
   CycloneReader(const CycloneParticipant& p, const dds_topic_descriptor_t* type,
-                const std::string& dds_topic, bool reliable = false) {
+                const std::string& dds_topic, bool reliable = false)
+      : CycloneReader(p, type, dds_topic, EndpointQos{.reliable = reliable}) {}
+  CycloneReader(const CycloneParticipant& p, const dds_topic_descriptor_t* type,
+                const std::string& dds_topic, const EndpointQos& endpoint) {
     topic_ = dds_create_topic(p.handle(), type, dds_topic.c_str(), nullptr, nullptr);
-    dds_qos_t* qos = ros_qos(reliable);
+    dds_qos_t* qos = ros_qos(endpoint);
     reader_ = dds_create_reader(p.handle(), topic_, qos, nullptr);
     dds_delete_qos(qos);
     if (topic_ < 0 || reader_ < 0) throw std::runtime_error("Cyclone DDS could not create a reader");
@@ -98,9 +112,12 @@ class CycloneReader {
 class CycloneWriter {
  public:
   CycloneWriter(const CycloneParticipant& p, const dds_topic_descriptor_t* type,
-                const std::string& dds_topic, bool reliable = false) {
+                const std::string& dds_topic, bool reliable = false)
+      : CycloneWriter(p, type, dds_topic, EndpointQos{.reliable = reliable}) {}
+  CycloneWriter(const CycloneParticipant& p, const dds_topic_descriptor_t* type,
+                const std::string& dds_topic, const EndpointQos& endpoint) {
     topic_ = dds_create_topic(p.handle(), type, dds_topic.c_str(), nullptr, nullptr);
-    dds_qos_t* qos = ros_qos(reliable);
+    dds_qos_t* qos = ros_qos(endpoint);
     writer_ = dds_create_writer(p.handle(), topic_, qos, nullptr);
     dds_delete_qos(qos);
     if (topic_ < 0 || writer_ < 0) throw std::runtime_error("Cyclone DDS could not create a writer");

@@ -20,6 +20,7 @@
 #include <thread>
 #include <vector>
 
+#include "bridge_test.hpp"
 #include "cyclone.hpp"
 #include "pcap_payloads.hpp"
 #include "sim/lidar_point.hpp"
@@ -32,6 +33,7 @@
 namespace {
 
 namespace fs = std::filesystem;
+using namespace bridge_test;
 using namespace std::chrono_literals;
 using sim::testing::CycloneParticipant;
 using sim::testing::CycloneReader;
@@ -41,22 +43,13 @@ using Cloud = sensor_msgs_msg_dds__PointCloud2_;
 using Image = sensor_msgs_msg_dds__Image_;
 using Compressed = sensor_msgs_msg_dds__CompressedImage_;
 
-const std::string bridge_tool = SIM_DDS_BRIDGE;
 const std::string replay_pcap = SIM_REPLAY_PCAP;
 const std::string replay_video = SIM_REPLAY_VIDEO;
 const fs::path hesai_data = SIM_HESAI_TEST_DATA;
 
-// Set in main(): why this process has no private network (its tests then skip).
-std::optional<std::string> g_skip_reason;
-
-#define SKIP_WITHOUT_NETWORK() \
-  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason
 
 using sim::testing::StreamGuard;
 
-std::string unique_name(const std::string& what) {
-  return sim::testing::unique_name("bridge_" + what);
-}
 
 struct TempDir {
   fs::path path = fs::temp_directory_path() / ("sim_bridge_test_" + std::to_string(::getpid()) +
@@ -66,24 +59,7 @@ struct TempDir {
   ~TempDir() { fs::remove_all(path); }
 };
 
-// A number out of the bridge's --json line for the topic `topic`: "\"bridged\":12".
-long long json_counter(const std::string& line, const std::string& topic, const std::string& key) {
-  const auto at = line.find("\"topic\":\"" + topic + "\"");
-  if (at == std::string::npos) return -1;
-  const auto k = line.find("\"" + key + "\":", at);
-  if (k == std::string::npos) return -1;
-  return std::stoll(line.substr(k + key.size() + 3));
-}
 
-// Reads the bridge's JSON lines until `topic`'s `key` reaches `at_least`; the last line read.
-std::string wait_counter(Process& bridge, const std::string& topic, const std::string& key,
-                         long long at_least) {
-  for (;;) {
-    auto line = bridge.wait_for_line("\"topics\"");
-    if (!line) return {};
-    if (json_counter(*line, topic, key) >= at_least) return *line;
-  }
-}
 
 std::vector<sim::LidarPoint> points_of(const Cloud& cloud) {
   std::vector<sim::LidarPoint> points(cloud.data._length / sizeof(sim::LidarPoint));
@@ -133,9 +109,6 @@ class FrameLog {
   std::thread thread_;
 };
 
-std::int64_t stamp_of(const std_msgs_msg_dds__Header_& h) {
-  return std::int64_t{h.stamp.sec} * 1'000'000'000 + h.stamp.nanosec;
-}
 
 Process start_pandar64_replay(const std::string& stream) {
   // Looping and restamped: frames keep coming with rising stamps for as long as the test needs.
@@ -145,11 +118,6 @@ Process start_pandar64_replay(const std::string& stream) {
                   "--min-range", "0.3", "--max-range", "200", "--loop", "--restamp", "--quiet"});
 }
 
-Process start_bridge(std::vector<std::string> args) {
-  std::vector<std::string> argv = {bridge_tool, "--json", "--status-period", "0.1", "--quiet"};
-  argv.insert(argv.end(), args.begin(), args.end());
-  return Process(argv);
-}
 
 // ---- SIM → DDS --------------------------------------------------------------------------------
 
@@ -276,9 +244,11 @@ TEST(Bridge, PublishesCameraFramesAsImagesAndJpegCompressedImages) {
   Process bridge = start_bridge({"--publish", stream.name, "--compress", stream.name + "=jpeg:95"});
 
   CycloneParticipant participant;
-  CycloneReader<Image> images(participant, &sensor_msgs_msg_dds__Image__desc, "rt" + stream.name);
+  // image_transport's layout: <stream>/image_raw and its compressed transport.
+  CycloneReader<Image> images(participant, &sensor_msgs_msg_dds__Image__desc,
+                              "rt" + stream.name + "/image_raw");
   CycloneReader<Compressed> jpegs(participant, &sensor_msgs_msg_dds__CompressedImage__desc,
-                                  "rt" + stream.name + "/compressed");
+                                  "rt" + stream.name + "/image_raw/compressed");
   std::int64_t last_stamp = 0;
   int last_index = -1;
   for (int n = 0; n < 6; ++n) {
@@ -323,30 +293,7 @@ TEST(Bridge, PublishesCameraFramesAsImagesAndJpegCompressedImages) {
 
 // ---- DDS → SIM --------------------------------------------------------------------------------
 
-sim::Expected<sim::Reader> open_when_created(const std::string& name) {
-  const auto deadline = std::chrono::steady_clock::now() + 30s;
-  for (;;) {
-    auto reader = sim::Reader::open(name);
-    if (reader || std::chrono::steady_clock::now() > deadline) return reader;
-    std::this_thread::sleep_for(5ms);
-  }
-}
 
-// Publishes `sample` until the SIM reader has a frame newer than the last, and returns it
-// (best effort may lose the first messages while the bridge's reader is still matching).
-std::optional<std::pair<sim::FrameInfo, std::vector<std::byte>>> publish_until_seen(
-    CycloneWriter& writer, const void* sample, sim::Reader& reader) {
-  for (int attempt = 0; attempt < 100; ++attempt) {
-    writer.write(sample);
-    std::vector<std::byte> buffer(reader.capacity());  // the region may have been replaced
-    sim::FrameInfo info;
-    if (reader.read_next(buffer, info, 300ms) == sim::ReadStatus::new_frame) {
-      buffer.resize(info.size);
-      return std::make_pair(info, buffer);
-    }
-  }
-  return std::nullopt;
-}
 
 TEST(Bridge, WritesRemoteImagesIntoASimStreamThatAnotherProcessReads) {
   SKIP_WITHOUT_NETWORK();
@@ -532,7 +479,7 @@ TEST(Bridge, ReadsItsTopicsFromTheExampleYamlConfig) {
   const auto line = bridge.wait_for_line("\"topics\"");
   ASSERT_TRUE(line) << bridge.err();
   EXPECT_NE(line->find("\"stream\":\"/lidar_top\",\"topic\":\"/lidar_top\""), std::string::npos);
-  EXPECT_NE(line->find("\"topic\":\"/camera_front/compressed\""), std::string::npos);
+  EXPECT_NE(line->find("\"topic\":\"/camera_front/image_raw/compressed\""), std::string::npos);
   EXPECT_NE(line->find("\"direction\":\"subscribe\",\"stream\":\"/camera_remote\",\"topic\":\"/remote_camera\""),
             std::string::npos)
       << *line;
@@ -543,7 +490,7 @@ TEST(Bridge, ReadsItsTopicsFromTheExampleYamlConfig) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  g_skip_reason = sim::testing::enter_private_network(sim::testing::Multicast::on);
+  bridge_test::g_skip_reason = sim::testing::enter_private_network(sim::testing::Multicast::on);
   ::testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
 }

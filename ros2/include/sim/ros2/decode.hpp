@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <string_view>
 
 #include "sim/layout.hpp"
@@ -67,6 +68,10 @@ Expected<ImageLayout> sim_image_layout(const ImageView& image);
 // point_step equal to the SIM point size, rows packed), so it can be copied as it is; otherwise
 // an error saying so (then repack_points() converts it).
 Expected<PointLayout> sim_point_layout(const PointCloud2View& cloud);
+
+// Why repack_points() cannot convert `cloud` (big endian, or no x, y and z field), or empty when
+// it can: what a subscriber checks before it touches its SIM stream.
+std::string repack_problem(const PointCloud2View& cloud);
 
 // Converts any cloud with FLOAT32 or FLOAT64 x, y, z into SIM points of `type`, one point per
 // cloud point in order: intensity from any numeric "intensity" field, for lidar_point also

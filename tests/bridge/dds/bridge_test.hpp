@@ -1,0 +1,126 @@
+// SPDX-License-Identifier: Apache-2.0
+// What the bridge tests share: the bridge as a process with --json, its counters, unique names,
+// the skip when there is no private network, and waiting for what the bridge writes into SIM.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <optional>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "cyclone.hpp"
+#include "sim/reader.hpp"
+#include "sim/writer.hpp"
+#include "sim_test/process.hpp"
+#include "sim_test/streams.hpp"
+
+namespace bridge_test {
+
+using namespace std::chrono_literals;
+using sim::testing::CycloneWriter;
+using sim::testing::Process;
+
+const std::string bridge_tool = SIM_DDS_BRIDGE;
+
+// Set in main(): why this process has no private network (its tests then skip).
+inline std::optional<std::string> g_skip_reason;
+
+#define SKIP_WITHOUT_NETWORK() \
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason
+
+inline std::string unique_name(const std::string& what) {
+  return sim::testing::unique_name("bridge_" + what);
+}
+
+// A number out of the bridge's --json line for the topic `topic`: "\"bridged\":12".
+inline long long json_counter(const std::string& line, const std::string& topic, const std::string& key) {
+  const auto at = line.find("\"topic\":\"" + topic + "\"");
+  if (at == std::string::npos) return -1;
+  const auto k = line.find("\"" + key + "\":", at);
+  if (k == std::string::npos) return -1;
+  return std::stoll(line.substr(k + key.size() + 3));
+}
+
+// Reads the bridge's JSON lines until `topic`'s `key` reaches `at_least`; the last line read.
+inline std::string wait_counter(Process& bridge, const std::string& topic, const std::string& key,
+                         long long at_least) {
+  for (;;) {
+    auto line = bridge.wait_for_line("\"topics\"");
+    if (!line) return {};
+    if (json_counter(*line, topic, key) >= at_least) return *line;
+  }
+}
+
+inline std::int64_t stamp_of(const std_msgs_msg_dds__Header_& h) {
+  return std::int64_t{h.stamp.sec} * 1'000'000'000 + h.stamp.nanosec;
+}
+
+inline Process start_bridge(std::vector<std::string> args) {
+  std::vector<std::string> argv = {bridge_tool, "--json", "--status-period", "0.1", "--quiet"};
+  argv.insert(argv.end(), args.begin(), args.end());
+  return Process(argv);
+}
+
+inline sim::Expected<sim::Reader> open_when_created(const std::string& name) {
+  const auto deadline = std::chrono::steady_clock::now() + 30s;
+  for (;;) {
+    auto reader = sim::Reader::open(name);
+    if (reader || std::chrono::steady_clock::now() > deadline) return reader;
+    std::this_thread::sleep_for(5ms);
+  }
+}
+
+// Publishes `sample` until the SIM reader has a frame newer than the last, and returns it
+// (best effort may lose the first messages while the bridge's reader is still matching).
+inline std::optional<std::pair<sim::FrameInfo, std::vector<std::byte>>> publish_until_seen(
+    CycloneWriter& writer, const void* sample, sim::Reader& reader) {
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    writer.write(sample);
+    std::vector<std::byte> buffer(reader.capacity());  // the region may have been replaced
+    sim::FrameInfo info;
+    if (reader.read_next(buffer, info, 300ms) == sim::ReadStatus::new_frame) {
+      buffer.resize(info.size);
+      return std::make_pair(info, buffer);
+    }
+  }
+  return std::nullopt;
+}
+
+// A SIM writer in this process that publishes a frame every 30 ms (stamped 1.7e18 + n × 33.3 ms,
+// each frame's bytes a pattern of its number) until it is destroyed: a live stream for the bridge
+// to publish.
+class FramePump {
+ public:
+  FramePump(sim::StreamSpec spec) : writer_(sim::Writer::create(spec)) {
+    if (writer_) thread_ = std::thread([this] { run(); });
+  }
+  ~FramePump() {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+  }
+  bool ok() const { return writer_.has_value(); }
+  std::string error() { return writer_ ? std::string{} : writer_.error().message; }
+  static std::int64_t stamp_of_frame(std::uint64_t n) {
+    return 1'700'000'000'000'000'000 + static_cast<std::int64_t>(n) * 33'333'333;
+  }
+
+ private:
+  void run() {
+    std::vector<std::byte> frame(writer_->layout().min_capacity());
+    for (std::uint64_t n = 0; !stop_; ++n) {
+      for (std::size_t i = 0; i < frame.size(); ++i) frame[i] = std::byte(static_cast<std::uint8_t>(i + n));
+      (void)writer_->write(frame, stamp_of_frame(n));
+      std::this_thread::sleep_for(30ms);
+    }
+  }
+  sim::Expected<sim::Writer> writer_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+}  // namespace bridge_test

@@ -1,0 +1,299 @@
+// SPDX-License-Identifier: Apache-2.0
+// Issue 21 "Beyond the host", the bridge's part, seen by an independent Cyclone DDS node (types
+// from idlc) that joins after the bridge started, as a ROS 2 node on rmw_cyclonedds would: the
+// calibration on <stream>/camera_info paired by stamp with the images, the mountings on
+// /tf_static, the bridge's participant and endpoints with the USER_DATA rmw reads, and the
+// bridge as the node sim_dds_bridge on ros_discovery_info. And the other direction: camera_info
+// and /tf_static from ROS 2 become the SIM stream's sensor description.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "bridge_test.hpp"
+#include "cyclone.hpp"
+#include "sim/reader.hpp"
+#include "sim/ros2/type_hash.hpp"
+#include "sim/writer.hpp"
+#include "sim_test/network.hpp"
+#include "sim_test/process.hpp"
+#include "sim_test/streams.hpp"
+
+namespace {
+
+using namespace bridge_test;
+using sim::testing::CycloneParticipant;
+using sim::testing::CycloneReader;
+using sim::testing::CycloneWriter;
+using sim::testing::EndpointQos;
+using sim::testing::StreamGuard;
+using Image = sensor_msgs_msg_dds__Image_;
+using CameraInfo = sensor_msgs_msg_dds__CameraInfo_;
+using TfMessage = tf2_msgs_msg_dds__TFMessage_;
+using Graph = rmw_dds_common_msg_dds__ParticipantEntitiesInfo_;
+using Gid = std::array<std::uint8_t, 16>;
+
+constexpr EndpointQos latched{.reliable = true, .transient_local = true, .depth = 10};
+constexpr EndpointQos deep{.depth = 100};  // keeps what arrives until the test takes it
+
+sim::SensorInfo camera_sensor() {
+  sim::SensorInfo s;
+  s.frame_id = "camera_front_optical";
+  s.mounting = sim::Mounting{{1.25, 0.0, 1.5}, {-0.5, 0.5, -0.5, 0.5}};
+  sim::CameraCalibration c;
+  c.width = 16;
+  c.height = 12;
+  c.d = {-0.25, 0.125, 0.0, 0.0, 0.0};
+  c.k = {500.5, 0, 8.25, 0, 501.5, 6.5, 0, 0, 1};
+  c.p = {500.5, 0, 8.25, 0, 0, 501.5, 6.5, 0, 0, 0, 1, 0};
+  s.calibration = c;
+  return s;
+}
+
+sim::SensorInfo lidar_sensor() {
+  sim::SensorInfo s;
+  s.frame_id = "lidar_top";
+  s.mounting = sim::Mounting{{0.0, 0.0, 1.75}, {0, 0, 0, 1}};
+  return s;
+}
+
+Gid gid_of(const dds_guid_t& guid) {
+  Gid gid{};
+  std::memcpy(gid.data(), guid.v, 16);
+  return gid;
+}
+
+std::string user_data(const dds_qos_t* qos) {
+  void* value = nullptr;
+  std::size_t size = 0;
+  if (!dds_qget_userdata(qos, &value, &size) || value == nullptr) return {};
+  std::string text(static_cast<const char*>(value), size);
+  dds_free(value);
+  return text;
+}
+
+// What Cyclone's builtin topics tell about one remote endpoint.
+struct Endpoint {
+  Gid gid;
+  Gid participant;
+  std::string user_data;
+};
+
+// Reads DCPSPublication until a writer of `topic` is announced; nullopt after the hang guard.
+std::optional<Endpoint> find_publication(const CycloneParticipant& p, const std::string& topic) {
+  const dds_entity_t reader = dds_create_reader(p.handle(), DDS_BUILTIN_TOPIC_DCPSPUBLICATION, nullptr, nullptr);
+  std::optional<Endpoint> found;
+  for (int i = 0; i < 3000 && !found; ++i) {
+    void* samples[16] = {};
+    dds_sample_info_t info[16];
+    const dds_return_t n = dds_take(reader, samples, info, 16, 16);
+    for (dds_return_t k = 0; k < n; ++k) {
+      const auto* e = static_cast<const dds_builtintopic_endpoint_t*>(samples[k]);
+      if (info[k].valid_data && e->topic_name != nullptr && topic == e->topic_name) {
+        found = Endpoint{gid_of(e->key), gid_of(e->participant_key), user_data(e->qos)};
+      }
+    }
+    if (n > 0) dds_return_loan(reader, samples, n);
+    if (!found) std::this_thread::sleep_for(10ms);
+  }
+  dds_delete(reader);
+  return found;
+}
+
+// The USER_DATA of the participant `key`, from DCPSParticipant.
+std::string participant_user_data(const CycloneParticipant& p, const Gid& key) {
+  const dds_entity_t reader = dds_create_reader(p.handle(), DDS_BUILTIN_TOPIC_DCPSPARTICIPANT, nullptr, nullptr);
+  std::optional<std::string> found;
+  for (int i = 0; i < 3000 && !found; ++i) {
+    void* samples[16] = {};
+    dds_sample_info_t info[16];
+    const dds_return_t n = dds_take(reader, samples, info, 16, 16);
+    for (dds_return_t k = 0; k < n; ++k) {
+      const auto* e = static_cast<const dds_builtintopic_participant_t*>(samples[k]);
+      if (info[k].valid_data && gid_of(e->key) == key) found = user_data(e->qos);
+    }
+    if (n > 0) dds_return_loan(reader, samples, n);
+    if (!found) std::this_thread::sleep_for(10ms);
+  }
+  dds_delete(reader);
+  return found.value_or("");
+}
+
+bool is_rihs01_user_data(const std::string& text) {
+  const std::string prefix = "typehash=RIHS01_";
+  return text.size() == prefix.size() + 64 + 1 && text.rfind(prefix, 0) == 0 && text.back() == ';' &&
+         text.find_first_not_of("0123456789abcdef", prefix.size()) == prefix.size() + 64;
+}
+
+TEST(BridgeGraph, ALateRos2NodeGetsCalibrationMountingsUserDataAndTheBridgeAsANode) {
+  SKIP_WITHOUT_NETWORK();
+  StreamGuard camera(unique_name("cam"));
+  StreamGuard lidar(unique_name("lidar"));
+  sim::StreamSpec camera_spec{.name = camera.name};
+  camera_spec.layout = sim::Layout::of(sim::ImageLayout::packed(16, 12, sim::PixelFormat::bgr8));
+  camera_spec.sensor = camera_sensor();
+  sim::StreamSpec lidar_spec{.name = lidar.name};
+  lidar_spec.layout = sim::Layout::of(sim::PointLayout::of(sim::PointType::xyz32, 100));
+  lidar_spec.sensor = lidar_sensor();
+  FramePump camera_frames(camera_spec);
+  FramePump lidar_frames(lidar_spec);
+  ASSERT_TRUE(camera_frames.ok()) << camera_frames.error();
+  ASSERT_TRUE(lidar_frames.ok()) << lidar_frames.error();
+
+  Process bridge = start_bridge({"--publish", camera.name, "--publish", lidar.name});
+  // The bridge has read both descriptions (its /tf_static holds both) before the node joins.
+  ASSERT_FALSE(wait_counter(bridge, "/tf_static", "bridged", 2).empty()) << bridge.err();
+
+  CycloneParticipant node;
+  CycloneReader<Image> images(node, &sensor_msgs_msg_dds__Image__desc, "rt" + camera.name + "/image_raw", deep);
+  CycloneReader<CameraInfo> infos(node, &sensor_msgs_msg_dds__CameraInfo__desc,
+                                  "rt" + camera.name + "/camera_info", deep);
+  CycloneReader<TfMessage> tf(node, &tf2_msgs_msg_dds__TFMessage__desc, "rt/tf_static", latched);
+  CycloneReader<Graph> graph(node, &rmw_dds_common_msg_dds__ParticipantEntitiesInfo__desc,
+                             "ros_discovery_info", latched);
+
+  // The calibration beside every image: the same stamp and frame_id.
+  std::map<std::int64_t, std::string> image_frames;
+  for (int n = 0; n < 10; ++n) {
+    ASSERT_TRUE(images.take([&](const Image& i) { image_frames[stamp_of(i.header)] = i.header.frame_id; }))
+        << bridge.err();
+  }
+  int paired = 0;
+  for (int n = 0; n < 10; ++n) {
+    ASSERT_TRUE(infos.take([&](const CameraInfo& info) {
+      const sim::CameraCalibration expected = *camera_sensor().calibration;
+      EXPECT_STREQ(info.header.frame_id, "camera_front_optical");
+      EXPECT_EQ(info.width, 16u);
+      EXPECT_EQ(info.height, 12u);
+      EXPECT_STREQ(info.distortion_model, "plumb_bob");
+      ASSERT_EQ(info.d._length, expected.d.size());
+      for (int k = 0; k < 9; ++k) EXPECT_EQ(info.k[k], expected.k[k]) << k;
+      for (int k = 0; k < 12; ++k) EXPECT_EQ(info.p[k], expected.p[k]) << k;
+      auto image = image_frames.find(stamp_of(info.header));
+      if (image != image_frames.end()) {
+        ++paired;
+        EXPECT_EQ(image->second, "camera_front_optical");
+      }
+    })) << bridge.err();
+  }
+  EXPECT_GT(paired, 0) << "no CameraInfo had the stamp of an image";
+
+  // /tf_static: one message with both mountings, though the node joined later.
+  std::map<std::string, std::pair<std::string, double>> mounted;  // child → parent, z
+  ASSERT_TRUE(tf.take([&](const TfMessage& m) {
+    for (std::uint32_t i = 0; i < m.transforms._length; ++i) {
+      const auto& t = m.transforms._buffer[i];
+      mounted[t.child_frame_id] = {t.header.frame_id, t.transform.translation.z};
+    }
+  })) << bridge.err();
+  EXPECT_EQ(mounted["camera_front_optical"], std::make_pair(std::string("base_link"), 1.5));
+  EXPECT_EQ(mounted["lidar_top"], std::make_pair(std::string("base_link"), 1.75));
+
+  // USER_DATA: the participant is in the ROS 2 graph, each endpoint names its type hash.
+  const auto info_writer = find_publication(node, "rt" + camera.name + "/camera_info");
+  ASSERT_TRUE(info_writer);
+  EXPECT_EQ(info_writer->user_data,
+            "typehash=" + std::string(sim::ros2::rihs01_type_hash("sensor_msgs/msg/CameraInfo")) + ";");
+  EXPECT_TRUE(is_rihs01_user_data(info_writer->user_data)) << info_writer->user_data;
+  const auto image_writer = find_publication(node, "rt" + camera.name + "/image_raw");
+  ASSERT_TRUE(image_writer);
+  EXPECT_TRUE(is_rihs01_user_data(image_writer->user_data)) << image_writer->user_data;
+  EXPECT_NE(participant_user_data(node, info_writer->participant).find("enclave=/;"), std::string::npos);
+
+  // ros_discovery_info: the node sim_dds_bridge of that participant, owning the camera_info writer.
+  bool found_node = false;
+  for (int i = 0; i < 50 && !found_node; ++i) {
+    if (!graph.take([&](const Graph& g) {
+          if (gid_of(reinterpret_cast<const dds_guid_t&>(g.gid.data)) != info_writer->participant) return;
+          for (std::uint32_t n = 0; n < g.node_entities_info_seq._length; ++n) {
+            const auto& node_info = g.node_entities_info_seq._buffer[n];
+            if (std::string(node_info.node_name) != "sim_dds_bridge") continue;
+            EXPECT_STREQ(node_info.node_namespace, "/");
+            for (std::uint32_t w = 0; w < node_info.writer_gid_seq._length; ++w) {
+              Gid gid;
+              std::memcpy(gid.data(), node_info.writer_gid_seq._buffer[w].data, 16);
+              if (gid == info_writer->gid) found_node = true;
+            }
+          }
+        })) {
+      break;
+    }
+  }
+  EXPECT_TRUE(found_node) << "no ros_discovery_info names sim_dds_bridge with the camera_info writer";
+  bridge.signal(SIGTERM);
+  EXPECT_EQ(bridge.wait(), 0) << bridge.err();
+}
+
+TEST(BridgeGraph, CameraInfoAndTfStaticFromRos2BecomeTheStreamsSensorDescription) {
+  SKIP_WITHOUT_NETWORK();
+  const std::string ns = unique_name("remote_cam");
+  StreamGuard local(unique_name("remote_cam_local"));
+  Process bridge = start_bridge({"--subscribe", ns + "/image_raw", "--as", local.name});
+  CycloneParticipant node;
+  CycloneWriter tf(node, &tf2_msgs_msg_dds__TFMessage__desc, "rt/tf_static", latched);
+  CycloneWriter images(node, &sensor_msgs_msg_dds__Image__desc, "rt" + ns + "/image_raw");
+  CycloneWriter infos(node, &sensor_msgs_msg_dds__CameraInfo__desc, "rt" + ns + "/camera_info");
+
+  geometry_msgs_msg_dds__TransformStamped_ mounting{};
+  mounting.header.frame_id = const_cast<char*>("base_link");
+  mounting.child_frame_id = const_cast<char*>("remote_cam_optical");
+  mounting.transform.translation = {0.5, -0.25, 2.0};
+  mounting.transform.rotation = {0, 0, 0, 1};
+  TfMessage tf_message{};
+  tf_message.transforms._buffer = &mounting;
+  tf_message.transforms._length = tf_message.transforms._maximum = 1;
+  tf.write(&tf_message);  // latched: the bridge gets it whenever it matches
+
+  std::vector<std::uint8_t> pixels(8 * 6, 9);
+  Image image{};
+  image.header.frame_id = const_cast<char*>("remote_cam_optical");
+  image.width = 8;
+  image.height = 6;
+  image.encoding = const_cast<char*>("mono8");
+  image.step = 8;
+  image.data._buffer = pixels.data();
+  image.data._length = image.data._maximum = static_cast<std::uint32_t>(pixels.size());
+  double d[5] = {0.1, -0.05, 0, 0, 0};
+  CameraInfo info{};
+  info.header.frame_id = image.header.frame_id;
+  info.width = 8;
+  info.height = 6;
+  info.distortion_model = const_cast<char*>("plumb_bob");
+  info.d._buffer = d;
+  info.d._length = info.d._maximum = 5;
+  const double k[9] = {40.5, 0, 4, 0, 41.5, 3, 0, 0, 1};
+  std::memcpy(info.k, k, sizeof k);
+  const double r[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  std::memcpy(info.r, r, sizeof r);
+  const double p[12] = {40.5, 0, 4, 0, 0, 41.5, 3, 0, 0, 0, 1, 0};
+  std::memcpy(info.p, p, sizeof p);
+
+  std::optional<sim::SensorInfo> described;
+  for (int n = 0; n < 600 && !(described && described->calibration && described->mounting); ++n) {
+    image.header.stamp = info.header.stamp = {1'700'000'000 + n, 0};
+    images.write(&image);
+    infos.write(&info);
+    std::this_thread::sleep_for(50ms);
+    if (auto status = sim::inspect(local.name); status && status->sensor) described = status->sensor;
+  }
+  ASSERT_TRUE(described && described->calibration && described->mounting) << bridge.err();
+  EXPECT_EQ(described->frame_id, "remote_cam_optical");
+  EXPECT_EQ(described->parent_frame, "base_link");
+  EXPECT_EQ(described->mounting->translation, (std::array<double, 3>{0.5, -0.25, 2.0}));
+  EXPECT_EQ(described->calibration->k, (std::array<double, 9>{40.5, 0, 4, 0, 41.5, 3, 0, 0, 1}));
+  EXPECT_EQ(described->calibration->d, (std::vector<double>{0.1, -0.05, 0, 0, 0}));
+  bridge.signal(SIGTERM);
+  EXPECT_EQ(bridge.wait(), 0) << bridge.err();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  bridge_test::g_skip_reason = sim::testing::enter_private_network(sim::testing::Multicast::on);
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
