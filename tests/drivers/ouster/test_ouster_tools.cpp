@@ -1,0 +1,291 @@
+// SPDX-License-Identifier: Apache-2.0
+// The Ouster programs as a user runs them, as real processes in a private network namespace:
+// sim_replay_pcap detects an Ouster capture (and says in one sentence that it needs the
+// metadata), reassembles a fragmented one, names metadata that does not fit; sim_lidar_ouster
+// fetches the metadata from a fake sensor's HTTP API on loopback, caches it, falls back to the
+// cache when the sensor does not answer, and publishes the frame and IMU samples it receives.
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "frames.hpp"  // tests/drivers/hesai/driver: hand-built frames and capture files
+#include "ouster_test_support.hpp"
+#include "sim/sim.hpp"
+#include "sim_test/network.hpp"
+#include "sim_test/process.hpp"
+#include "sim_test/streams.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using sim::testing::Process;
+using sim::testing::StreamGuard;
+using sim::testing::unique_name;
+
+std::optional<std::string> g_skip_reason;
+const std::string replay_tool = SIM_REPLAY_PCAP;
+const std::string live_tool = SIM_LIDAR_OUSTER;
+const std::string dual = "OS-0-32-U1_v2.2.0_1024x10";
+const std::string legacy = "OS-1-32-G_v2.1.1_1024x10";
+
+std::string data(const std::string& name) { return ouster_test::data_path(name).string(); }
+
+struct TempDir {
+  fs::path path = fs::temp_directory_path() / ("sim_ouster_tools_" + std::to_string(::getpid()) + "_" +
+                                               std::to_string(counter()++));
+  TempDir() { fs::create_directories(path); }
+  ~TempDir() { fs::remove_all(path); }
+  static std::atomic<int>& counter() {
+    static std::atomic<int> c{0};
+    return c;
+  }
+};
+
+bool one_sentence(const std::string& err) {
+  // "<tool>: <sentence>.\n" and nothing else.
+  return !err.empty() && err.find('\n') == err.size() - 1;
+}
+
+TEST(OusterReplay, TheDualReturnCapturePublishesItsFrameAndImuSamples) {
+  const std::string stream = unique_name("ouster_replay");
+  StreamGuard guard(stream);
+  guard.names.push_back(stream + ".imu");
+  const auto r = sim::testing::run({replay_tool, data(dual + ".pcap"), "--calibration", data(dual + ".json"),
+                                    "--stream", stream, "--max-rate", "--summary", "-q"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("frames=1 packets=64 lost=0 malformed=0 imu=10 points=65536"), std::string::npos) << r.out;
+}
+
+TEST(OusterReplay, ACaptureWithoutItsMetadataIsRecognisedAndTheUserToldToGiveIt) {
+  const auto r = sim::testing::run({replay_tool, data(legacy + ".pcap"), "--stream", unique_name("ouster_nometa")});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("holds Ouster lidar packets"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--calibration FILE.json"), std::string::npos) << r.err;
+  EXPECT_TRUE(one_sentence(r.err)) << r.err;
+}
+
+TEST(OusterReplay, AnotherSensorsMetadataPublishesNothingAndSaysWhatThePacketsFit) {
+  const std::string stream = unique_name("ouster_mismatch");
+  StreamGuard guard(stream);
+  guard.names.push_back(stream + ".imu");
+  const auto r = sim::testing::run({replay_tool, data(dual + ".pcap"), "--calibration", data(legacy + ".json"),
+                                    "--stream", stream, "--max-rate", "-q"});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("the packets fit RNG19_RFL8_SIG16_NIR16_DUAL with 32 beams"), std::string::npos) << r.err;
+  EXPECT_TRUE(one_sentence(r.err)) << r.err;
+}
+
+TEST(OusterReplay, AFragmentedCaptureReplaysLikeTheWholeOne) {
+  const auto capture = ouster_test::load_capture(dual);
+  std::vector<sim::pcap::testing::Record> records;
+  std::int64_t t = 1'600'000'000'000'000'000;
+  std::uint16_t id = 0;
+  for (const auto& payload : capture.lidar) {
+    const auto udp = sim::pcap::testing::udp(7502, 7502, payload);
+    for (std::size_t offset = 0; offset < udp.size(); offset += 1480) {
+      const std::size_t size = std::min<std::size_t>(1480, udp.size() - offset);
+      const bool more = offset + size < udp.size();
+      sim::pcap::testing::Bytes body(udp.begin() + static_cast<long>(offset), udp.begin() + static_cast<long>(offset + size));
+      auto ip = sim::pcap::testing::ipv4({192, 168, 1, 100}, {192, 168, 1, 1}, body, 17, {},
+                                         static_cast<std::uint16_t>((more ? 0x2000 : 0) | (offset / 8)));
+      ip[4] = static_cast<std::uint8_t>(id >> 8);  // identification
+      ip[5] = static_cast<std::uint8_t>(id);
+      records.push_back({sim::pcap::testing::ethernet(0x0800, ip), t += 20'000});
+    }
+    ++id;
+  }
+  TempDir dir;
+  const std::string file = (dir.path / "fragmented.pcap").string();
+  sim::pcap::testing::write_capture(file, DLT_EN10MB, records);
+  const std::string stream = unique_name("ouster_fragments");
+  StreamGuard guard(stream);
+  const auto r = sim::testing::run({replay_tool, file, "--calibration", data(dual + ".json"), "--stream", stream,
+                                    "--no-imu", "--max-rate", "--summary", "-q"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("frames=1 packets=64 lost=0 malformed=0"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("skipped=0"), std::string::npos) << r.out;
+}
+
+// A sensor's HTTP API on 127.0.0.1 (port 0): answers GET /api/v1/sensor/metadata with `body`.
+class FakeSensorHttp {
+ public:
+  explicit FakeSensorHttp(std::string body) : body_(std::move(body)), listener_(::socket(AF_INET, SOCK_STREAM, 0)) {
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ::bind(listener_, reinterpret_cast<const sockaddr*>(&address), sizeof address);
+    ::listen(listener_, 8);
+    socklen_t length = sizeof address;
+    ::getsockname(listener_, reinterpret_cast<sockaddr*>(&address), &length);
+    port_ = ntohs(address.sin_port);
+    thread_ = std::thread([this] { serve(); });
+  }
+  ~FakeSensorHttp() {
+    stop_ = true;
+    thread_.join();
+    ::close(listener_);
+  }
+  std::uint16_t port() const { return port_; }
+  int requests() const { return requests_; }
+
+ private:
+  void serve() {
+    while (!stop_) {
+      pollfd p{listener_, POLLIN, 0};
+      if (::poll(&p, 1, 20) <= 0) continue;
+      const int fd = ::accept(listener_, nullptr, nullptr);
+      if (fd < 0) continue;
+      std::string request;
+      char chunk[1024];
+      while (request.find("\r\n\r\n") == std::string::npos) {
+        const ssize_t n = ::recv(fd, chunk, sizeof chunk, 0);
+        if (n <= 0) break;
+        request.append(chunk, static_cast<std::size_t>(n));
+      }
+      ++requests_;
+      const bool right = request.rfind("GET /api/v1/sensor/metadata HTTP/1.", 0) == 0;
+      const std::string answer =
+          right ? "HTTP/1.0 200 OK\r\nContent-Type: application/json\r\n\r\n" + body_
+                : std::string("HTTP/1.0 404 Not Found\r\n\r\n");
+      (void)::send(fd, answer.data(), answer.size(), MSG_NOSIGNAL);
+      ::close(fd);
+    }
+  }
+
+  std::string body_;
+  int listener_;
+  std::uint16_t port_ = 0;
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+  std::atomic<int> requests_{0};
+};
+
+void send_to(std::uint16_t port, const std::vector<std::vector<std::uint8_t>>& payloads) {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(port);
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  for (const auto& p : payloads) {
+    (void)::sendto(fd, p.data(), p.size(), 0, reinterpret_cast<const sockaddr*>(&to), sizeof to);
+  }
+  ::close(fd);
+}
+
+struct Ports {
+  unsigned lidar = 0, imu = 0;
+};
+std::optional<Ports> listening(Process& p) {
+  auto line = p.wait_for_line("listening on");
+  if (!line) return std::nullopt;
+  Ports ports;
+  if (std::sscanf(line->c_str(), "sim_lidar_ouster: listening on %*s lidar port %u imu port %u", &ports.lidar,
+                  &ports.imu) != 2) {
+    return std::nullopt;
+  }
+  return ports;
+}
+
+TEST(OusterLive, MetadataComesFromTheSensorsHttpApiIsCachedAndTheFramesAndImuArePublished) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  const auto capture = ouster_test::load_capture(dual);
+  TempDir dir;
+  const std::string cache = (dir.path / "os0.json").string();
+  const std::string stream = unique_name("ouster_live");
+  StreamGuard guard(stream);
+  guard.names.push_back(stream + ".imu");
+  {
+    FakeSensorHttp sensor(ouster_test::read_text(ouster_test::data_path(dual + ".json")));
+    Process driver({live_tool, "--metadata-from-sensor", "--sensor-ip", "127.0.0.1", "--http-port",
+                    std::to_string(sensor.port()), "--calibration", cache, "--lidar-port", "0", "--imu-port",
+                    "0", "--stream", stream, "--status-interval", "0", "--summary", "--frame-id", "os_sensor"});
+    const auto ports = listening(driver);
+    ASSERT_TRUE(ports) << driver.err();
+    EXPECT_EQ(sensor.requests(), 1);
+    EXPECT_EQ(ouster_test::read_text(cache), ouster_test::read_text(ouster_test::data_path(dual + ".json")));
+    auto reader = sim::testing::wait_for_stream(stream);
+    ASSERT_TRUE(reader);
+    send_to(static_cast<std::uint16_t>(ports->imu), capture.imu);
+    send_to(static_cast<std::uint16_t>(ports->lidar), capture.lidar);
+    std::vector<std::byte> buffer(reader->capacity());
+    sim::FrameInfo info;
+    ASSERT_EQ(reader->read_next(buffer, info, 30s), sim::ReadStatus::new_frame) << driver.err();
+    EXPECT_EQ(info.size, 65536 * sizeof(sim::LidarPoint));
+    auto described = reader->sensor_info();
+    ASSERT_TRUE(described && *described);
+    EXPECT_EQ((*described)->identity.model, "OS-0-32-U1");
+    EXPECT_EQ((*described)->frame_id, "os_sensor");
+    EXPECT_EQ((*described)->point_time, sim::PointTime::after_frame_stamp);
+    ::kill(driver.pid(), SIGTERM);
+    EXPECT_EQ(driver.wait(), 0) << driver.err();
+    EXPECT_NE(driver.out().find("frames=1 packets=64 lost=0 malformed=0 imu=10"), std::string::npos) << driver.out();
+  }
+  // The sensor is gone: the cached metadata is used, with a warning.
+  Process again({live_tool, "--metadata-from-sensor", "--sensor-ip", "127.0.0.1", "--http-port", "1",
+                 "--http-timeout", "2", "--calibration", cache, "--lidar-port", "0", "--imu-port", "0",
+                 "--stream", stream, "--status-interval", "0"});
+  ASSERT_TRUE(listening(again)) << again.err();
+  ::kill(again.pid(), SIGTERM);
+  EXPECT_EQ(again.wait(), 0);
+  EXPECT_NE(again.err().find("using the cached " + cache), std::string::npos) << again.err();
+  // Without a cache it is one sentence and exit 1.
+  const auto none = sim::testing::run({live_tool, "--metadata-from-sensor", "--sensor-ip", "127.0.0.1",
+                                       "--http-port", "1", "--http-timeout", "2", "--calibration",
+                                       (dir.path / "absent.json").string(), "--stream", unique_name("ouster_none")});
+  EXPECT_EQ(none.code, 1);
+  EXPECT_NE(none.err.find("no cached metadata"), std::string::npos) << none.err;
+  EXPECT_TRUE(one_sentence(none.err)) << none.err;
+}
+
+TEST(OusterLive, PacketsThatDoNotFitTheMetadataAreCountedAndToldOnceNeverPublished) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  const auto capture = ouster_test::load_capture(dual);
+  const std::string stream = unique_name("ouster_live_mismatch");
+  StreamGuard guard(stream);
+  Process driver({live_tool, "--calibration", data(legacy + ".json"), "--lidar-port", "0", "--imu-port", "0",
+                  "--no-imu", "--stream", stream, "--status-interval", "0", "--summary"});
+  const auto ports = listening(driver);
+  ASSERT_TRUE(ports) << driver.err();
+  auto reader = sim::testing::wait_for_stream(stream);
+  ASSERT_TRUE(reader);
+  send_to(static_cast<std::uint16_t>(ports->lidar), capture.lidar);
+  // Then a datagram larger than any Ouster packet: counted, not cut to a plausible size.
+  send_to(static_cast<std::uint16_t>(ports->lidar), {std::vector<std::uint8_t>(65000, 0)});
+  // Wait until the driver has taken them all: its one sentence comes with the first.
+  const auto deadline = std::chrono::steady_clock::now() + 30s;
+  while (driver.err().find("the packets fit") == std::string::npos && std::chrono::steady_clock::now() < deadline) {
+    (void)driver.next_line(100ms);
+  }
+  std::this_thread::sleep_for(200ms);  // the rest of the burst; the counts below do not depend on it
+  ::kill(driver.pid(), SIGTERM);
+  EXPECT_EQ(driver.wait(), 0);
+  EXPECT_NE(driver.err().find("the packets fit RNG19_RFL8_SIG16_NIR16_DUAL with 32 beams"), std::string::npos)
+      << driver.err();
+  std::size_t told = 0;
+  for (std::size_t at = 0; (at = driver.err().find("the packets fit", at)) != std::string::npos; ++at) ++told;
+  EXPECT_EQ(told, 1u) << driver.err();
+  EXPECT_NE(driver.out().find("frames=0 packets=0"), std::string::npos) << driver.out();
+  sim::FrameInfo info;
+  std::vector<std::byte> buffer(reader->capacity());
+  EXPECT_NE(reader->read_next(buffer, info, 0ms), sim::ReadStatus::new_frame);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  g_skip_reason = sim::testing::enter_private_network(sim::testing::Multicast::off);
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
