@@ -29,7 +29,10 @@ struct detail::WriterState {
   // Group-readable streams have readers that may not write the wait page, so they cannot say
   // they sleep: the writer then wakes the futex on every publish (one cheap system call).
   bool wakes_every_publish = false;
-  RegionFile file;
+  // Shared with whoever holds Writer::mapping(), so views into the region (a binding's numpy
+  // views of a committed loan) stay readable after the writer is gone; the writer lock goes with
+  // the WriterState all the same (its destructor releases it).
+  std::shared_ptr<RegionFile> file = std::make_shared<RegionFile>();
   RegionHeader* header = nullptr;
   std::uint64_t last_seq = 0;  // newest published frame
   std::int64_t last_publish_ns = 0;
@@ -46,7 +49,7 @@ struct detail::WriterState {
   bool heartbeat_stop = false;
 
   std::byte* slot(std::uint64_t seq) const noexcept {
-    return file.base() + file.identity().slot_offset[seq & 1];
+    return file->base() + file->identity().slot_offset[seq & 1];
   }
   SlotMeta& meta(std::uint64_t seq) const noexcept { return header->slots[seq & 1]; }
 
@@ -75,10 +78,10 @@ struct detail::WriterState {
   void heal_dead_sleepers(std::int64_t now) noexcept {
     if (now - last_heal_ns < kHealPeriodNs) return;
     last_heal_ns = now;
-    WaitPage& wait = *file.wait_page();
+    WaitPage& wait = *file->wait_page();
     for (std::size_t i = 0; i < kReaderSlots; ++i) {
       std::uint64_t token = wait.asleep[i].load(std::memory_order_acquire);
-      if (token == 0 || byte_locked(file.fd(), kReaderLockBase + static_cast<off_t>(i))) continue;
+      if (token == 0 || byte_locked(file->fd(), kReaderLockBase + static_cast<off_t>(i))) continue;
       if (wait.asleep[i].compare_exchange_strong(token, 0, std::memory_order_acq_rel)) {
         wait.sleepers.fetch_sub(1, std::memory_order_relaxed);
       }
@@ -90,7 +93,7 @@ struct detail::WriterState {
     stop_heartbeat();
     if (header != nullptr) {
       // Release the writer lock first, then wake sleeping readers, so they see it released.
-      unlock_writer(file.fd());
+      unlock_writer(file->fd());
       header->publication.futex_word.fetch_add(1, std::memory_order_release);
       futex_wake_all(&header->publication.futex_word);
     }
@@ -212,10 +215,10 @@ Expected<Writer> Writer::create(const StreamSpec& spec) {
       // under that name: such a region is replaced, never taken over.
       if (valid && compatible(id, spec, capacity) && file.link_count() == 1) {
         if (auto mapped = file.map_read_write(); !mapped) return mapped.error();
-        impl->file = std::move(file);  // take it over: the lock stays with this open file
-        impl->header = impl->file.header();
+        *impl->file = std::move(file);  // take it over: the lock stays with this open file
+        impl->header = impl->file->header();
         impl->last_seq = impl->header->publication.latest_seq.load(std::memory_order_acquire);
-        fchmod(impl->file.fd(), spec.mode & 0777);
+        fchmod(impl->file->fd(), spec.mode & 0777);
         break;
       }
       // Layout or capacity changed, or the region is corrupt or linked twice: build a new one
@@ -244,8 +247,8 @@ Expected<Writer> Writer::create(const StreamSpec& spec) {
       old.header()->publication.futex_word.fetch_add(1, std::memory_order_release);
       futex_wake_all(&old.header()->publication.futex_word);
     }
-    impl->file = std::move(*created);
-    impl->header = impl->file.header();
+    *impl->file = std::move(*created);
+    impl->header = impl->file->header();
     impl->last_seq = impl->header->publication.latest_seq.load(std::memory_order_relaxed);
     break;
   }
@@ -272,7 +275,7 @@ Expected<Writer> Writer::create(const StreamSpec& spec) {
     write_sensor_block(h.sensor, spec.sensor);
   }
 
-  if (spec.lock_memory && mlock(impl->file.base(), impl->file.file_size()) != 0) {
+  if (spec.lock_memory && mlock(impl->file->base(), impl->file->file_size()) != 0) {
     return errno_error(ErrorCode::system_error,
                        "cannot lock stream " + spec.name +
                            " in memory; raise RLIMIT_MEMLOCK (ulimit -l) or drop lock_memory",
@@ -357,7 +360,7 @@ WriteStatus publish(WriterState& w, std::uint64_t size, std::int64_t stamp_ns,
   // Dekker-style handshake with Reader::wait: either a sleeper sees the new frame before it
   // sleeps, or this load sees the sleeper and wakes it. No system call when nobody sleeps.
   std::atomic_thread_fence(std::memory_order_seq_cst);
-  const bool sleepers = w.file.wait_page()->sleepers.load(std::memory_order_relaxed) != 0;
+  const bool sleepers = w.file->wait_page()->sleepers.load(std::memory_order_relaxed) != 0;
   if (sleepers || w.wakes_every_publish) {
     const long woken = futex_wake_all(&pub.futex_word);
     // Counted sleepers but nobody woke: usually a reader just about to sleep, but perhaps one
@@ -380,6 +383,11 @@ Expected<void> Writer::set_sensor_info(const SensorInfo& info) {
   }
   write_sensor_block(impl_->header->sensor, info);
   return {};
+}
+
+std::shared_ptr<const void> Writer::mapping() const noexcept {
+  if (!impl_) return nullptr;
+  return impl_->file;
 }
 
 const std::string& Writer::name() const noexcept { return impl_->name; }

@@ -131,6 +131,10 @@ class Writer {
   // copy of about 1 KiB into the header page; publishing frames costs nothing more for it.
   Expected<void> set_sensor_info(const SensorInfo& info);
 
+  // Keeps the region mapped while held, even after this Writer is gone (its lock is released
+  // all the same): for bindings whose views into a loan may outlive the writer. Null if moved from.
+  std::shared_ptr<const void> mapping() const noexcept;
+
   const std::string& name() const noexcept;
   std::uint64_t capacity() const noexcept;
   const Layout& layout() const noexcept;

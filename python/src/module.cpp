@@ -349,16 +349,19 @@ void raise_if_failed(sim::WriteStatus status, std::uint64_t size, std::uint64_t 
   }
 }
 
-// The Python object holds the writer's state, so the slot stays mapped (and the sim::Loan never
-// outlives its Writer) as long as the Loan or any view of it lives.
+// Until it is committed, the Python object holds the writer's state, so the sim::Loan never
+// outlives its Writer. It always holds the region's mapping, so its views stay readable as long as
+// they live; a committed loan lets go of the writer (review L8: a leftover view kept the writer's
+// lock, and the stream, for as long as it lived).
 class LoanObject {
  public:
-  LoanObject(std::shared_ptr<WriterState> state, sim::Loan loan, sim::Layout layout)
-      : state_(std::move(state)), loan_(std::move(loan)), layout_(layout) {}
+  LoanObject(std::shared_ptr<WriterState> state, sim::Loan loan, sim::Layout layout,
+             std::shared_ptr<const void> mapping)
+      : state_(std::move(state)), loan_(std::move(loan)), layout_(layout), mapping_(std::move(mapping)) {}
   LoanObject(const LoanObject&) = delete;
   LoanObject& operator=(const LoanObject&) = delete;
   ~LoanObject() {
-    locked(state_->mutex, [&] { loan_ = sim::Loan(); });  // giving it up touches the writer's state
+    if (state_) locked(state_->mutex, [&] { loan_ = sim::Loan(); });  // touches the writer's state
   }
 
   // A writable view of the whole slot; its base is this Loan, which keeps the mapping alive.
@@ -380,6 +383,7 @@ class LoanObject {
       }
       return std::move(loan_).commit(size, stamp, receive_ns);  // ends the loan whatever the outcome
     });
+    state_.reset();  // the loan is over: views need only the mapping, not the writer
     raise_if_failed(status, size, slot_capacity);
   }
 
@@ -388,9 +392,10 @@ class LoanObject {
     const std::uint64_t full = layout_.min_capacity();
     return full != 0 ? std::min<std::uint64_t>(full, capacity()) : capacity();
   }
-  std::shared_ptr<WriterState> state_;
+  std::shared_ptr<WriterState> state_;  // null once committed
   sim::Loan loan_;
   sim::Layout layout_;
+  std::shared_ptr<const void> mapping_;
 };
 
 
@@ -415,6 +420,9 @@ class WriterObject {
     }
     if (!*writer) raise(writer->error());
     state_->writer.emplace(std::move(writer->value()));
+    name_ = state_->writer->name();
+    capacity_ = state_->writer->capacity();
+    layout_ = state_->writer->layout();
   }
 
   void write(const py::object& data, std::optional<std::int64_t> stamp_ns, std::int64_t receive_ns) {
@@ -446,13 +454,15 @@ class WriterObject {
 
   std::unique_ptr<LoanObject> loan() {
     sim::Layout layout;
+    std::shared_ptr<const void> mapping;
     sim::Loan loan = locked(state_->mutex, [&] {
       sim::Writer& writer = state_->usable();
       layout = writer.layout();
+      mapping = writer.mapping();
       return writer.loan();
     });
     if (!loan.valid()) raise_if_failed(sim::WriteStatus::loan_open, 0, 0);
-    return std::make_unique<LoanObject>(state_, std::move(loan), layout);
+    return std::make_unique<LoanObject>(state_, std::move(loan), layout, std::move(mapping));
   }
 
   void set_sensor_info(const sim::SensorInfo& info) {
@@ -463,17 +473,27 @@ class WriterObject {
     py::gil_scoped_release release;
     std::lock_guard lock(state_->mutex);
     state_->open = false;
-    // The region stays mapped while a loan lives; without one the writer lock goes now.
-    if (state_.use_count() == 1) state_->writer.reset();
+    // An open loan still needs the writer; otherwise the writer lock goes now.
+    if (state_.use_count() == 1 && state_->writer) {
+      last_seq_ = state_->writer->last_seq();
+      state_->writer.reset();
+    }
   }
   bool closed() const { return !state_->open; }
-  std::string name() const { return state_->writer->name(); }
-  std::uint64_t capacity() const { return state_->writer->capacity(); }
-  sim::Layout layout() const { return state_->writer->layout(); }
-  std::uint64_t last_seq() const { return state_->writer->last_seq(); }
+  // Fixed at creation, so they stay answerable after close() let the writer go.
+  std::string name() const { return name_; }
+  std::uint64_t capacity() const { return capacity_; }
+  sim::Layout layout() const { return layout_; }
+  std::uint64_t last_seq() {
+    return locked(state_->mutex, [&] { return state_->writer ? state_->writer->last_seq() : last_seq_; });
+  }
 
  private:
   std::shared_ptr<WriterState> state_;
+  std::string name_;
+  std::uint64_t capacity_ = 0;
+  sim::Layout layout_;
+  std::uint64_t last_seq_ = 0;  // when close() let the writer go
 };
 
 sim::PixelFormat pixel_format_from(const py::handle& format) {

@@ -73,3 +73,19 @@ def test_a_loan_committed_after_its_writer_closed_publishes_nothing(stream_name)
     with pytest.raises(sim.SimError, match="the writer is closed"):
         loan.commit(3)
     assert reader.read() is None
+
+
+def test_a_leftover_view_of_a_committed_loan_does_not_keep_the_writer_alive(stream_name):
+    writer = sim.Writer(stream_name, capacity=16)
+    loan = writer.loan()
+    view = loan.array
+    view[:4] = [1, 2, 3, 4]
+    loan.commit(4)
+    del loan
+    writer.close()
+    del writer
+    # The stream is free for a new writer in this very process, and the old view stays readable.
+    again = sim.Writer(stream_name, capacity=16)
+    assert view[:4].tolist() == [1, 2, 3, 4]
+    again.write(b"next")
+    assert sim.Reader(stream_name).read().array.tobytes() == b"next"
