@@ -10,6 +10,7 @@
 
 #include "sim/apps/command_line.hpp"
 #include "sim/apps/pacer.hpp"
+#include "sim/apps/sensor_options.hpp"
 #include "sim/apps/status_line.hpp"
 #include "sim/apps/stop_signal.hpp"
 #include "sim/clock.hpp"
@@ -57,6 +58,7 @@ int main(int argc, char** argv) {
   double rate_hz = 10.0;
   bool quiet = false;
   sim::ThreadPlacement placement;
+  sim::apps::SensorOptions sensor;
   sim::apps::CommandLine cli(
       "sim_replay_serial",
       "Replay a raw byte recording of a Unitree L1 or L2 (sim_lidar_unitree --record) into SIM, "
@@ -73,8 +75,11 @@ int main(int argc, char** argv) {
   app.add_option("--rate-hz", rate_hz, "scans per second to publish (0: as fast as possible)")
       ->check(CLI::Range(0.0, 1000.0));
   app.add_flag("-q,--quiet", quiet, "no progress line and no summary");
+  sim::apps::add_sensor_options(cli, sensor, sim::apps::SensorKind::lidar);
   cli.add_placement(placement);
   if (auto code = cli.parse(argc, argv)) return *code;
+  auto described = sim::apps::sensor_info_from(sensor, stream);
+  if (!described) return cli.fail(described.error());
   const auto& stop = sim::apps::StopSignal::install();
   if (auto code = cli.apply_placement(placement)) return *code;
 
@@ -93,6 +98,8 @@ int main(int argc, char** argv) {
       no_imu ? std::string()
              : (imu_stream.empty() ? sim::unitree::default_imu_stream(stream) : imu_stream);
   sink_options.max_points = sim::unitree::Decoder::max_points_per_scan(options);
+  sink_options.sensor = sim::unitree::describe_sensor(*described, options);
+  sink_options.sensor->time_sync = "replayed, stamped with this host's clock when published";
   auto sink = sim::unitree::SimScanSink::create(sink_options);
   if (!sink) return cli.fail(sink.error());
   PacedSink paced(**sink, rate_hz, stop);

@@ -8,6 +8,7 @@
 
 #include "sim/apps/command_line.hpp"
 #include "sim/apps/pacer.hpp"
+#include "sim/apps/sensor_options.hpp"
 #include "sim/apps/status_line.hpp"
 #include "sim/apps/stop_signal.hpp"
 #include "sim/clock.hpp"
@@ -31,6 +32,7 @@ int main(int argc, char** argv) {
   bool checksum = false;
   bool quiet = false;
   ThreadPlacement placement;
+  apps::SensorOptions sensor;
   app.add_option("source", path, "video file, or folder of images played in name order")
       ->required();
   cli.add_stream("--stream", stream, "SIM stream name");
@@ -42,9 +44,14 @@ int main(int argc, char** argv) {
   app.add_option("--output", output_text, "published format: bgr8, rgb8 or mono8")
       ->check(CLI::IsMember({"bgr8", "rgb8", "mono8"}));
   app.add_flag("--checksum", checksum, "publish an XXH3 checksum with every frame");
+  apps::add_sensor_options(cli, sensor, apps::SensorKind::camera);
   cli.add_placement(placement);
   app.add_flag("-q,--quiet", quiet, "no progress line and no summary");
   if (auto code = cli.parse(argc, argv)) return *code;
+  auto described = apps::sensor_info_from(sensor, stream);
+  if (!described) return cli.fail(described.error());
+  described->time_base = TimeBase::host;
+  described->time_sync = "replayed, stamped with this host's clock when published";
   const auto output = *imaging::parse_output_format(output_text);
   // Before the stream exists: a reader may see it and stop us at once.
   const auto& stop = apps::StopSignal::install();
@@ -75,10 +82,17 @@ int main(int argc, char** argv) {
                                   static_cast<std::uint32_t>(frame.step[0]));
   auto decoder = imaging::FrameDecoder::create(input, output);
   if (!decoder) return cli.fail(decoder.error());
+  // A calibration of another size would mislead every consumer: refused before the stream exists.
+  if (auto fits = apps::check_calibration_size(*described, decoder->output_layout().width,
+                                               decoder->output_layout().height);
+      !fits) {
+    return cli.fail(fits.error());
+  }
   StreamSpec spec;
   spec.name = stream;
   spec.layout = Layout::of(decoder->output_layout());
   spec.checksum = checksum;
+  spec.sensor = *described;
   auto writer = Writer::create(spec);
   if (!writer) return cli.fail(writer.error());
 

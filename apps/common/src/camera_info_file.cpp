@@ -3,6 +3,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -232,6 +233,20 @@ Expected<CameraCalibration> load_camera_info(std::string_view location) {
     return Error{ErrorCode::invalid_argument, "cannot read the camera info file " + name};
   }
   return parse_camera_info(text.str(), "the camera info file " + name);
+}
+
+Expected<void> check_calibration_size(const CameraCalibration& c, std::uint32_t width,
+                                      std::uint32_t height) {
+  std::uint32_t expected_width = c.roi.width != 0 ? c.roi.width : c.width;
+  std::uint32_t expected_height = c.roi.height != 0 ? c.roi.height : c.height;
+  expected_width /= std::max<std::uint32_t>(c.binning_x, 1);
+  expected_height /= std::max<std::uint32_t>(c.binning_y, 1);
+  if (expected_width == width && expected_height == height) return {};
+  return Error{ErrorCode::invalid_argument,
+               "the camera calibration is for " + std::to_string(expected_width) + "x" +
+                   std::to_string(expected_height) + " images but the stream's are " +
+                   std::to_string(width) + "x" + std::to_string(height) +
+                   "; give the calibration of this camera mode"};
 }
 
 std::string format_camera_info(const CameraCalibration& c) {

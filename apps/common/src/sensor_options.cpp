@@ -114,16 +114,7 @@ Expected<SensorInfo> sensor_info_from(const SensorOptions& options, std::string_
 Expected<void> check_calibration_size(const SensorInfo& info, std::uint32_t width,
                                       std::uint32_t height) {
   if (!info.calibration) return {};
-  const CameraCalibration& c = *info.calibration;
-  std::uint32_t expected_width = c.roi.width != 0 ? c.roi.width : c.width;
-  std::uint32_t expected_height = c.roi.height != 0 ? c.roi.height : c.height;
-  expected_width /= std::max<std::uint32_t>(c.binning_x, 1);
-  expected_height /= std::max<std::uint32_t>(c.binning_y, 1);
-  if (expected_width == width && expected_height == height) return {};
-  return usage("the camera calibration is for " + std::to_string(expected_width) + "x" +
-               std::to_string(expected_height) + " images but the stream's are " +
-               std::to_string(width) + "x" + std::to_string(height) +
-               "; give the calibration of this camera mode");
+  return sim::apps::check_calibration_size(*info.calibration, width, height);
 }
 
 Expected<void> check_sensor_info(const SensorInfo& info) {

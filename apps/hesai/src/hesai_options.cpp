@@ -55,6 +55,7 @@ void add_hesai_stream_options(CommandLine& cli, HesaiStreamOptions& o) {
       ->check(CLI::Range(300U, 1200U));
   app.add_flag("--checksum", o.checksum, "add an XXH3 checksum to every frame, verified by readers");
   app.add_flag("--lock-memory", o.lock_memory, "mlock the stream's shared memory");
+  add_sensor_options(cli, o.sensor, SensorKind::lidar);
   cli.add_placement(o.placement);
 }
 
@@ -63,7 +64,7 @@ std::optional<hesai::Model> hesai_model(const HesaiStreamOptions& o) {
   return hesai::parse_model(o.model);
 }
 
-hesai::LidarStreamConfig hesai_stream_config(const HesaiStreamOptions& o) {
+Expected<hesai::LidarStreamConfig> hesai_stream_config(const HesaiStreamOptions& o) {
   hesai::LidarStreamConfig config;
   config.stream = o.stream;
   config.calibration = o.calibration;
@@ -81,6 +82,9 @@ hesai::LidarStreamConfig hesai_stream_config(const HesaiStreamOptions& o) {
   config.min_rpm = o.min_rpm;
   config.checksum = o.checksum;
   config.lock_memory = o.lock_memory;
+  auto sensor = sensor_info_from(o.sensor, o.stream);
+  if (!sensor) return sensor.error();
+  config.sensor = std::move(sensor.value());
   return config;
 }
 

@@ -6,6 +6,7 @@
 #include <optional>
 #include <thread>
 
+#include "sim/apps/camera_info_file.hpp"
 #include "sim/imaging/decoder.hpp"
 #include "sim/clock.hpp"
 #include "sim/writer.hpp"
@@ -65,6 +66,7 @@ struct AravisCapture::Impl {
   gulong control_lost_handler = 0;
   std::optional<imaging::FrameDecoder> decoder;
   std::optional<Writer> writer;
+  std::optional<SensorInfo> sensor;  // the description the stream carries
   ImageLayout input{};
   std::string name;
   std::atomic<bool> lost{false};
@@ -144,7 +146,64 @@ struct AravisCapture::Impl {
     return Error{ErrorCode::system_error, message};
   }
 
+  // A feature's value as text (strings, enumerations, numbers), or "" when the camera has none.
+  static std::string feature_text(ArvDevice* device, const char* feature) {
+    ArvGcNode* node = arv_device_get_feature(device, feature);
+    if (node == nullptr || !ARV_IS_GC_FEATURE_NODE(node)) return {};
+    GError* error = nullptr;
+    const char* value = arv_gc_feature_node_get_value_as_string(ARV_GC_FEATURE_NODE(node), &error);
+    g_clear_error(&error);
+    return value != nullptr ? std::string(value).substr(0, SensorInfo::kMaxName) : std::string();
+  }
+
+  static std::string first_feature(ArvDevice* device, std::initializer_list<const char*> names) {
+    for (const char* name : names) {
+      if (std::string value = feature_text(device, name); !value.empty()) return value;
+    }
+    return {};
+  }
+
+  // config.sensor completed with the device info and the clock of the stamps; the calibration's
+  // size checked against the frames (an error on the first connect, dropped with a log line
+  // after a reconnect in another size).
+  Expected<std::optional<SensorInfo>> describe(ArvDevice* device, bool first) const {
+    if (!config.sensor) return std::optional<SensorInfo>();
+    SensorInfo info = *config.sensor;
+    const ImageLayout& output = decoder->output_layout();
+    if (info.calibration) {
+      if (auto fits = apps::check_calibration_size(*info.calibration, output.width, output.height);
+          !fits) {
+        if (first) return fits.error();
+        log("warning: " + fits.error().message + "; the stream carries no calibration now");
+        info.calibration.reset();
+      }
+    }
+    info.identity.vendor = first_feature(device, {"DeviceVendorName"});
+    info.identity.model = first_feature(device, {"DeviceModelName"});
+    info.identity.serial = first_feature(device, {"DeviceSerialNumber", "DeviceID"});
+    info.identity.firmware = first_feature(device, {"DeviceFirmwareVersion", "DeviceVersion"});
+    info.point_time = PointTime::none;
+    const std::string ptp_enabled = first_feature(device, {"PtpEnable", "GevIEEE1588"});
+    const bool ptp = ptp_enabled == "true" || ptp_enabled == "1";
+    const std::string ptp_status = first_feature(device, {"PtpStatus", "GevIEEE1588Status"});
+    if (!device_time) {
+      info.time_base = TimeBase::host;
+      info.time_sync = ptp ? "host receive time (PTP " + (ptp_status.empty() ? "on" : ptp_status) + ")"
+                           : "host receive time";
+    } else if (ptp) {
+      // Slave: locked to a master; Master: the camera is the network's clock.
+      const bool locked = ptp_status == "Slave" || ptp_status == "Master";
+      info.time_base = locked ? TimeBase::sensor_synchronized : TimeBase::sensor_free_running;
+      info.time_sync = "PTP " + (ptp_status.empty() ? std::string("on, state not reported") : ptp_status);
+    } else {
+      info.time_base = TimeBase::sensor_free_running;
+      info.time_sync = "the camera's clock, PTP off";
+    }
+    return std::optional<SensorInfo>(std::move(info));
+  }
+
   std::optional<Error> connect() {
+    const bool first = !writer.has_value();
     GError* error = nullptr;
     camera = arv_camera_new(config.device_id.empty() ? nullptr : config.device_id.c_str(), &error);
     if (camera == nullptr) {
@@ -234,6 +293,11 @@ struct AravisCapture::Impl {
     if (!created) return fail(created.error().message);
     decoder.emplace(std::move(created.value()));
 
+    auto described = describe(device, first);
+    if (!described) {
+      disconnect();
+      return described.error();
+    }
     const Layout layout = Layout::of(decoder->output_layout());
     const std::uint64_t capacity = decoder->output_capacity(0);
     if (!writer || writer->layout() != layout || writer->capacity() != capacity) {
@@ -243,13 +307,18 @@ struct AravisCapture::Impl {
       spec.layout = layout;
       spec.capacity = capacity;
       spec.checksum = config.checksum;
+      spec.sensor = *described;
       auto made = Writer::create(spec);
       if (!made) {
         disconnect();
         return made.error();
       }
       writer.emplace(std::move(made.value()));
+    } else if (*described && *described != sensor) {
+      // The same stream after a reconnect: readers see what changed (the PTP state, a camera).
+      if (auto set = writer->set_sensor_info(**described); !set) log("warning: " + set.error().message);
     }
+    sensor = *described;
 
     const guint payload = arv_camera_get_payload(camera, &error);
     if (auto e = step("reading its payload size")) return e;

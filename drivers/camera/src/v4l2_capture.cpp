@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/camera/v4l2_capture.hpp"
 
+#include "sim/apps/camera_info_file.hpp"
+
 #include <algorithm>
 #include <thread>
 #include <utility>
@@ -50,6 +52,8 @@ std::optional<Error> V4l2Capture::connect(bool first) {
   if (!format) return format.error();
   auto decoder = imaging::FrameDecoder::create(format->layout, config_.format.output);
   if (!decoder) return decoder.error();
+  auto described = describe(*device, decoder->output_layout(), first);
+  if (!described) return described.error();
 
   const Layout layout = Layout::of(decoder->output_layout());
   // A device that announces no sizeimage for MJPEG still needs room: two bytes a pixel is more
@@ -66,10 +70,15 @@ std::optional<Error> V4l2Capture::connect(bool first) {
     spec.capacity = capacity;
     spec.layout = layout;
     spec.checksum = config_.checksum;
+    spec.sensor = *described;
     auto writer = Writer::create(spec);
     if (!writer) return writer.error();
     writer_.emplace(std::move(writer.value()));
+  } else if (*described && *described != sensor_) {
+    // The same stream, another camera or mode behind it: readers see the new description.
+    if (auto set = writer_->set_sensor_info(**described); !set) log("warning: " + set.error().message);
   }
+  sensor_ = *described;
   if (auto error = device->start(config_.buffers)) return error;
 
   device_.emplace(std::move(device.value()));
@@ -78,6 +87,31 @@ std::optional<Error> V4l2Capture::connect(bool first) {
   last_sequence_.reset();  // sequence numbers restart with the stream
   last_frame_ = std::chrono::steady_clock::now();
   return std::nullopt;
+}
+
+Expected<std::optional<SensorInfo>> V4l2Capture::describe(const V4l2Device& device,
+                                                          const ImageLayout& output,
+                                                          bool first) const {
+  if (!config_.sensor) return std::optional<SensorInfo>();
+  SensorInfo info = *config_.sensor;
+  const std::uint32_t width = output.width;
+  const std::uint32_t height = output.height;
+  if (info.calibration) {
+    if (auto fits = apps::check_calibration_size(*info.calibration, width, height); !fits) {
+      if (first) return fits.error();
+      log("warning: " + fits.error().message + "; the stream carries no calibration now");
+      info.calibration.reset();
+    }
+  }
+  // V4L2 names the card and the bus it is on; it knows no vendor, serial or firmware.
+  info.identity.model = device.card().substr(0, SensorInfo::kMaxName);
+  info.identity.serial = device.bus().substr(0, SensorInfo::kMaxName);
+  info.time_base = TimeBase::host;
+  info.time_sync = config_.timestamps == TimestampSource::device
+                       ? "V4L2 buffer time (host monotonic clock) mapped to realtime"
+                       : "host receive time";
+  info.point_time = PointTime::none;
+  return std::optional<SensorInfo>(std::move(info));
 }
 
 void V4l2Capture::disconnect() noexcept {

@@ -130,6 +130,7 @@ Expected<V4l2Device> V4l2Device::open(V4l2Io& io, const std::string& path) {
                  path + " does not support streaming I/O, which this driver needs"};
   }
   device.card_ = c_string(caps.card, sizeof caps.card);
+  device.bus_ = c_string(caps.bus_info, sizeof caps.bus_info);
   return device;
 }
 
@@ -141,6 +142,7 @@ V4l2Device::V4l2Device(V4l2Device&& other) noexcept
       fd_(std::exchange(other.fd_, -1)),
       path_(std::move(other.path_)),
       card_(std::move(other.card_)),
+      bus_(std::move(other.bus_)),
       buffers_(std::move(other.buffers_)),
       buffers_requested_(std::exchange(other.buffers_requested_, false)),
       streaming_(std::exchange(other.streaming_, false)) {
@@ -154,6 +156,7 @@ V4l2Device& V4l2Device::operator=(V4l2Device&& other) noexcept {
     fd_ = std::exchange(other.fd_, -1);
     path_ = std::move(other.path_);
     card_ = std::move(other.card_);
+    bus_ = std::move(other.bus_);
     buffers_ = std::move(other.buffers_);
     other.buffers_.clear();
     buffers_requested_ = std::exchange(other.buffers_requested_, false);

@@ -19,6 +19,15 @@ std::optional<std::string> split_pairs(const std::vector<std::string>& items, co
   return std::nullopt;
 }
 
+// The sensor options into the capture's description; the problem's sentence otherwise.
+std::optional<std::string> describe(const apps::SensorOptions& options, const std::string& stream,
+                                    std::optional<SensorInfo>& sensor) {
+  auto info = apps::sensor_info_from(options, stream);
+  if (!info) return info.error().message;
+  sensor = std::move(info.value());
+  return std::nullopt;
+}
+
 }  // namespace
 
 void add_v4l2_options(apps::CommandLine& cli, V4l2Options& o) {
@@ -46,6 +55,7 @@ void add_v4l2_options(apps::CommandLine& cli, V4l2Options& o) {
   app.add_flag("--checksum", o.config.checksum, "publish an XXH3 checksum with every frame");
   app.add_flag("--list-formats", o.list_formats, "list the device's formats, sizes and rates");
   app.add_flag("--list-controls", o.list_controls, "list the device's controls");
+  apps::add_sensor_options(cli, o.sensor, apps::SensorKind::camera);
   cli.add_placement(o.placement);
   app.add_flag("-q,--quiet", o.quiet, "no status line and no summary");
 }
@@ -67,7 +77,7 @@ std::optional<std::string> finish_v4l2_options(V4l2Options& o) {
   if (auto problem = split_pairs(o.controls, "--ctrl", pairs)) return problem;
   o.config.controls.clear();
   for (auto& [key, value] : pairs) o.config.controls.push_back({key, value});
-  return std::nullopt;
+  return describe(o.sensor, o.config.stream, o.config.sensor);
 }
 
 void add_aravis_options(apps::CommandLine& cli, AravisOptions& o) {
@@ -101,6 +111,7 @@ void add_aravis_options(apps::CommandLine& cli, AravisOptions& o) {
   app.add_option("--retry-period-ms", o.retry_period_ms, "between attempts to find a lost camera");
   app.add_flag("--checksum", o.config.checksum, "publish an XXH3 checksum with every frame");
   app.add_flag("--list", o.list, "list the cameras Aravis finds and exit");
+  apps::add_sensor_options(cli, o.sensor, apps::SensorKind::camera);
   cli.add_placement(o.placement);
   app.add_flag("-q,--quiet", o.quiet, "no status line and no summary");
 }
@@ -117,7 +128,8 @@ std::optional<std::string> finish_aravis_options(AravisOptions& o) {
   }
   o.config.retry_period = std::chrono::milliseconds(o.retry_period_ms);
   o.config.features.clear();
-  return split_pairs(o.features, "--feature", o.config.features);
+  if (auto problem = split_pairs(o.features, "--feature", o.config.features)) return problem;
+  return describe(o.sensor, o.config.stream, o.config.sensor);
 }
 
 }  // namespace sim::camera

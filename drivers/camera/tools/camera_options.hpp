@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "sim/apps/command_line.hpp"
+#include "sim/apps/sensor_options.hpp"
 #include "sim/camera/aravis_capture.hpp"
 #include "sim/camera/v4l2_capture.hpp"
 
@@ -26,10 +27,12 @@ struct V4l2Options {
   bool list_formats = false;
   bool list_controls = false;
   bool quiet = false;
+  apps::SensorOptions sensor;  // --frame-id … --camera-info
 };
 
 void add_v4l2_options(apps::CommandLine& cli, V4l2Options& options);
-// After parsing: the text options into `options.config`; one sentence for a value that is wrong.
+// After parsing: the text options into `options.config` (the sensor options, with the calibration
+// file read, into config.sensor); one sentence for a value or a file that is wrong.
 std::optional<std::string> finish_v4l2_options(V4l2Options& options);
 
 struct AravisOptions {
@@ -41,6 +44,7 @@ struct AravisOptions {
   std::uint32_t retry_period_ms = 1000;
   bool list = false;
   bool quiet = false;
+  apps::SensorOptions sensor;  // --frame-id … --camera-info
 };
 
 void add_aravis_options(apps::CommandLine& cli, AravisOptions& options);

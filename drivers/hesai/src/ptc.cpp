@@ -11,6 +11,18 @@ Error bad_answer(std::string message) {
   return Error{ErrorCode::invalid_argument, std::move(message)};
 }
 
+// A NUL-padded text field, printable ASCII only, without surrounding spaces.
+std::string text_field(std::span<const std::uint8_t> bytes) {
+  std::string text;
+  for (const std::uint8_t byte : bytes) {
+    if (byte == 0) break;
+    if (byte >= 0x20 && byte < 0x7F) text += static_cast<char>(byte);
+  }
+  const auto first = text.find_first_not_of(' ');
+  if (first == std::string::npos) return {};
+  return text.substr(first, text.find_last_not_of(' ') - first + 1);
+}
+
 }  // namespace
 
 std::array<std::uint8_t, header_size> request(std::uint8_t command) noexcept {
@@ -59,6 +71,26 @@ Expected<std::span<const std::uint8_t>> parse_response(std::span<const std::uint
                       " payload bytes but announces " + std::to_string(header->payload_size));
   }
   return bytes.subspan(header_size);
+}
+
+Expected<Inventory> parse_inventory(std::span<const std::uint8_t> payload) {
+  if (payload.size() < inventory_size) {
+    return bad_answer("the inventory answer is " + std::to_string(payload.size()) +
+                      " bytes, shorter than the " + std::to_string(inventory_size) +
+                      " of a Hesai inventory");
+  }
+  Inventory inventory;
+  inventory.serial = text_field(payload.subspan(0, 18));
+  inventory.manufactured = text_field(payload.subspan(18, 16));
+  // mac: 6 bytes at 34
+  inventory.software = text_field(payload.subspan(40, 16));
+  inventory.hardware = text_field(payload.subspan(56, 16));
+  inventory.control_firmware = text_field(payload.subspan(72, 16));
+  inventory.sensor_firmware = text_field(payload.subspan(88, 16));
+  // angle_offset: u16 at 104
+  inventory.model_code = payload[106];
+  inventory.lines = payload[108];
+  return inventory;
 }
 
 }  // namespace sim::hesai::ptc

@@ -97,10 +97,16 @@ std::string sentence(std::string text) {
   return text + ".";
 }
 
-// Fetches the calibration over PTC into the --calibration file (the cache); an exit code when the
-// program must end.
+// What PTC told about the unit, for the stream's description.
+struct FromSensor {
+  sim::SensorIdentity identity;
+  std::string calibration_source;
+};
+
+// Fetches the calibration over PTC into the --calibration file (the cache), and the unit's
+// identity (a warning when the sensor does not tell it); an exit code when the program must end.
 std::optional<int> fetch_calibration(const sim::apps::CommandLine& cli, Options& o,
-                                     sim::apps::StatusLine& status) {
+                                     sim::apps::StatusLine& status, FromSensor& from_sensor) {
   sim::hesai::PtcEndpoint sensor;
   if (!o.sensor.sensor_ip.empty()) {
     sensor.host = o.sensor.sensor_ip;
@@ -122,10 +128,18 @@ std::optional<int> fetch_calibration(const sim::apps::CommandLine& cli, Options&
   if (!fetched) return cli.fail(sentence(fetched.error().message));
   if (fetched->from_cache) {
     status.note("warning: " + sentence(fetched->warning));
+    return std::nullopt;  // the stream names the cached file as the calibration's source
+  }
+  std::printf("%s: calibration of sensor %s (%zu channels) fetched and cached in %s\n", tool,
+              sensor.host.c_str(), fetched->channels, o.stream.calibration.c_str());
+  std::fflush(stdout);
+  from_sensor.calibration_source = "sensor " + sensor.host + " over PTC";
+  auto identity = sim::hesai::fetch_identity(sensor);
+  if (identity) {
+    from_sensor.identity = std::move(identity.value());
   } else {
-    std::printf("%s: calibration of sensor %s (%zu channels) fetched and cached in %s\n", tool,
-                sensor.host.c_str(), fetched->channels, o.stream.calibration.c_str());
-    std::fflush(stdout);
+    status.note("warning: the stream will not carry the unit's serial number: " +
+                sentence(identity.error().message));
   }
   return std::nullopt;
 }
@@ -159,9 +173,18 @@ int run(const sim::apps::CommandLine& cli, Options& o) {
   // Before any socket or stream exists: a stop request from here on ends the program cleanly.
   const auto& stop = sim::apps::StopSignal::install();
   auto status = sim::apps::StatusLine::for_stderr(tool, o.quiet);
+  FromSensor from_sensor;
   if (o.sensor.calibration_from_sensor) {
-    if (auto code = fetch_calibration(cli, o, status)) return *code;
+    if (auto code = fetch_calibration(cli, o, status, from_sensor)) return *code;
   }
+  auto configured = sim::apps::hesai_stream_config(o.stream);
+  if (!configured) return cli.fail(configured.error());
+  sim::hesai::LidarStreamConfig config = std::move(configured.value());
+  config.sensor->identity = from_sensor.identity;  // vendor and model come from the packets
+  config.sensor->calibration_source = from_sensor.calibration_source;
+  // The packets carry the sensor's clock (UTC fields); whether PTP or GPS sets it, they do not say.
+  config.sensor->time_base = sim::TimeBase::unknown;
+  config.sensor->time_sync = "the sensor's clock, from its packets; synchronisation not reported";
 
   sim::hesai::NetworkConfig network;
   network.bind = o.network.bind;
@@ -184,7 +207,6 @@ int run(const sim::apps::CommandLine& cli, Options& o) {
                 " to ride out stalls without losing packets.");
   }
 
-  auto config = sim::apps::hesai_stream_config(o.stream);
   config.heartbeat_period = std::chrono::milliseconds(500);
   if (auto published = receiver->publish_to(config, sim::apps::hesai_model(o.stream)); !published) {
     return cli.fail(std::string_view(published.error().message));

@@ -13,6 +13,20 @@ std::string default_imu_stream(std::string_view points_stream) {
   return std::string(points_stream) + ".imu";
 }
 
+SensorInfo describe_sensor(SensorInfo info, const DecoderOptions& options) {
+  info.identity.vendor = "Unitree";
+  info.identity.model = options.model == Model::l1 ? "L1" : "L2";
+  info.point_time = PointTime::after_frame_stamp;
+  if (options.time_source == TimeSource::sensor) {
+    info.time_base = TimeBase::unknown;
+    info.time_sync = "the L2's own clock; its synchronisation is not reported";
+  } else {
+    info.time_base = TimeBase::host;
+    info.time_sync = "host receive time";
+  }
+  return info;
+}
+
 Expected<std::unique_ptr<SimScanSink>> SimScanSink::create(const SimSinkOptions& options) {
   StreamSpec points_spec;
   points_spec.name = options.points_stream;
@@ -20,6 +34,7 @@ Expected<std::unique_ptr<SimScanSink>> SimScanSink::create(const SimSinkOptions&
   points_spec.checksum = options.checksum;
   // Readers can tell an idle driver (no data from the sensor) from a dead one.
   points_spec.heartbeat_period = std::chrono::milliseconds(500);
+  points_spec.sensor = options.sensor;
   Expected<Writer> points = Writer::create(points_spec);
   if (!points) return points.error();
 
@@ -31,6 +46,10 @@ Expected<std::unique_ptr<SimScanSink>> SimScanSink::create(const SimSinkOptions&
     imu_spec.layout = Layout::raw();
     imu_spec.checksum = options.checksum;
     imu_spec.heartbeat_period = std::chrono::milliseconds(500);
+    if (options.sensor) {
+      imu_spec.sensor = options.sensor;
+      imu_spec.sensor->point_time = PointTime::none;
+    }
     Expected<Writer> imu_writer = Writer::create(imu_spec);
     if (!imu_writer) return imu_writer.error();
     imu.emplace(std::move(imu_writer.value()));
@@ -81,6 +100,7 @@ Expected<std::unique_ptr<UnitreeStream>> UnitreeStream::create(
   }
   sink_options.max_points = Decoder::max_points_per_scan(options.decoder);
   sink_options.checksum = options.checksum;
+  if (options.sensor) sink_options.sensor = describe_sensor(*options.sensor, options.decoder);
   auto sink = SimScanSink::create(sink_options);
   if (!sink) return sink.error();
   return std::unique_ptr<UnitreeStream>(

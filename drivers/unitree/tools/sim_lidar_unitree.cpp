@@ -18,6 +18,7 @@
 #include <string>
 
 #include "sim/apps/command_line.hpp"
+#include "sim/apps/sensor_options.hpp"
 #include "sim/apps/status_line.hpp"
 #include "sim/apps/stop_signal.hpp"
 #include "sim/clock.hpp"
@@ -47,6 +48,8 @@ struct Options {
   bool quiet = false;
   bool udp_port_given = false;
   sim::ThreadPlacement placement;
+  sim::apps::SensorOptions sensor;   // --frame-id, --parent-frame, --x … --yaw
+  sim::SensorInfo sensor_info;       // what they describe, checked before anything is opened
 };
 
 // Everything read off the wire goes to the decoder, and to the recording when there is one.
@@ -186,6 +189,7 @@ int run(const Options& opt, const sim::apps::CommandLine& cli) {
   stream_options.imu_stream = opt.imu_stream;
   stream_options.no_imu = opt.no_imu;
   stream_options.checksum = opt.checksum;
+  stream_options.sensor = opt.sensor_info;
 
   Pipeline pipeline;
 
@@ -312,9 +316,13 @@ int main(int argc, char** argv) {
                  "sim_replay_serial)");
   app.add_flag("--checksum", opt.checksum, "publish frames with an XXH3 checksum");
   app.add_flag("-q,--quiet", opt.quiet, "no status line and no summary");
+  sim::apps::add_sensor_options(cli, opt.sensor, sim::apps::SensorKind::lidar);
   cli.add_placement(opt.placement);
   if (auto code = cli.parse(argc, argv)) return *code;
   opt.udp_port_given = udp_port->count() > 0;
+  auto sensor = sim::apps::sensor_info_from(opt.sensor, opt.stream);
+  if (!sensor) return cli.fail(sensor.error());
+  opt.sensor_info = std::move(sensor.value());
   try {
     return run(opt, cli);
   } catch (const std::exception& e) {

@@ -125,7 +125,13 @@ int run_hesai_replay(int argc, char** argv) {
         "no calibration file given; pass the recorded unit's angle-correction CSV with "
         "--calibration (every unit has its own)");
   }
-  hesai::LidarStreamConfig config = apps::hesai_stream_config(s);
+  auto configured = apps::hesai_stream_config(s);
+  if (!configured) return cli.fail(configured.error());
+  hesai::LidarStreamConfig config = std::move(configured.value());
+  // A recording's stamps are the recorded sensor clock, or this host's clock with --restamp.
+  config.sensor->time_base = r.restamp ? TimeBase::host : TimeBase::unknown;
+  config.sensor->time_sync = r.restamp ? "replayed, restamped to this host's clock"
+                                       : "replayed with the recorded sensor stamps";
   config.heartbeat_period = std::chrono::milliseconds(500);
   // Before the stream exists: a reader may see it and stop us at once.
   const auto& stop = apps::StopSignal::install();

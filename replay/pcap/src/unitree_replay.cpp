@@ -5,6 +5,7 @@
 
 #include "replay_loop.hpp"
 #include "replays.hpp"
+#include "sim/apps/sensor_options.hpp"
 #include "sim/clock.hpp"
 #include "sim/unitree/sim_sink.hpp"
 
@@ -71,14 +72,19 @@ int run_unitree_replay(int argc, char** argv) {
   app.add_option("--scan-packets", scan_packets, "packets per published scan")
       ->check(CLI::Range(1U, 1000U));
   app.add_flag("--checksum", o.checksum, "publish frames with an XXH3 checksum");
+  apps::SensorOptions sensor;
+  apps::add_sensor_options(cli, sensor, apps::SensorKind::lidar);
   ThreadPlacement placement;
   cli.add_placement(placement);
   if (auto code = cli.parse(argc, argv)) return *code;
+  auto described = apps::sensor_info_from(sensor, o.points_stream);
+  if (!described) return cli.fail(described.error());
+  o.sensor = std::move(described.value());
   const auto& stop = apps::StopSignal::install();
   if (auto code = cli.apply_placement(placement)) return *code;
   o.decoder.model = *unitree::parse_model(model_text);
   o.decoder.packets_per_scan = scan_packets;
-  o.decoder.time_source = unitree::TimeSource::host;
+  o.decoder.time_source = unitree::TimeSource::host;  // the capture's time: the recording host's clock
 
   // The file is read before the streams are created: a missing capture leaves nothing behind.
   if (auto probe = CaptureReader::open(r.file, r.capture_options()); !probe) {

@@ -43,6 +43,24 @@ struct LidarStream::Impl {
   }
 };
 
+namespace {
+
+// The configured description completed with what the stream itself knows.
+SensorInfo describe_sensor(const LidarStreamConfig& config, Model model) {
+  SensorInfo info = *config.sensor;
+  info.point_time = PointTime::after_frame_stamp;
+  if (info.identity.vendor.empty()) info.identity.vendor = "Hesai";
+  if (info.identity.model.empty()) info.identity.model = std::string(to_string(model));
+  if (info.calibration_source.empty()) {
+    std::error_code ignored;
+    const auto file = std::filesystem::absolute(config.calibration, ignored).lexically_normal();
+    info.calibration_source = ("file://" + file.string()).substr(0, SensorInfo::kMaxSource);
+  }
+  return info;
+}
+
+}  // namespace
+
 Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config) {
   const Model model = config.assembler.model;
   if (config.calibration.empty()) {
@@ -68,6 +86,7 @@ Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config) {
   spec.checksum = config.checksum;
   spec.lock_memory = config.lock_memory;
   spec.heartbeat_period = config.heartbeat_period;
+  if (config.sensor) spec.sensor = describe_sensor(config, model);
   auto writer = Writer::create(spec);
   if (!writer) return writer.error();
 

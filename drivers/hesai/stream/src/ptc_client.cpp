@@ -51,9 +51,10 @@ bool wait_for(int fd, short events, std::int64_t deadline_ns) {
   }
 }
 
-}  // namespace
-
-Expected<std::string> fetch_calibration_text(const PtcEndpoint& sensor) {
+// One PTC exchange: connects, sends `command`, reads the header and exactly the payload it
+// announces; `what` names the payload in messages ("calibration", "inventory").
+Expected<std::vector<std::uint8_t>> exchange(const PtcEndpoint& sensor, std::uint8_t command,
+                                             const std::string& what) {
   const std::string who = "sensor " + sensor.host + ":" + std::to_string(sensor.port);
   const double seconds = static_cast<double>(sensor.timeout.count()) / 1000.0;
   char seconds_text[32];
@@ -89,7 +90,7 @@ Expected<std::string> fetch_calibration_text(const PtcEndpoint& sensor) {
     }
   }
 
-  const auto request = ptc::request(ptc::get_calibration);
+  const auto request = ptc::request(command);
   std::size_t sent = 0;
   while (sent < request.size()) {
     const ssize_t n = ::send(fd, request.data() + sent, request.size() - sent, MSG_NOSIGNAL);
@@ -121,7 +122,7 @@ Expected<std::string> fetch_calibration_text(const PtcEndpoint& sensor) {
       return failed(who + " closed the PTC connection after " +
                     std::to_string(answer.size() - ptc::header_size) + " of the " +
                     std::to_string(wanted - ptc::header_size) +
-                    " calibration bytes it announced; try again");
+                    " " + what + " bytes it announced; try again");
     } else if (errno == EAGAIN || errno == EINTR) {
       if (!wait_for(fd, POLLIN, deadline)) {
         if (answer.empty()) {
@@ -136,19 +137,49 @@ Expected<std::string> fetch_calibration_text(const PtcEndpoint& sensor) {
       return failed(who + " broke the PTC connection: " + std::strerror(errno));
     }
     if (!header_read && answer.size() == ptc::header_size) {
-      auto header = ptc::parse_header(answer, ptc::get_calibration);
+      auto header = ptc::parse_header(answer, command);
       if (!header) return failed(who + ": " + header.error().message);
       header_read = true;
       wanted = ptc::header_size + header->payload_size;
     }
   }
   if (!header_read) {
-    auto header = ptc::parse_header(answer, ptc::get_calibration);
-    return failed(who + ": " + (header ? std::string("answered no calibration") : header.error().message));
+    auto header = ptc::parse_header(answer, command);
+    return failed(who + ": " + (header ? "answered no " + what : header.error().message));
   }
-  auto payload = ptc::parse_response(answer, ptc::get_calibration);
+  auto payload = ptc::parse_response(answer, command);
   if (!payload) return failed(who + ": " + payload.error().message);
+  return std::vector<std::uint8_t>(payload->begin(), payload->end());
+}
+
+}  // namespace
+
+Expected<std::string> fetch_calibration_text(const PtcEndpoint& sensor) {
+  auto payload = exchange(sensor, ptc::get_calibration, "calibration");
+  if (!payload) return payload.error();
   return std::string(reinterpret_cast<const char*>(payload->data()), payload->size());
+}
+
+Expected<SensorIdentity> fetch_identity(const PtcEndpoint& sensor) {
+  auto payload = exchange(sensor, ptc::get_inventory, "inventory");
+  if (!payload) return payload.error();
+  auto inventory = ptc::parse_inventory(*payload);
+  if (!inventory) {
+    return failed("sensor " + sensor.host + ":" + std::to_string(sensor.port) + ": " +
+                  inventory.error().message);
+  }
+  auto fit = [](const std::string& text) { return text.substr(0, SensorInfo::kMaxName); };
+  SensorIdentity identity;
+  identity.vendor = "Hesai";
+  identity.serial = fit(inventory->serial);
+  // The sensor firmware is what Hesai's release notes and the web page call the firmware; the
+  // control board's version follows it.
+  std::string firmware = inventory->sensor_firmware;
+  if (!inventory->control_firmware.empty()) {
+    firmware += (firmware.empty() ? "control " : ", control ") + inventory->control_firmware;
+  }
+  identity.firmware = fit(firmware);
+  return identity;
 }
 
 Expected<FetchedCalibration> calibration_from_sensor(const PtcEndpoint& sensor,

@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <span>
 #include <string>
 #include <thread>
 #include <vector>
@@ -91,11 +92,30 @@ class FakeSensor {
     }
   }
 
-  static std::string header(std::uint8_t code, std::size_t size) {
+  static std::string header(std::uint8_t code, std::size_t size, char command = '\x05') {
     const auto n = static_cast<std::uint32_t>(size);
-    return {'\x47', '\x74', '\x05', static_cast<char>(code), static_cast<char>(n >> 24),
+    return {'\x47', '\x74', command, static_cast<char>(code), static_cast<char>(n >> 24),
             static_cast<char>(n >> 16), static_cast<char>(n >> 8), static_cast<char>(n)};
   }
+
+ public:
+  // A QT128's inventory as the PTC manual lays it out: NUL-padded text fields (serial, date,
+  // MAC, software, hardware, control firmware, sensor firmware), then model and line count.
+  static std::string inventory() {
+    std::string payload(120, '\0');
+    auto put = [&](std::size_t at, const std::string& text) { payload.replace(at, text.size(), text); };
+    put(0, "QT12800TEST01");
+    put(18, "2024-03-01");
+    put(40, "3.1.8");
+    put(56, "HW-2.0");
+    put(72, "CTRL-1.4.2");
+    put(88, "SENS-3.2.9");
+    payload[106] = 32;   // QT128C2X
+    payload[108] = static_cast<char>(128);
+    return payload;
+  }
+
+ private:
 
   void answer(int fd) {
     // The request: 47 74 05 00 00 00 00 00.
@@ -107,6 +127,11 @@ class FakeSensor {
       got += static_cast<std::size_t>(n);
     }
     if (got == 8 && request[0] == 0x47 && request[1] == 0x74 && request[2] == 0x05) ++requests_;
+    if (got == 8 && request[2] == 0x07) {  // the inventory, whatever the behaviour
+      if (behaviour_ == Behaviour::serve) send_all(fd, header(0, 120, '\x07') + inventory());
+      ::close(fd);
+      return;
+    }
     switch (behaviour_) {
       case Behaviour::serve:
         send_all(fd, header(0, file_.size()) + file_);
@@ -262,6 +287,58 @@ TEST(PtcCalibration, FallsBackToTheCacheWithAWarningAndFailsWithoutOne) {
     EXPECT_NE(r.error().message.find("no cached calibration at"), std::string::npos) << r.error().message;
     EXPECT_EQ(r.error().message.find('\n'), std::string::npos);
   }
+}
+
+TEST(PtcCalibration, TheDriversStreamCarriesTheUnitsIdentityFromPtc) {
+  TempDir dir;
+  const std::string cache = (dir.path / "qt128.csv").string();
+  const std::string stream = "/test_hesai_ptc_id_" + std::to_string(::getpid());
+  FakeSensor sensor(Behaviour::serve);
+  Process driver({live_tool, "--calibration-from-sensor", "--sensor-ip", "127.0.0.1",
+                  "--ptc-port", std::to_string(sensor.port()), "--ptc-timeout", "2",
+                  "--calibration", cache, "--model", "PandarQT128", "--port", "0", "--bind",
+                  "127.0.0.1", "--stream", stream, "--status-interval", "0", "--frame-id",
+                  "lidar_front", "--y", "0.5"});
+  ASSERT_TRUE(driver.wait_for_line("listening on")) << driver.err();
+  // The model is given: the stream is created right after the port is opened.
+  auto reader = sim::Reader::open(stream);
+  for (int i = 0; i < 3000 && !reader; ++i) {
+    std::this_thread::sleep_for(10ms);
+    reader = sim::Reader::open(stream);
+  }
+  ASSERT_TRUE(reader) << reader.error().message << driver.err();
+  auto info = reader->sensor_info();
+  ASSERT_TRUE(info) << info.error().message;
+  ASSERT_TRUE(info->has_value());
+  const sim::SensorInfo& s = **info;
+  EXPECT_EQ(s.frame_id, "lidar_front");
+  ASSERT_TRUE(s.mounting.has_value());
+  EXPECT_EQ(s.mounting->translation[1], 0.5);
+  EXPECT_EQ(s.identity.vendor, "Hesai");
+  EXPECT_EQ(s.identity.model, "PandarQT128");
+  EXPECT_EQ(s.identity.serial, "QT12800TEST01");
+  EXPECT_EQ(s.identity.firmware, "SENS-3.2.9, control CTRL-1.4.2");
+  EXPECT_EQ(s.calibration_source, "sensor 127.0.0.1 over PTC");
+  EXPECT_EQ(s.point_time, sim::PointTime::after_frame_stamp);
+  driver.signal(SIGTERM);
+  EXPECT_EQ(driver.wait(), 0) << driver.err();
+  (void)sim::destroy(stream, true);
+}
+
+TEST(PtcCalibration, AnInventoryAnswerIsReadAndAShortOneRefused) {
+  const std::string payload = FakeSensor::inventory();
+  const auto bytes = std::span(reinterpret_cast<const std::uint8_t*>(payload.data()), payload.size());
+  auto inventory = sim::hesai::ptc::parse_inventory(bytes);
+  ASSERT_TRUE(inventory) << inventory.error().message;
+  EXPECT_EQ(inventory->serial, "QT12800TEST01");
+  EXPECT_EQ(inventory->manufactured, "2024-03-01");
+  EXPECT_EQ(inventory->software, "3.1.8");
+  EXPECT_EQ(inventory->sensor_firmware, "SENS-3.2.9");
+  EXPECT_EQ(inventory->model_code, 32);
+  EXPECT_EQ(inventory->lines, 128);
+  auto short_answer = sim::hesai::ptc::parse_inventory(bytes.first(60));
+  ASSERT_FALSE(short_answer);
+  EXPECT_NE(short_answer.error().message.find("shorter"), std::string::npos);
 }
 
 TEST(PtcCalibration, DriverFetchesAtStartAndFallsBackToItsCache) {

@@ -844,3 +844,60 @@ TEST(LiveDriver, UsageErrors) {
 }
 
 }  // namespace
+
+namespace {
+
+// The description a reader finds in `stream` (the test fails when there is none).
+std::optional<sim::SensorInfo> sensor_info_of(const sim::Reader& reader) {
+  auto info = reader.sensor_info();
+  if (!info) {
+    ADD_FAILURE() << info.error().message;
+    return std::nullopt;
+  }
+  return *info;
+}
+
+}  // namespace
+
+TEST(ReplayTool, TheStreamCarriesTheFrameMountingAndCalibrationSourceGiven) {
+  StreamGuard stream;
+  Process replay({replay_tool, p64_capture, "--stream", stream.name, "--calibration",
+                  p64_calibration, "--loop", "--frame-id", "lidar_top", "--parent-frame",
+                  "roof_rack", "--x", "1.25", "--z", "1.8", "--yaw", "3.0"});
+  auto reader = open_when_created(stream.name);
+  ASSERT_TRUE(reader) << reader.error().message;
+  const auto info = sensor_info_of(*reader);
+  ASSERT_TRUE(info.has_value()) << "the stream carries no description";
+  EXPECT_EQ(info->frame_id, "lidar_top");
+  EXPECT_EQ(info->parent_frame, "roof_rack");
+  ASSERT_TRUE(info->mounting.has_value());
+  EXPECT_EQ(info->mounting->translation, (std::array<double, 3>{1.25, 0.0, 1.8}));
+  EXPECT_EQ(info->mounting->rotation, sim::Mounting::from_xyz_rpy(0, 0, 0, 0, 0, 3.0).rotation);
+  EXPECT_EQ(info->identity.vendor, "Hesai");
+  EXPECT_EQ(info->identity.model, "Pandar64");
+  EXPECT_EQ(info->point_time, sim::PointTime::after_frame_stamp);
+  EXPECT_EQ(info->calibration_source,
+            "file://" + fs::absolute(p64_calibration).lexically_normal().string());
+  EXPECT_FALSE(info->calibration.has_value());
+  replay.signal(SIGTERM);
+  EXPECT_EQ(replay.wait(), 0) << replay.err();
+}
+
+TEST(ReplayTool, ABadFrameNameOrMountingIsRefusedWithOneSentenceAndNoStream) {
+  StreamGuard stream;
+  const std::vector<std::vector<std::string>> bad = {
+      {"--frame-id", "lidar top"}, {"--frame-id", "9lidar"}, {"--parent-frame", "/base_link"},
+      {"--x", "nan"}, {"--yaw", "inf"}};
+  for (const auto& extra : bad) {
+    std::vector<std::string> argv = {replay_tool, p64_capture, "--stream", stream.name,
+                                     "--calibration", p64_calibration, "--max-rate"};
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    const auto r = run(argv);
+    EXPECT_EQ(r.code, 2) << extra[0] << " " << extra[1] << ": " << r.err;
+    EXPECT_EQ(r.err.rfind("sim_replay_pcap: ", 0), 0u) << r.err;
+    EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << "one line: " << r.err;
+    auto reader = sim::Reader::open(stream.name);
+    ASSERT_FALSE(reader) << "a stream was created for " << extra[0] << " " << extra[1];
+    EXPECT_EQ(reader.error().code, sim::ErrorCode::not_found);
+  }
+}

@@ -18,6 +18,7 @@
 // (sim_dump) do not take the programs' command line with it.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -39,6 +40,12 @@ Expected<std::filesystem::path> camera_info_path(std::string_view location);
 
 // Reads and parses the file at `location` (a name or a file:// URL).
 Expected<CameraCalibration> load_camera_info(std::string_view location);
+
+// Whether `calibration` fits images of `width` × `height`: the calibrated size, or its region of
+// interest when one is given, divided by the binning. An invalid_argument sentence when not.
+// (Here rather than in the options so the camera libraries check a reconnected camera too.)
+Expected<void> check_calibration_size(const CameraCalibration& calibration, std::uint32_t width,
+                                      std::uint32_t height);
 
 // The file's text: the keys above, numbers written so they read back exactly. binning and roi
 // are written only when they are not zero.

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "sim/apps/command_line.hpp"
+#include "sim/apps/sensor_options.hpp"
 #include "sim/hesai/lidar_stream.hpp"
 #include "sim/os.hpp"
 
@@ -31,18 +32,20 @@ struct HesaiStreamOptions {
   bool checksum = false;
   bool lock_memory = false;
   ThreadPlacement placement;  // --cpu, --rt-priority
+  SensorOptions sensor;       // --frame-id, --parent-frame, --x … --yaw
 };
 
 // Adds --stream --model --calibration --firetimes --cut-azimuth --min-range --max-range
 // --keep-zero-distance --keep-identical-returns --dual-return-threshold --partial-frames
 // --firetime-azimuth-compensation --returns --min-rpm --checksum --lock-memory --cpu
-// --rt-priority. Every value is checked by parse(): a stream name, a model, a range.
+// --rt-priority and the sensor options (sim/apps/sensor_options.hpp). Every value is checked by parse(): a stream name, a model, a range.
 void add_hesai_stream_options(CommandLine& cli, HesaiStreamOptions& options);
 
 // The model given, or nullopt for auto (parse() has checked the name).
 std::optional<hesai::Model> hesai_model(const HesaiStreamOptions& options);
 
-// The stream library's configuration (assembler.model is set by whoever knows the model).
-hesai::LidarStreamConfig hesai_stream_config(const HesaiStreamOptions& options);
+// The stream library's configuration (assembler.model is set by whoever knows the model), with
+// the sensor's description; an invalid_argument sentence (exit 2) when that is refused.
+Expected<hesai::LidarStreamConfig> hesai_stream_config(const HesaiStreamOptions& options);
 
 }  // namespace sim::apps

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -18,6 +19,7 @@
 #include "sim/imaging/image_format.hpp"
 #include "sim/layout.hpp"
 #include "sim/result.hpp"
+#include "sim/sensor_info.hpp"
 
 namespace sim::camera {
 
@@ -41,6 +43,10 @@ struct AravisCaptureConfig {
   // on (PtpEnable or GevIEEE1588).
   bool device_timestamps = false;
   bool checksum = false;
+  // The stream's description (frame, mounting, calibration); the capture adds the device info
+  // (vendor, model, serial, firmware) and the clock of the stamps with the PTP state, on every
+  // (re)connect. Calibration size as in V4l2CaptureConfig. nullopt: no description.
+  std::optional<SensorInfo> sensor;
   std::chrono::milliseconds retry_period{1000};
   std::function<void(std::string_view)> log;
 };

@@ -18,6 +18,7 @@
 #include "sim/camera/v4l2_device.hpp"
 #include "sim/camera/v4l2_io.hpp"
 #include "sim/result.hpp"
+#include "sim/sensor_info.hpp"
 #include "sim/writer.hpp"
 
 namespace sim::camera {
@@ -44,6 +45,11 @@ struct V4l2CaptureConfig {
   std::chrono::milliseconds frame_timeout{3000};
   std::chrono::milliseconds retry_period{500};  // between attempts to reopen a lost device
   bool checksum = false;
+  // The stream's description (frame, mounting, calibration); the capture adds the device (card
+  // as the model, bus as where it is plugged) and the clock of the stamps. A calibration of
+  // another size than the frames: start() fails (invalid_argument); after a reconnect in another
+  // size the calibration is dropped with a log line. nullopt: no description.
+  std::optional<SensorInfo> sensor;
   // Status messages (device lost, reconnected, …); none when empty.
   std::function<void(std::string_view)> log;
 };
@@ -98,6 +104,10 @@ class V4l2Capture {
   V4l2Capture(V4l2Io& io, V4l2CaptureConfig config) noexcept;
   // Open + controls + negotiate + decoder + (re)create writer + start streaming.
   std::optional<Error> connect(bool first);
+  // config_.sensor completed for `device` with frames of `output`; the calibration size checked
+  // (an error on the first connect, dropped with a log line after).
+  Expected<std::optional<SensorInfo>> describe(const V4l2Device& device, const ImageLayout& output,
+                                               bool first) const;
   void disconnect() noexcept;
   void log(const std::string& message) const;
   StepResult handle(const DeviceFrame& frame);
@@ -107,6 +117,7 @@ class V4l2Capture {
   std::optional<V4l2Device> device_;
   std::optional<imaging::FrameDecoder> decoder_;
   std::optional<Writer> writer_;
+  std::optional<SensorInfo> sensor_;  // the description the stream carries
   StreamFormat format_{};
   CaptureStats stats_{};
   MonotonicToRealtime clock_;

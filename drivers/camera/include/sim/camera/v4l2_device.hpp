@@ -112,6 +112,8 @@ class V4l2Device {
 
   const std::string& path() const noexcept { return path_; }
   const std::string& card() const noexcept { return card_; }
+  // Where the device is plugged (VIDIOC_QUERYCAP bus_info: "usb-0000:00:14.0-1").
+  const std::string& bus() const noexcept { return bus_; }
 
   std::vector<FormatInfo> formats();
   std::vector<ControlInfo> controls();
@@ -145,6 +147,7 @@ class V4l2Device {
   int fd_ = -1;
   std::string path_;
   std::string card_;
+  std::string bus_;
   std::vector<Buffer> buffers_;
   bool buffers_requested_ = false;  // REQBUFS succeeded: give them back with a count of 0
   bool streaming_ = false;

@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <string_view>
 
 #include "sim/result.hpp"
@@ -20,6 +21,8 @@ namespace sim::hesai::ptc {
 
 inline constexpr std::uint16_t default_port = 9347;
 inline constexpr std::uint8_t get_calibration = 0x05;
+// Answers with the unit's inventory: serial number, versions, model code (layout below).
+inline constexpr std::uint8_t get_inventory = 0x07;
 inline constexpr std::size_t header_size = 8;
 // No calibration file is anywhere near this; a larger announced payload is not one.
 inline constexpr std::uint32_t max_payload_size = 1 << 20;
@@ -39,5 +42,26 @@ Expected<ResponseHeader> parse_header(std::span<const std::uint8_t> bytes, std::
 // A whole answer (header and exactly its payload): the payload, viewing `bytes`.
 Expected<std::span<const std::uint8_t>> parse_response(std::span<const std::uint8_t> bytes,
                                                        std::uint8_t command);
+
+// The inventory answer (Hesai's PTC manual; nebula's HesaiInventory): NUL-padded text fields
+// sn[18] date_of_manufacture[16] mac[6] sw_ver[16] hw_ver[16] control_fw_ver[16]
+// sensor_fw_ver[16], then angle_offset u16, model u8, motor_type u8, num_of_lines u8, 11 reserved:
+// 120 bytes. Longer answers (newer firmware) are read for these fields.
+inline constexpr std::size_t inventory_size = 120;
+struct Inventory {
+  std::string serial;
+  std::string manufactured;
+  std::string software;          // sw_ver
+  std::string hardware;          // hw_ver
+  std::string control_firmware;  // control_fw_ver
+  std::string sensor_firmware;   // sensor_fw_ver
+  std::uint8_t model_code = 0;
+  std::uint8_t lines = 0;
+};
+
+// The inventory in a get_inventory payload; text fields keep their printable ASCII only (a
+// hostile answer cannot smuggle control bytes into a stream's description). One sentence when
+// the payload is too short.
+Expected<Inventory> parse_inventory(std::span<const std::uint8_t> payload);
 
 }  // namespace sim::hesai::ptc

@@ -19,6 +19,7 @@
 #include <string_view>
 
 #include "sim/result.hpp"
+#include "sim/sensor_info.hpp"
 #include "sim/unitree/decoder.hpp"
 #include "sim/writer.hpp"
 
@@ -29,7 +30,16 @@ struct SimSinkOptions {
   std::string imu_stream;     // "/lidar_top.imu"; empty: IMU samples are dropped
   std::uint64_t max_points = 0;  // Decoder::max_points_per_scan(options)
   bool checksum = false;
+  // The description the point stream carries (describe_sensor() below); the IMU stream carries
+  // the same frame and clock, without per-point times. nullopt: none.
+  std::optional<SensorInfo> sensor;
 };
+
+// `configured` (frame, parent, mounting from the command line) completed with what the decoder
+// knows: vendor Unitree and the model, per-point times after the scan's stamp, and the clock of
+// the stamps (the host's, or with TimeSource::sensor the L2's own, whose synchronisation the
+// packets do not report).
+SensorInfo describe_sensor(SensorInfo configured, const DecoderOptions& options);
 
 // "/lidar_top" → "/lidar_top.imu" (SIM names allow no second slash).
 std::string default_imu_stream(std::string_view points_stream);
@@ -67,6 +77,7 @@ struct UnitreeStreamOptions {
   std::string imu_stream;
   bool no_imu = false;
   bool checksum = false;
+  std::optional<SensorInfo> sensor;  // completed by describe_sensor(); nullopt: none
 };
 
 // The decoder writing into SIM: what the live driver and the pcap replay each run.

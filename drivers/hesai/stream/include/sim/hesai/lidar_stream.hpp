@@ -16,6 +16,7 @@
 
 #include "sim/hesai/hesai.hpp"
 #include "sim/result.hpp"
+#include "sim/sensor_info.hpp"
 #include "sim/writer.hpp"
 
 namespace sim::hesai {
@@ -31,6 +32,11 @@ struct LidarStreamConfig {
   bool checksum = false;
   bool lock_memory = false;
   std::chrono::milliseconds heartbeat_period{0};
+  // The sensor's description (frame, mounting, identity, time base); the stream adds what it
+  // knows: per-point times after the frame's stamp, vendor "Hesai" and the model when the
+  // identity has none, and the calibration file as the calibration source when none is given.
+  // nullopt: the stream carries no description.
+  std::optional<SensorInfo> sensor;
 };
 
 // What the stream published, beside the assembler's own counters.

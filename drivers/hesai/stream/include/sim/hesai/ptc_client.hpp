@@ -18,6 +18,7 @@
 #include "sim/hesai/model.hpp"
 #include "sim/hesai/ptc.hpp"
 #include "sim/result.hpp"
+#include "sim/sensor_info.hpp"
 
 namespace sim::hesai {
 
@@ -30,6 +31,11 @@ struct PtcEndpoint {
 // Asks the sensor for its angle-correction file and returns its text, or one sentence naming
 // the sensor and what went wrong (refused, no answer, closed early, not PTC, stalled).
 Expected<std::string> fetch_calibration_text(const PtcEndpoint& sensor);
+
+// Asks the sensor for its inventory (PTC 0x07): vendor "Hesai", the serial number and the
+// firmware versions (the model is left to the caller, who knows it from the packets). One
+// sentence when the sensor does not answer or the answer is not an inventory.
+Expected<SensorIdentity> fetch_identity(const PtcEndpoint& sensor);
 
 struct FetchedCalibration {
   bool from_cache = false;  // the sensor's answer was not usable; the cached file is used
