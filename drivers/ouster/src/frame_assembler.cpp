@@ -32,6 +32,11 @@ Expected<FrameAssembler> FrameAssembler::create(const Metadata& metadata, Assemb
       metadata.pixel_shift_by_row.size() != metadata.beams()) {
     return invalid("the metadata's beam tables do not have one entry per beam");
   }
+  if (metadata.format.columns_per_packet > max_columns_per_packet) {
+    return invalid("the metadata's " + std::to_string(metadata.format.columns_per_packet) +
+                   " columns per packet are more than any Ouster sensor sends (" +
+                   std::to_string(max_columns_per_packet) + ")");
+  }
   const Profile profile = metadata.format.profile;
   if (!has_signal(profile) && options.intensity == IntensityField::signal) {
     return invalid("the " + std::string(to_string(profile)) +
@@ -83,7 +88,7 @@ void FrameAssembler::build_lookup_table() {
                            std::sin(azimuth) * std::cos(altitude), std::sin(altitude)};
       const double o[3] = {t03 * std::cos(encoder) - n * d[0], t03 * std::sin(encoder) - n * d[1],
                            t23 - n * d[2]};
-      const std::size_t at = std::size_t{col} * beams_ + u;
+      const std::size_t at = std::size_t{u} * columns_ + col;
       for (unsigned row = 0; row < 3; ++row) {
         const double* r = &s[4 * row];
         direction_[3 * at + row] = static_cast<float>((r[0] * d[0] + r[1] * d[1] + r[2] * d[2]) / 1000.0);
@@ -197,7 +202,15 @@ void FrameAssembler::decode_columns(const LidarPacket& packet) noexcept {
   const unsigned stride = pixel_bytes(P);
   constexpr bool dual = P == Profile::rng19_rfl8_sig16_nir16_dual || P == Profile::fusa_rng15_rfl8_nir8_dual;
   const bool second = dual && returns_ > 1;
-  for (unsigned c = 0; c < packet.columns(); ++c) {
+  // First the columns' headers: which to decode, and their times.
+  struct Accepted {
+    unsigned index;  // in the packet
+    unsigned m;      // measurement_id
+    std::uint32_t time_offset;
+  };
+  std::array<Accepted, max_columns_per_packet> accepted;
+  unsigned count = 0;
+  for (unsigned c = 0; c < packet.columns() && c < max_columns_per_packet; ++c) {
     const Column column = packet.column(c);
     if (!column.valid) {
       ++invalid_columns_;
@@ -215,12 +228,19 @@ void FrameAssembler::decode_columns(const LidarPacket& packet) noexcept {
       stamp_ns_ = timestamp;
       have_stamp_ = true;
     }
-    const std::int64_t offset = std::clamp<std::int64_t>(timestamp - stamp_ns_, 0, std::numeric_limits<std::uint32_t>::max());
-    const auto time_offset = static_cast<std::uint32_t>(offset);
-    const std::uint8_t* bytes = packet.pixel_bytes(c, 0);
-    for (unsigned u = 0; u < beams_; ++u) {
-      const Pixel px = decode_pixel_as<P>(bytes + std::size_t{u} * stride);
-      const std::size_t lut = std::size_t{m} * beams_ + u;
+    const std::int64_t offset =
+        std::clamp<std::int64_t>(timestamp - stamp_ns_, 0, std::numeric_limits<std::uint32_t>::max());
+    accepted[count++] = {c, m, static_cast<std::uint32_t>(offset)};
+  }
+  // Then beam by beam: an organised frame is row-major, so the packet's neighbouring columns of
+  // one beam are neighbouring points; writing them together fills whole cache lines at once
+  // (rows lie W × 24 bytes apart, a multiple of 4 KiB that maps every row to the same cache set).
+  for (unsigned u = 0; u < beams_; ++u) {
+    const std::size_t row_start = std::size_t{u} * columns_;
+    for (unsigned k = 0; k < count; ++k) {
+      const Accepted& col = accepted[k];
+      const Pixel px = decode_pixel_as<P>(packet.pixel_bytes(col.index, 0) + std::size_t{u} * stride);
+      const std::size_t lut = row_start + col.m;
       float intensity = 0;
       float intensity2 = 0;
       switch (intensity_) {
@@ -231,14 +251,14 @@ void FrameAssembler::decode_columns(const LidarPacket& packet) noexcept {
       }
       if (organized) {
         const std::size_t at = organized_index_[lut];
-        write_point(at, u, lut, px.range_mm, intensity, time_offset, 0);
-        if (second) write_point(at + image, u, lut, px.range2_mm, intensity2, time_offset, 1);
+        write_point(at, u, lut, px.range_mm, intensity, col.time_offset, 0);
+        if (second) write_point(at + image, u, lut, px.range2_mm, intensity2, col.time_offset, 1);
       } else {
         if (px.range_mm != 0 && px.range_mm >= min_range_mm_ && px.range_mm <= max_range_mm_) {
-          write_point(dense_count_++, u, lut, px.range_mm, intensity, time_offset, 0);
+          write_point(dense_count_++, u, lut, px.range_mm, intensity, col.time_offset, 0);
         }
         if (second && px.range2_mm != 0 && px.range2_mm >= min_range_mm_ && px.range2_mm <= max_range_mm_) {
-          write_point(dense_count_++, u, lut, px.range2_mm, intensity2, time_offset, 1);
+          write_point(dense_count_++, u, lut, px.range2_mm, intensity2, col.time_offset, 1);
         }
       }
     }
@@ -277,7 +297,7 @@ void FrameAssembler::fill_missing_columns() noexcept {
   for (unsigned m = 0; m < columns_; ++m) {
     if (received_[m] != 0) continue;
     for (unsigned u = 0; u < beams_; ++u) {
-      const std::size_t lut = std::size_t{m} * beams_ + u;
+      const std::size_t lut = std::size_t{u} * columns_ + m;
       for (unsigned r = 0; r < returns_; ++r) {
         write_point(organized_index_[lut] + r * image, u, lut, 0, 0, 0, static_cast<std::uint8_t>(r));
       }

@@ -19,6 +19,7 @@
 // them to the sensor frame; metres. Every pixel of a column has the column's timestamp.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -93,7 +94,10 @@ class FrameAssembler {
  public:
   // Fails (one sentence) for inverted or negative range limits or pixel shifts the frame
   // cannot hold.
+  // Fails (one sentence) for more than max_columns_per_packet columns per packet.
   static Expected<FrameAssembler> create(const Metadata& metadata, AssemblerOptions options);
+
+  static constexpr unsigned max_columns_per_packet = 64;
 
   // Points one frame can hold: H × W × returns.
   std::size_t max_points() const noexcept;
@@ -131,10 +135,11 @@ class FrameAssembler {
   std::uint32_t min_range_mm_ = 0;
   std::uint32_t max_range_mm_ = 0;
   IntensityField intensity_ = IntensityField::signal;
-  // Per (measurement_id, beam): xyz = range_mm · direction + origin, metres, sensor frame.
+  // Per pixel, beam-major (u·W + measurement_id, the order decode walks them): xyz =
+  // range_mm · direction + origin, metres, sensor frame.
   std::vector<float> direction_;  // 3 per pixel
   std::vector<float> origin_;
-  // Per (measurement_id, beam): the destaggered column's index row-major, u·W + (m + shift) % W.
+  // Per pixel (same order): the destaggered point's index row-major, u·W + (m + shift) % W.
   std::vector<std::uint32_t> organized_index_;
 
   // The frame in progress.

@@ -1,0 +1,122 @@
+// SPDX-License-Identifier: Apache-2.0
+// Decode throughput of sim::ouster::FrameAssembler on one core: lidar payloads in memory ->
+// points in a caller's span (organised, destaggered, sensor frame), frames swapped as a driver
+// swaps loans. The real captures (OS-1-32 LEGACY, OS-0-32 dual return; one frame each) and
+// synthetic frames of the heaviest modes (128 beams × 2048 columns, dual and single; RNG15 low
+// data rate), built with the tests' independent encoder. Counters: points/s and x_real_time =
+// seconds of sensor data decoded per second (target ≥ 50×, issue 22).
+//
+//   build-*/bench/ouster/bench_ouster_decode --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+#include <benchmark/benchmark.h>
+
+#include <stdexcept>
+#include <vector>
+
+#include "ouster_test_support.hpp"
+#include "packet_encoder.hpp"
+#include "sim/ouster/ouster.hpp"
+
+using namespace sim::ouster;
+
+namespace {
+
+struct Input {
+  Metadata metadata;
+  std::vector<std::vector<std::uint8_t>> packets;  // whole frames
+  double sensor_seconds;
+};
+
+Input real(const std::string& base) {
+  auto capture = ouster_test::load_capture(base);
+  const double seconds = static_cast<double>(capture.lidar.size()) * capture.metadata.format.columns_per_packet /
+                         capture.metadata.columns() / capture.metadata.frequency_hz;
+  return {capture.metadata, std::move(capture.lidar), seconds};
+}
+
+// Two frames of `layout`, every pixel returning (the worst case for the decoder).
+Input synthetic(ouster_test::Layout layout, unsigned beams, unsigned columns) {
+  auto m = Metadata::parse(ouster_test::nested_metadata(layout, beams, columns, 16, 1));
+  if (!m) throw std::runtime_error(m.error().message);
+  Input in{m.value(), {}, 2.0 / 10.0};
+  for (std::uint32_t frame = 1; frame <= 2; ++frame) {
+    for (unsigned first = 0; first < columns; first += 16) {
+      ouster_test::PacketSpec s;
+      s.layout = layout;
+      s.beams = beams;
+      s.frame_id = frame;
+      s.init_id = 1;
+      s.first_column = static_cast<std::uint16_t>(first);
+      in.packets.push_back(ouster_test::encode_packet(s, [](unsigned v, unsigned u) {
+        ouster_test::EncodedPixel p;
+        p.range_mm = 1000 + 8 * ((v * 7 + u * 13) % 4000);
+        p.range2_mm = p.range_mm + 800;
+        p.reflectivity = static_cast<std::uint8_t>(u);
+        p.signal = static_cast<std::uint16_t>(v);
+        p.near_ir = static_cast<std::uint16_t>(16 * (u % 200));
+        return p;
+      }));
+    }
+  }
+  return in;
+}
+
+void decode(benchmark::State& state, const Input& in, CloudLayout layout) {
+  AssemblerOptions options;
+  options.layout = layout;
+  auto assembler = FrameAssembler::create(in.metadata, options).value();
+  std::vector<sim::LidarPoint> points(assembler.max_points());
+  assembler.set_output(points);
+  std::size_t decoded = 0;
+  for (auto _ : state) {
+    for (const auto& p : in.packets) {
+      if (auto r = assembler.push(p, 0); r.frame) {
+        decoded += r.frame->point_count;
+        benchmark::DoNotOptimize(points.data());
+        assembler.set_output(points);
+      }
+    }
+  }
+  state.counters["points/s"] = benchmark::Counter(static_cast<double>(decoded), benchmark::Counter::kIsRate);
+  state.counters["x_real_time"] =
+      benchmark::Counter(in.sensor_seconds * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+
+void os1_32_legacy(benchmark::State& s) {
+  static const Input in = real("OS-1-32-G_v2.1.1_1024x10");
+  decode(s, in, CloudLayout::organized);
+}
+void os0_32_dual(benchmark::State& s) {
+  static const Input in = real("OS-0-32-U1_v2.2.0_1024x10");
+  decode(s, in, CloudLayout::organized);
+}
+void os0_32_dual_dense(benchmark::State& s) {
+  static const Input in = real("OS-0-32-U1_v2.2.0_1024x10");
+  decode(s, in, CloudLayout::dense);
+}
+void os_128x2048_dual(benchmark::State& s) {
+  static const Input in = synthetic(ouster_test::Layout::rng19_dual, 128, 2048);
+  decode(s, in, CloudLayout::organized);
+}
+void os_128x2048_single(benchmark::State& s) {
+  static const Input in = synthetic(ouster_test::Layout::rng19, 128, 2048);
+  decode(s, in, CloudLayout::organized);
+}
+void os_128x1024_low_data_rate(benchmark::State& s) {
+  static const Input in = synthetic(ouster_test::Layout::rng15, 128, 1024);
+  decode(s, in, CloudLayout::organized);
+}
+void os_32x1024_fusa_dual(benchmark::State& s) {
+  static const Input in = synthetic(ouster_test::Layout::fusa_dual, 32, 1024);
+  decode(s, in, CloudLayout::organized);
+}
+
+}  // namespace
+
+BENCHMARK(os1_32_legacy)->Unit(benchmark::kMicrosecond);
+BENCHMARK(os0_32_dual)->Unit(benchmark::kMicrosecond);
+BENCHMARK(os0_32_dual_dense)->Unit(benchmark::kMicrosecond);
+BENCHMARK(os_128x2048_dual)->Unit(benchmark::kMicrosecond);
+BENCHMARK(os_128x2048_single)->Unit(benchmark::kMicrosecond);
+BENCHMARK(os_128x1024_low_data_rate)->Unit(benchmark::kMicrosecond);
+BENCHMARK(os_32x1024_fusa_dual)->Unit(benchmark::kMicrosecond);
+BENCHMARK_MAIN();
