@@ -13,6 +13,9 @@
 //   remove NAME                                                 destroy() the stream until SIGTERM
 //   stall-in-copy NAME                                          stop inside read()'s copy of a frame
 //   hold-borrow NAME                                            borrow a frame and keep it
+//   recalibrate NAME                                            frame 1 described as camera_a; once
+//                                                               a reader sleeps, describe camera_b
+//                                                               and publish frame 2
 #include <sched.h>
 #if defined(__has_feature)
 #if __has_feature(address_sanitizer) && !defined(__SANITIZE_ADDRESS__)
@@ -308,6 +311,49 @@ int run_hold_borrow(const std::string& name) {
 
 }  // namespace
 
+// A camera whose calibration changes while a reader in another process reads it (issue 21).
+int run_recalibrate(const std::string& name) {
+  SensorInfo info;
+  info.frame_id = "camera_a";
+  info.mounting = Mounting::from_xyz_rpy(1.0, 0.0, 1.5, 0.0, 0.0, 0.0);
+  CameraCalibration c;
+  c.width = 640;
+  c.height = 480;
+  c.k = {500, 0, 320, 0, 500, 240, 0, 0, 1};
+  info.calibration = c;
+  StreamSpec spec;
+  spec.name = name;
+  spec.capacity = 64;
+  spec.sensor = info;
+  auto writer = Writer::create(spec);
+  if (!writer) {
+    std::printf("error=%s\n", writer.error().message.c_str());
+    return 1;
+  }
+  const std::byte frame[8] = {};
+  if (writer->write(frame, sizeof frame, realtime_ns()) != WriteStatus::ok) return 1;
+  std::printf("ready\n");
+  std::fflush(stdout);
+  // The reader has read frame 1 (and its description) once it sleeps for the next frame.
+  const std::int64_t deadline = monotonic_ns() + 30'000'000'000;
+  for (;;) {
+    auto status = inspect(name);
+    if (status && status->sleeping_readers > 0) break;
+    if (monotonic_ns() > deadline) return 1;
+    std::this_thread::sleep_for(1ms);
+  }
+  info.frame_id = "camera_b";
+  info.calibration->k[0] = 510;
+  if (auto set = writer->set_sensor_info(info); !set) {
+    std::printf("error=%s\n", set.error().message.c_str());
+    return 1;
+  }
+  if (writer->write(frame, sizeof frame, realtime_ns()) != WriteStatus::ok) return 1;
+  std::printf("done\n");
+  std::fflush(stdout);
+  return 0;
+}
+
 int main(int argc, char** argv) {
   const std::vector<std::string> args(argv + 1, argv + argc);
   if (args.size() == 7 && args[0] == "writer") {
@@ -324,6 +370,7 @@ int main(int argc, char** argv) {
   if (args.size() == 2 && args[0] == "remove") return run_remove(args[1]);
   if (args.size() == 2 && args[0] == "stall-in-copy") return run_stall_in_copy(args[1]);
   if (args.size() == 2 && args[0] == "hold-borrow") return run_hold_borrow(args[1]);
+  if (args.size() == 2 && args[0] == "recalibrate") return run_recalibrate(args[1]);
   std::fprintf(stderr, "usage: see the comment at the top of tests/sim/peer.cpp\n");
   return 2;
 }

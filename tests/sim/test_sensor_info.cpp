@@ -18,11 +18,13 @@
 #include "../../sim/region.hpp"
 #include "sim/sim.hpp"
 #include "sim_test/frames.hpp"
+#include "sim_test/process.hpp"
 
 using namespace sim;
 using sim::detail::RegionHeader;
 using sim::detail::SensorBlock;
 using sim::detail::SensorRecord;
+using sim::testing::Process;
 using test::StreamGuard;
 using test::unique_name;
 
@@ -409,4 +411,31 @@ TEST(SensorInfoConcurrency, ConcurrentUpdatesNeverTearTheDescription) {
   stop = true;
   updater.join();
   EXPECT_EQ(torn, 0);
+}
+
+// The writer in another process recalibrates while this reader reads: the next frame carries a
+// new generation and sensor_info() then gives the new calibration, without reopening.
+TEST(SensorInfoProcesses, AReaderSeesAnotherProcessRecalibrateWithoutReopening) {
+  StreamGuard g{unique_name("sensor_peer")};
+  Process peer({SIM_TEST_PEER, "recalibrate", g.name});
+  ASSERT_TRUE(peer.wait_for_line("ready")) << peer.err();
+  auto r = Reader::open(g.name);
+  ASSERT_TRUE(r) << r.error().message;
+  std::vector<std::byte> buf(r->capacity());
+  FrameInfo first;
+  ASSERT_EQ(r->read_next(buf, first, std::chrono::seconds(30)), ReadStatus::new_frame);
+  ASSERT_NE(first.sensor_generation, 0u);
+  auto a = r->sensor_info();
+  ASSERT_TRUE(a && a->has_value());
+  EXPECT_EQ((*a)->frame_id, "camera_a");
+
+  FrameInfo second;  // read_next sleeps: the peer sees a sleeping reader and recalibrates
+  ASSERT_EQ(r->read_next(buf, second, std::chrono::seconds(30)), ReadStatus::new_frame) << peer.err();
+  EXPECT_NE(second.sensor_generation, first.sensor_generation);
+  auto b = r->sensor_info();
+  ASSERT_TRUE(b && b->has_value());
+  EXPECT_EQ((*b)->frame_id, "camera_b");
+  EXPECT_EQ((*b)->calibration->k[0], 510.0);
+  EXPECT_EQ(r->stats().reopens, 0u);
+  EXPECT_EQ(peer.wait(), 0) << peer.err();
 }
