@@ -5,6 +5,7 @@
 #include <poll.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 
 #include "sim/apps/command_line.hpp"
@@ -50,9 +51,25 @@ int main(int argc, char** argv) {
                  "address to listen on; 0.0.0.0 opens it to the network (no authentication)")
       ->capture_default_str();
   app.add_option("--max-rate", options.max_rate_hz,
-                 "at most this many messages per second per channel and client (0: every frame)")
-      ->check(CLI::NonNegativeNumber)
+                 "at most this many messages per second per channel and client (0: every frame; "
+                 "else at least 0.000001)")
+      ->check(CLI::Validator(
+          [](const std::string& text) -> std::string {
+            const double rate = std::strtod(text.c_str(), nullptr);
+            return rate == 0 || rate >= sim::foxglove::kMinRateHz
+                       ? std::string()
+                       : "--max-rate takes 0 (every frame) or a rate of at least 0.000001 Hz";
+          },
+          "RATE"))
       ->capture_default_str();
+  app.add_option("--max-connections", options.max_connections,
+                 "page and Foxglove connections served at once; more get HTTP 503")
+      ->check(CLI::Range(1u, 100000u))
+      ->capture_default_str();
+  app.add_option("--allow-origin", options.allowed_origins,
+                 "a web origin (https://host[:port]) whose pages may open the WebSocket, beside this "
+                 "server's page and Foxglove's web app; its host is also accepted by the page. "
+                 "* allows any (not safe)");
   app.add_option("--compress", compress,
                  "images as JPEG sensor_msgs/msg/CompressedImage: none, jpeg or jpeg:QUALITY (1-100)")
       ->capture_default_str();

@@ -9,11 +9,14 @@
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
+#include <fcntl.h>
 #include <poll.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cstring>
 #include <optional>
@@ -40,6 +43,14 @@ std::string unique_stream(const char* base) {
   name += '_';
   name += std::to_string(counter++);
   return name;
+}
+
+// "name:port", built in place (GCC 12 at -O3 misreads "literal" + std::string&& as -Wrestrict).
+std::string host_port(const char* name, std::uint16_t port) {
+  std::string text = name;
+  text += ':';
+  text += std::to_string(port);
+  return text;
 }
 
 struct Frame {
@@ -93,12 +104,23 @@ class RawClient {
 
   // Sends the upgrade request; returns the response head.
   std::optional<std::string> handshake(bool with_subprotocol = true) {
-    std::string request =
-        "GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
-        "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n";
-    if (with_subprotocol) request += "Sec-WebSocket-Protocol: foxglove.websocket.v1\r\n";
-    request += "\r\n";
+    return handshake_with(with_subprotocol ? "Sec-WebSocket-Protocol: foxglove.websocket.v1\r\n"
+                                           : "");
+  }
+  // The upgrade request with these header lines (each ending in CRLF) and this Host.
+  std::optional<std::string> handshake_with(const std::string& headers,
+                                            const std::string& host = "127.0.0.1") {
+    const std::string request =
+        "GET / HTTP/1.1\r\nHost: " + host +
+        "\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+        "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n" +
+        headers + "\r\n";
     if (!send_raw(request)) return std::nullopt;
+    return read_head();
+  }
+  // A plain GET of `target` with this Host; returns the response head.
+  std::optional<std::string> get(const std::string& target, const std::string& host = "127.0.0.1") {
+    if (!send_raw("GET " + target + " HTTP/1.1\r\nHost: " + host + "\r\n\r\n")) return std::nullopt;
     return read_head();
   }
 
@@ -229,6 +251,32 @@ class FoxgloveBadInput : public ::testing::Test {
   }
 
   std::uint16_t port() const { return server_->port(); }
+
+  // Another server on the fixture's stream, with options of the test's own.
+  sim::foxglove::Server another_server(sim::foxglove::ServerOptions options) {
+    options.port = 0;
+    options.streams = {stream_};
+    auto server = sim::foxglove::Server::start(options);
+    EXPECT_TRUE(server) << server.error().message;
+    return std::move(server.value());
+  }
+
+  // Subscribes the client to `channel` (subscription id 7).
+  static void subscribe(RawClient& client, std::uint32_t channel) {
+    ASSERT_TRUE(client.send_text(R"({"op":"subscribe","subscriptions":[{"id":7,"channelId":)" +
+                                 std::to_string(channel) + "}]}"));
+  }
+
+  // Reads until a message frame stamped after `after_ns` arrives: one published meanwhile.
+  static bool receives_frame_after(RawClient& client, std::int64_t after_ns) {
+    while (auto f = client.read_frame()) {
+      if (f->opcode != 0x2 || f->payload.size() < 13) continue;
+      std::uint64_t stamp = 0;
+      for (int i = 7; i >= 0; --i) stamp = (stamp << 8) | static_cast<unsigned char>(f->payload[5 + i]);
+      if (static_cast<std::int64_t>(stamp) > after_ns) return true;
+    }
+    return false;
+  }
 
   // A client past the handshake that has read serverInfo and the advertise of our stream;
   // returns the stream's channel id.
@@ -384,21 +432,21 @@ TEST_F(FoxgloveBadInput, GarbageHttpGetsA400AndUnknownPathsA404) {
   }
   {
     RawClient client(port());
-    ASSERT_TRUE(client.send_raw("GET /etc/passwd HTTP/1.1\r\nHost: x\r\n\r\n"));
+    ASSERT_TRUE(client.send_raw("GET /etc/passwd HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n"));
     const auto head = client.read_head();
     ASSERT_TRUE(head);
     EXPECT_NE(head->find(" 404 "), std::string::npos) << *head;
   }
   {
     RawClient client(port());
-    ASSERT_TRUE(client.send_raw("GET /api/image?stream=%2Fnot_a_stream HTTP/1.1\r\nHost: x\r\n\r\n"));
+    ASSERT_TRUE(client.send_raw("GET /api/image?stream=%2Fnot_a_stream HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n"));
     const auto head = client.read_head();
     ASSERT_TRUE(head);
     EXPECT_NE(head->find(" 404 "), std::string::npos) << *head;
   }
   {
     RawClient client(port());
-    ASSERT_TRUE(client.send_raw("GET /api/image?stream=%ZZ HTTP/1.1\r\nHost: x\r\n\r\n"));
+    ASSERT_TRUE(client.send_raw("GET /api/image?stream=%ZZ HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n"));
     const auto head = client.read_head();
     ASSERT_TRUE(head);
     EXPECT_NE(head->find(" 400 "), std::string::npos) << *head;
@@ -436,6 +484,226 @@ TEST_F(FoxgloveBadInput, AClientThatNeverReadsIsClosedAndOthersKeepGettingFrames
   std::this_thread::sleep_for(5s);
   EXPECT_TRUE(stuck.closed_by_server());
   EXPECT_GT(published_.load(), before) << "the writer stopped publishing";
+}
+
+// Review M1: Foxglove's current apps offer only foxglove.sdk.v1; RFC 6455 lets a client list its
+// subprotocols on several header lines. The answer names the one the client offered.
+TEST_F(FoxgloveBadInput, ASdkClientGetsTheSubprotocolItOfferedAlsoOnASecondHeaderLine) {
+  {
+    RawClient client(port());
+    const auto head = client.handshake_with("Sec-WebSocket-Protocol: foxglove.sdk.v1\r\n");
+    ASSERT_TRUE(head);
+    EXPECT_NE(head->find(" 101 "), std::string::npos) << *head;
+    EXPECT_NE(head->find("Sec-WebSocket-Protocol: foxglove.sdk.v1\r\n"), std::string::npos) << *head;
+    EXPECT_TRUE(client.read_text_with("\"serverInfo\""));
+  }
+  {
+    RawClient client(port());
+    const auto head = client.handshake_with(
+        "Sec-WebSocket-Protocol: chat\r\nSec-WebSocket-Protocol: foxglove.websocket.v1\r\n");
+    ASSERT_TRUE(head);
+    EXPECT_NE(head->find(" 101 "), std::string::npos) << *head;
+    EXPECT_NE(head->find("Sec-WebSocket-Protocol: foxglove.websocket.v1\r\n"), std::string::npos)
+        << *head;
+  }
+  expect_server_still_serves();
+}
+
+// Review M2: WebSockets are not covered by CORS, so the server checks Origin itself; a page of
+// another site gets 403 and a sentence, the server's own page and Foxglove's web app get in.
+TEST_F(FoxgloveBadInput, APageOfAnotherSiteMayNotOpenTheWebSocket) {
+  const std::string offer = "Sec-WebSocket-Protocol: foxglove.websocket.v1\r\n";
+  {
+    RawClient client(port());
+    const auto head = client.handshake_with(offer + "Origin: https://evil.example\r\n");
+    ASSERT_TRUE(head);
+    EXPECT_NE(head->find(" 403 "), std::string::npos) << *head;
+  }
+  {
+    RawClient client(port());  // another local page, on another port, is another site too
+    const auto head = client.handshake_with(offer + "Origin: http://127.0.0.1:1\r\n",
+                                            host_port("127.0.0.1", port()));
+    ASSERT_TRUE(head);
+    EXPECT_NE(head->find(" 403 "), std::string::npos) << *head;
+  }
+  const std::string own = host_port("127.0.0.1", port());
+  for (const std::string& origin : {"http://" + own, std::string("https://app.foxglove.dev")}) {
+    RawClient client(port());
+    const auto head = client.handshake_with(offer + "Origin: " + origin + "\r\n", own);
+    ASSERT_TRUE(head);
+    EXPECT_NE(head->find(" 101 "), std::string::npos) << origin << ": " << *head;
+  }
+  expect_server_still_serves();
+}
+
+// Review M2: DNS rebinding (a name of the attacker's resolving to this machine) is refused by
+// the Host check; IP addresses and localhost are served.
+TEST_F(FoxgloveBadInput, ARequestNamingAnotherHostIsRefused) {
+  {
+    RawClient client(port());
+    const auto head = client.get("/api/streams", host_port("attacker.example", port()));
+    ASSERT_TRUE(head);
+    EXPECT_NE(head->find(" 403 "), std::string::npos) << *head;
+  }
+  for (const std::string& host : {std::string("127.0.0.1"), host_port("localhost", port())}) {
+    RawClient client(port());
+    const auto head = client.get("/api/streams", host);
+    ASSERT_TRUE(head);
+    EXPECT_NE(head->find(" 200 "), std::string::npos) << host << ": " << *head;
+  }
+}
+
+TEST_F(FoxgloveBadInput, AnAllowedOriginOpensTheWebSocketAndItsHostReadsThePage) {
+  sim::foxglove::ServerOptions options;
+  options.allowed_origins = {"http://viewer.example:9000"};
+  auto server = another_server(options);
+  {
+    RawClient client(server.port());
+    const auto head = client.handshake_with(
+        "Sec-WebSocket-Protocol: foxglove.sdk.v1\r\nOrigin: http://viewer.example:9000\r\n",
+        host_port("viewer.example", server.port()));
+    ASSERT_TRUE(head);
+    EXPECT_NE(head->find(" 101 "), std::string::npos) << *head;
+  }
+  RawClient client(server.port());
+  const auto head = client.get("/api/streams", "viewer.example");
+  ASSERT_TRUE(head);
+  EXPECT_NE(head->find(" 200 "), std::string::npos) << *head;
+}
+
+// Review H1: connections beyond --max-connections are answered 503 with a sentence (not left to
+// exhaust the descriptors); the connected client keeps getting frames; a freed place is reused.
+TEST_F(FoxgloveBadInput, ConnectionsBeyondTheLimitGetA503AndTheConnectedAreStillServed) {
+  sim::foxglove::ServerOptions options;
+  options.max_connections = 3;
+  auto server = another_server(options);
+  RawClient viewer(server.port());
+  subscribe(viewer, open_client(viewer));
+  std::optional<RawClient> idle1(std::in_place, server.port());
+  std::optional<RawClient> idle2(std::in_place, server.port());
+  ASSERT_TRUE(idle1->connected() && idle2->connected());
+  {
+    RawClient extra(server.port());
+    const auto head = extra.get("/api/streams");
+    ASSERT_TRUE(head);
+    EXPECT_NE(head->find(" 503 "), std::string::npos) << *head;
+  }
+  EXPECT_TRUE(receives_frame_after(viewer, sim::realtime_ns())) << "the connected client starved";
+  idle1.reset();
+  idle2.reset();
+  // The server notices the closed connections when it reads them; until then it says 503.
+  const auto give_up = std::chrono::steady_clock::now() + kPatience;
+  std::string last;
+  while (std::chrono::steady_clock::now() < give_up) {
+    RawClient next(server.port());
+    last = next.get("/api/streams").value_or("(no answer)");
+    if (last.find(" 200 ") != std::string::npos) break;
+    std::this_thread::sleep_for(50ms);
+  }
+  EXPECT_NE(last.find(" 200 "), std::string::npos) << last;
+}
+
+// Review H1: out of file descriptors, accept() fails at once every time; the server must wait
+// between tries (at most one failure per 100 ms backoff) instead of spinning a core, keep
+// serving the connected client, and accept the waiting connection once descriptors are free.
+TEST_F(FoxgloveBadInput, OutOfDescriptorsTheServerWaitsInsteadOfSpinningAndRecovers) {
+  sim::foxglove::ServerOptions options;
+  options.poll_interval = std::chrono::hours(1);  // the catalog would fail to open regions too
+  auto server = another_server(options);
+  RawClient viewer(server.port());
+  subscribe(viewer, open_client(viewer));
+  ASSERT_TRUE(receives_frame_after(viewer, 0));
+
+  // A client socket made now (it needs a descriptor), connected once the table is full.
+  const int waiting = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  ASSERT_GE(waiting, 0);
+  rlimit saved{};
+  ASSERT_EQ(::getrlimit(RLIMIT_NOFILE, &saved), 0);
+  int highest = waiting;
+  for (int fd = 0; fd < 65536 && fd < static_cast<int>(std::min<rlim_t>(saved.rlim_cur, 65536)); ++fd) {
+    if (::fcntl(fd, F_GETFD) != -1) highest = fd;
+  }
+  rlimit low = saved;
+  low.rlim_cur = static_cast<rlim_t>(highest) + 16;
+  ASSERT_EQ(::setrlimit(RLIMIT_NOFILE, &low), 0);
+  std::vector<int> fillers;
+  for (int fd; (fd = ::dup(0)) >= 0;) fillers.push_back(fd);
+  ASSERT_EQ(errno, EMFILE);
+
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(server.port());
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  const auto full_since = std::chrono::steady_clock::now();
+  const std::int64_t full_since_ns = sim::realtime_ns();
+  ASSERT_EQ(::connect(waiting, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
+  std::this_thread::sleep_for(1s);
+  const std::uint64_t failures = server.accept_failures();
+  const auto full_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+                           std::chrono::steady_clock::now() - full_since)
+                           .count();
+  const bool served_meanwhile = receives_frame_after(viewer, full_since_ns);
+
+  for (const int fd : fillers) ::close(fd);
+  ASSERT_EQ(::setrlimit(RLIMIT_NOFILE, &saved), 0);
+  EXPECT_GE(failures, 1u) << "the descriptor table was never full for the server";
+  EXPECT_LE(failures, static_cast<std::uint64_t>(full_ms / 100 + 2))
+      << "accept() failed " << failures << " times in " << full_ms << " ms: the loop spins";
+  EXPECT_TRUE(served_meanwhile) << "the connected client got no frame while descriptors were out";
+
+  const std::string get = "GET /api/streams HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n";
+  ASSERT_EQ(::send(waiting, get.data(), get.size(), MSG_NOSIGNAL), static_cast<ssize_t>(get.size()));
+  pollfd p{waiting, POLLIN, 0};
+  char answer[16] = {};
+  ASSERT_EQ(::poll(&p, 1, 20'000), 1) << "the waiting connection was never accepted";
+  ASSERT_GT(::recv(waiting, answer, sizeof answer - 1, 0), 0);
+  EXPECT_EQ(std::string(answer).substr(0, 12), "HTTP/1.1 200");
+  ::close(waiting);
+}
+
+// Review L1: a request naming many bad ids earns one status that lists them (not one status per
+// id, which overflowed the 256-text queue of a client that reads everything and closed it).
+TEST_F(FoxgloveBadInput, ARequestWithManyBadIdsGetsOneStatusAndTheConnectionStaysOpen) {
+  RawClient client(port());
+  const std::uint32_t channel = open_client(client);
+  std::string subscriptions, ids;
+  for (int i = 0; i < 300; ++i) {
+    if (i > 0) subscriptions += ',';
+    subscriptions += R"({"id":)";
+    subscriptions += std::to_string(1000 + i);
+    subscriptions += R"(,"channelId":)";
+    subscriptions += std::to_string(500000 + i);
+    subscriptions += '}';
+  }
+  for (int i = 0; i < 1024; ++i) {
+    if (i > 0) ids += ',';
+    ids += std::to_string(90000 + i);
+  }
+  ASSERT_TRUE(client.send_text(R"({"op":"subscribe","subscriptions":[)" + subscriptions + "]}"));
+  const auto subscribed = client.read_text_with("\"status\"");
+  ASSERT_TRUE(subscribed) << "the client was closed";
+  EXPECT_NE(subscribed->find("500000, 500001"), std::string::npos) << *subscribed;
+  EXPECT_NE(subscribed->find("and 284 more"), std::string::npos) << *subscribed;
+  ASSERT_TRUE(client.send_text(R"({"op":"unsubscribe","subscriptionIds":[)" + ids + "]}"));
+  const auto unsubscribed = client.read_text_with("\"status\"");
+  ASSERT_TRUE(unsubscribed) << "the client was closed";
+  EXPECT_NE(unsubscribed->find("and 1008 more"), std::string::npos) << *unsubscribed;
+  // Still open and usable: the next frame of a real subscription arrives.
+  subscribe(client, channel);
+  EXPECT_TRUE(receives_frame_after(client, 0));
+}
+
+// Review L3: a rate below 1e-6 Hz would overflow the interval in nanoseconds (and then send
+// every frame); it is refused with a sentence.
+TEST_F(FoxgloveBadInput, AMaxRateTooSmallToMeanAnythingIsRefused) {
+  for (const double rate : {1e-12, -1.0}) {
+    sim::foxglove::ServerOptions options;
+    options.port = 0;
+    options.max_rate_hz = rate;
+    const auto server = sim::foxglove::Server::start(options);
+    ASSERT_FALSE(server) << rate;
+    EXPECT_NE(server.error().message.find("--max-rate"), std::string::npos);
+  }
 }
 
 }  // namespace

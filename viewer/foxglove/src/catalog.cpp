@@ -61,13 +61,14 @@ void Catalog::poll() {
   for (const auto& name : names) seen.emplace_back(name, inspect(name));
   const std::int64_t now = monotonic_ns();
 
-  std::vector<AdvertisedStream> added;
-  std::vector<std::uint32_t> removed;
+  CatalogChanges changes;
   {
     std::lock_guard lock(mutex_);
     for (auto it = streams_.begin(); it != streams_.end();) {
       if (std::find(names.begin(), names.end(), it->first) == names.end()) {
-        if (it->second.entry.channel) removed.push_back(it->second.entry.channel->id);
+        for (const auto& c : {it->second.entry.channel, it->second.entry.calibration_channel}) {
+          if (c) changes.removed.push_back(c->id);
+        }
         it = streams_.erase(it);
       } else {
         ++it;
@@ -97,30 +98,119 @@ void Catalog::poll() {
       }
       if (!s.writer_alive) t.entry.rate_hz = 0;
       t.entry.age_ns = s.latest_publish_ns == 0 ? -1 : now - s.latest_publish_ns;
-
-      const bool changed = !t.entry.channel || !(t.layout == s.layout) || t.capacity != s.capacity;
-      if (changed) {
-        if (t.entry.channel) removed.push_back(t.entry.channel->id);
-        t.entry.channel.reset();
-        t.layout = s.layout;
-        t.capacity = s.capacity;
-        if (auto schema = schema_for(s.layout, encode_)) {
-          Channel c;
-          c.id = next_channel_id_++;
-          c.topic = name;
-          c.encoding = schema->message_encoding;
-          c.schema_name = schema->name;
-          c.schema_encoding = schema->encoding;
-          c.schema = schema->text;
-          t.entry.channel = c;
-          added.push_back({std::move(c), s.layout});
-        }
-      }
+      track(t, s, changes);
       t.entry.status = s;
     }
+    track_transforms(changes);
   }
-  if ((!added.empty() || !removed.empty()) && on_change_) on_change_(added, removed);
+  if (!changes.empty() && on_change_) on_change_(changes);
   if (after_poll_) after_poll_();
+}
+
+Channel Catalog::new_channel(std::string topic, const MessageSchema& schema) {
+  Channel c;
+  c.id = next_channel_id_++;
+  c.topic = std::move(topic);
+  c.encoding = schema.message_encoding;
+  c.schema_name = schema.name;
+  c.schema_encoding = schema.encoding;
+  c.schema = schema.text;
+  return c;
+}
+
+// The stream's frame channel (a new id when its layout changes, as Foxglove ids must keep their
+// schema) and its calibration channel.
+void Catalog::track(Tracked& t, const StreamStatus& s, CatalogChanges& changes) {
+  const bool changed = !t.entry.channel || !(t.layout == s.layout) || t.capacity != s.capacity;
+  if (changed) {
+    if (t.entry.channel) changes.removed.push_back(t.entry.channel->id);
+    if (t.entry.calibration_channel) changes.removed.push_back(t.entry.calibration_channel->id);
+    t.entry.channel.reset();
+    t.entry.calibration_channel.reset();
+    t.sensor.reset();
+    t.layout = s.layout;
+    t.capacity = s.capacity;
+    if (auto schema = schema_for(s.layout, encode_)) {
+      std::string topic = t.entry.name;
+      if (s.layout.kind == LayoutKind::image) {
+        topic = image_topic(t.entry.name, schema->name != "sensor_msgs/msg/Image");
+      }
+      t.entry.channel = new_channel(std::move(topic), *schema);
+      changes.added.push_back({*t.entry.channel, t.entry.name, s.layout, nullptr});
+    }
+  }
+  if (!t.entry.channel) return;
+  if (s.sensor == t.sensor) return;  // after a layout change t.sensor is empty
+  track_calibration(t, s.sensor, changes);
+  t.sensor = s.sensor;
+}
+
+void Catalog::track_calibration(Tracked& t, const std::optional<SensorInfo>& sensor,
+                                CatalogChanges& changes) {
+  const bool calibrated =
+      sensor && sensor->calibration && t.layout.kind == LayoutKind::image;
+  if (!calibrated) {
+    if (t.entry.calibration_channel) changes.removed.push_back(t.entry.calibration_channel->id);
+    t.entry.calibration_channel.reset();
+    return;
+  }
+  const bool existed = t.entry.calibration_channel.has_value();
+  if (existed && t.sensor && t.sensor->calibration == sensor->calibration &&
+      frame_of(t.entry.name, t.sensor) == frame_of(t.entry.name, sensor)) {
+    return;  // only the mounting or the identity changed
+  }
+  if (!existed) {
+    t.entry.calibration_channel =
+        new_channel(calibration_topic(t.entry.name),
+                    {"cdr", std::string(kCalibrationSchemaName), "ros2msg",
+                     std::string(calibration_schema())});
+  }
+  auto message = std::make_shared<Message>();
+  message->channel_id = t.entry.calibration_channel->id;
+  message->timestamp_ns = static_cast<std::uint64_t>(realtime_ns());
+  message->payload = encode_calibration(*sensor->calibration, frame_of(t.entry.name, sensor),
+                                        static_cast<std::int64_t>(message->timestamp_ns));
+  if (existed) {
+    changes.updated.push_back(std::move(message));
+  } else {
+    changes.added.push_back(
+        {*t.entry.calibration_channel, t.entry.name, t.layout, std::move(message)});
+  }
+}
+
+// One latched message with every mounting the streams know, changed when any of them changes.
+void Catalog::track_transforms(CatalogChanges& changes) {
+  std::vector<FrameTransform> transforms;
+  for (const auto& [name, t] : streams_) {
+    if (!t.sensor || !t.sensor->mounting) continue;
+    FrameTransform f{t.sensor->parent_frame, frame_of(name, t.sensor), *t.sensor->mounting};
+    const bool known = std::any_of(transforms.begin(), transforms.end(),
+                                   [&](const FrameTransform& o) { return o.child == f.child; });
+    if (!known) transforms.push_back(std::move(f));
+  }
+  if (transforms == transforms_) return;
+  transforms_ = transforms;
+  if (transforms.empty()) {
+    changes.removed.push_back(transforms_channel_->id);
+    transforms_channel_.reset();
+    return;
+  }
+  const bool added = !transforms_channel_;
+  if (added) {
+    transforms_channel_ = new_channel(std::string(kTransformsTopic),
+                                      {"cdr", std::string(kTransformsSchemaName), "ros2msg",
+                                       std::string(transforms_schema())});
+  }
+  auto message = std::make_shared<Message>();
+  message->channel_id = transforms_channel_->id;
+  message->timestamp_ns = static_cast<std::uint64_t>(realtime_ns());
+  message->payload =
+      encode_transforms(transforms, static_cast<std::int64_t>(message->timestamp_ns));
+  if (added) {
+    changes.added.push_back({*transforms_channel_, "", Layout{}, std::move(message)});
+  } else {
+    changes.updated.push_back(std::move(message));
+  }
 }
 
 std::vector<StreamEntry> Catalog::snapshot() const {
@@ -129,6 +219,11 @@ std::vector<StreamEntry> Catalog::snapshot() const {
   out.reserve(streams_.size());
   for (const auto& [name, t] : streams_) out.push_back(t.entry);
   return out;
+}
+
+std::vector<FrameTransform> Catalog::mountings() const {
+  std::lock_guard lock(mutex_);
+  return transforms_;
 }
 
 std::optional<StreamEntry> Catalog::find(const std::string& name) const {

@@ -17,6 +17,8 @@
 #include <vector>
 
 #include "encoder.hpp"
+#include "foxglove_messages.hpp"
+#include "pump.hpp"
 #include "sim/foxglove/protocol.hpp"
 #include "sim/reader.hpp"
 
@@ -29,19 +31,30 @@ struct StreamEntry {
   double rate_hz = 0;                  // frames per second over the last poll window
   std::int64_t age_ns = -1;            // since the newest frame was published; -1 before any
   std::optional<Channel> channel;      // nullopt for streams Foxglove cannot show
+  std::optional<Channel> calibration_channel;  // calibrated cameras only
 };
 
-// A channel and the layout its messages are encoded from.
+// A channel and what its messages are made from: the frames of a stream of `layout` (a pump
+// encodes them), or, for a latched channel (calibration, transforms), its one current message.
 struct AdvertisedStream {
   Channel channel;
+  std::string stream;  // the SIM stream's name (the channel's topic may add a namespace)
   Layout layout{};
+  std::shared_ptr<const Message> latched;
+};
+
+// What one poll found changed.
+struct CatalogChanges {
+  std::vector<AdvertisedStream> added;
+  std::vector<std::uint32_t> removed;
+  std::vector<std::shared_ptr<const Message>> updated;  // new messages of latched channels
+  bool empty() const { return added.empty() && removed.empty() && updated.empty(); }
 };
 
 class Catalog {
  public:
-  // Called on the catalog's thread with the channels that appeared and the ids that went away.
-  using ChangeHandler = std::function<void(const std::vector<AdvertisedStream>& added,
-                                           const std::vector<std::uint32_t>& removed)>;
+  // Called on the catalog's thread with what changed.
+  using ChangeHandler = std::function<void(const CatalogChanges& changes)>;
 
   Catalog(std::vector<std::string> only, EncodeOptions encode, std::chrono::milliseconds period,
           ChangeHandler on_change, std::function<void()> after_poll = {});
@@ -56,16 +69,24 @@ class Catalog {
 
   std::vector<StreamEntry> snapshot() const;
   std::optional<StreamEntry> find(const std::string& name) const;
+  // Every mounting the streams describe (each sensor's frame in its parent), as last polled.
+  std::vector<FrameTransform> mountings() const;
 
  private:
   struct Tracked {
     StreamEntry entry;
+    std::optional<SensorInfo> sensor;  // as the last poll read it
     Layout layout{};
     std::uint64_t capacity = 0;
     std::uint64_t window_frames = 0;
     std::int64_t window_start_ns = 0;
   };
   void run();
+  void track(Tracked& t, const StreamStatus& s, CatalogChanges& changes);
+  void track_calibration(Tracked& t, const std::optional<SensorInfo>& sensor,
+                         CatalogChanges& changes);
+  void track_transforms(CatalogChanges& changes);
+  Channel new_channel(std::string topic, const MessageSchema& schema);
 
   const std::vector<std::string> only_;
   const EncodeOptions encode_;
@@ -76,6 +97,8 @@ class Catalog {
   mutable std::mutex mutex_;
   std::map<std::string, Tracked> streams_;
   std::uint32_t next_channel_id_ = 1;
+  std::optional<Channel> transforms_channel_;
+  std::vector<FrameTransform> transforms_;
 
   std::mutex poll_mutex_;  // one poll at a time
   std::mutex wake_mutex_;

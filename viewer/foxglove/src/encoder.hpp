@@ -42,6 +42,7 @@ class FrameEncoder {
   FrameEncoder(const Layout& layout, const EncodeOptions& options, std::string frame_id);
 
   const Layout& layout() const noexcept { return layout_; }
+  void set_frame_id(std::string frame_id) { frame_id_ = std::move(frame_id); }
   // Encodes one frame into `out`, reading `frame` (which may be a borrowed slot) once.
   std::optional<Error> encode(std::span<const std::byte> frame, const FrameInfo& info,
                               std::vector<std::byte>& out);

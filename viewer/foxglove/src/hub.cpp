@@ -26,21 +26,21 @@ void Hub::leave(const Client* client) {
   for (auto& [id, pump] : pumps_) pump->remove(client);
 }
 
-std::optional<std::string> Hub::subscribe(const std::shared_ptr<Client>& client,
-                                          std::uint32_t channel_id) {
+bool Hub::subscribe(const std::shared_ptr<Client>& client, std::uint32_t channel_id) {
   std::lock_guard lock(mutex_);
   const auto channel = channels_.find(channel_id);
-  if (channel == channels_.end()) {
-    return "channel " + std::to_string(channel_id) +
-           " is not advertised; subscribe to a channel id from an advertise message.";
+  if (channel == channels_.end()) return false;
+  if (channel->second.latched) {
+    client->offer(channel->second.latched);  // what a late subscriber must still get
+    return true;
   }
   auto& pump = pumps_[channel_id];
   if (!pump) {
-    pump = std::make_unique<Pump>(channel->second.channel.topic, channel_id,
+    pump = std::make_unique<Pump>(channel->second.stream, channel_id,
                                   channel->second.layout, pump_options_);
   }
   pump->add(client);
-  return std::nullopt;
+  return true;
 }
 
 void Hub::unsubscribe(const Client* client, std::uint32_t channel_id) {
@@ -62,8 +62,9 @@ void Hub::reap() {
   // `finished` is declared before the lock: the pumps join their threads after it is released.
 }
 
-void Hub::update(const std::vector<AdvertisedStream>& added,
-                 const std::vector<std::uint32_t>& removed) {
+void Hub::update(const CatalogChanges& changes) {
+  const auto& added = changes.added;
+  const auto& removed = changes.removed;
   std::vector<std::unique_ptr<Pump>> finished;
   std::lock_guard lock(mutex_);
   std::vector<std::shared_ptr<Client>> clients;
@@ -92,6 +93,13 @@ void Hub::update(const std::vector<AdvertisedStream>& added,
     }
     const std::string text = advertise_json(channels);
     for (const auto& c : clients) c->send_text(text);
+  }
+  // Clients that do not subscribe to the channel ignore the offer.
+  for (const auto& message : changes.updated) {
+    if (auto it = channels_.find(message->channel_id); it != channels_.end()) {
+      it->second.latched = message;
+    }
+    for (const auto& c : clients) c->offer(message);
   }
 }
 

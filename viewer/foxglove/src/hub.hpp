@@ -36,9 +36,9 @@ class Hub {
   // The client is gone: its subscriptions end.
   void leave(const Client* client);
 
-  // Starts the channel's messages flowing to the client; the error is one sentence.
-  std::optional<std::string> subscribe(const std::shared_ptr<Client>& client,
-                                       std::uint32_t channel_id);
+  // Starts the channel's messages flowing to the client (a latched channel's current message at
+  // once); false when the channel is not advertised.
+  bool subscribe(const std::shared_ptr<Client>& client, std::uint32_t channel_id);
   void unsubscribe(const Client* client, std::uint32_t channel_id);
 
   // Ends the pumps nobody subscribes to any more. Called from the catalog's thread, not from a
@@ -47,7 +47,8 @@ class Hub {
   void reap();
 
   // From the catalog.
-  void update(const std::vector<AdvertisedStream>& added, const std::vector<std::uint32_t>& removed);
+  // A latched channel's new message goes to every client subscribed to it.
+  void update(const CatalogChanges& changes);
 
   // Ends every pump (before the clients' executor goes away).
   void stop();

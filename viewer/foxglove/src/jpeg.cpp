@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "jpeg.hpp"
 
+#include <cstring>
 #include <string>
 #include <utility>
 
@@ -28,6 +29,12 @@ std::optional<Error> ImageToJpeg::encode(const ImageLayout& layout,
     return std::nullopt;
   }
   if (encodes_directly(layout.format)) return jpeg_.encode(layout, frame, out);
+  if (auto error = convert(layout, frame)) return error;
+  return jpeg_.encode(decoder_->output_layout(), converted_, out);
+}
+
+std::optional<Error> ImageToJpeg::convert(const ImageLayout& layout,
+                                          std::span<const std::byte> frame) {
   if (!decoder_ || !(decoder_layout_ == layout)) {
     auto decoder = imaging::FrameDecoder::create(layout, imaging::OutputFormat::bgr8);
     if (!decoder) {
@@ -45,7 +52,36 @@ std::optional<Error> ImageToJpeg::encode(const ImageLayout& layout,
                                                   imaging::to_string(decoded.status) +
                                                   "); nothing was sent."};
   }
-  return jpeg_.encode(decoder_->output_layout(), converted_, out);
+  return std::nullopt;
+}
+
+std::optional<Error> ImageToJpeg::to_bgr(const ImageLayout& layout,
+                                         std::span<const std::byte> frame,
+                                         std::vector<std::uint8_t>& bgr) {
+  const std::size_t row = std::size_t{layout.width} * 3;
+  bgr.resize(row * layout.height);
+  if (layout.format == PixelFormat::bgr8) {
+    if (frame.size() < layout.frame_bytes() || layout.stride < row) {
+      return Error{ErrorCode::invalid_argument, "the frame is shorter than its layout says."};
+    }
+    for (std::uint32_t y = 0; y < layout.height; ++y) {
+      std::memcpy(bgr.data() + y * row, frame.data() + std::size_t{y} * layout.stride, row);
+    }
+    return std::nullopt;
+  }
+  if (auto error = convert(layout, frame)) return error;
+  const ImageLayout& out = decoder_->output_layout();
+  for (std::uint32_t y = 0; y < layout.height; ++y) {
+    std::memcpy(bgr.data() + y * row, converted_.data() + std::size_t{y} * out.stride, row);
+  }
+  return std::nullopt;
+}
+
+std::optional<Error> ImageToJpeg::encode_bgr(std::uint32_t width, std::uint32_t height,
+                                             std::span<const std::uint8_t> bgr,
+                                             std::vector<std::byte>& out) {
+  return jpeg_.encode(ImageLayout::packed(width, height, PixelFormat::bgr8), std::as_bytes(bgr),
+                      out);
 }
 
 std::optional<Error> ImageToJpeg::encode_rgb(std::uint32_t width, std::uint32_t height,

@@ -28,12 +28,20 @@ class ImageToJpeg {
   // here converts, a short frame).
   std::optional<Error> encode(const ImageLayout& layout, std::span<const std::byte> frame,
                               std::vector<std::byte>& out);
+  // The frame as tightly packed 8-bit BGR (to draw on); the error is one sentence.
+  std::optional<Error> to_bgr(const ImageLayout& layout, std::span<const std::byte> frame,
+                              std::vector<std::uint8_t>& bgr);
+  // Compresses tightly packed 8-bit BGR pixels (a picture drawn on).
+  std::optional<Error> encode_bgr(std::uint32_t width, std::uint32_t height,
+                                  std::span<const std::uint8_t> bgr, std::vector<std::byte>& out);
   // Compresses tightly packed 8-bit RGB pixels (the top-down view).
   std::optional<Error> encode_rgb(std::uint32_t width, std::uint32_t height,
                                   std::span<const std::uint8_t> rgb, std::vector<std::byte>& out);
 
  private:
   explicit ImageToJpeg(imaging::JpegEncoder jpeg) : jpeg_(std::move(jpeg)) {}
+  // Converts a frame of a format the encoder does not take to BGR (in converted_).
+  std::optional<Error> convert(const ImageLayout& layout, std::span<const std::byte> frame);
   imaging::JpegEncoder jpeg_;
   // Conversion to BGR for formats the encoder does not take, kept while the layout stays.
   std::optional<imaging::FrameDecoder> decoder_;

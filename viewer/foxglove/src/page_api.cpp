@@ -3,6 +3,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "projection.hpp"
+
 namespace sim::foxglove {
 namespace {
 
@@ -69,7 +71,34 @@ std::optional<Target> parse_target(std::string_view target) {
   return out;
 }
 
-std::string streams_json(const std::vector<StreamEntry>& streams) {
+namespace {
+
+void add_sensor(nlohmann::json& s, const StreamEntry& e, const std::vector<StreamEntry>& streams,
+                const std::vector<FrameTransform>& mountings) {
+  const StreamStatus& st = *e.status;
+  if (!st.sensor_problem.empty()) s["sensor_problem"] = st.sensor_problem;
+  const std::optional<SensorInfo>& sensor = st.sensor;
+  s["frame_id"] = frame_of(e.name, sensor);
+  if (!sensor) return;
+  s["parent_frame"] = sensor->parent_frame;
+  s["mounted"] = sensor->mounting.has_value();
+  if (!sensor->calibration || st.layout.kind != LayoutKind::image) return;
+  s["calibration"] = summary(*sensor->calibration);
+  if (e.calibration_channel) s["calibration_topic"] = e.calibration_channel->topic;
+  auto partners = nlohmann::json::array();
+  for (const StreamEntry& other : streams) {
+    if (!other.status || other.status->layout.kind != LayoutKind::points) continue;
+    if (pose_between(mountings, frame_of(other.name, other.status->sensor), s["frame_id"].get<std::string>())) {
+      partners.push_back(other.name);
+    }
+  }
+  s["projectable"] = std::move(partners);
+}
+
+}  // namespace
+
+std::string streams_json(const std::vector<StreamEntry>& streams,
+                         const std::vector<FrameTransform>& mountings) {
   using nlohmann::json;
   json list = json::array();
   for (const StreamEntry& e : streams) {
@@ -97,8 +126,10 @@ std::string streams_json(const std::vector<StreamEntry>& streams) {
     }
     if (e.channel) {
       s["channel_id"] = e.channel->id;
+      s["topic"] = e.channel->topic;
       s["schema"] = e.channel->schema_name;
     }
+    add_sensor(s, e, streams, mountings);
     list.push_back(std::move(s));
   }
   return list.dump(-1, ' ', false, json::error_handler_t::replace);

@@ -22,8 +22,11 @@ struct Target {
 // nullopt for a target that is not an origin-form path or has broken percent-encoding.
 std::optional<Target> parse_target(std::string_view target);
 
-// The page's stream table: one object per stream with its health and how it is shown.
-std::string streams_json(const std::vector<StreamEntry>& streams);
+// The page's stream table: one object per stream with its health, how it is shown, its sensor's
+// frame and calibration, and for a calibrated camera the LiDAR streams whose points can be drawn
+// into its image (a chain of `mountings` joins their frames).
+std::string streams_json(const std::vector<StreamEntry>& streams,
+                         const std::vector<FrameTransform>& mountings);
 
 // The page itself (page.html, embedded at build time).
 extern const char* const kPageHtml;

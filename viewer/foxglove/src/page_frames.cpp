@@ -43,16 +43,22 @@ std::optional<Error> PageFrames::refresh(Entry& e, const std::string& stream) co
   return std::nullopt;
 }
 
+std::optional<Error> PageFrames::newest(Entry& e, const std::string& stream,
+                                         LayoutKind kind) const {
+  if (auto error = refresh(e, stream)) return error;
+  if (!e.have_frame) return Error{ErrorCode::not_found, stream + " has no frame yet."};
+  if (e.info.layout.kind != kind) {
+    return Error{ErrorCode::invalid_argument,
+                 stream + (kind == LayoutKind::image ? " does not hold images."
+                                                     : " does not hold points.")};
+  }
+  return std::nullopt;
+}
+
 Expected<Picture> PageFrames::image(const std::string& stream) {
   const auto e = entry(stream);
   std::lock_guard lock(e->mutex);
-  if (auto error = refresh(*e, stream)) return *error;
-  if (!e->have_frame) {
-    return Error{ErrorCode::not_found, "the stream has no frame yet."};
-  }
-  if (e->info.layout.kind != LayoutKind::image) {
-    return Error{ErrorCode::invalid_argument, "the stream does not hold images."};
-  }
+  if (auto error = newest(*e, stream, LayoutKind::image)) return *error;
   const std::string key = "image " + std::to_string(e->info.seq);
   if (e->picture.jpeg && e->picture_key == key) return e->picture;
   if (!e->jpeg) {
@@ -73,13 +79,7 @@ Expected<Picture> PageFrames::image(const std::string& stream) {
 Expected<Picture> PageFrames::top_down(const std::string& stream, const TopDownOptions& options) {
   const auto e = entry(stream);
   std::lock_guard lock(e->mutex);
-  if (auto error = refresh(*e, stream)) return *error;
-  if (!e->have_frame) {
-    return Error{ErrorCode::not_found, "the stream has no frame yet."};
-  }
-  if (e->info.layout.kind != LayoutKind::points) {
-    return Error{ErrorCode::invalid_argument, "the stream does not hold points."};
-  }
+  if (auto error = newest(*e, stream, LayoutKind::points)) return *error;
   const std::string key = "top " + std::to_string(e->info.seq) + " " +
                           std::to_string(static_cast<int>(options.color)) + " " +
                           std::to_string(options.range_m) + " " + std::to_string(options.size_px);
@@ -96,14 +96,63 @@ Expected<Picture> PageFrames::top_down(const std::string& stream, const TopDownO
   if (auto error = e->jpeg->encode_rgb(raster.width, raster.height, raster.rgb, *out)) {
     return *error;
   }
-  char caption[160];
+  // The colour scale in words (blue → red), since the picture has no legend of its own.
+  char caption[240];
+  const bool by_height = options.color == ColorBy::height || e->info.layout.points.type == PointType::xyz32;
   std::snprintf(caption, sizeof caption,
-                "%llu points, view %.0f m each way, rings every %.0f m, frame %llu",
+                "%llu points, view %.0f m each way, rings every %.0f m, frame %llu; colour: %s "
+                "%.1f%s (blue) to %.1f%s (red)",
                 static_cast<unsigned long long>(raster.points_drawn), raster.range_m,
-                raster.ring_step_m, static_cast<unsigned long long>(e->info.seq));
+                raster.ring_step_m, static_cast<unsigned long long>(e->info.seq),
+                by_height ? "height" : "intensity", raster.colour_low, by_height ? " m" : "",
+                raster.colour_high, by_height ? " m" : "");
   e->picture = {out, caption};
   e->picture_key = key;
   return e->picture;
+}
+
+Expected<Picture> PageFrames::projection(const std::string& camera, const std::string& lidar,
+                                         const Pose& lidar_to_camera,
+                                         const CameraCalibration& calibration) {
+  const auto c = entry(camera);
+  const auto l = entry(lidar);
+  std::scoped_lock lock(c->mutex, l->mutex);  // both, in an order that cannot deadlock
+  if (auto error = newest(*c, camera, LayoutKind::image)) return *error;
+  if (auto error = newest(*l, lidar, LayoutKind::points)) return *error;
+  char key[320];
+  std::snprintf(key, sizeof key, "projection %s %llu %llu %g %g %g %g %g %g %g %g %g",
+                lidar.c_str(), static_cast<unsigned long long>(c->info.seq),
+                static_cast<unsigned long long>(l->info.seq), lidar_to_camera.translation[0],
+                lidar_to_camera.translation[1], lidar_to_camera.translation[2],
+                lidar_to_camera.rotation[0], lidar_to_camera.rotation[1],
+                lidar_to_camera.rotation[2], lidar_to_camera.rotation[3], calibration.k[0],
+                calibration.k[2]);
+  if (c->picture.jpeg && c->picture_key == key) return c->picture;
+  if (!c->jpeg) {
+    auto jpeg = ImageToJpeg::create(quality_);
+    if (!jpeg) return jpeg.error();
+    c->jpeg.emplace(std::move(jpeg.value()));
+  }
+  const ImageLayout& image = c->info.layout.image;
+  if (auto error = c->jpeg->to_bgr(image, std::span(c->frame.data(), c->info.size), c->bgr)) {
+    return *error;
+  }
+  const ProjectionResult drawn = draw_projected_points(
+      l->info.layout.points, std::span<const std::byte>(l->frame.data(), l->info.size),
+      lidar_to_camera, calibration, image.width, image.height, c->bgr);
+  auto out = std::make_shared<std::vector<std::byte>>();
+  if (auto error = c->jpeg->encode_bgr(image.width, image.height, c->bgr, *out)) return *error;
+  char caption[320];
+  std::snprintf(caption, sizeof caption,
+                "%llu of %llu points of %s in the picture (frames %llu and %llu); colour: "
+                "distance from the camera %.1f m (blue) to %.1f m (red)",
+                static_cast<unsigned long long>(drawn.projected),
+                static_cast<unsigned long long>(drawn.points), lidar.c_str(),
+                static_cast<unsigned long long>(c->info.seq),
+                static_cast<unsigned long long>(l->info.seq), drawn.nearest_m, drawn.farthest_m);
+  c->picture = {out, caption};
+  c->picture_key = key;
+  return c->picture;
 }
 
 }  // namespace sim::foxglove

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "jpeg.hpp"
+#include "projection.hpp"
 #include "sim/reader.hpp"
 #include "top_down.hpp"
 
@@ -35,6 +36,10 @@ class PageFrames {
   // The error is one sentence (no frame yet, not an image stream, …).
   Expected<Picture> image(const std::string& stream);
   Expected<Picture> top_down(const std::string& stream, const TopDownOptions& options);
+  // The newest frame of `lidar` drawn into the newest image of `camera`: `lidar_to_camera` and
+  // `calibration` come from the streams' descriptions.
+  Expected<Picture> projection(const std::string& camera, const std::string& lidar,
+                               const Pose& lidar_to_camera, const CameraCalibration& calibration);
   // Closes the readers of streams that are not in `names` any more.
   void keep_only(const std::set<std::string>& names);
 
@@ -48,10 +53,13 @@ class PageFrames {
     std::optional<ImageToJpeg> jpeg;
     std::string picture_key;  // what `picture` shows: seq and options
     Picture picture;
+    std::vector<std::uint8_t> bgr;  // the image drawn on (projections)
   };
   std::shared_ptr<Entry> entry(const std::string& stream);
   // Copies the newest frame into the entry, if there is a newer one; the error is one sentence.
   std::optional<Error> refresh(Entry& e, const std::string& stream) const;
+  // Refreshes the entry and checks it holds a frame of `kind`; the error is one sentence.
+  std::optional<Error> newest(Entry& e, const std::string& stream, LayoutKind kind) const;
 
   const int quality_;
   const Trust trust_;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "foxglove_messages.hpp"
 #include "sim/clock.hpp"
 
 namespace sim::foxglove {
@@ -20,10 +21,6 @@ void sleep_unless(const std::atomic<bool>& stopping, std::chrono::nanoseconds to
     std::this_thread::sleep_for(std::min<std::chrono::nanoseconds>(
         kWaitSlice, until - std::chrono::steady_clock::now()));
   }
-}
-
-std::string frame_id_of(const std::string& stream) {
-  return stream.empty() || stream.front() != '/' ? stream : stream.substr(1);
 }
 
 }  // namespace
@@ -73,8 +70,9 @@ void Pump::deliver(const std::shared_ptr<const Message>& message) {
 
 void Pump::run() {
   std::optional<Reader> reader;
-  FrameEncoder encoder(layout_, options_.encode, frame_id_of(stream_));
-  std::vector<std::byte> scratch;
+  FrameEncoder encoder(layout_, options_.encode, frame_of(stream_, std::nullopt));
+  std::uint64_t sensor_generation = 0;  // of the description `encoder` has the frame id from
+  // Server::start refuses rates under kMinRateHz, whose interval would overflow.
   const auto min_interval =
       options_.max_rate_hz > 0 ? std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 / options_.max_rate_hz))
                                : std::chrono::nanoseconds(0);
@@ -100,6 +98,13 @@ void Pump::run() {
     if (frame.status() != ReadStatus::new_frame) continue;
     // A stream recreated with another layout is a new channel; this pump only waits to end.
     if (!(frame.info().layout == layout_)) continue;
+    // The writer described its sensor anew (or first): messages carry the sensor's frame, the
+    // one its calibration and mounting name. Read only when the generation changes.
+    if (frame.info().sensor_generation != sensor_generation) {
+      sensor_generation = frame.info().sensor_generation;
+      auto sensor = reader->sensor_info();
+      encoder.set_frame_id(frame_of(stream_, sensor ? *sensor : std::nullopt));
+    }
 
     auto message = std::make_shared<Message>();
     message->channel_id = channel_id_;

@@ -8,11 +8,16 @@
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 #include <boost/beast/websocket.hpp>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <atomic>
 #include <cstdio>
 #include <random>
 #include <set>
 #include <thread>
 
+#include "access.hpp"
 #include "catalog.hpp"
 #include "hub.hpp"
 #include "page_api.hpp"
@@ -30,20 +35,36 @@ using namespace std::chrono_literals;
 
 namespace {
 
-// Whether the client's Sec-WebSocket-Protocol list names ours.
-bool offers_subprotocol(std::string_view list) {
-  while (!list.empty()) {
-    const auto comma = list.find(',');
-    std::string_view item = list.substr(0, comma);
-    list = comma == std::string_view::npos ? std::string_view{} : list.substr(comma + 1);
-    while (!item.empty() && (item.front() == ' ' || item.front() == '\t')) item.remove_prefix(1);
-    while (!item.empty() && (item.back() == ' ' || item.back() == '\t')) item.remove_suffix(1);
-    if (item == kSubprotocol) return true;
-  }
-  return false;
+std::string_view view(beast::string_view text) { return {text.data(), text.size()}; }
+
+// Every Sec-WebSocket-Protocol line of the request (RFC 6455 lets a client send several).
+std::vector<std::string_view> subprotocol_lines(const http::request<http::string_body>& request) {
+  std::vector<std::string_view> lines;
+  const auto [first, last] = request.equal_range(http::field::sec_websocket_protocol);
+  for (auto it = first; it != last; ++it) lines.push_back(view(it->value()));
+  return lines;
 }
 
-std::string_view view(beast::string_view text) { return {text.data(), text.size()}; }
+std::string machine_name() {
+  char name[256] = {};
+  return ::gethostname(name, sizeof name - 1) == 0 ? std::string(name) : std::string();
+}
+
+// Descriptors kept free for what is not a connection: SIM regions of the pumps and the page,
+// the listening socket, the standard streams.
+constexpr rlim_t kReservedDescriptors = 64;
+// Connections over the limit that still get a 503 sentence; beyond them they are closed at once.
+constexpr unsigned kRefusalSlots = 32;
+
+// The connection limit the process can keep: the option, lowered to what RLIMIT_NOFILE leaves.
+unsigned connection_limit(unsigned wanted) {
+  rlimit limit{};
+  if (::getrlimit(RLIMIT_NOFILE, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) return wanted;
+  const rlim_t usable = limit.rlim_cur > kReservedDescriptors + kRefusalSlots + 1
+                            ? limit.rlim_cur - kReservedDescriptors - kRefusalSlots
+                            : 1;
+  return static_cast<unsigned>(std::min<rlim_t>(std::max(wanted, 1u), usable));
+}
 
 std::string random_session_id() {
   std::random_device device;
@@ -60,9 +81,12 @@ struct Server::Impl {
         hub(PumpOptions{encode_options(o), o.max_rate_hz, o.trust}),
         frames(o.jpeg_quality, o.trust),
         catalog(o.streams, encode_options(o), o.poll_interval,
-                [this](const auto& added, const auto& removed) { hub.update(added, removed); },
+                [this](const CatalogChanges& changes) { hub.update(changes); },
                 [this] { after_poll(); }),
-        acceptor(ioc) {
+        access(o.allowed_origins, machine_name()),
+        acceptor(ioc),
+        accept_backoff(ioc),
+        max_connections(connection_limit(o.max_connections)) {
     session.server_name = o.name;
     session.session_id = random_session_id();
     session.max_rate_hz = o.max_rate_hz;
@@ -81,16 +105,28 @@ struct Server::Impl {
   }
 
   void accept();
+  void admit(tcp::socket socket);
   void stop();
+
+  // Counts a connection while it lives (an HTTP or WebSocket session holds it).
+  std::shared_ptr<void> count_connection() {
+    ++connections;
+    return std::shared_ptr<void>(nullptr, [this](void*) { --connections; });
+  }
 
   ServerOptions options;
   SessionOptions session;
   Hub hub;
   PageFrames frames;
   Catalog catalog;
+  AccessPolicy access;
   // Declared after the hub: destroyed first, so sessions never outlive the hub they refer to.
   net::io_context ioc;
   tcp::acceptor acceptor;
+  net::steady_timer accept_backoff;
+  const unsigned max_connections;
+  std::atomic<unsigned> connections{0};
+  std::atomic<std::uint64_t> accept_failures{0};
   std::vector<std::thread> threads;
   bool stopped = false;
 };
@@ -99,14 +135,19 @@ namespace {
 
 class HttpSession : public std::enable_shared_from_this<HttpSession> {
  public:
-  HttpSession(tcp::socket&& socket, Server::Impl& server)
-      : stream_(std::move(socket)), server_(server) {}
+  // `refuse`: the server is at its connection limit; the request is answered with 503.
+  HttpSession(tcp::socket&& socket, Server::Impl& server, std::shared_ptr<void> connection,
+              bool refuse)
+      : stream_(std::move(socket)),
+        server_(server),
+        connection_(std::move(connection)),
+        refuse_(refuse) {}
 
   void read() {
     parser_.emplace();
     parser_->header_limit(16 * 1024);
     parser_->body_limit(16 * 1024);
-    stream_.expires_after(30s);  // a client that sends nothing is dropped
+    stream_.expires_after(refuse_ ? 5s : 30s);  // a client that sends nothing is dropped
     http::async_read(stream_, buffer_, *parser_,
                      [self = shared_from_this()](beast::error_code ec, std::size_t) {
                        self->on_read(ec);
@@ -126,18 +167,37 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
       return shut();
     }
     auto request = parser_->release();
-    if (websocket::is_upgrade(request)) {
-      if (!offers_subprotocol(view(request[http::field::sec_websocket_protocol]))) {
-        return reply_error(http::status::bad_request,
-                           "This server speaks the Foxglove WebSocket protocol: connect with the "
-                           "subprotocol foxglove.websocket.v1 (Foxglove or Lichtblick does).",
-                           request.version(), false);
-      }
-      std::make_shared<WsSession>(std::move(stream_), server_.hub, server_.session)
-          ->start(std::move(request));
-      return;
+    if (refuse_) {
+      return reply_error(http::status::service_unavailable,
+                         "sim_foxglove serves " + std::to_string(server_.max_connections) +
+                             " connections at once and has that many; close a page or client "
+                             "(or raise --max-connections) and retry.",
+                         request.version(), false);
     }
+    const std::string_view host = view(request[http::field::host]);
+    if (auto problem = server_.access.host_problem(host); !problem.empty()) {
+      return reply_error(http::status::forbidden, std::move(problem), request.version(), false);
+    }
+    if (websocket::is_upgrade(request)) return upgrade(std::move(request), host);
     respond(request);
+  }
+
+  void upgrade(http::request<http::string_body> request, std::string_view host) {
+    const auto subprotocol = choose_subprotocol(subprotocol_lines(request));
+    if (!subprotocol) {
+      return reply_error(http::status::bad_request,
+                         "This server speaks the Foxglove WebSocket protocol: connect with the "
+                         "subprotocol foxglove.sdk.v1 or foxglove.websocket.v1 (Foxglove or "
+                         "Lichtblick does).",
+                         request.version(), false);
+    }
+    const std::string_view origin = view(request[http::field::origin]);
+    if (auto problem = server_.access.origin_problem(origin, host); !problem.empty()) {
+      return reply_error(http::status::forbidden, std::move(problem), request.version(), false);
+    }
+    std::make_shared<WsSession>(std::move(stream_), server_.hub, server_.session, *subprotocol,
+                                std::move(connection_))
+        ->start(std::move(request));
   }
 
   void respond(const http::request<http::string_body>& request) {
@@ -157,7 +217,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
                    request.method() == http::verb::head);
     }
     if (target->path == "/api/streams") {
-      return reply("application/json", streams_json(server_.catalog.snapshot()), version,
+      return reply("application/json",
+                   streams_json(server_.catalog.snapshot(), server_.catalog.mountings()), version,
                    keep_alive, request.method() == http::verb::head);
     }
     if (target->path == "/api/image" || target->path == "/api/topdown") {
@@ -168,7 +229,9 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
                            keep_alive);
       }
       Expected<Picture> picture = Error{ErrorCode::invalid_argument, ""};
-      if (target->path == "/api/image") {
+      if (const auto lidar = target->query.find("lidar"); lidar != target->query.end()) {
+        picture = projection(it->second, lidar->second);
+      } else if (target->path == "/api/image") {
         picture = server_.frames.image(it->second);
       } else {
         TopDownOptions options;
@@ -193,6 +256,26 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     }
     reply_error(http::status::not_found, "Nothing here; open / for the page.", version,
                 keep_alive);
+  }
+
+  // /api/image?stream=CAMERA&lidar=LIDAR: the LiDAR's points drawn into the camera's image,
+  // through the calibration and mountings the streams describe.
+  Expected<Picture> projection(const std::string& camera, const std::string& lidar) {
+    const auto c = server_.catalog.find(camera);
+    const auto l = server_.catalog.find(lidar);
+    if (!l || lidar == camera) {
+      return Error{ErrorCode::not_found, "No LiDAR stream " + lidar + " here; /api/streams lists them."};
+    }
+    const std::optional<SensorInfo> camera_sensor = c && c->status ? c->status->sensor : std::nullopt;
+    if (!camera_sensor || !camera_sensor->calibration) {
+      return Error{ErrorCode::not_found, camera + " has no calibration; start its writer with one "
+                                                  "(--camera-info FILE) to draw points into it."};
+    }
+    auto pose = pose_between(server_.catalog.mountings(),
+                                   frame_of(lidar, l->status ? l->status->sensor : std::nullopt),
+                                   frame_of(camera, camera_sensor));
+    if (!pose) return pose.error();
+    return server_.frames.projection(camera, lidar, *pose, *camera_sensor->calibration);
   }
 
   void reply(const char* type, std::string body, unsigned version, bool keep_alive,
@@ -259,6 +342,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   beast::flat_buffer buffer_;
   std::optional<http::request_parser<http::string_body>> parser_;
   Jpeg held_;
+  std::shared_ptr<void> connection_;  // counted while this session (or its WebSocket) lives
+  const bool refuse_;
 };
 
 }  // namespace
@@ -266,9 +351,33 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 void Server::Impl::accept() {
   acceptor.async_accept(net::make_strand(ioc), [this](beast::error_code ec, tcp::socket socket) {
     if (ec == net::error::operation_aborted || !acceptor.is_open()) return;
-    if (!ec) std::make_shared<HttpSession>(std::move(socket), *this)->read();
-    accept();
+    if (!ec) {
+      admit(std::move(socket));
+      return accept();
+    }
+    if (ec == net::error::connection_aborted) return accept();  // the peer gave up; next one
+    // Out of descriptors or memory (EMFILE, ENFILE, ENOBUFS): trying again at once fails again
+    // at once, a busy loop that serves nobody. Wait, while the connected clients are served.
+    ++accept_failures;
+    accept_backoff.expires_after(100ms);
+    accept_backoff.async_wait([this](beast::error_code wait_ec) {
+      if (!wait_ec && acceptor.is_open()) accept();
+    });
   });
+}
+
+// Serves the connection, answers it 503 when the server is at its limit, or closes it at once
+// when even the refusals are many (a flood must not take the descriptors the served need).
+void Server::Impl::admit(tcp::socket socket) {
+  const unsigned live = connections.load();
+  if (live >= max_connections + kRefusalSlots) {
+    beast::error_code ignored;
+    socket.close(ignored);
+    return;
+  }
+  std::make_shared<HttpSession>(std::move(socket), *this, count_connection(),
+                                live >= max_connections)
+      ->read();
 }
 
 void Server::Impl::stop() {
@@ -278,6 +387,7 @@ void Server::Impl::stop() {
   net::post(ioc, [this] {
     beast::error_code ignored;
     acceptor.close(ignored);
+    accept_backoff.cancel();
   });
   ioc.stop();
   for (auto& t : threads) t.join();
@@ -291,6 +401,10 @@ Expected<Server> Server::start(const ServerOptions& options) {
   if (ec) {
     return Error{ErrorCode::invalid_argument,
                  "--bind " + options.bind + " is not an IP address; use e.g. 127.0.0.1 or 0.0.0.0."};
+  }
+  if (options.max_rate_hz != 0 && !(options.max_rate_hz >= kMinRateHz)) {
+    return Error{ErrorCode::invalid_argument,
+                 "--max-rate must be 0 (every frame) or at least 0.000001 messages per second."};
   }
   if (options.jpeg_quality < 1 || options.jpeg_quality > 100) {
     return Error{ErrorCode::invalid_argument, "the JPEG quality must be from 1 to 100."};
@@ -329,6 +443,10 @@ Server::~Server() { stop(); }
 std::uint16_t Server::port() const noexcept {
   beast::error_code ec;
   return impl_ ? impl_->acceptor.local_endpoint(ec).port() : 0;
+}
+
+std::uint64_t Server::accept_failures() const noexcept {
+  return impl_ ? impl_->accept_failures.load() : 0;
 }
 
 void Server::stop() {

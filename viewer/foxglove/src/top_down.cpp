@@ -6,11 +6,6 @@
 #include <cstring>
 
 namespace sim::foxglove {
-namespace {
-
-struct Rgb {
-  std::uint8_t r, g, b;
-};
 
 // Google's "Turbo" colour map as its published polynomial fit: dark blue → red, readable on
 // a dark background and in both colour-blind and greyscale prints.
@@ -26,6 +21,8 @@ Rgb turbo(float t) {
   auto byte = [](float v) { return static_cast<std::uint8_t>(std::clamp(v, 0.0f, 1.0f) * 255.0f); };
   return {byte(r), byte(g), byte(b)};
 }
+
+namespace {
 
 struct PointView {
   float x, y, z, value;
@@ -132,6 +129,8 @@ void render_top_down(const PointLayout& layout, std::span<const std::byte> frame
     if (read_point(layout, frame.data() + i * stride, options.color, v)) values.push_back(v.value);
   }
   const auto [low, high] = colour_range(values);
+  out.colour_low = low;
+  out.colour_high = high;
 
   for (std::size_t i = 0; i < count; ++i) {
     if (!read_point(layout, frame.data() + i * stride, options.color, v)) continue;

@@ -16,6 +16,12 @@ namespace sim::foxglove {
 
 enum class ColorBy { height, intensity };
 
+struct Rgb {
+  std::uint8_t r, g, b;
+};
+// Google's Turbo colour map: t from 0 (dark blue) to 1 (dark red), clamped.
+Rgb turbo(float t);
+
 struct TopDownOptions {
   ColorBy color = ColorBy::height;
   float range_m = 0.0f;      // half the width of the view; 0: fit 95 % of the points
@@ -29,6 +35,8 @@ struct TopDownImage {
   std::uint64_t points_drawn = 0;
   float range_m = 0;       // half the width of the view as drawn
   float ring_step_m = 0;   // distance between range rings
+  float colour_low = 0;    // the value (height in m, or intensity) drawn dark blue…
+  float colour_high = 0;   // …and the one drawn dark red
 };
 
 // Draws the frame; points outside the view or with non-finite coordinates are left out.

@@ -17,13 +17,37 @@ namespace {
 constexpr std::size_t kMaxClientMessage = 64 * 1024;
 // Status and advertise messages waiting for a client that does not read; more closes it.
 constexpr std::size_t kMaxQueuedTexts = 256;
+// Ids named in one status; a request with more bad ids gets "… and N more".
+constexpr std::size_t kIdsPerStatus = 16;
+
+// "1, 2, 3" or "1, 2, …, 16 and 284 more".
+std::string id_list(const std::vector<std::uint32_t>& ids) {
+  std::string out;
+  for (std::size_t i = 0; i < ids.size() && i < kIdsPerStatus; ++i) {
+    if (i > 0) out += ", ";
+    out += std::to_string(ids[i]);
+  }
+  if (ids.size() > kIdsPerStatus) out += " and " + std::to_string(ids.size() - kIdsPerStatus) + " more";
+  return out;
+}
+
+// "<what>: <ids>; <what to do>." added to `status`, or nothing when there are no ids.
+void add_problem(std::string& status, const std::vector<std::uint32_t>& ids, const char* what,
+                 const char* what_to_do) {
+  if (ids.empty()) return;
+  if (!status.empty()) status += ' ';
+  status += std::string(what) + ": " + id_list(ids) + "; " + what_to_do + ".";
+}
 
 }  // namespace
 
-WsSession::WsSession(beast::tcp_stream&& stream, Hub& hub, const SessionOptions& options)
+WsSession::WsSession(beast::tcp_stream&& stream, Hub& hub, const SessionOptions& options,
+                     std::string_view subprotocol, std::shared_ptr<void> connection)
     : ws_(std::move(stream)),
       hub_(hub),
       options_(options),
+      subprotocol_(subprotocol),
+      connection_(std::move(connection)),
       rate_timer_(ws_.get_executor()),
       watchdog_(ws_.get_executor()) {}
 
@@ -38,8 +62,9 @@ void WsSession::start(http::request<http::string_body> request) {
       std::max<std::chrono::milliseconds>(options_.send_timeout * 3, 3s));
   timeouts.keep_alive_pings = true;
   ws_.set_option(timeouts);
-  ws_.set_option(websocket::stream_base::decorator([](websocket::response_type& response) {
-    response.set(http::field::sec_websocket_protocol, std::string(kSubprotocol));
+  ws_.set_option(websocket::stream_base::decorator([name = subprotocol_](
+                                                     websocket::response_type& response) {
+    response.set(http::field::sec_websocket_protocol, name);
     response.set(http::field::server, "sim_foxglove");
   }));
   ws_.read_message_max(kMaxClientMessage);
@@ -85,43 +110,54 @@ void WsSession::handle(std::string_view text) {
     send_text(status_json(StatusLevel::error, rejected->message));
     return;
   }
-  if (const auto* subscribe = std::get_if<SubscribeRequest>(&request)) {
-    for (const Subscription& s : subscribe->subscriptions) {
-      if (subscriptions_.contains(s.id)) {
-        send_text(status_json(StatusLevel::error, "subscription id " + std::to_string(s.id) +
-                                                      " is already in use; choose another id."));
-        continue;
-      }
-      bool taken = false;
-      for (const auto& [id, channel] : subscriptions_) taken |= channel == s.channel_id;
-      if (taken) {
-        send_text(status_json(StatusLevel::error,
-                              "this client already subscribes to channel " +
-                                  std::to_string(s.channel_id) + "; one subscription per channel."));
-        continue;
-      }
-      {
-        std::lock_guard lock(mutex_);
-        slots_[s.channel_id] = Slot{s.id, nullptr, {}};
-      }
-      if (const auto error = hub_.subscribe(shared_from_this(), s.channel_id)) {
-        {
-          std::lock_guard lock(mutex_);
-          slots_.erase(s.channel_id);
-        }
-        send_text(status_json(StatusLevel::error, *error));
-        continue;
-      }
-      subscriptions_[s.id] = s.channel_id;
-    }
-    return;
+  if (const auto* request_to_subscribe = std::get_if<SubscribeRequest>(&request)) {
+    return subscribe(*request_to_subscribe);
   }
-  const auto& unsubscribe = std::get<UnsubscribeRequest>(request);
-  for (const std::uint32_t id : unsubscribe.subscription_ids) {
+  unsubscribe(std::get<UnsubscribeRequest>(request));
+}
+
+// Every bad id of one request is named in one status: a request of many ids must not earn as
+// many statuses (a client that reads everything would still overflow the text queue).
+void WsSession::subscribe(const SubscribeRequest& request) {
+  std::vector<std::uint32_t> ids_in_use, channels_taken, channels_unknown;
+  for (const Subscription& s : request.subscriptions) {
+    if (subscriptions_.contains(s.id)) {
+      ids_in_use.push_back(s.id);
+      continue;
+    }
+    bool taken = false;
+    for (const auto& [id, channel] : subscriptions_) taken |= channel == s.channel_id;
+    if (taken) {
+      channels_taken.push_back(s.channel_id);
+      continue;
+    }
+    {
+      std::lock_guard lock(mutex_);
+      slots_[s.channel_id] = Slot{s.id, nullptr, {}};
+    }
+    if (!hub_.subscribe(shared_from_this(), s.channel_id)) {
+      std::lock_guard lock(mutex_);
+      slots_.erase(s.channel_id);
+      channels_unknown.push_back(s.channel_id);
+      continue;
+    }
+    subscriptions_[s.id] = s.channel_id;
+  }
+  std::string status;
+  add_problem(status, ids_in_use, "Subscription ids already in use", "choose other ids");
+  add_problem(status, channels_taken, "Channels this client already subscribes to",
+              "one subscription per channel");
+  add_problem(status, channels_unknown, "Channels not advertised",
+              "subscribe to channel ids from an advertise message");
+  if (!status.empty()) send_text(status_json(StatusLevel::error, status));
+}
+
+void WsSession::unsubscribe(const UnsubscribeRequest& request) {
+  std::vector<std::uint32_t> inactive;
+  for (const std::uint32_t id : request.subscription_ids) {
     const auto it = subscriptions_.find(id);
     if (it == subscriptions_.end()) {
-      send_text(status_json(StatusLevel::warning, "subscription id " + std::to_string(id) +
-                                                      " is not active; nothing to unsubscribe."));
+      inactive.push_back(id);
       continue;
     }
     const std::uint32_t channel_id = it->second;
@@ -132,6 +168,9 @@ void WsSession::handle(std::string_view text) {
     }
     hub_.unsubscribe(this, channel_id);
   }
+  std::string status;
+  add_problem(status, inactive, "Subscription ids not active", "nothing to unsubscribe");
+  if (!status.empty()) send_text(status_json(StatusLevel::warning, status));
 }
 
 void WsSession::offer(std::shared_ptr<const Message> message) {

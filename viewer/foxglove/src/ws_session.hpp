@@ -32,7 +32,10 @@ struct SessionOptions {
 
 class WsSession final : public Client, public std::enable_shared_from_this<WsSession> {
  public:
-  WsSession(boost::beast::tcp_stream&& stream, Hub& hub, const SessionOptions& options);
+  // `subprotocol`: the name to answer with (the one the client offered); `connection` is held
+  // while the session lives (the server's connection count).
+  WsSession(boost::beast::tcp_stream&& stream, Hub& hub, const SessionOptions& options,
+            std::string_view subprotocol, std::shared_ptr<void> connection);
   ~WsSession() override;
 
   // Completes the WebSocket handshake for `request` (already checked for the subprotocol).
@@ -53,6 +56,8 @@ class WsSession final : public Client, public std::enable_shared_from_this<WsSes
   void read();
   void on_read(boost::beast::error_code ec, std::size_t bytes);
   void handle(std::string_view text);
+  void subscribe(const SubscribeRequest& request);
+  void unsubscribe(const UnsubscribeRequest& request);
   void kick();
   void write_next();
   void on_write(boost::beast::error_code ec);
@@ -62,6 +67,8 @@ class WsSession final : public Client, public std::enable_shared_from_this<WsSes
   boost::beast::websocket::stream<boost::beast::tcp_stream> ws_;
   Hub& hub_;
   const SessionOptions options_;
+  const std::string subprotocol_;
+  const std::shared_ptr<void> connection_;
   boost::beast::flat_buffer read_buffer_;
   boost::asio::steady_timer rate_timer_;
   boost::asio::steady_timer watchdog_;

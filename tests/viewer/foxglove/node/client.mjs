@@ -72,6 +72,13 @@ function decode(reader, message) {
   return decoded;
 }
 
+// --- 0. Rates too small to mean anything are a usage error (review L3), not every frame. ------
+for (const rate of ["1e-12", "-1"]) {
+  const run = spawnSync(h.bin.foxglove, ["--port", "0", "--max-rate", rate], { encoding: "utf8", timeout: 20_000 });
+  assert.equal(run.status, 2, `--max-rate ${rate}: exit ${run.status}, ${run.stderr}`);
+  assert.match(run.stderr, /--max-rate/);
+}
+
 const lidar = h.uniqueStream("fox_lidar");
 const camera = h.uniqueStream("fox_camera");
 const images = h.writeImageFolder();
@@ -92,11 +99,13 @@ await state.until("serverInfo", () => state.serverInfo);
 assert.equal(state.serverInfo.name, "sim_foxglove");
 const lidarChannel = await state.until("lidar advertised", () => state.topic(lidar));
 assert.equal(lidarChannel.schemaName, "sensor_msgs/msg/PointCloud2");
-assert.equal(state.topic(camera), undefined, "a stream that does not exist yet is advertised");
+// Images get a namespace of their own (for Foxglove to pair them with a calibration).
+const cameraTopic = `${camera}/image_raw`;
+assert.equal(state.topic(cameraTopic), undefined, "a stream that does not exist yet is advertised");
 
 // The camera starts after the client is connected: the server must advertise it as it appears.
 h.startVideo(camera, images);
-const cameraChannel = await state.until("camera advertised", () => state.topic(camera));
+const cameraChannel = await state.until("camera advertised", () => state.topic(cameraTopic));
 assert.equal(cameraChannel.schemaName, "sensor_msgs/msg/Image");
 
 const lidarSub = client.subscribe(lidarChannel.id);
@@ -190,7 +199,7 @@ const camera2 = h.uniqueStream("fox_camera_jpeg");
 h.startVideo(camera2, images);
 const jpegServer = await h.startFoxglove(["--compress", "jpeg:70", "--max-rate", "5"], [camera2]);
 const second = connect(jpegServer.port);
-const jpegChannel = await second.state.until("jpeg channel", () => second.state.topic(camera2));
+const jpegChannel = await second.state.until("jpeg channel", () => second.state.topic(`${camera2}/compressed`));
 assert.equal(jpegChannel.schemaName, "sensor_msgs/msg/CompressedImage");
 const jpegSub = second.client.subscribe(jpegChannel.id);
 const jpegReader = readerFor(jpegChannel);

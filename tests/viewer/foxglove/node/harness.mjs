@@ -15,6 +15,7 @@ export const bin = {
   replayVideo: need("SIM_REPLAY_VIDEO"),
   echo: need("SIM_ECHO"),
   rm: need("SIM_RM"),
+  sensorWriter: need("SIM_SENSOR_WRITER"),
 };
 export const hesaiData = need("SIM_HESAI_DATA");
 
@@ -150,6 +151,22 @@ export function startEcho(stream) {
   const help = spawnSync(bin.echo, ["--help"], { encoding: "utf8" }).stdout || "";
   const json = help.includes("--json") ? ["--json"] : [];
   return start(bin.echo, [stream, "--wait-for-stream", ...json]);
+}
+
+// A calibrated camera and a LiDAR, both mounted on base_link (tests/viewer/foxglove/
+// sensor_writer.cpp has the scene); the camera is recalibrated at frame `recalibrateAt`.
+export const scene = {
+  width: 320, height: 240, fx: 200, cx: 160, cy: 120, recalibratedCx: 170,
+  cameraFrame: "test_camera_optical", lidarFrame: "test_lidar",
+  // Where the wall of points ahead lands in the camera image.
+  wall: { left: 120, right: 200, top: 80, bottom: 160 },
+};
+export async function startSensorWriter(camera, lidar, recalibrateAt) {
+  const args = [camera, lidar];
+  if (recalibrateAt !== undefined) args.push(String(recalibrateAt));
+  const child = start(bin.sensorWriter, args, { streamNames: [camera, lidar] });
+  await child.waitForLine(/^ready$/);
+  return child;
 }
 
 const crcTable = Array.from({ length: 256 }, (_, n) => {

@@ -1,25 +1,34 @@
 // SPDX-License-Identifier: Apache-2.0
 // The built-in page in a real browser: headless Chromium (Debian's /usr/bin/chromium, driven by
-// puppeteer-core) opens http://127.0.0.1:PORT/ while the Pandar64 recording and a camera replay
-// run, and the test asserts the page lists both streams with a live writer and shows a camera
-// image and a LiDAR top-down view that are not blank. The screenshot is kept as an artifact.
+// puppeteer-core) opens http://127.0.0.1:PORT/ while the Pandar64 recording, a camera replay and
+// a calibrated camera with a mounted LiDAR (sensor_writer) run. It asserts the page lists the
+// streams with a live writer, shows a camera image and a LiDAR top-down view that are not blank,
+// draws the LiDAR's points into the calibrated camera's image where the mountings put them,
+// marks a dead writer's picture, replaces a view whose stream changed kind, says so when there
+// are no streams, and greys everything out with a banner when the server is gone. Screenshots
+// are kept as artifacts (the projection one is the picture in docs/foxglove.md).
 import assert from "node:assert/strict";
 import fs from "node:fs";
 import os from "node:os";
 import path from "node:path";
+import { spawnSync } from "node:child_process";
 import puppeteer from "puppeteer-core";
 
 import * as h from "./harness.mjs";
 
-h.deadline(150, "the page test");
+h.deadline(200, "the page test");
 const chromium = process.env.SIM_CHROMIUM || "/usr/bin/chromium";
 const artifacts = process.env.SIM_TEST_ARTIFACTS || os.tmpdir();
+fs.mkdirSync(artifacts, { recursive: true });
 
 const lidar = h.uniqueStream("page_lidar");
 const camera = h.uniqueStream("page_camera");
+const calibrated = h.uniqueStream("page_calibrated");
+const mountedLidar = h.uniqueStream("page_mounted_lidar");
 h.startLidar(lidar);
-h.startVideo(camera, h.writeImageFolder());
-const server = await h.startFoxglove([], [lidar, camera]);
+const video = h.startVideo(camera, h.writeImageFolder());
+await h.startSensorWriter(calibrated, mountedLidar);
+const server = await h.startFoxglove([], [lidar, camera, calibrated, mountedLidar]);
 
 const profile = fs.mkdtempSync(path.join(os.tmpdir(), "sim_foxglove_chromium_"));
 const browser = await puppeteer.launch({
@@ -35,68 +44,125 @@ process.on("exit", () => {
   fs.rmSync(profile, { recursive: true, force: true });
 });
 
+// Measures the picture of a stream's view in the same step that finds it loaded (the page swaps
+// each <img>'s source as frames come). `region` counts pixels unlike the grey background
+// (coloured points) inside a rectangle and outside it.
+async function measure(page, name, { urlPattern = "", region = null } = {}) {
+  const measured = await page.waitForFunction((n, pattern, r) => {
+    const img = document.querySelector(`.view[data-stream="${n}"] img`);
+    if (!img || !img.complete || img.naturalWidth === 0) return null;
+    if (pattern && !new RegExp(pattern).test(img.dataset.url || "")) return null;
+    const canvas = document.createElement("canvas");
+    canvas.width = img.naturalWidth;
+    canvas.height = img.naturalHeight;
+    const ctx = canvas.getContext("2d");
+    ctx.drawImage(img, 0, 0);
+    const { data } = ctx.getImageData(0, 0, canvas.width, canvas.height);
+    const colours = new Set();
+    let lit = 0, inside = 0, outside = 0;
+    for (let i = 0; i < data.length; i += 4) {
+      colours.add((data[i] >> 4) * 256 + (data[i + 1] >> 4) * 16 + (data[i + 2] >> 4));
+      if (data[i] + data[i + 1] + data[i + 2] > 150) ++lit;
+      if (r) {
+        const x = (i / 4) % canvas.width, y = Math.floor(i / 4 / canvas.width);
+        const marked = Math.max(Math.abs(data[i] - 50), Math.abs(data[i + 1] - 50), Math.abs(data[i + 2] - 50)) > 40;
+        if (marked && x >= r.left && x <= r.right && y >= r.top && y <= r.bottom) ++inside;
+        else if (marked) ++outside;
+      }
+    }
+    return { width: canvas.width, height: canvas.height, colours: colours.size, lit, inside, outside };
+  }, { timeout: 60_000, polling: 100 }, name, urlPattern, region);
+  return measured.jsonValue();
+}
+
+const rowText = (page, name) => page.$$eval("#streams tbody tr",
+  (trs, n) => trs.find((r) => r.dataset.stream === n)?.textContent || "", name);
+
 try {
   const page = await browser.newPage();
   await page.setViewport({ width: 1400, height: 1000 });
   await page.goto(`http://127.0.0.1:${server.port}/`, { waitUntil: "domcontentloaded" });
 
-  // Both streams in the table, with a live writer and a rate.
-  for (const name of [lidar, camera]) {
+  // Every stream in the table, with a live writer and a rate.
+  for (const name of [lidar, camera, calibrated, mountedLidar]) {
     await page.waitForFunction((n) => {
       const row = [...document.querySelectorAll("#streams tbody tr")].find((r) => r.dataset.stream === n);
       return row && /alive/.test(row.textContent) && / Hz/.test(row.textContent);
     }, { timeout: 60_000 }, name);
   }
-  const rows = await page.$$eval("#streams tbody tr", (trs) => trs.map((r) => r.textContent));
-  assert.ok(rows.some((r) => r.includes(lidar) && r.includes("points lidar_point")), rows.join("\n"));
-  assert.ok(rows.some((r) => r.includes(camera) && r.includes("bgr8")), rows.join("\n"));
+  assert.ok((await rowText(page, lidar)).includes("points lidar_point"));
+  assert.ok((await rowText(page, camera)).includes("bgr8"));
+  const calibratedRow = await rowText(page, calibrated);
+  assert.ok(calibratedRow.includes(`${h.scene.cameraFrame} in base_link`), calibratedRow);
+  assert.ok(calibratedRow.includes("fx=200"), calibratedRow);
+  assert.ok(calibratedRow.includes(`${calibrated}/camera_info`), calibratedRow);
 
-  // Each view shows a picture that is not blank: many distinct colours, not one flat fill. The
-  // page swaps each <img>'s source as frames come, so the check that a picture is loaded and its
-  // measurement run in one step inside the page (no new source can start loading in between).
-  const spread = async (name) => {
-    const measured = await page.waitForFunction((n) => {
-      const img = document.querySelector(`.view[data-stream="${n}"] img`);
-      if (!img || !img.complete || img.naturalWidth === 0) return null;
-      const canvas = document.createElement("canvas");
-      canvas.width = img.naturalWidth;
-      canvas.height = img.naturalHeight;
-      const ctx = canvas.getContext("2d");
-      ctx.drawImage(img, 0, 0);
-      const { data } = ctx.getImageData(0, 0, canvas.width, canvas.height);
-      const colours = new Set();
-      let lit = 0;
-      for (let i = 0; i < data.length; i += 4) {
-        colours.add((data[i] >> 4) * 256 + (data[i + 1] >> 4) * 16 + (data[i + 2] >> 4));
-        if (data[i] + data[i + 1] + data[i + 2] > 150) ++lit;
-      }
-      return { width: canvas.width, height: canvas.height, colours: colours.size, lit };
-    }, { timeout: 60_000, polling: 100 }, name);
-    return measured.jsonValue();
-  };
-  const cameraPicture = await spread(camera);
+  const cameraPicture = await measure(page, camera);
   assert.equal(cameraPicture.width, h.image.width);
   assert.equal(cameraPicture.height, h.image.height);
   assert.ok(cameraPicture.colours > 50, `camera image has only ${cameraPicture.colours} colours`);
-  const lidarPicture = await spread(lidar);
+  const lidarPicture = await measure(page, lidar);
   assert.ok(lidarPicture.colours > 20, `top-down view has only ${lidarPicture.colours} colours`);
   assert.ok(lidarPicture.lit > 2000, `top-down view shows only ${lidarPicture.lit} bright pixels`);
 
-  // Intensity colouring is a different picture of the same frame.
+  // Intensity colouring is a different picture of the same frame; the caption names the scale.
   await page.select(`.view[data-stream="${lidar}"] select`, "intensity");
   await page.waitForFunction((n) => {
-    const img = document.querySelector(`.view[data-stream="${n}"] img`);
-    return img.complete && /color=intensity/.test(img.dataset.url || "");
+    const view = document.querySelector(`.view[data-stream="${n}"]`);
+    return view.querySelector("img").complete && /color=intensity/.test(view.querySelector("img").dataset.url || "") &&
+      /colour: intensity .* \(blue\) to .* \(red\)/.test(view.querySelector(".caption").textContent);
   }, { timeout: 30_000 }, lidar);
 
-  fs.mkdirSync(artifacts, { recursive: true });
-  const shot = path.join(artifacts, "sim_foxglove_page.png");
+  // The calibrated camera shows its LiDAR's points by default, where calibration and mountings
+  // put them: the wall ahead lands in its rectangle, the wall behind nowhere. A wrong transform
+  // or intrinsics would draw them elsewhere (or not at all).
+  const wall = h.scene.wall;
+  const projected = await measure(page, calibrated, {
+    urlPattern: "lidar=" + encodeURIComponent(mountedLidar),
+    region: { left: wall.left - 3, right: wall.right + 3, top: wall.top - 3, bottom: wall.bottom + 3 },
+  });
+  assert.ok(projected.inside > 1500, `only ${projected.inside} projected pixels where the wall is`);
+  assert.ok(projected.outside < projected.inside / 50,
+            `${projected.outside} marked pixels outside the wall (${projected.inside} inside)`);
+  const caption = await page.$eval(`.view[data-stream="${calibrated}"] .caption`, (c) => c.textContent);
+  assert.match(caption, /^1681 of 3362 points/, caption);
+  const shot = path.join(artifacts, "sim_foxglove_projection.png");
   await page.screenshot({ path: shot, fullPage: true });
-  console.log(`ok: page lists ${lidar} and ${camera}, shows both pictures; screenshot ${shot}`);
+  console.log(`ok: ${projected.inside} pixels of projected points on the wall, ${projected.outside} elsewhere; screenshot ${shot}`);
+
+  // A writer that died: its picture is marked stale, not passed off as live.
+  video.kill("SIGKILL");
+  await page.waitForFunction((n) => /writer gone/.test(
+    document.querySelector(`.view[data-stream="${n}"] .stale-mark`)?.textContent || ""),
+    { timeout: 30_000 }, camera);
+  // A stream whose name is taken by another kind gets a new view (the LiDAR becomes a camera).
+  spawnSync(h.bin.rm, ["--force", lidar], { stdio: "ignore" });
+  h.startVideo(lidar, h.writeImageFolder());
+  await page.waitForFunction((n) => {
+    const view = document.querySelector(`.view[data-stream="${n}"]`);
+    return view && view.dataset.kind === "image" && view.querySelector("img").naturalWidth === 160;
+  }, { timeout: 30_000 }, lidar);
+  console.log("ok: a dead writer's picture is marked; a stream that changed kind got a new view");
+
+  // The server goes away: a banner says so and the table is struck through, not left green.
+  await h.stop(server.child);
+  await page.waitForFunction(() => document.getElementById("banner").classList.contains("shown") &&
+    document.getElementById("streams").classList.contains("stale"), { timeout: 30_000 });
+  const banner = await page.$eval("#banner", (b) => b.textContent);
+  assert.match(banner, /Lost contact with sim_foxglove at .*Retrying/);
+  await page.screenshot({ path: path.join(artifacts, "sim_foxglove_page_server_gone.png"), fullPage: true });
+  console.log("ok: the page says it lost contact with the server and greys out its data");
+
+  // No streams at all: a sentence that says how to start one.
+  const empty = await h.startFoxglove([], [h.uniqueStream("page_nothing")]);
+  await page.goto(`http://127.0.0.1:${empty.port}/`, { waitUntil: "domcontentloaded" });
+  await page.waitForFunction(() => !document.getElementById("empty").hidden, { timeout: 30_000 });
+  assert.match(await page.$eval("#empty", (e) => e.textContent), /No SIM streams on this machine yet/);
+  await h.stop(empty.child);
+  console.log("ok: a page with no streams says how to start one");
 } finally {
   await browser.close();
 }
-await h.stop(server.child);
 assert.equal(server.child.exitCode, 0, server.child.stderrText);
 console.log("PASS");
 process.exit(0);

@@ -15,8 +15,10 @@
 
 namespace sim::foxglove {
 
-// The only subprotocol Foxglove's and Lichtblick's WebSocket data source speak.
-inline constexpr std::string_view kSubprotocol = "foxglove.websocket.v1";
+// The subprotocol names of the Foxglove WebSocket protocol: Foxglove's current apps and SDK
+// servers speak foxglove.sdk.v1, older ones and Lichtblick foxglove.websocket.v1; the protocol
+// is the same. The server answers with the one the client offered.
+inline constexpr std::string_view kSubprotocols[] = {"foxglove.sdk.v1", "foxglove.websocket.v1"};
 
 // One advertised channel: a SIM stream as Foxglove sees it.
 struct Channel {
