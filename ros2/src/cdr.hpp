@@ -138,6 +138,17 @@ class Reader {
     pos_ += n;
     return out;
   }
+  // A fixed-size array of bytes (octet[n]): no count, no alignment.
+  std::span<const std::byte> fixed(std::size_t n, const char* what) noexcept {
+    if (!ok()) return {};
+    if (n > remaining()) {
+      fail(what);
+      return {};
+    }
+    const auto out = in_.subspan(pos_, n);
+    pos_ += n;
+    return out;
+  }
   bool fail(const char* what) noexcept {
     if (failure_ == nullptr) failure_ = what;
     return false;

@@ -10,6 +10,7 @@
 
 #include "sim/lidar_point.hpp"
 #include "sim/ros2/encode.hpp"
+#include "sim/ros2/graph.hpp"
 #include "sim/ros2/metadata.hpp"
 
 namespace {
@@ -73,5 +74,11 @@ int main(int argc, char** argv) {
       {{Time{1700000000, 5}, "base_link"}, "camera_front", Mounting{{1.2, 0, 1.4}, {0.5, -0.5, 0.5, -0.5}}},
   };
   save_bytes(root / "tf_message", "two_mountings.cdr", encode_tf_message(transforms).value());
+  const Gid participant{1, 15, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 0, 0, 1, 0xc1};
+  const Gid reader{1, 15, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 0, 0, 2, 0x04};
+  const Gid writer{1, 15, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 0, 0, 3, 0x03};
+  const NodeEntities node{"/", "sim_dds_bridge", {&reader, 1}, {&writer, 1}};
+  save_bytes(root / "participant_entities_info", "one_node.cdr",
+             encode_participant_entities_info(participant, {&node, 1}));
   return 0;
 }

@@ -10,6 +10,7 @@
 
 #include "sim/ros2/decode.hpp"
 #include "sim/ros2/encode.hpp"
+#include "sim/ros2/graph.hpp"
 #include "sim/ros2/metadata.hpp"
 #include "sim/ros2/type_hash.hpp"
 
@@ -223,6 +224,30 @@ TEST(Ros2Messages, ANanosecondCountOfOneSecondIsToldAsABadStamp) {
   auto r = decode_camera_info(message);
   ASSERT_FALSE(r.has_value());
   EXPECT_NE(r.error().message.find("not below 1000000000"), std::string::npos) << r.error().message;
+}
+
+TEST(Ros2Graph, ParticipantEntitiesRoundTripAndBadCountsAreDropped) {
+  const Gid participant{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 0, 0, 1, 0xc1};
+  const Gid readers[] = {{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 0, 0, 2, 4}};
+  const Gid writers[] = {{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 0, 0, 3, 3},
+                         {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 0, 0, 4, 3}};
+  const NodeEntities node{"/", "sim_dds_bridge", readers, writers};
+  auto message = encode_participant_entities_info(participant, {&node, 1});
+  // gid (16) | node count | "/" | "sim_dds_bridge" | 1 reader | 2 writers
+  EXPECT_EQ(message.size(), 4u + 16 + 4 + (4 + 2 + 2) + (4 + 15 + 1) + 4 + 16 + 4 + 32);
+  auto back = decode_participant_entities_info(message);
+  ASSERT_TRUE(back.has_value()) << back.error().message;
+  EXPECT_EQ(back->participant, participant);
+  EXPECT_EQ(back->nodes, std::vector<std::string>{"/sim_dds_bridge"});
+  EXPECT_EQ(back->readers.size(), 1u);
+  EXPECT_EQ(back->writers.size(), 2u);
+  EXPECT_EQ(back->writers[1], writers[1]);
+  for (std::size_t n = 0; n < message.size(); ++n) {
+    EXPECT_FALSE(decode_participant_entities_info(std::span(message).first(n)).has_value()) << n;
+  }
+  const std::uint32_t huge = 0x40000000;
+  std::memcpy(message.data() + message.size() - 36, &huge, 4);  // the writer count
+  EXPECT_FALSE(decode_participant_entities_info(message).has_value());
 }
 
 TEST(Ros2Metadata, SchemasNameTheirNestedTypes) {

@@ -129,8 +129,8 @@ Expected<std::unique_ptr<DdsSession>> DdsSession::create(int domain) {
       return Error{ErrorCode::system_error, "Fast DDS refused the type " + support.get_type_name()};
     }
   }
-  if (!session->start_graph_writer()) {
-    return Error{ErrorCode::system_error, "Fast DDS could not create the ros_discovery_info writer"};
+  if (!session->start_graph_writer() || !session->start_graph_reader()) {
+    return Error{ErrorCode::system_error, "Fast DDS could not create the ros_discovery_info endpoints"};
   }
   return session;
 }
@@ -187,8 +187,57 @@ void DdsSession::announce_graph() {
   graph_writer_->write(&message);
 }
 
+bool DdsSession::start_graph_reader() {
+  graph_listener_.session = this;
+  std::lock_guard lock(mutex_);
+  std::string error;
+  dds::Topic* t = topic(std::string(ros2::graph_dds_topic),
+                        ros2::participant_entities_info_dds_type_name, error);
+  if (t == nullptr) return false;
+  dds::DataReaderQos qos = dds::DATAREADER_QOS_DEFAULT;
+  apply(qos, QosChoice{.reliable = true, .depth = 100, .transient_local = true},
+        ros2::participant_entities_info_dds_type_name);
+  only_xcdr1(qos.type_consistency().representation);
+  graph_reader_ = subscriber_->create_datareader(t, qos, &graph_listener_,
+                                                 dds::StatusMask::data_available());
+  return graph_reader_ != nullptr;
+}
+
+void DdsSession::GraphListener::on_data_available(dds::DataReader* reader) {
+  IncomingMessage sample{this};
+  IncomingMessage ignored{nullptr};
+  dds::SampleInfo info;
+  while (reader->get_first_untaken_info(&info) == ReturnCode_t::RETCODE_OK) {
+    if (reader->take_next_sample(session->own_sample(info) ? &ignored : &sample, &info) !=
+        ReturnCode_t::RETCODE_OK) {
+      break;
+    }
+  }
+}
+
+void DdsSession::GraphListener::deliver(std::span<const std::byte> message) {
+  auto entities = ros2::decode_participant_entities_info(message);
+  if (!entities) return;  // another participant's business; nothing of the bridge's depends on it
+  GuidPrefix prefix;
+  std::memcpy(prefix.data(), entities->participant.data(), prefix.size());
+  {
+    std::lock_guard lock(session->discovery_mutex_);
+    session->graph_readers_[prefix] = {entities->readers.begin(), entities->readers.end()};
+  }
+  session->graph_generation_.fetch_add(1);
+}
+
+bool DdsSession::graph_says_gone(const rtps::GUID_t& reader) const {
+  GuidPrefix prefix;
+  std::memcpy(prefix.data(), reader.guidPrefix.value, prefix.size());
+  std::lock_guard lock(discovery_mutex_);
+  auto it = graph_readers_.find(prefix);
+  return it != graph_readers_.end() && it->second.count(gid_of(reader)) == 0;
+}
+
 dds::DataWriter* DdsSession::create_writer(const std::string& dds_topic, std::string_view dds_type,
-                                           const QosChoice& choice, std::string& error) {
+                                           const QosChoice& choice, std::string& error,
+                                           dds::DataWriterListener* listener) {
   std::lock_guard lock(mutex_);
   dds::Topic* t = topic(dds_topic, dds_type, error);
   if (t == nullptr) return nullptr;
@@ -197,7 +246,10 @@ dds::DataWriter* DdsSession::create_writer(const std::string& dds_topic, std::st
   only_xcdr1(qos.representation());
   // Never make the SIM side wait long for DDS: a full reliable history blocks write() at most this.
   qos.reliability().max_blocking_time = eprosima::fastrtps::Duration_t(0, 50'000'000);
-  dds::DataWriter* w = publisher_->create_datawriter(t, qos);
+  dds::DataWriter* w = listener == nullptr
+                           ? publisher_->create_datawriter(t, qos)
+                           : publisher_->create_datawriter(t, qos, listener,
+                                                           dds::StatusMask::publication_matched());
   if (w == nullptr) {
     error = "Fast DDS could not create a writer on " + dds_topic;
     return nullptr;

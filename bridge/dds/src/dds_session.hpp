@@ -13,13 +13,16 @@
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/DataWriterListener.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 
 #include <array>
+#include <atomic>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -30,6 +33,7 @@
 #include <vector>
 
 #include "sim/result.hpp"
+#include "ros_message_type.hpp"
 #include "sim/ros2/message.hpp"
 
 namespace sim::bridge {
@@ -56,9 +60,9 @@ class DdsSession final : private eprosima::fastdds::dds::DomainParticipantListen
 
   // A writer (reader) on the DDS topic `dds_topic` ("rt/lidar_top") of the DDS type `dds_type`
   // (one of registered_types()); nullptr with a sentence in `error`.
-  eprosima::fastdds::dds::DataWriter* create_writer(const std::string& dds_topic,
-                                                    std::string_view dds_type,
-                                                    const QosChoice& qos, std::string& error);
+  eprosima::fastdds::dds::DataWriter* create_writer(
+      const std::string& dds_topic, std::string_view dds_type, const QosChoice& qos,
+      std::string& error, eprosima::fastdds::dds::DataWriterListener* listener = nullptr);
   eprosima::fastdds::dds::DataReader* create_reader(const std::string& dds_topic,
                                                     std::string_view dds_type,
                                                     const QosChoice& qos, std::string& error);
@@ -82,6 +86,13 @@ class DdsSession final : private eprosima::fastdds::dds::DomainParticipantListen
   // takes its own messages back).
   bool own_sample(const eprosima::fastdds::dds::SampleInfo& info) const;
 
+  // Review M1: Debian's Fast DDS never unmatches a Cyclone DDS (rmw_cyclonedds) reader that is
+  // deleted while its participant lives. A ROS 2 node also lists its readers on
+  // ros_discovery_info; true when the reader's participant does so and no longer lists it.
+  bool graph_says_gone(const eprosima::fastrtps::rtps::GUID_t& reader) const;
+  // Changes whenever a ros_discovery_info message was taken; 0: none yet.
+  std::uint64_t graph_generation() const noexcept { return graph_generation_.load(); }
+
  private:
   DdsSession() = default;
   eprosima::fastdds::dds::Topic* topic(const std::string& dds_topic, std::string_view dds_type,
@@ -95,6 +106,18 @@ class DdsSession final : private eprosima::fastdds::dds::DomainParticipantListen
   void announce_graph();
 
   using Gid = std::array<std::uint8_t, 16>;
+  using GuidPrefix = std::array<std::uint8_t, 12>;
+  // Takes the ros_discovery_info messages of other participants as they arrive.
+  struct GraphListener final : eprosima::fastdds::dds::DataReaderListener, MessageSink {
+    DdsSession* session = nullptr;
+    void on_data_available(eprosima::fastdds::dds::DataReader* reader) override;
+    void deliver(std::span<const std::byte> message) override;
+  };
+  bool start_graph_reader();
+  GraphListener graph_listener_;
+  eprosima::fastdds::dds::DataReader* graph_reader_ = nullptr;
+  std::map<GuidPrefix, std::set<Gid>> graph_readers_;  // under discovery_mutex_
+  std::atomic<std::uint64_t> graph_generation_{0};
   std::mutex mutex_;  // entity creation and deletion, and the GID sets
   // Apart from mutex_: Fast DDS calls discovery back from its own threads, possibly while it
   // holds locks a creation under mutex_ waits for.

@@ -2,8 +2,14 @@
 #include "outbound.hpp"
 
 #include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
+#include <fastdds/dds/publisher/DataWriterListener.hpp>
+#include <fastdds/rtps/common/InstanceHandle.h>
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <mutex>
+#include <set>
 #include <vector>
 
 #include "ros_message_type.hpp"
@@ -36,6 +42,33 @@ std::string topic_for(const std::string& base, ros2::MessageType type) {
   return base;
 }
 
+// The remote readers a writer is matched with, as Fast DDS reports them (on its own threads).
+class MatchTracker final : public dds::DataWriterListener {
+ public:
+  void on_publication_matched(dds::DataWriter*, const dds::PublicationMatchedStatus& status) override {
+    std::lock_guard lock(mutex_);
+    const auto guid = eprosima::fastrtps::rtps::iHandle2GUID(status.last_subscription_handle);
+    if (status.current_count_change > 0) readers_.insert(guid);
+    if (status.current_count_change < 0) readers_.erase(guid);
+    generation_.fetch_add(1);
+  }
+  std::uint64_t generation() const noexcept { return generation_.load(); }
+  std::set<eprosima::fastrtps::rtps::GUID_t> readers() const {
+    std::lock_guard lock(mutex_);
+    return readers_;
+  }
+  void clear() {
+    std::lock_guard lock(mutex_);
+    readers_.clear();
+    generation_.fetch_add(1);
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::set<eprosima::fastrtps::rtps::GUID_t> readers_;
+  std::atomic<std::uint64_t> generation_{0};
+};
+
 // One DDS writer of one topic, recreated when the topic or its type changes.
 class TopicWriter {
  public:
@@ -52,20 +85,35 @@ class TopicWriter {
     std::string error;
     ros_topic_ = ros_topic;
     dds_type_ = dds_type;
-    writer_ = session_.create_writer(ros2::dds_topic_name(ros_topic), dds_type, qos_, error);
+    tracker_.clear();
+    writer_ = session_.create_writer(ros2::dds_topic_name(ros_topic), dds_type, qos_, error, &tracker_);
     if (writer_ == nullptr) counters_.problem(error);
     counters_.connected.store(writer_ != nullptr);
     return writer_ != nullptr;
   }
   bool exists() const { return writer_ != nullptr; }
 
-  // Remote readers matched now (one cheap call; Fast DDS keeps the count).
+  // Remote readers matched now (one cheap call; Fast DDS keeps the count), less those that
+  // ROS 2's graph says are gone (review M1; recounted only when the matches or the graph changed).
   int matched() {
     if (writer_ == nullptr) return 0;
     dds::PublicationMatchedStatus status;
     writer_->get_publication_matched_status(status);
-    counters_.matched.store(status.current_count, std::memory_order_relaxed);
-    return status.current_count;
+    int live = status.current_count;
+    const std::uint64_t graph = session_.graph_generation();
+    if (graph != 0 && live > 0) {
+      const std::uint64_t matches = tracker_.generation();
+      if (graph != counted_graph_ || matches != counted_matches_ || live != counted_matched_) {
+        counted_graph_ = graph;
+        counted_matches_ = matches;
+        counted_matched_ = live;
+        gone_ = 0;
+        for (const auto& reader : tracker_.readers()) gone_ += session_.graph_says_gone(reader) ? 1 : 0;
+      }
+      live = std::max(0, live - gone_);
+    }
+    counters_.matched.store(live, std::memory_order_relaxed);
+    return live;
   }
 
   // Review M4: a remote reader that discovery announced but that did not match is told why, in
@@ -102,9 +150,14 @@ class TopicWriter {
   DdsSession& session_;
   QosChoice qos_;
   Counters& counters_;
+  MatchTracker tracker_;
   dds::DataWriter* writer_ = nullptr;
   std::string ros_topic_;
   std::string_view dds_type_;
+  std::uint64_t counted_graph_ = 0;
+  std::uint64_t counted_matches_ = 0;
+  int counted_matched_ = 0;
+  int gone_ = 0;
 };
 
 // --max-rate: a frame goes out when at least one period passed since the last one sent, less a

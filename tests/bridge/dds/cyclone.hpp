@@ -80,6 +80,8 @@ class CycloneReader {
   CycloneReader(const CycloneReader&) = delete;
   CycloneReader& operator=(const CycloneReader&) = delete;
 
+  dds_entity_t handle() const { return reader_; }
+
   // Takes the next sample and hands it to `use`; false when none came within `timeout`.
   template <typename Use>
   bool take(Use&& use, std::chrono::milliseconds timeout = std::chrono::milliseconds(30'000)) {

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <optional>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -272,6 +273,72 @@ TEST(BridgeReview, TheCompressedTopicAndTheFinalReportCountWhatWasSent) {
             json_counter(last, raw_topic, "bridged") + json_counter(last, raw_topic, "failed") +
                 json_counter(last, raw_topic, "torn"))
       << last;
+}
+
+// The ParticipantEntitiesInfo an rmw publishes for a participant with one node.
+struct GraphMessage {
+  rmw_dds_common_msg_dds__NodeEntitiesInfo_ node{};
+  std::vector<rmw_dds_common_msg_dds__Gid_> readers;
+  rmw_dds_common_msg_dds__ParticipantEntitiesInfo_ info{};
+  GraphMessage(dds_entity_t participant, std::vector<dds_entity_t> reader_entities) {
+    dds_guid_t guid;
+    dds_get_guid(participant, &guid);
+    std::memcpy(info.gid.data, guid.v, 16);
+    for (dds_entity_t r : reader_entities) {
+      dds_get_guid(r, &guid);
+      rmw_dds_common_msg_dds__Gid_ gid;
+      std::memcpy(gid.data, guid.v, 16);
+      readers.push_back(gid);
+    }
+    std::strcpy(node.node_namespace, "/");
+    std::strcpy(node.node_name, "viewer");
+    node.reader_gid_seq._buffer = readers.data();
+    node.reader_gid_seq._length = node.reader_gid_seq._maximum = static_cast<std::uint32_t>(readers.size());
+    info.node_entities_info_seq._buffer = &node;
+    info.node_entities_info_seq._length = info.node_entities_info_seq._maximum = 1;
+  }
+};
+
+// M1: a Cyclone DDS (rmw_cyclonedds) reader deleted while its participant lives stayed matched:
+// the bridge went on serializing and sending to it. A ROS 2 node says so on ros_discovery_info.
+TEST(BridgeReview, AReaderItsRos2NodeDroppedIsNoLongerServed) {
+  SKIP_WITHOUT_NETWORK();
+  StreamGuard stream(unique_name("m1"));
+  sim::StreamSpec spec;
+  spec.name = stream.name;
+  spec.layout = sim::Layout::of(sim::ImageLayout::packed(16, 12, sim::PixelFormat::mono8));
+  FramePump pump(spec);
+  ASSERT_TRUE(pump.ok()) << pump.error();
+  Process bridge = start_bridge({"--publish", stream.name});
+  const std::string topic = stream.name + "/image_raw";
+
+  CycloneParticipant node;
+  CycloneWriter graph(node, &rmw_dds_common_msg_dds__ParticipantEntitiesInfo__desc, "ros_discovery_info",
+                      EndpointQos{.reliable = true, .transient_local = true, .depth = 1});
+  std::optional<CycloneReader<Image>> images;
+  images.emplace(node, &sensor_msgs_msg_dds__Image__desc, "rt" + topic);
+  GraphMessage with_reader(node.handle(), {images->handle()});
+  graph.write(&with_reader.info);
+  ASSERT_TRUE(images->take([](const Image&) {})) << bridge.err();
+  ASSERT_FALSE(wait_counter(bridge, topic, "serialized", 1).empty()) << bridge.err();
+
+  images.reset();  // the subscription goes; the participant (the node) stays
+  GraphMessage without_reader(node.handle(), {});
+  graph.write(&without_reader.info);
+  std::string idle;
+  for (int i = 0; i < 300 && idle.empty(); ++i) {  // a hang guard, not a timing check
+    auto line = bridge.wait_for_line("\"topics\"");
+    if (!line) break;
+    if (json_counter(*line, topic, "matched") == 0) idle = *line;
+  }
+  ASSERT_FALSE(idle.empty()) << "the reader stayed matched\n" << bridge.err();
+  // From now on frames are left alone, not serialized.
+  const long long serialized = json_counter(idle, topic, "serialized");
+  const std::string later = wait_counter(bridge, topic, "no_reader", json_counter(idle, topic, "no_reader") + 5);
+  ASSERT_FALSE(later.empty()) << bridge.err();
+  EXPECT_EQ(json_counter(later, topic, "serialized"), serialized) << later;
+  bridge.signal(SIGTERM);
+  EXPECT_EQ(bridge.wait(), 0) << bridge.err();
 }
 
 }  // namespace

@@ -8,8 +8,11 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <string_view>
 #include <vector>
+
+#include "sim/result.hpp"
 
 namespace sim::ros2 {
 
@@ -32,5 +35,19 @@ struct NodeEntities {
 // The serialized message (XCDR1 little endian) of one participant with its nodes.
 std::vector<std::byte> encode_participant_entities_info(const Gid& participant,
                                                         std::span<const NodeEntities> nodes);
+
+// What a received ParticipantEntitiesInfo says: the participant, its nodes ("/ns/name" as
+// ROS names them), and every reader and writer GID of all its nodes.
+struct ParticipantEntities {
+  Gid participant{};
+  std::vector<std::string> nodes;
+  std::vector<Gid> readers;
+  std::vector<Gid> writers;
+};
+
+// Most nodes one message may list here (a process with more is not a sensor pipeline).
+inline constexpr std::size_t max_graph_nodes = 1024;
+
+Expected<ParticipantEntities> decode_participant_entities_info(std::span<const std::byte> message);
 
 }  // namespace sim::ros2
