@@ -1,12 +1,15 @@
 // SPDX-License-Identifier: Apache-2.0
 // The C API: the paper's five calls, their error codes and SIM_lastError.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstring>
 #include <string>
 #include <thread>
 
+#include "../../sim/region.hpp"
 #include "sim/sim.h"
 #include "sim_test/frames.hpp"
 
@@ -148,5 +151,37 @@ TEST(CApi, BadSensorDescriptionIsRefusedWithOneSentence) {
   EXPECT_EQ(SIM_writerSetSensorInfo(w, nullptr), SIM_EINVAL);
   EXPECT_EQ(SIM_readerSensorInfo(nullptr, &info), SIM_EINVAL);
   EXPECT_EQ(SIM_readerSensorGeneration(nullptr), 0u);
+  SIM_writerClose(w);
+}
+
+TEST(CApi, DamagedSensorDescriptionIsAnErrorWhileFramesFlow) {
+  StreamGuard g{unique_name("capisensordamaged")};
+  sim_writer* w = SIM_writerInit(g.name.c_str(), 64);
+  ASSERT_NE(w, nullptr) << SIM_lastError();
+  sim_sensor_info info{};
+  std::strcpy(info.frame_id, "lidar_top");
+  std::strcpy(info.parent_frame, "base_link");
+  ASSERT_EQ(SIM_writerSetSensorInfo(w, &info), 0) << SIM_lastError();
+  sim_reader* r = SIM_readerInit(g.name.c_str(), 64);
+  ASSERT_NE(r, nullptr) << SIM_lastError();
+  // Another process turns the frame name into one that starts with a digit.
+  const int fd = open(("/dev/shm/sim." + g.name.substr(1)).c_str(), O_RDWR);
+  ASSERT_GE(fd, 0);
+  const char digit = '7';
+  const off_t at = static_cast<off_t>(sim::detail::kHeaderOffset + offsetof(sim::detail::RegionHeader, sensor) +
+                                      offsetof(sim::detail::SensorBlock, record) +
+                                      offsetof(sim::detail::SensorRecord, frame_id));
+  ASSERT_EQ(pwrite(fd, &digit, 1, at), 1);
+  close(fd);
+
+  sim_sensor_info got{};
+  EXPECT_EQ(SIM_readerSensorInfo(r, &got), SIM_EREGION);
+  EXPECT_NE(std::string(SIM_lastError()).find("sensor description is damaged"), std::string::npos)
+      << SIM_lastError();
+  char buf[64];
+  sim_frame_info frame{};
+  ASSERT_EQ(SIM_writeData(w, "ok", 2), 0);
+  EXPECT_EQ(SIM_readData(r, buf, sizeof buf, &frame), 2) << SIM_lastError();
+  SIM_readerClose(r);
   SIM_writerClose(w);
 }
