@@ -3,6 +3,8 @@
 //   sim_python_peer write-image  NAME WIDTH HEIGHT   bgr8 frames until stdin closes
 //   sim_python_peer write-points NAME COUNT          LidarPoint frames until stdin closes
 //   sim_python_peer read-image   NAME FRAMES         reads FRAMES bgr8 frames, checks every byte
+//   sim_python_peer describe     NAME               a camera stream with a full sensor
+//                                                   description, one frame, until stdin closes
 // Writers print "ready" once the stream exists. Pixel (x, y, c) of frame seq is pixel_value();
 // point i of frame seq is expected_point(). The Python tests compute the same values.
 #include <poll.h>
@@ -113,12 +115,45 @@ int read_image(const std::string& name, int frames) {
 
 std::uint32_t number(const std::string& text) { return static_cast<std::uint32_t>(std::stoul(text)); }
 
+// The description test_sensor_info.py expects (camera_from_cpp there).
+int describe(const std::string& name) {
+  sim::SensorInfo info;
+  info.frame_id = "camera_left_optical";
+  info.parent_frame = "base_link";
+  info.mounting = sim::Mounting::from_xyz_rpy(0.5, 0.25, 1.5, 0.0, 0.0, 0.0);
+  sim::CameraCalibration c;
+  c.width = 1280;
+  c.height = 720;
+  c.distortion_model = "rational_polynomial";
+  c.d = {0.1, -0.2, 0.001, 0.002, 0.3, 0.01, 0.02, 0.03};
+  c.k = {900, 0, 640, 0, 905, 360, 0, 0, 1};
+  c.p = {900, 0, 640, 0, 0, 905, 360, 0, 0, 0, 1, 0};
+  info.calibration = c;
+  info.identity = {"Lucid", "TRI054S", "221000123", "1.64"};
+  info.time_base = sim::TimeBase::sensor_synchronized;
+  info.time_sync = "PTP slave, locked";
+  sim::StreamSpec spec;
+  spec.name = name;
+  spec.capacity = 64;
+  spec.sensor = info;
+  auto writer = sim::Writer::create(spec);
+  if (!writer) return fail(writer.error().message);
+  const std::byte frame[4] = {};
+  if (writer->write(frame, sizeof frame, sim::realtime_ns()) != sim::WriteStatus::ok) return fail("write");
+  std::printf("ready\n");
+  std::fflush(stdout);
+  while (!stdin_closed(100)) {
+  }
+  return 0;
+}
+
 int main(int argc, char** argv) {
   const std::vector<std::string> args(argv + 1, argv + argc);
   if (args.size() == 4 && args[0] == "write-image")
     return write_image(args[1], number(args[2]), number(args[3]));
   if (args.size() == 3 && args[0] == "write-points") return write_points(args[1], number(args[2]));
   if (args.size() == 3 && args[0] == "read-image") return read_image(args[1], std::stoi(args[2]));
-  std::fprintf(stderr, "usage: sim_python_peer write-image NAME W H | write-points NAME N | read-image NAME FRAMES\n");
+  if (args.size() == 2 && args[0] == "describe") return describe(args[1]);
+  std::fprintf(stderr, "usage: sim_python_peer write-image NAME W H | write-points NAME N | read-image NAME FRAMES | describe NAME\n");
   return 2;
 }

@@ -117,3 +117,25 @@ def test_mounting_from_xyz_rpy_matches_tf2(stream_name):
     np.testing.assert_allclose(
         sim.Mounting.from_xyz_rpy(0, 0, 0, math.pi / 2, 0, math.pi / 2).rotation, [0.5, 0.5, 0.5, 0.5]
     )
+
+
+def test_reads_the_description_a_cpp_writer_in_another_process_set(stream_name, peer):
+    writer = peer("describe", stream_name)
+    writer.expect_line("ready")
+    reader = sim.Reader(stream_name)
+    frame = reader.read()
+    assert frame is not None and frame.info.sensor_generation != 0
+    info = reader.sensor_info
+    assert (info.frame_id, info.parent_frame) == ("camera_left_optical", "base_link")
+    np.testing.assert_array_equal(info.mounting.translation, [0.5, 0.25, 1.5])
+    np.testing.assert_array_equal(info.mounting.rotation, [0.0, 0.0, 0.0, 1.0])
+    calibration = info.calibration
+    assert (calibration.width, calibration.height) == (1280, 720)
+    assert calibration.distortion_model == "rational_polynomial"
+    np.testing.assert_array_equal(calibration.d, [0.1, -0.2, 0.001, 0.002, 0.3, 0.01, 0.02, 0.03])
+    np.testing.assert_array_equal(calibration.k, [[900, 0, 640], [0, 905, 360], [0, 0, 1]])
+    np.testing.assert_array_equal(calibration.p, [[900, 0, 640, 0], [0, 905, 360, 0], [0, 0, 1, 0]])
+    assert info.identity == sim.SensorIdentity(vendor="Lucid", model="TRI054S", serial="221000123", firmware="1.64")
+    assert info.time_base == sim.TimeBase.sensor_synchronized and info.time_sync == "PTP slave, locked"
+    code, _, err = writer.finish()
+    assert code == 0, err
