@@ -120,11 +120,15 @@ void Inbound::run() {
     if (camera_info == nullptr) counters_.problem(error);
   }
   counters_.connected.store(true);
+  std::int64_t next_mismatch_check_ns = 0;
   while (!stop_.load(std::memory_order_relaxed)) {
     dds::SubscriptionMatchedStatus matched;
     reader->get_subscription_matched_status(matched);
     counters_.matched.store(matched.current_count, std::memory_order_relaxed);
-    tell_mismatches(dds_topic);
+    if (const std::int64_t now = monotonic_ns(); now >= next_mismatch_check_ns) {
+      next_mismatch_check_ns = now + 500'000'000;  // twice a second, not per message
+      tell_mismatches(dds_topic);
+    }
     if (camera_info != nullptr) take_all(camera_info, &camera_info_sink_);
     if (!reader->wait_for_unread_message(eprosima::fastrtps::Duration_t(0, 100'000'000))) continue;
     take_all(reader, this);
