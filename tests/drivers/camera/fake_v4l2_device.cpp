@@ -190,6 +190,7 @@ int FakeV4l2Device::ioctl(int fd, unsigned long request, void* arg) {
       *caps = {};
       copy_name(caps->driver, sizeof caps->driver, "simfake");
       copy_name(caps->card, sizeof caps->card, "SIM fake camera");
+      copy_name(caps->bus_info, sizeof caps->bus_info, "platform:simfake-0");
       caps->device_caps = V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_STREAMING;
       caps->capabilities = caps->device_caps | V4L2_CAP_DEVICE_CAPS;
       return 0;

@@ -261,6 +261,63 @@ TEST_F(AravisDriver, AMissingCameraIsOneSentenceAndExitOne) {
 
 }  // namespace
 
+// A 128x96 calibration in camera_calibration_parsers YAML, written by hand.
+std::string write_calibration(const std::string& path, int width, int height) {
+  std::ofstream(path) << "image_width: " << width << "\nimage_height: " << height
+                      << "\ncamera_name: gige\ncamera_matrix: {rows: 3, cols: 3, data: [110.5, 0, "
+                         "64, 0, 111, 48, 0, 0, 1]}\ndistortion_model: plumb_bob\n"
+                         "distortion_coefficients: {rows: 1, cols: 5, data: [0.01, 0, 0, 0, 0]}\n"
+                         "rectification_matrix: {rows: 3, cols: 3, data: [1, 0, 0, 0, 1, 0, 0, 0, 1]}\n"
+                         "projection_matrix: {rows: 3, cols: 4, data: [110.5, 0, 64, 0, 0, 111, 48, 0, "
+                         "0, 0, 1, 0]}\n";
+  return path;
+}
+
+TEST_F(AravisDriver, TheStreamCarriesTheDeviceInfoTheClockAndTheCalibration) {
+  FakeGvCamera camera("SIMINFO");
+  ASSERT_TRUE(camera.running());
+  const std::string yaml = write_calibration(log + ".yaml", 128, 96);
+  spawn({"127.0.0.1", "--stream", stream, "--pixel-format", "Mono8", "--output", "mono8", "--roi",
+         "0", "0", "128", "96", "--fps", "20", "-q", "--camera-info", yaml, "--frame-id",
+         "gige_optical", "--parent-frame", "camera_mount", "--x", "0.1"});
+  auto reader = open_reader();
+  ASSERT_TRUE(reader) << output();
+  auto info = reader->sensor_info();
+  std::remove(yaml.c_str());
+  ASSERT_TRUE(info) << info.error().message;
+  ASSERT_TRUE(info->has_value());
+  const sim::SensorInfo& s = **info;
+  EXPECT_EQ(s.frame_id, "gige_optical");
+  EXPECT_EQ(s.parent_frame, "camera_mount");
+  ASSERT_TRUE(s.mounting.has_value());
+  EXPECT_EQ(s.mounting->translation[0], 0.1);
+  ASSERT_TRUE(s.calibration.has_value());
+  EXPECT_EQ(s.calibration->k[0], 110.5);
+  // Aravis's fake camera names itself in its GenICam features.
+  EXPECT_EQ(s.identity.vendor, "Aravis");
+  EXPECT_FALSE(s.identity.model.empty());
+  EXPECT_NE(s.identity.serial.find("SIMINFO"), std::string::npos) << s.identity.serial;
+  // No PTP on the fake camera: host receive time, said so.
+  EXPECT_EQ(s.time_base, sim::TimeBase::host);
+  EXPECT_EQ(s.time_sync, "host receive time");
+  kill(pid, SIGTERM);
+  EXPECT_EQ(wait_exit(), 0) << output();
+}
+
+TEST_F(AravisDriver, ACalibrationOfAnotherSizeIsExitTwoAndNoStream) {
+  FakeGvCamera camera("SIMCAL");
+  ASSERT_TRUE(camera.running());
+  const std::string yaml = write_calibration(log + ".yaml", 640, 480);
+  spawn({"127.0.0.1", "--stream", stream, "--pixel-format", "Mono8", "--output", "mono8", "--roi",
+         "0", "0", "128", "96", "-q", "--camera-info", yaml});
+  EXPECT_EQ(wait_exit(), 2) << output();
+  std::remove(yaml.c_str());
+  const std::string message = output();
+  EXPECT_NE(message.find("640x480"), std::string::npos) << message;
+  EXPECT_EQ(message.find('\n'), message.size() - 1) << "one line: " << message;
+  EXPECT_FALSE(sim::Reader::open(stream));
+}
+
 int main(int argc, char** argv) {
   g_skip_reason = sim::testing::enter_private_network(sim::testing::Multicast::off);
   ::testing::InitGoogleTest(&argc, argv);

@@ -590,3 +590,64 @@ TEST(V4l2Tool, UsageErrorsExitWithTwo) {
 
 }  // namespace
 }  // namespace sim::camera
+
+// --- the stream's sensor description (issue 21) --------------------------------------------
+
+namespace sim::camera {
+namespace {
+
+sim::CameraCalibration calibration_of(std::uint32_t width, std::uint32_t height) {
+  sim::CameraCalibration c;
+  c.width = width;
+  c.height = height;
+  c.camera_name = "front";
+  c.d = {-0.28, 0.07, 0.0004, -0.0003, 0.0};
+  c.k = {200.5, 0, 80.25, 0, 201.0, 60.5, 0, 0, 1};
+  c.p = {200.5, 0, 80.25, 0, 0, 201.0, 60.5, 0, 0, 0, 1, 0};
+  return c;
+}
+
+TEST_F(V4l2CaptureTest, TheStreamCarriesTheCalibrationMountingCardAndBus) {
+  config.format.width = 160;
+  config.format.height = 120;
+  sim::SensorInfo sensor;
+  sensor.frame_id = "camera_front_optical";
+  sensor.mounting = sim::Mounting::from_xyz_rpy(1.5, 0, 1.2, -1.5707963, 0, -1.5707963);
+  sensor.calibration = calibration_of(160, 120);
+  config.sensor = sensor;
+  auto capture = start();
+  ASSERT_TRUE(capture) << capture.error().message;
+  Reader reader = open_reader();
+  auto info = reader.sensor_info();
+  ASSERT_TRUE(info) << info.error().message;
+  ASSERT_TRUE(info->has_value());
+  const sim::SensorInfo& s = **info;
+  EXPECT_EQ(s.frame_id, "camera_front_optical");
+  EXPECT_EQ(s.mounting, sensor.mounting);
+  ASSERT_TRUE(s.calibration.has_value());
+  EXPECT_TRUE(*s.calibration == calibration_of(160, 120));
+  EXPECT_EQ(s.identity.model, "SIM fake camera");
+  EXPECT_EQ(s.identity.serial, "platform:simfake-0");
+  EXPECT_EQ(s.time_base, sim::TimeBase::host);
+  EXPECT_EQ(s.point_time, sim::PointTime::none);
+}
+
+TEST_F(V4l2CaptureTest, ACalibrationOfAnotherSizeIsRefusedAndNoStreamIsCreated) {
+  config.format.width = 160;
+  config.format.height = 120;
+  sim::SensorInfo sensor;
+  sensor.frame_id = "camera_front_optical";
+  sensor.calibration = calibration_of(640, 480);
+  config.sensor = sensor;
+  auto capture = start();
+  ASSERT_FALSE(capture);
+  EXPECT_EQ(capture.error().code, sim::ErrorCode::invalid_argument);  // exit 2 in the program
+  EXPECT_NE(capture.error().message.find("640x480"), std::string::npos) << capture.error().message;
+  EXPECT_NE(capture.error().message.find("160x120"), std::string::npos) << capture.error().message;
+  auto reader = Reader::open(config.stream);
+  ASSERT_FALSE(reader);
+  EXPECT_EQ(reader.error().code, sim::ErrorCode::not_found);
+}
+
+}  // namespace
+}  // namespace sim::camera

@@ -248,3 +248,72 @@ TEST_F(ReplayVideo, BadInputFailsWithOneSentence) {
 }
 
 }  // namespace
+
+namespace {
+
+// A camera_calibration_parsers file as ROS's cameracalibrator writes it, written here by hand
+// (not by SIM's writer) for a camera of `width` × `height`.
+std::string calibration_yaml(int width, int height, const std::string& fx = "90.5") {
+  return "image_width: " + std::to_string(width) + "\nimage_height: " + std::to_string(height) +
+         "\ncamera_name: replayed\ncamera_matrix:\n  rows: 3\n  cols: 3\n  data: [" + fx +
+         ", 0, 48.25, 0, 91, 32.5, 0, 0, 1]\ndistortion_model: plumb_bob\n"
+         "distortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [-0.1, 0.01, 0, 0, 0]\n"
+         "rectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n"
+         "projection_matrix:\n  rows: 3\n  cols: 4\n  data: [" + fx +
+         ", 0, 48.25, 0, 0, 91, 32.5, 0, 0, 0, 1, 0]\n";
+}
+
+}  // namespace
+
+TEST_F(ReplayVideo, TheStreamCarriesTheCalibrationFileAndMountingGiven) {
+  const std::string video = write_video("clip.mkv", cv::VideoWriter::fourcc('F', 'F', 'V', '1'), 5);
+  const std::string yaml = (dir / "front.yaml").string();
+  std::ofstream(yaml) << calibration_yaml(kWidth, kHeight);
+  spawn({video, "--stream", stream, "--loop", "-q", "--camera-info", "file://" + yaml,
+         "--frame-id", "camera_front_optical", "--z", "1.4", "--roll", "-1.5707963"});
+  auto reader = open_reader();
+  ASSERT_TRUE(reader) << output();
+  auto info = reader->sensor_info();
+  ASSERT_TRUE(info) << info.error().message;
+  ASSERT_TRUE(info->has_value());
+  const sim::SensorInfo& s = **info;
+  EXPECT_EQ(s.frame_id, "camera_front_optical");
+  EXPECT_EQ(s.parent_frame, "base_link");
+  ASSERT_TRUE(s.mounting.has_value());
+  EXPECT_EQ(s.mounting->translation[2], 1.4);
+  ASSERT_TRUE(s.calibration.has_value());
+  EXPECT_EQ(s.calibration->width, static_cast<std::uint32_t>(kWidth));
+  EXPECT_EQ(s.calibration->camera_name, "replayed");
+  EXPECT_EQ(s.calibration->k[0], 90.5);
+  EXPECT_EQ(s.calibration->k[5], 32.5);
+  EXPECT_EQ(s.calibration->d[0], -0.1);
+  EXPECT_EQ(s.calibration_source, "file://" + yaml);
+  EXPECT_EQ(s.time_base, sim::TimeBase::host);
+  kill(pid, SIGTERM);
+  EXPECT_EQ(wait_exit(), 0) << output();
+}
+
+TEST_F(ReplayVideo, ABadCalibrationIsOneSentenceExitTwoAndNoStream) {
+  const std::string video = write_video("clip.mkv", cv::VideoWriter::fourcc('F', 'F', 'V', '1'), 3);
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {calibration_yaml(640, 480), "640x480"},            // another camera mode
+      {calibration_yaml(kWidth, kHeight, ".nan"), "finite"},  // a number that is not one
+      {"image_width: [96\n", "not valid YAML"},            // malformed
+      {calibration_yaml(kWidth, kHeight).substr(0, calibration_yaml(kWidth, kHeight).find("rect")),
+       "has no 'rectification_matrix'"},  // cut short
+  };
+  int index = 0;
+  for (const auto& [text, expected] : bad) {
+    const std::string yaml = (dir / ("bad" + std::to_string(index++) + ".yaml")).string();
+    std::ofstream(yaml) << text;
+    EXPECT_EQ(run({video, "--stream", stream, "-q", "--camera-info", yaml}), 2) << output();
+    const std::string message = output();
+    EXPECT_EQ(message.rfind("sim_replay_video: ", 0), 0u) << message;
+    EXPECT_NE(message.find(expected), std::string::npos) << message;
+    EXPECT_EQ(message.find('\n'), message.size() - 1) << "one line: " << message;
+    auto reader = sim::Reader::open(stream);
+    ASSERT_FALSE(reader) << "a stream was created for " << expected;
+  }
+  EXPECT_EQ(run({video, "--stream", stream, "-q", "--frame-id", "camera front"}), 2) << output();
+  EXPECT_FALSE(sim::Reader::open(stream));
+}
