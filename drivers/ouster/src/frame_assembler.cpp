@@ -67,40 +67,41 @@ FrameAssembler::FrameAssembler(const Metadata& metadata, AssemblerOptions option
 // beam u (azimuth offset θa = −2π·az/360, altitude φ = 2π·alt/360), the pixel of range r lies
 // at (r − n)·d + o in the lidar frame, d = (cos(θe+θa)·cos φ, sin(θe+θa)·cos φ, sin φ) and
 // o = (T03·cos θe, T03·sin θe, T23) with T the beam-to-lidar transform (T03 = n on FW 2.x).
-// Written as r·d + (o − n·d), then taken to the sensor frame, both parts are fixed per pixel.
+// In the sensor frame that is (r − n)·R·d + (R·o + t): a direction per pixel and an origin per
+// column, so decoding a point is three multiply-adds and the table stays small (12 B a pixel).
 void FrameAssembler::build_lookup_table() {
-  const std::size_t pixels = std::size_t{columns_} * beams_;
-  direction_.resize(3 * pixels);
-  origin_.resize(3 * pixels);
-  organized_index_.resize(pixels);
+  direction_.resize(3 * std::size_t{columns_} * beams_);
+  column_origin_.resize(3 * std::size_t{columns_});
+  row_shift_.resize(beams_);
   const auto& m = metadata_;
-  const double n = m.lidar_origin_to_beam_origin_mm;
   const double t03 = m.beam_to_lidar[3];
   const double t23 = m.beam_to_lidar[11];
   const auto& s = m.lidar_to_sensor;
   constexpr double pi = std::numbers::pi;
   for (unsigned col = 0; col < columns_; ++col) {
     const double encoder = 2 * pi * (1.0 - static_cast<double>(col) / columns_);
+    const double o[3] = {t03 * std::cos(encoder), t03 * std::sin(encoder), t23};
+    for (unsigned row = 0; row < 3; ++row) {
+      const double* r = &s[4 * row];
+      column_origin_[3 * col + row] = static_cast<float>((r[0] * o[0] + r[1] * o[1] + r[2] * o[2] + r[3]) / 1000.0);
+    }
     for (unsigned u = 0; u < beams_; ++u) {
       const double azimuth = encoder - 2 * pi * m.beam_azimuth_deg[u] / 360.0;
       const double altitude = 2 * pi * m.beam_altitude_deg[u] / 360.0;
       const double d[3] = {std::cos(azimuth) * std::cos(altitude),
                            std::sin(azimuth) * std::cos(altitude), std::sin(altitude)};
-      const double o[3] = {t03 * std::cos(encoder) - n * d[0], t03 * std::sin(encoder) - n * d[1],
-                           t23 - n * d[2]};
       const std::size_t at = std::size_t{u} * columns_ + col;
       for (unsigned row = 0; row < 3; ++row) {
         const double* r = &s[4 * row];
         direction_[3 * at + row] = static_cast<float>((r[0] * d[0] + r[1] * d[1] + r[2] * d[2]) / 1000.0);
-        origin_[3 * at + row] =
-            static_cast<float>((r[0] * o[0] + r[1] * o[1] + r[2] * o[2] + r[3]) / 1000.0);
       }
-      const long shift = m.pixel_shift_by_row[u];
-      const long w = columns_;
-      const auto destaggered = static_cast<std::uint32_t>(((col + shift) % w + w) % w);
-      organized_index_[at] = u * columns_ + destaggered;
     }
   }
+  const long w = columns_;
+  for (unsigned u = 0; u < beams_; ++u) {
+    row_shift_[u] = static_cast<unsigned>((m.pixel_shift_by_row[u] % w + w) % w);
+  }
+  beam_origin_mm_ = static_cast<float>(m.lidar_origin_to_beam_origin_mm);
 }
 
 std::size_t FrameAssembler::max_points() const noexcept {
@@ -250,22 +251,22 @@ void FrameAssembler::decode_columns(const LidarPacket& packet) noexcept {
         case IntensityField::automatic: intensity = intensity2 = px.near_ir; break;
       }
       if (organized) {
-        const std::size_t at = organized_index_[lut];
-        write_point(at, u, lut, px.range_mm, intensity, col.time_offset, 0);
-        if (second) write_point(at + image, u, lut, px.range2_mm, intensity2, col.time_offset, 1);
+        const std::size_t at = organized_index(u, col.m);
+        write_point(at, u, col.m, lut, px.range_mm, intensity, col.time_offset, 0);
+        if (second) write_point(at + image, u, col.m, lut, px.range2_mm, intensity2, col.time_offset, 1);
       } else {
         if (px.range_mm != 0 && px.range_mm >= min_range_mm_ && px.range_mm <= max_range_mm_) {
-          write_point(dense_count_++, u, lut, px.range_mm, intensity, col.time_offset, 0);
+          write_point(dense_count_++, u, col.m, lut, px.range_mm, intensity, col.time_offset, 0);
         }
         if (second && px.range2_mm != 0 && px.range2_mm >= min_range_mm_ && px.range2_mm <= max_range_mm_) {
-          write_point(dense_count_++, u, lut, px.range2_mm, intensity2, col.time_offset, 1);
+          write_point(dense_count_++, u, col.m, lut, px.range2_mm, intensity2, col.time_offset, 1);
         }
       }
     }
   }
 }
 
-void FrameAssembler::write_point(std::size_t index, unsigned row, std::size_t lut,
+void FrameAssembler::write_point(std::size_t index, unsigned row, unsigned column, std::size_t lut,
                                  std::uint32_t range_mm, float intensity, std::uint32_t time_offset,
                                  std::uint8_t return_index) noexcept {
   if (!attached_ || index >= output_.size()) {
@@ -275,9 +276,9 @@ void FrameAssembler::write_point(std::size_t index, unsigned row, std::size_t lu
   LidarPoint& p = output_[index];
   // Out of the range limits counts as no return: the organised slot stays at the origin.
   if (range_mm != 0 && range_mm >= min_range_mm_ && range_mm <= max_range_mm_) {
-    const auto r = static_cast<float>(range_mm);
+    const float r = static_cast<float>(range_mm) - beam_origin_mm_;
     const float* d = &direction_[3 * lut];
-    const float* o = &origin_[3 * lut];
+    const float* o = &column_origin_[3 * std::size_t{column}];
     p.x = r * d[0] + o[0];
     p.y = r * d[1] + o[1];
     p.z = r * d[2] + o[2];
@@ -299,7 +300,7 @@ void FrameAssembler::fill_missing_columns() noexcept {
     for (unsigned u = 0; u < beams_; ++u) {
       const std::size_t lut = std::size_t{u} * columns_ + m;
       for (unsigned r = 0; r < returns_; ++r) {
-        write_point(organized_index_[lut] + r * image, u, lut, 0, 0, 0, static_cast<std::uint8_t>(r));
+        write_point(organized_index(u, m) + r * image, u, m, lut, 0, 0, 0, static_cast<std::uint8_t>(r));
       }
     }
   }

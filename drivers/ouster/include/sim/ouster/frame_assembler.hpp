@@ -122,7 +122,7 @@ class FrameAssembler {
   void decode(const LidarPacket& packet) noexcept;
   template <Profile P>
   void decode_columns(const LidarPacket& packet) noexcept;
-  void write_point(std::size_t index, unsigned row, std::size_t lut, std::uint32_t range_mm,
+  void write_point(std::size_t index, unsigned row, unsigned column, std::size_t lut, std::uint32_t range_mm,
                    float intensity, std::uint32_t time_offset, std::uint8_t return_index) noexcept;
   std::optional<CompletedFrame> close() noexcept;
   void fill_missing_columns() noexcept;
@@ -135,12 +135,18 @@ class FrameAssembler {
   std::uint32_t min_range_mm_ = 0;
   std::uint32_t max_range_mm_ = 0;
   IntensityField intensity_ = IntensityField::signal;
-  // Per pixel, beam-major (u·W + measurement_id, the order decode walks them): xyz =
-  // range_mm · direction + origin, metres, sensor frame.
-  std::vector<float> direction_;  // 3 per pixel
-  std::vector<float> origin_;
-  // Per pixel (same order): the destaggered point's index row-major, u·W + (m + shift) % W.
-  std::vector<std::uint32_t> organized_index_;
+  // xyz = (range_mm − beam_origin_mm_) · direction + column origin, metres, sensor frame.
+  // direction_: 3 per pixel, beam-major (u·W + measurement_id, the order decode walks them).
+  std::vector<float> direction_;
+  std::vector<float> column_origin_;  // 3 per column
+  float beam_origin_mm_ = 0;
+  // Destaggering: row u's column m lands in column (m + row_shift_[u]) mod W.
+  std::vector<unsigned> row_shift_;
+  std::size_t organized_index(unsigned u, unsigned m) const noexcept {
+    unsigned c = m + row_shift_[u];
+    if (c >= columns_) c -= columns_;
+    return std::size_t{u} * columns_ + c;
+  }
 
   // The frame in progress.
   bool open_ = false;
