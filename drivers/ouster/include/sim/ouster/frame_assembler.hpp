@@ -92,9 +92,9 @@ struct AssemblerCounters {
 
 class FrameAssembler {
  public:
-  // Fails (one sentence) for inverted or negative range limits or pixel shifts the frame
-  // cannot hold.
-  // Fails (one sentence) for more than max_columns_per_packet columns per packet.
+  // Fails (one sentence) for inverted, negative or non-finite range limits, beam tables of the
+  // wrong length, more than max_columns_per_packet columns per packet, or signal asked of a
+  // profile without it.
   static Expected<FrameAssembler> create(const Metadata& metadata, AssemblerOptions options);
 
   static constexpr unsigned max_columns_per_packet = 64;
