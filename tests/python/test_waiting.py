@@ -17,8 +17,8 @@ import sys, sim
 name, call = sys.argv[1], sys.argv[2]
 writer = sim.Writer(name, capacity=16)
 reader = sim.Reader(name)
-print("waiting", flush=True)
 try:
+    print("waiting", flush=True)  # inside the try: a signal that comes early is caught all the same
     reader.read_next(None) if call == "read_next" else reader.wait(None)
     print("returned", flush=True)
 except KeyboardInterrupt:
