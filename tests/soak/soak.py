@@ -14,6 +14,7 @@ import argparse
 import ctypes
 import json
 import os
+import queue
 import random
 import shutil
 import signal
@@ -27,6 +28,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 HESAI = os.path.join(ROOT, "tests", "drivers", "hesai", "data")
 CAMERA_PERIOD_MS = 1000 / 30
+FRAME_KIB = 1920 * 1200 * 3 // 1024  # the largest frame of the soak
 LIDAR_PERIOD_MS = 100.0
 STOP_GRACE_S = 15  # a process asked to stop with SIGTERM must be gone by then (else: a hang)
 SILENCE_S = 20     # a reader that prints nothing for this long hangs
@@ -35,8 +37,36 @@ _libc = ctypes.CDLL(None, use_errno=True)
 
 
 def _die_with_parent():
-    """In the child: SIGKILL when the soak itself dies, so nothing is left behind."""
+    """In the child: SIGKILL when the thread that started it ends (the spawner, which lives as
+    long as the soak), so nothing is left behind however the soak ends."""
     _libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+
+
+class Spawner:
+    """Starts every child from one thread that lives as long as the soak: PR_SET_PDEATHSIG fires
+    when the starting *thread* ends, so children started by the chaos loop's short threads would
+    otherwise die with them."""
+
+    def __init__(self):
+        self.requests = queue.Queue()
+        threading.Thread(target=self._serve, daemon=True).start()
+
+    def _serve(self):
+        while True:
+            make, done = self.requests.get()
+            try:
+                done.append(make())
+            except Exception as e:  # handed back to the caller
+                done.append(e)
+
+    def run(self, make):
+        done = []
+        self.requests.put((make, done))
+        while not done:
+            time.sleep(0.005)
+        if isinstance(done[0], Exception):
+            raise done[0]
+        return done[0]
 
 
 class Child:
@@ -44,16 +74,18 @@ class Child:
 
     def __init__(self, soak, name, argv, long_lived, env=None):
         self.soak, self.name, self.argv, self.long_lived = soak, name, argv, long_lived
-        self.log_path = os.path.join(soak.workdir, f"{name}.{len(soak.history.get(name, []))}.log")
+        file_name = name.replace("/", "_")
+        self.log_path = os.path.join(soak.workdir, f"{file_name}.{len(soak.history.get(name, []))}.log")
         self.log = open(self.log_path, "w")
-        self.proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=self.log, text=True,
-                                     env=env, preexec_fn=_die_with_parent)
+        self.proc = soak.spawner.run(lambda: subprocess.Popen(
+            argv, stdout=subprocess.PIPE, stderr=self.log, text=True, env=env, preexec_fn=_die_with_parent))
         self.pid = self.proc.pid
         self.started = time.monotonic()
         self.last_line = self.started
         self.stats = None
         self.other = []  # JSON lines that are neither stats nor violations (sim_foxglove's port)
         self.signalled = None
+        self.handled = False  # whether it had its handler for the signal it was sent
         self.ended_reported = False
         self.reader = threading.Thread(target=self._read, daemon=True)
         self.reader.start()
@@ -75,8 +107,19 @@ class Child:
     def alive(self):
         return self.proc.poll() is None
 
+    def handles(self, sig):
+        """Whether the process has installed a handler for `sig` (SigCgt in /proc/PID/status)."""
+        try:
+            for line in open(f"/proc/{self.pid}/status"):
+                if line.startswith("SigCgt:"):
+                    return bool(int(line.split()[1], 16) >> (sig - 1) & 1)
+        except OSError:
+            pass
+        return False
+
     def send(self, sig):
         self.signalled = sig
+        self.handled = self.handles(sig)
         try:
             self.proc.send_signal(sig)
         except ProcessLookupError:
@@ -96,7 +139,8 @@ class Child:
         return code
 
     def stderr_tail(self):
-        self.log.flush()
+        if not self.log.closed:
+            self.log.flush()
         with open(self.log_path, errors="replace") as f:
             return f.read()[-400:].strip()
 
@@ -107,6 +151,7 @@ class Soak:
         self.rng = random.Random(args.seed)
         self.bin = lambda rel: os.path.join(args.build, rel)
         self.workdir = tempfile.mkdtemp(prefix="sim_soak_")
+        self.spawner = Spawner()
         tag = f"{os.getpid()}"
         self.cameras = [f"/soak{tag}_cam{i}" for i in range(7)]
         self.lidars = [f"/soak{tag}_lidar{i}" for i in range(2)]
@@ -215,8 +260,10 @@ class Soak:
 
     def start_record(self):
         out = os.path.join(self.workdir, "segment.mcap")
+        # One LiDAR, lz4: recording both at 40 MB/s with zstd would take a core of the CI machine.
         self.start("sim_record", [self.bin("tools/sim_record/sim_record"), "-o", out, "--duration", "10",
-                                  "--wait-for-streams", "--quiet", "--json", *self.lidars])
+                                  "--compression", "lz4", "--wait-for-streams", "--quiet", "--json",
+                                  self.lidars[1]])
 
     # ---- resources of the long-lived processes -----------------------------------------------
     def long_lived_pids(self):
@@ -256,6 +303,8 @@ class Soak:
         """A SIGTERM must end a program with exit 0 in time; a SIGKILL ends it by that signal."""
         if code is None:
             self.fail(child.name, f"still running {STOP_GRACE_S} s after {sig.name}")
+        elif sig == signal.SIGTERM and code == -signal.SIGTERM and not child.handled:
+            pass  # signalled before it installed its handler (still starting): it stopped at once
         elif sig == signal.SIGTERM and code != 0:
             self.fail(child.name, f"exit {code} after SIGTERM: {child.stderr_tail()}")
         elif sig == signal.SIGKILL and code not in (-signal.SIGKILL, 0):
@@ -278,7 +327,7 @@ class Soak:
         if self.rng.random() < 0.5:  # the stream is dead now: remove it, a new region will be made
             rm = subprocess.run([self.bin("tools/sim_rm"), "--dead", stream], capture_output=True, text=True)
             self.chaos["sim_rm_dead"] += 1
-            if rm.returncode != 0:
+            if rm.returncode != 0 and "no stream named" not in rm.stderr:  # (killed before it made one)
                 self.fail("sim_rm", f"--dead {stream}: exit {rm.returncode}: {rm.stderr.strip()}")
             elif "removed" in rm.stdout:
                 self.chaos["sim_rm_dead_removed"] += 1
@@ -378,7 +427,8 @@ class Soak:
     # ---- the run -----------------------------------------------------------------------------
     def run(self):
         seconds = self.args.seconds
-        warmup = max(10.0, 0.08 * seconds)
+        warmup = max(20.0, 0.15 * seconds)  # with chaos: caches and pools reach their size
+        calm = 8.0                            # no chaos, every writer back: the start sample
         settle = max(12.0, min(30.0, 0.05 * seconds))
         self.pictures = os.path.join(self.workdir, "pictures")
         self.python_env = dict(os.environ, PYTHONPATH=self.bin("python"), PYTHONDONTWRITEBYTECODE="1")
@@ -389,9 +439,11 @@ class Soak:
         watcher.start()
         recorder = threading.Thread(target=self.record_loop, daemon=True)
         recorder.start()
-        time.sleep(warmup)
+        time.sleep(5)
+        self.chaos_loop(self.t0 + warmup)
+        time.sleep(calm)
         self.sample_all("start")
-        print(f"soak: everything runs; chaos for {seconds - warmup - settle:.0f} s", flush=True)
+        print(f"soak: warmed up; chaos until {seconds - settle:.0f} s", flush=True)
         self.chaos_loop(self.t0 + seconds - settle)
         # Settled: every writer is back. Every long-lived consumer must still get frames.
         time.sleep(max(2.0, settle - 7))
@@ -459,13 +511,20 @@ class Soak:
                     self.fail(name, "was not running at both resource samples")
                 continue
             a, b = when["start"], when["end"]
-            node = name == "foxglove_client"
-            limits = {"rss_anon_kib": max(65536 if node else 16384, (0.5 if node else 0.25) * a.get("rss_anon_kib", 0)),
+            # The Node client is the test's viewer, not part of the vehicle: its garbage-collected
+            # heap and keep-alive sockets are shown, not judged.
+            judged = name != "foxglove_client"
+            # Private memory: an allocator keeps freed buffers of a frame's size for reuse (glibc
+            # raises its mmap threshold to the largest block freed), so a process that handles
+            # 6.9 MB frames may hold a few more at the end without leaking; a leak of anything per
+            # frame or per chaos event would be far more over thousands of frames and events.
+            limits = {"rss_anon_kib": max(16384, 0.25 * a.get("rss_anon_kib", 0), 4 * FRAME_KIB),
                       "fds": 2, "threads": 2, "shm_regions": 0 if name == "/dev/shm" else 1}
             for key, limit in limits.items():
                 if key in a:
                     rows.append({"process": name, "what": key, "start": a[key], "end": b[key],
-                                 "limit": f"+{limit:.0f}", "ok": b[key] - a[key] <= limit})
+                                 "limit": f"+{limit:.0f}" if judged else "shown",
+                                 "ok": b[key] - a[key] <= limit or not judged})
             if "rss_kib" in a:
                 rows.append({"process": name, "what": "rss_kib (with shared memory touched)", "start": a["rss_kib"],
                              "end": b["rss_kib"], "limit": "shown", "ok": True})

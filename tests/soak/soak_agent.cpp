@@ -20,6 +20,7 @@
 #include <chrono>
 #include <cinttypes>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <deque>
 #include <memory>
@@ -54,7 +55,7 @@ void install_stop() {
 [[noreturn]] void usage(const char* why) {
   std::fprintf(stderr,
                "sim_soak_agent: %s.\nusage: sim_soak_agent writer --stream NAME --hz H "
-               "(--image WxH | --points N)\n       sim_soak_agent read --mode "
+               "(--image WxH | --points N) [--tear-every N]\n       sim_soak_agent read --mode "
                "block|borrow|adaptive NAME:PERIOD_MS...\n       sim_soak_agent waitset "
                "NAME:PERIOD_MS...\n       sim_soak_agent make-pictures DIR --frames N --width W "
                "--height H\n",
@@ -69,6 +70,7 @@ struct WriterOptions {
   double hz = 30;
   std::uint32_t width = 0, height = 0;  // an image stream (bgr8)
   std::uint64_t points = 0;             // or a point stream of up to this many points
+  std::uint64_t tear_every = 0;         // the checks' own test: every Nth frame is torn on purpose
 };
 
 sim::Layout layout_of(const WriterOptions& o) {
@@ -100,6 +102,9 @@ int run_writer(const WriterOptions& o) {
     const std::size_t size = frame_bytes(o, writer->capacity(), seq);
     const std::vector<std::int64_t> carried(history.begin(), history.end());
     soak::fill(loan.bytes().subspan(0, size), seq, carried, index_words);
+    if (o.tear_every > 0 && seq % o.tear_every == 0) {  // its second half from the frame before
+      soak::fill(loan.bytes().subspan(size / 2 / 8 * 8, size - size / 2 / 8 * 8), seq - 1, {}, index_words);
+    }
     next += period;
     std::this_thread::sleep_until(next);
     const auto stamp = std::chrono::system_clock::now().time_since_epoch();
@@ -148,7 +153,7 @@ class WriterDelay {
  public:
   std::int64_t now(sim::Reader& reader) {
     const std::int64_t t = monotonic_ns();
-    if (t - refreshed_ns_ > 1'000'000'000) {
+    if (t - refreshed_ns_ > 200'000'000) {  // a restarted writer is a new process
       refreshed_ns_ = t;
       const int pid = reader.status().writer_pid;
       if (pid != pid_) {
@@ -184,8 +189,8 @@ class WaitClock {
     const std::int64_t own_end = own_.now();
     const std::int64_t writer_end = writer.now(reader);
     wait_.own_delay_ns = own_start_ >= 0 && own_end >= 0 ? own_end - own_start_ : 0;
-    wait_.writer_delay_ns =
-        writer.pid() == pid_ && writer_start_ >= 0 && writer_end >= 0 ? writer_end - writer_start_ : 0;
+    wait_.writer_delay_known = writer.pid() == pid_ && writer_start_ >= 0 && writer_end >= 0;
+    wait_.writer_delay_ns = wait_.writer_delay_known ? writer_end - writer_start_ : 0;
     return wait_;
   }
   // After a timeout: how long a frame newer than the last delivered had been waiting, net.
@@ -214,14 +219,16 @@ std::optional<sim::Reader> open_when_there(const std::string& name, sim::WaitMod
 }
 
 // Reads the newest frame (copy or borrow) and checks it. False when nothing was delivered.
+// `reopens_before`: the reader's count of regions followed when the wait began.
 bool take_frame(sim::Reader& reader, StreamCheck& check, bool borrow, std::vector<std::byte>& buffer,
-                const Wait& wait) {
+                Wait wait, std::uint64_t reopens_before) {
   if (borrow) {
     sim::Borrow b = reader.borrow();
     if (b.status() == sim::ReadStatus::checksum_mismatch) check.torn_checksum(b.info().seq);
     if (b.status() != sim::ReadStatus::new_frame) return false;
     const bool ok = whole(b.bytes(), b.info());
     const std::int64_t carried_ns = carried(b.bytes(), b.info(), check.last_seq());
+    wait.new_region = reader.stats().reopens != reopens_before;
     if (!b.still_valid()) {
       check.overwritten();
       return false;
@@ -235,13 +242,22 @@ bool take_frame(sim::Reader& reader, StreamCheck& check, bool borrow, std::vecto
   if (status == sim::ReadStatus::checksum_mismatch) check.torn_checksum(info.seq);
   if (status != sim::ReadStatus::new_frame) return false;
   const sim::span<const std::byte> bytes(buffer.data(), info.size);
+  wait.new_region = reader.stats().reopens != reopens_before;
   check.delivered(info, whole(bytes, info), wait, carried(bytes, info, check.last_seq()));
   return true;
 }
 
 // ---- readers of one stream: blocking, borrowing, adaptive ---------------------------------------
 
+// The checks' own test: SIM_SOAK_OVERSLEEP_MS makes every wait sleep that long first, as a reader
+// that slept through a frame would (a plain sleep, not a run delay, so it must be reported).
+std::chrono::milliseconds oversleep() {
+  const char* text = std::getenv("SIM_SOAK_OVERSLEEP_MS");
+  return std::chrono::milliseconds(text ? std::atoi(text) : 0);
+}
+
 void read_stream(StreamCheck& check, sim::WaitMode mode, bool borrow) {
+  static const auto inject = oversleep();
   std::vector<std::byte> buffer;
   WaitClock clock;
   while (!g_stop) {
@@ -252,22 +268,22 @@ void read_stream(StreamCheck& check, sim::WaitMode mode, bool borrow) {
     std::uint64_t reopens = reader->stats().reopens;
     std::int64_t gone_since = 0;
     while (!g_stop) {
+      const std::uint64_t reopens_before = reader->stats().reopens;
       clock.begin(*reader, check, writer);
+      if (inject.count() > 0) std::this_thread::sleep_for(inject);
       const auto status = reader->wait(1s);
       const Wait& wait = clock.end(*reader, writer);
+      if (status == sim::ReadStatus::new_frame) {
+        take_frame(*reader, check, borrow, buffer, wait, reopens_before);
+        gone_since = 0;
+      } else if (status == sim::ReadStatus::no_new_frame) {
+        check.timed_out_with_newer(clock.unserved_ns(*reader, check), reader->stats().reopens != reopens_before);
+      }
       if (reader->stats().reopens != reopens) {  // replaced under the same name: followed
         reopens = reader->stats().reopens;
         check.replaced();
       }
-      if (status == sim::ReadStatus::new_frame) {
-        take_frame(*reader, check, borrow, buffer, wait);
-        gone_since = 0;
-        continue;
-      }
-      if (status == sim::ReadStatus::no_new_frame) {
-        check.timed_out_with_newer(clock.unserved_ns(*reader, check), 0);
-        continue;
-      }
+      if (status == sim::ReadStatus::new_frame || status == sim::ReadStatus::no_new_frame) continue;
       // Writer gone (killed by the chaos loop), stale, or the region removed: look again by name
       // after a while (a new writer may have created a new region).
       if (gone_since == 0) gone_since = monotonic_ns();
@@ -312,14 +328,14 @@ bool wait_once(sim::WaitSet& set, std::vector<std::unique_ptr<SetMember>>& membe
   for (std::size_t i = 0; i < members.size(); ++i) {
     auto& m = *members[i];
     const Wait& wait = m.clock.end(*m.reader, m.writer);
+    if ((ready && *ready == i) || set.ready(i)) {
+      if (take_frame(*m.reader, *m.check, true, buffer, wait, m.reopens)) m.gone_since = 0;
+    } else if (!ready) {
+      m.check->timed_out_with_newer(m.clock.unserved_ns(*m.reader, *m.check), m.reader->stats().reopens != m.reopens);
+    }
     if (m.reader->stats().reopens != m.reopens) {
       m.reopens = m.reader->stats().reopens;
       m.check->replaced();
-    }
-    if ((ready && *ready == i) || set.ready(i)) {
-      if (take_frame(*m.reader, *m.check, true, buffer, wait)) m.gone_since = 0;
-    } else if (!ready) {
-      m.check->timed_out_with_newer(m.clock.unserved_ns(*m.reader, *m.check), 0);
     }
     if (m.reader->writer_alive()) {
       m.gone_since = 0;
@@ -456,6 +472,8 @@ int main(int argc, char** argv) {
     const std::string points = value_after(args, "--points");
     if (o.stream.empty() || hz.empty() || image.empty() == points.empty()) usage("writer needs --stream, --hz and --image or --points");
     o.hz = std::stod(hz);
+    const std::string tear = value_after(args, "--tear-every");
+    if (!tear.empty()) o.tear_every = std::stoull(tear);
     if (!points.empty()) o.points = std::stoull(points);
     if (!image.empty() && std::sscanf(image.c_str(), "%ux%u", &o.width, &o.height) != 2) usage("--image is WxH");
     return run_writer(o);

@@ -88,6 +88,7 @@ static double now_s(void) {
 static void read_until_gone(sim_reader *r, const char *name, struct counters *c, unsigned char **buf,
                             size_t *capacity, double *next_print) {
   unsigned long long last_seq = 0;
+  long long last_publish = 0;
   double gone_since = 0;
   while (!stop_requested) {
     sim_frame_info info;
@@ -115,12 +116,14 @@ static void read_until_gone(sim_reader *r, const char *name, struct counters *c,
     if (n < 0 || info.seq == 0) continue;
     ++c->frames;
     if (!whole(*buf, (size_t)n)) { ++c->torn; violation("torn", name, info.seq); }
-    /* A region that replaced another carries its numbering on (docs/protocol.md). */
-    if (last_seq != 0 && info.seq <= last_seq) {
+    /* Not above the previous number is out of order, unless published later: a stream removed
+     * and created anew numbers from 1 again (a replacing region carries the numbering on). */
+    if (last_seq != 0 && info.seq <= last_seq && info.publish_ns <= last_publish) {
       ++c->out_of_order;
       violation("out_of_order", name, info.seq);
     }
     last_seq = info.seq;
+    last_publish = info.publish_ns;
   }
 }
 
@@ -140,9 +143,13 @@ int main(int argc, char **argv) {
   sigaction(SIGINT, &action, NULL);
   while (!stop_requested) {
     sim_reader *r = SIM_readerInit(argv[1], 0);
-    if (!r) {
+    if (!r) { /* no stream now (its writer was killed and the stream removed): look again */
       struct timespec pause = {0, 20000000};
       nanosleep(&pause, NULL);
+      if (now_s() >= next_print) {
+        print_stats(argv[1], &c, 0);
+        next_print += 1.0;
+      }
       continue;
     }
     ++c.opens;

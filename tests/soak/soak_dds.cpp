@@ -11,7 +11,7 @@
 // SIGTERM ends the bridge with SIGTERM and reports its exit code; the namespace goes with the two
 // processes. Exit 0 only if the bridge lived until asked to stop and then exited 0.
 #include <signal.h>
-#include <spawn.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -29,8 +29,6 @@
 #include "cyclone.hpp"
 #include "sim_test/network.hpp"
 
-extern char** environ;
-
 namespace {
 
 using namespace std::chrono_literals;
@@ -45,12 +43,19 @@ struct TopicCounters {
   std::int64_t last_stamp = 0;
 };
 
+// The bridge dies with this process, however it ends (nothing is left behind).
 pid_t start_bridge(const std::vector<std::string>& argv) {
   std::vector<char*> args;
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
-  pid_t pid = -1;
-  if (posix_spawn(&pid, args[0], nullptr, nullptr, args.data(), environ) != 0) return -1;
+  const pid_t parent = getpid();
+  const pid_t pid = fork();
+  if (pid == 0) {
+    prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (getppid() != parent) _exit(127);  // the parent died before prctl
+    execv(args[0], args.data());
+    _exit(127);
+  }
   return pid;
 }
 

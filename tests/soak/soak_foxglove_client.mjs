@@ -9,6 +9,7 @@
 // Follows channels that are re-advertised (a stream replaced with another layout). One JSON line
 // per second: messages per topic, stamps that went backwards, undecodable messages, page fetches
 // that failed. Exits 1 if the server closes the connection; SIGTERM ends it with exit 0.
+import http from "node:http";
 import { createRequire } from "node:module";
 import path from "node:path";
 import { fileURLToPath } from "node:url";
@@ -81,31 +82,49 @@ client.on("close", () => {
   process.exit(1);
 });
 
+// One GET on a connection of its own (no keep-alive pool), as a browser tab opened and closed
+// would: the status and the body's length, or the error.
+function get(target) {
+  return new Promise((resolve) => {
+    const request = http.get(base + target, { agent: false, timeout: 10_000 }, (response) => {
+      let length = 0;
+      response.on("data", (chunk) => { length += chunk.length; });
+      response.on("end", () => resolve({ status: response.statusCode, length }));
+      response.on("error", (e) => resolve({ error: String(e) }));
+    });
+    request.on("timeout", () => request.destroy(new Error("no answer within 10 s")));
+    request.on("error", (e) => resolve({ error: String(e) }));
+  });
+}
+
 async function fetchPage() {
   const wanted = [["/", true], ["/api/streams", true]];
   for (const t of topics) wanted.push([`/api/${t.includes("lidar") ? "topdown" : "image"}?stream=${encodeURIComponent(t)}`, false]);
   for (const [target, mustServe] of wanted) {
     page.fetches += 1;
-    try {
-      const response = await fetch(base + target, { signal: AbortSignal.timeout(10_000) });
-      const body = Buffer.from(await response.arrayBuffer());
-      if (response.status === 200 && body.length > 0) {
-        if (!mustServe) page.images += 1;
-      } else if (!mustServe && response.status === 503) {
-        page.image_unavailable += 1;  // the stream is between writers at this moment
-      } else {
-        page.failures += 1;
-        violation("page", "", `${target}: HTTP ${response.status}`);
-      }
-    } catch (e) {
+    const r = await get(target);
+    if (r.status === 200 && r.length > 0) {
+      if (!mustServe) page.images += 1;
+    } else if (!mustServe && (r.status === 503 || r.status === 404)) {
+      // The stream is between writers, removed, or a LiDAR stream for now (layout replaced).
+      page.image_unavailable += 1;
+    } else {
       page.failures += 1;
-      violation("page", "", `${target}: ${e}`);
+      violation("page", "", `${target}: ${r.error ?? `HTTP ${r.status}`}`);
     }
   }
 }
 
 let stopping = false;
-const timers = [setInterval(() => print(false), 1000), setInterval(() => void fetchPage(), 2000)];
+let fetching = false;  // one round of fetches at a time, however slow the server is
+const timers = [
+  setInterval(() => print(false), 1000),
+  setInterval(() => {
+    if (fetching) return;
+    fetching = true;
+    void fetchPage().finally(() => { fetching = false; });
+  }, 2000),
+];
 for (const signal of ["SIGTERM", "SIGINT"]) {
   process.on(signal, () => {
     stopping = true;
