@@ -47,6 +47,8 @@ std::optional<AuxiliaryPacket> parse_auxiliary(std::span<const std::byte> p) noe
 std::optional<ImuSample> parse_imu(std::span<const std::byte> p) noexcept {
   if (p.size() < 42) return std::nullopt;
   ImuSample s;
+  // Taken as (x, y, z, w), the order the vendor labels. Unlike the L2's (whose real samples show
+  // (w, x, y, z)), no public L1 sample settles it: undetermined (docs/unitree.md).
   for (std::size_t i = 0; i < 4; ++i) s.quaternion[i] = le::f32(p, 4 * i);
   for (std::size_t i = 0; i < 3; ++i) {
     s.angular_velocity[i] = le::f32(p, 16 + 4 * i);

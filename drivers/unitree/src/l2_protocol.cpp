@@ -173,7 +173,10 @@ std::optional<ImuSample> parse_imu(std::span<const std::byte> p) noexcept {
   ImuSample s;
   s.seq = le::u32(p, o::seq);
   s.stamp_ns = std::int64_t{le::u32(p, o::stamp_sec)} * 1'000'000'000 + le::u32(p, o::stamp_nsec);
-  for (std::size_t i = 0; i < 4; ++i) s.quaternion[i] = le::f32(p, o::quaternion + 4 * i);
+  // On the wire (w, x, y, z), whatever the vendor example's label says: decoded real samples
+  // agree with gravity only in this order (docs/unitree.md). Published as (x, y, z, w).
+  s.quaternion[3] = le::f32(p, o::quaternion);
+  for (std::size_t i = 0; i < 3; ++i) s.quaternion[i] = le::f32(p, o::quaternion + 4 * (i + 1));
   for (std::size_t i = 0; i < 3; ++i) {
     s.angular_velocity[i] = le::f32(p, o::angular_velocity + 4 * i);
     s.linear_acceleration[i] = le::f32(p, o::linear_acceleration + 4 * i);

@@ -3,6 +3,7 @@
 // reference notes (§7.2 and §8), scan boundaries, time offsets, storage bounds, IMU.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <numbers>
@@ -265,7 +266,7 @@ TEST(UnitreeL2Decoder, ImuPacket) {
   s.seq = 42;
   s.stamp_sec = 12;
   s.stamp_nsec = 34;
-  s.quaternion = {0.1F, 0.2F, 0.3F, 0.9F};
+  s.quaternion_wxyz = {0.9F, 0.1F, 0.2F, 0.3F};
   s.angular_velocity = {0.01F, -0.02F, 0.03F};
   s.linear_acceleration = {0.5F, -0.25F, 9.81F};
   DecoderOptions options;
@@ -277,10 +278,55 @@ TEST(UnitreeL2Decoder, ImuPacket) {
   const auto& imu = sink.imu_samples[0];
   EXPECT_EQ(imu.seq, 42U);
   EXPECT_EQ(imu.stamp_ns, 12'000'000'034LL);
+  // Published as (x, y, z, w).
+  EXPECT_EQ(imu.quaternion[0], 0.1F);
+  EXPECT_EQ(imu.quaternion[1], 0.2F);
+  EXPECT_EQ(imu.quaternion[2], 0.3F);
   EXPECT_EQ(imu.quaternion[3], 0.9F);
   EXPECT_EQ(imu.angular_velocity[1], -0.02F);
   EXPECT_EQ(imu.linear_acceleration[2], 9.81F);
   EXPECT_EQ(decoder.counters().imu_samples, 1U);
+}
+
+// The decoded samples real L2 units printed (unilidar_sdk2 README, issue #32): the quaternion as
+// it came off the wire, and the acceleration measured with it. Read as (w, x, y, z), the
+// direction of gravity the quaternion predicts in the sensor frame (the third row of its rotation
+// matrix) agrees with the measured acceleration within a few degrees; read as the vendor example
+// labels it, (x, y, z, w), it would be off by 45 to 156 degrees.
+TEST(UnitreeL2Decoder, ImuQuaternionIsReadAsWxyzAgreeingWithGravityInPublishedSamples) {
+  struct Published {
+    std::array<float, 4> wire;
+    std::array<float, 3> acceleration;
+  };
+  const Published samples[] = {
+      {{-0.3645F, 0.0077F, 0.0099F, 0.9293F}, {0.22F, 0.35F, 9.58F}},
+      {{0.9218F, 0.1377F, 0.3574F, 0.0126F}, {-6.46F, 2.88F, 7.27F}},
+  };
+  for (const Published& p : samples) {
+    L2ImuSpec s;
+    s.quaternion_wxyz = p.wire;
+    s.linear_acceleration = p.acceleration;
+    const auto packet = l2_imu_packet(s);
+    float first = 0;  // the first float at offset 28 is the wire's first number
+    std::memcpy(&first, packet.data() + 28, sizeof first);
+    ASSERT_EQ(first, p.wire[0]);
+    VectorSink sink(1);
+    Decoder decoder(DecoderOptions{}, sink);
+    decoder.push(packet, 1);
+    ASSERT_EQ(sink.imu_samples.size(), 1U);
+    const auto& q = sink.imu_samples[0].quaternion;  // x, y, z, w
+    EXPECT_EQ(q[3], p.wire[0]);
+    EXPECT_EQ(q[0], p.wire[1]);
+    const double x = q[0], y = q[1], z = q[2], w = q[3];
+    const double up[3] = {2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)};
+    const double a[3] = {p.acceleration[0], p.acceleration[1], p.acceleration[2]};
+    const double dot = up[0] * a[0] + up[1] * a[1] + up[2] * a[2];
+    const double norms = std::sqrt(up[0] * up[0] + up[1] * up[1] + up[2] * up[2]) *
+                         std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    const double degrees = std::acos(std::min(1.0, dot / norms)) * 180.0 / std::numbers::pi;
+    EXPECT_LT(degrees, 5.0) << "gravity predicted by the quaternion is " << degrees
+                            << " degrees off the measured acceleration";
+  }
 }
 
 // ---- L1 --------------------------------------------------------------------------------------

@@ -84,7 +84,7 @@ L2PointSpec l2_packet_spec(std::uint32_t seq) {
 L2ImuSpec imu_spec() {
   L2ImuSpec s;
   s.seq = 5;
-  s.quaternion = {0.0F, 0.0F, 0.38268343F, 0.9238795F};
+  s.quaternion_wxyz = {0.9238795F, 0.0F, 0.0F, 0.38268343F};
   s.angular_velocity = {0.1F, -0.2F, 0.3F};
   s.linear_acceleration = {0.05F, 0.0F, 9.81F};
   return s;
@@ -192,7 +192,8 @@ TEST(UnitreeDriver, L2OverLoopbackUdp) {
   sim::unitree::ImuSample sample;
   std::memcpy(&sample, imu_buffer.data(), sizeof sample);
   EXPECT_EQ(sample.seq, 5U);
-  EXPECT_EQ(sample.quaternion[2], 0.38268343F);
+  EXPECT_EQ(sample.quaternion[2], 0.38268343F);  // z of (x, y, z, w)
+  EXPECT_EQ(sample.quaternion[3], 0.9238795F);
   EXPECT_EQ(sample.linear_acceleration[2], 9.81F);
 
   // Scan 2: three packets merged into one datagram.
@@ -537,3 +538,44 @@ TEST(UnitreeReplayPcap, BadArgumentsAreRefusedBeforeAnythingIsOpened) {
 #endif
 
 }  // namespace
+
+TEST(UnitreeDriver, TheStreamsCarryTheFrameMountingAndClockGiven) {
+  StreamGuard guard;
+  const std::string stream = unique_name("described");
+  guard.names = {stream, stream + ".imu"};
+  Process driver({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", "0", "--bind-address",
+                  "127.0.0.1", "--stream", stream, "-q", "--frame-id", "lidar_l2",
+                  "--parent-frame", "base_link", "--z", "0.3", "--pitch", "0.2"});
+  ASSERT_TRUE(driver.next_line(kTimeout).has_value()) << driver.err();
+  auto points = open_reader(stream);
+  auto imu = open_reader(stream + ".imu");
+  ASSERT_TRUE(points && imu);
+  auto info = points->sensor_info();
+  ASSERT_TRUE(info) << info.error().message;
+  ASSERT_TRUE(info->has_value());
+  const sim::SensorInfo& s = **info;
+  EXPECT_EQ(s.frame_id, "lidar_l2");
+  ASSERT_TRUE(s.mounting.has_value());
+  EXPECT_EQ(s.mounting->translation[2], 0.3);
+  EXPECT_EQ(s.mounting->rotation, sim::Mounting::from_xyz_rpy(0, 0, 0.3, 0, 0.2, 0).rotation);
+  EXPECT_EQ(s.identity.vendor, "Unitree");
+  EXPECT_EQ(s.identity.model, "L2");
+  EXPECT_EQ(s.point_time, sim::PointTime::after_frame_stamp);
+  EXPECT_EQ(s.time_base, sim::TimeBase::host);
+  auto imu_info = imu->sensor_info();
+  ASSERT_TRUE(imu_info) << imu_info.error().message;
+  ASSERT_TRUE(imu_info->has_value());
+  EXPECT_EQ((*imu_info)->frame_id, "lidar_l2");
+  EXPECT_EQ((*imu_info)->point_time, sim::PointTime::none);
+  driver.signal(SIGTERM);
+  EXPECT_EQ(driver.wait(kTimeout), 0) << driver.err();
+}
+
+TEST(UnitreeDriver, ABadFrameNameIsExitTwoBeforeAnythingIsOpened) {
+  const std::string stream = unique_name("badframe");
+  Process p({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", "0", "--stream", stream,
+             "-q", "--frame-id", "lidar l2"});
+  EXPECT_EQ(p.wait(kTimeout), 2) << p.err();
+  EXPECT_EQ(p.err().find('\n'), p.err().size() - 1) << "one line: " << p.err();
+  EXPECT_FALSE(sim::Reader::open(stream));
+}

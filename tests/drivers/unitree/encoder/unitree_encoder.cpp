@@ -115,7 +115,7 @@ Bytes l2_imu_packet(const L2ImuSpec& s) {
   put_u32(p, 16, 40);
   put_u32(p, 20, s.stamp_sec);
   put_u32(p, 24, s.stamp_nsec);
-  for (std::size_t i = 0; i < 4; ++i) put_f32(p, 28 + 4 * i, s.quaternion[i]);
+  for (std::size_t i = 0; i < 4; ++i) put_f32(p, 28 + 4 * i, s.quaternion_wxyz[i]);
   for (std::size_t i = 0; i < 3; ++i) {
     put_f32(p, 44 + 4 * i, s.angular_velocity[i]);
     put_f32(p, 56 + 4 * i, s.linear_acceleration[i]);

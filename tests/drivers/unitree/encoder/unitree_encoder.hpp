@@ -57,7 +57,9 @@ struct L2ImuSpec {
   std::uint32_t seq = 0;
   std::uint32_t stamp_sec = 0;
   std::uint32_t stamp_nsec = 0;
-  std::array<float, 4> quaternion{0, 0, 0, 1};
+  // In the order on the wire: (w, x, y, z), as real L2 units send it (the vendor example's
+  // (x, y, z, w) label is wrong; see docs/unitree.md).
+  std::array<float, 4> quaternion_wxyz{1, 0, 0, 0};
   std::array<float, 3> angular_velocity{};
   std::array<float, 3> linear_acceleration{};
 };

@@ -10,7 +10,9 @@ namespace sim::unitree {
 
 struct ImuSample {
   std::int64_t stamp_ns = 0;             // sensor clock (L2) or host receive time (L1)
-  float quaternion[4] = {0, 0, 0, 1};    // x, y, z, w
+  // x, y, z, w. The L2 sends (w, x, y, z) and is reordered; the L1's wire order is undetermined
+  // and taken as the vendor labels it (docs/unitree.md).
+  float quaternion[4] = {0, 0, 0, 1};
   float angular_velocity[3] = {0, 0, 0};     // rad/s
   float linear_acceleration[3] = {0, 0, 0};  // m/s²
   std::uint32_t seq = 0;                 // L2 packet seq, or L1 packet_id
