@@ -101,6 +101,9 @@ try {
   assert.equal(cameraPicture.width, h.image.width);
   assert.equal(cameraPicture.height, h.image.height);
   assert.ok(cameraPicture.colours > 50, `camera image has only ${cameraPicture.colours} colours`);
+  // A picture under 320 pixels wide is scaled up to a readable size (review L6).
+  const shownWidth = await page.$eval(`.view[data-stream="${camera}"] img`, (img) => img.getBoundingClientRect().width);
+  assert.ok(shownWidth >= 320, `a 160-pixel picture is shown ${shownWidth} pixels wide`);
   const lidarPicture = await measure(page, lidar);
   assert.ok(lidarPicture.colours > 20, `top-down view has only ${lidarPicture.colours} colours`);
   assert.ok(lidarPicture.lit > 2000, `top-down view shows only ${lidarPicture.lit} bright pixels`);
