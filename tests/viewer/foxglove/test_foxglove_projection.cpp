@@ -1,0 +1,112 @@
+// SPDX-License-Identifier: Apache-2.0
+// The page's projection of LiDAR points into a camera image, as plain math: poses through chains
+// of mountings (up the parent frames to a common one and down), refusals for frames no chain
+// joins and for loops, and the pinhole model with distortion, binning and ROI, checked against
+// values worked out by hand.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "projection.hpp"
+
+namespace {
+
+using sim::foxglove::FrameTransform;
+using sim::foxglove::Pose;
+
+constexpr double kHalf = 0.70710678118654752;
+
+void expect_near(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(a[i], b[i], 1e-9) << "coordinate " << i;
+}
+
+TEST(FoxgloveProjection, APoseGoesUpTheParentFramesAndDownToTheTarget) {
+  // lidar on a roof rack turned 90° left, the rack 2 m up on base_link; the camera 1 m ahead.
+  const std::vector<FrameTransform> mountings = {
+      {"roof_rack", "lidar", sim::Mounting{{0, 0, 0.5}, {0, 0, kHalf, kHalf}}},
+      {"base_link", "roof_rack", sim::Mounting{{0, 0, 2.0}, {0, 0, 0, 1}}},
+      {"base_link", "camera", sim::Mounting{{1.0, 0, 0}, {0, 0, 0, 1}}},
+  };
+  auto pose = sim::foxglove::pose_between(mountings, "lidar", "camera");
+  ASSERT_TRUE(pose) << pose.error().message;
+  // The lidar's +x is the vehicle's +y: (1, 0, 0) in the lidar is (0, 1, 2.5) on base_link,
+  // (-1, 1, 2.5) from the camera.
+  expect_near(pose->apply({1, 0, 0}), {-1, 1, 2.5});
+  expect_near(pose->apply({0, 0, 0}), {-1, 0, 2.5});
+  // And back again.
+  auto back = sim::foxglove::pose_between(mountings, "camera", "lidar");
+  ASSERT_TRUE(back);
+  expect_near(back->apply(pose->apply({0.3, -2, 7})), {0.3, -2, 7});
+}
+
+TEST(FoxgloveProjection, FramesNoChainJoinsAndLoopsAreRefusedWithASentence) {
+  const std::vector<FrameTransform> apart = {
+      {"base_link", "camera", sim::Mounting{}},
+      {"trailer", "lidar", sim::Mounting{}},
+  };
+  auto none = sim::foxglove::pose_between(apart, "lidar", "camera");
+  ASSERT_FALSE(none);
+  EXPECT_NE(none.error().message.find("no chain of mountings"), std::string::npos);
+  const std::vector<FrameTransform> loop = {
+      {"b", "a", sim::Mounting{}},
+      {"a", "b", sim::Mounting{}},
+  };
+  auto looped = sim::foxglove::pose_between(loop, "a", "camera");
+  ASSERT_FALSE(looped);
+  EXPECT_NE(looped.error().message.find("loop"), std::string::npos);
+}
+
+sim::CameraCalibration calibration() {
+  sim::CameraCalibration c;
+  c.width = 640;
+  c.height = 480;
+  c.k = {500, 0, 320, 0, 500, 240, 0, 0, 1};
+  c.p = {500, 0, 320, 0, 0, 500, 240, 0, 0, 0, 1, 0};
+  c.d = {0, 0, 0, 0, 0};
+  return c;
+}
+
+TEST(FoxgloveProjection, APinholeCameraWithPlumbBobDistortionProjectsAsOpenCvDoes) {
+  sim::CameraCalibration c = calibration();
+  auto centre = sim::foxglove::project_to_pixel(c, 640, 480, {0, 0, 5});
+  ASSERT_TRUE(centre);
+  EXPECT_FLOAT_EQ((*centre)[0], 320);
+  EXPECT_FLOAT_EQ((*centre)[1], 240);
+  // x = 0.2, y = 0.1 (normalised); k1 = -0.1, p1 = 0.01: r² = 0.05, radial = 0.995,
+  // x' = 0.199 + 2·0.01·0.02 = 0.1994, y' = 0.0995 + 0.01·(0.05 + 0.02) = 0.1002.
+  c.d = {-0.1, 0, 0.01, 0, 0};
+  auto p = sim::foxglove::project_to_pixel(c, 640, 480, {1, 0.5, 5});
+  ASSERT_TRUE(p);
+  EXPECT_NEAR((*p)[0], 320 + 500 * 0.1994, 1e-3);
+  EXPECT_NEAR((*p)[1], 240 + 500 * 0.1002, 1e-3);
+  // Behind the camera, or outside the picture: not drawn.
+  EXPECT_FALSE(sim::foxglove::project_to_pixel(c, 640, 480, {0, 0, -5}));
+  EXPECT_FALSE(sim::foxglove::project_to_pixel(c, 640, 480, {50, 0, 5}));
+}
+
+TEST(FoxgloveProjection, BinningAndRegionOfInterestMoveThePixelAsRosDefinesThem) {
+  sim::CameraCalibration c = calibration();
+  c.binning_x = 2;
+  c.binning_y = 2;
+  c.roi.x_offset = 100;
+  c.roi.y_offset = 40;
+  auto p = sim::foxglove::project_to_pixel(c, 320, 240, {0, 0, 5});
+  ASSERT_TRUE(p);
+  EXPECT_FLOAT_EQ((*p)[0], (320 - 100) / 2.0f);
+  EXPECT_FLOAT_EQ((*p)[1], (240 - 40) / 2.0f);
+}
+
+TEST(FoxgloveProjection, AnEquidistantLensBendsByTheAngle) {
+  sim::CameraCalibration c = calibration();
+  c.distortion_model = "equidistant";
+  c.d = {0.1, 0, 0, 0};
+  // r = 0.2: theta = atan(0.2), theta_d = theta (1 + 0.1 theta²), x' = 0.2 theta_d / r.
+  const double theta = std::atan(0.2);
+  const double expected = 320 + 500 * (theta * (1 + 0.1 * theta * theta));
+  auto p = sim::foxglove::project_to_pixel(c, 640, 480, {1, 0, 5});
+  ASSERT_TRUE(p);
+  EXPECT_NEAR((*p)[0], expected, 1e-3);
+  EXPECT_NEAR((*p)[1], 240, 1e-3);
+}
+
+}  // namespace
