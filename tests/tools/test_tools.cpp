@@ -254,3 +254,96 @@ TEST(EveryTool, StopsOnSigtermWhenAFifoSitsAtTheStreamsPath) {
   }
   std::remove(path.c_str());
 }
+
+namespace {
+
+// A writer in this process whose stream describes a calibrated camera mounted on the vehicle.
+sim::SensorInfo described_camera() {
+  sim::SensorInfo sensor;
+  sensor.frame_id = "camera_front_optical";
+  sensor.parent_frame = "base_link";
+  sensor.mounting = sim::Mounting::from_xyz_rpy(1.5, 0, 1.2, 0, 0, 1.5707963);
+  sim::CameraCalibration c;
+  c.width = 32;
+  c.height = 16;
+  c.k = {40.5, 0, 16, 0, 41, 8, 0, 0, 1};
+  c.p = {40.5, 0, 16, 0, 0, 41, 8, 0, 0, 0, 1, 0};
+  c.d = {0.1, 0, 0, 0, 0};
+  sensor.calibration = c;
+  sensor.identity = {"Acme", "Cam 1", "0815", "2.1"};
+  sensor.time_base = sim::TimeBase::host;
+  return sensor;
+}
+
+Expected<Writer> described_writer(const std::string& name) {
+  return Writer::create({.name = name,
+                         .layout = Layout::of(ImageLayout::packed(32, 16, PixelFormat::mono8)),
+                         .sensor = described_camera()});
+}
+
+}  // namespace
+
+TEST(SimLs, ShowsTheFrameParentAndCalibrationSummaryForPeopleAndScripts) {
+  StreamGuard g{unique_name("ls_sensor")};
+  auto writer = described_writer(g.name);
+  ASSERT_TRUE(writer) << writer.error().message;
+  const auto table = sim::testing::run({kLs, g.name});
+  ASSERT_EQ(table.code, 0) << table.err;
+  EXPECT_NE(table.out.find("sensor: frame camera_front_optical in base_link at x 1.5 y 0 z 1.2 m"),
+            std::string::npos)
+      << table.out;
+  EXPECT_NE(table.out.find(sim::summary(*described_camera().calibration)), std::string::npos)
+      << table.out;
+  EXPECT_NE(table.out.find("Acme Cam 1 serial 0815"), std::string::npos) << table.out;
+
+  const auto json = sim::testing::run({kLs, "--json", g.name});
+  ASSERT_EQ(json.code, 0) << json.err;
+  EXPECT_NE(json.out.find("\"frame_id\":\"camera_front_optical\",\"parent_frame\":\"base_link\""),
+            std::string::npos)
+      << json.out;
+  EXPECT_NE(json.out.find("\"translation\":[1.5,0,1.2]"), std::string::npos) << json.out;
+  EXPECT_NE(json.out.find("\"k\":[40.5,0,16,0,41,8,0,0,1]"), std::string::npos) << json.out;
+  EXPECT_NE(json.out.find("\"time_base\":\"host\""), std::string::npos) << json.out;
+}
+
+TEST(SimLs, AStreamWithoutADescriptionSaysNothingAndHasANullSensor) {
+  StreamGuard g{unique_name("ls_plain")};
+  auto writer = start_writer(g.name, 1000000, 50, 0);
+  const auto json = sim::testing::run({kLs, "--json", g.name});
+  ASSERT_EQ(json.code, 0) << json.err;
+  EXPECT_NE(json.out.find("\"sensor\":null"), std::string::npos) << json.out;
+  const auto table = sim::testing::run({kLs, g.name});
+  EXPECT_EQ(table.out.find("sensor:"), std::string::npos) << table.out;
+}
+
+TEST(SimEcho, PrintsTheSensorBeforeTheFirstFrameAndAgainWhenItChanges) {
+  StreamGuard g{unique_name("echo_sensor")};
+  auto writer = described_writer(g.name);
+  ASSERT_TRUE(writer) << writer.error().message;
+  Process echo({kEcho, g.name, "--count", "2", "--json"});
+  const std::vector<std::byte> frame(32 * 16);
+  // sim_echo prints frames published after it opened the stream: publish until it has one.
+  std::optional<std::string> first;
+  for (int i = 0; i < 3000 && !first; ++i) {
+    ASSERT_EQ(writer->write(frame, i + 1), WriteStatus::ok);
+    first = echo.next_line(std::chrono::milliseconds(10));
+  }
+  ASSERT_TRUE(first) << echo.err();
+  EXPECT_EQ(first->rfind("{\"sensor_generation\":", 0), 0u) << *first;
+  EXPECT_NE(first->find("\"frame_id\":\"camera_front_optical\""), std::string::npos) << *first;
+  const std::string frame_line = echo.next_line().value_or("");
+  EXPECT_NE(frame_line.find("\"seq\":"), std::string::npos) << frame_line;
+  // A remount: the next frame comes after a new description.
+  sim::SensorInfo moved = described_camera();
+  moved.mounting = sim::Mounting::from_xyz_rpy(2.0, 0, 1.2, 0, 0, 0);
+  ASSERT_TRUE(writer->set_sensor_info(moved));
+  std::optional<std::string> changed;
+  for (int i = 0; i < 3000 && !changed; ++i) {
+    ASSERT_EQ(writer->write(frame, 100 + i), WriteStatus::ok);
+    changed = echo.next_line(std::chrono::milliseconds(10));
+  }
+  ASSERT_TRUE(changed) << echo.err();
+  EXPECT_NE(changed->find("\"translation\":[2,0,1.2]"), std::string::npos) << *changed;
+  EXPECT_NE(json_number(*changed, "sensor_generation"), json_number(*first, "sensor_generation"));
+  EXPECT_EQ(echo.wait(), 0) << echo.err();
+}

@@ -3,6 +3,7 @@
 #include <string>
 
 #include "frame_sink.hpp"
+#include "sim/apps/sensor_text.hpp"
 
 namespace sim::dump {
 namespace {
@@ -85,15 +86,49 @@ Expected<std::unique_ptr<FrameSink>> make_sink(const Layout& layout, const SinkO
   return Error{ErrorCode::invalid_argument, "the stream's layout is unknown to this sim_dump."};
 }
 
+// The sensor's part of the sidecar: frame, transform, description, calibration file.
+std::string sensor_fields(const std::optional<SensorInfo>& sensor,
+                          const std::string& calibration_file) {
+  using apps::json_string;
+  if (!sensor) return ",\n  \"frame_id\": null,\n  \"transform\": null,\n  \"sensor\": null";
+  std::string out = ",\n  \"frame_id\": ";
+  out += json_string(sensor->frame_id);
+  out += ",\n  \"transform\": ";
+  if (sensor->mounting) {
+    const auto& t = sensor->mounting->translation;
+    const auto& r = sensor->mounting->rotation;
+    char numbers[256];
+    std::snprintf(numbers, sizeof numbers,
+                  "\"translation\": [%.17g, %.17g, %.17g], \"rotation\": [%.17g, %.17g, %.17g, %.17g]",
+                  t[0], t[1], t[2], r[0], r[1], r[2], r[3]);
+    out += "{\"parent_frame\": ";
+    out += json_string(sensor->parent_frame);
+    out += ", \"child_frame\": ";
+    out += json_string(sensor->frame_id);
+    out += ", ";
+    out += numbers;
+    out += "}";
+  } else {
+    out += "null";
+  }
+  out += ",\n  \"calibration_file\": ";
+  out += json_string(calibration_file);
+  out += ",\n  \"sensor\": ";
+  out += apps::sensor_json(*sensor);
+  return out;
+}
+
 std::string sidecar_json(const std::string& stream, const FrameInfo& info,
-                         const std::string& file_name) {
+                         const std::string& file_name, const std::optional<SensorInfo>& sensor,
+                         const std::string& calibration_file) {
   return "{\n  \"stream\": \"" + escaped(stream) + "\",\n  \"file\": \"" + escaped(file_name) +
          "\",\n  \"seq\": " + std::to_string(info.seq) +
          ",\n  \"stamp_ns\": " + std::to_string(info.stamp_ns) +
          ",\n  \"receive_ns\": " + std::to_string(info.receive_ns) +
          ",\n  \"publish_ns\": " + std::to_string(info.publish_ns) +
          ",\n  \"size\": " + std::to_string(info.size) +
-         ",\n  \"layout\": " + layout_json(info.layout, info.size) + "\n}\n";
+         ",\n  \"layout\": " + layout_json(info.layout, info.size) +
+         sensor_fields(sensor, calibration_file) + "\n}\n";
 }
 
 }  // namespace sim::dump

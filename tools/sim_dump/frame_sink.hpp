@@ -40,8 +40,13 @@ Expected<std::unique_ptr<FrameSink>> make_image_sink(const ImageLayout& layout,
                                                      const SinkOptions& options);
 std::unique_ptr<FrameSink> make_raw_sink();
 
-// The JSON sidecar written next to each frame file: the frame's metadata and layout.
+// The JSON sidecar written next to each frame file: the frame's metadata and layout and, when
+// the stream describes its sensor, its frame, the transform from the parent frame (as
+// tf2_msgs' TransformStamped: parent, child, translation m, rotation x y z w; null when the
+// mounting is unknown), the whole description, and the calibration file written beside the frame
+// (`calibration_file`, empty when none).
 std::string sidecar_json(const std::string& stream, const FrameInfo& info,
-                         const std::string& file_name);
+                         const std::string& file_name, const std::optional<SensorInfo>& sensor,
+                         const std::string& calibration_file);
 
 }  // namespace sim::dump

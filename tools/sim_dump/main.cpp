@@ -6,10 +6,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "frame_sink.hpp"
+#include "sim/apps/camera_info_file.hpp"
 #include "sim/apps/command_line.hpp"
 #include "sim/apps/status_line.hpp"
 #include "sim/apps/stop_signal.hpp"
@@ -77,6 +79,8 @@ int main(int argc, char** argv) {
   const auto timeout = std::chrono::duration<double>(timeout_s);
   std::uint64_t written = 0;
   auto last_frame = std::chrono::steady_clock::now();
+  std::uint64_t sensor_generation = 0;
+  std::optional<sim::SensorInfo> sensor;
   while ((wanted == 0 || written < wanted) && !stop.requested()) {
     sim::FrameInfo info;
     const sim::ReadStatus status = reader->read_next(buffer, info, std::chrono::milliseconds(100));
@@ -103,8 +107,30 @@ int main(int argc, char** argv) {
     if (auto error = (*sink)->write(folder / file_name, std::span(buffer).first(info.size), info)) {
       return cli.fail(std::string_view(error->message));
     }
+    // The description, read again only when the writer changed it.
+    if (info.sensor_generation != sensor_generation) {
+      sensor_generation = info.sensor_generation;
+      sensor.reset();
+      if (sensor_generation != 0) {
+        auto described = reader->sensor_info();
+        if (described) {
+          sensor = *described;
+        } else {
+          status_line.note("warning: " + described.error().message);
+        }
+      }
+    }
+    // An image's calibration beside it, in the file format it came in (camera_calibration_parsers).
+    std::string calibration_file;
+    if (sensor && sensor->calibration) {
+      calibration_file = stem + ".yaml";
+      if (auto saved = sim::apps::save_camera_info(folder / calibration_file, *sensor->calibration);
+          !saved) {
+        return cli.fail(std::string_view(saved.error().message));
+      }
+    }
     std::ofstream sidecar(folder / (stem + ".json"));
-    sidecar << sim::dump::sidecar_json(stream, info, file_name);
+    sidecar << sim::dump::sidecar_json(stream, info, file_name, sensor, calibration_file);
     if (!sidecar.flush()) return cli.fail("cannot write " + (folder / (stem + ".json")).string());
     ++written;
     status_line.update(sim::apps::fields(

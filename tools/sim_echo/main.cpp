@@ -10,6 +10,7 @@
 #include "sim/apps/command_line.hpp"
 #include "sim/apps/stop_signal.hpp"
 #include "sim/clock.hpp"
+#include "sim/apps/sensor_text.hpp"
 #include "sim/reader.hpp"
 
 namespace {
@@ -36,11 +37,13 @@ void print_frame(const Options& o, const sim::FrameInfo& info, std::int64_t read
   if (o.json) {
     std::printf(
         "{\"seq\":%llu,\"stamp_ns\":%lld,\"receive_ns\":%lld,\"publish_ns\":%lld,"
-        "\"size\":%llu,\"latency_us\":%.1f,\"delay_us\":%.1f,\"skipped\":%llu,\"layout\":\"%s\"}\n",
+        "\"size\":%llu,\"latency_us\":%.1f,\"delay_us\":%.1f,\"skipped\":%llu,\"layout\":\"%s\","
+        "\"sensor_generation\":%llu}\n",
         static_cast<unsigned long long>(info.seq), static_cast<long long>(info.stamp_ns),
         static_cast<long long>(info.receive_ns), static_cast<long long>(info.publish_ns),
         static_cast<unsigned long long>(info.size), latency_us, delay_us,
-        static_cast<unsigned long long>(skipped), info.layout.describe().c_str());
+        static_cast<unsigned long long>(skipped), info.layout.describe().c_str(),
+        static_cast<unsigned long long>(info.sensor_generation));
   } else {
     std::printf("seq %llu  size %llu B  latency %.1f us  delay %.1f us  skipped %llu  %s\n",
                 static_cast<unsigned long long>(info.seq),
@@ -48,6 +51,31 @@ void print_frame(const Options& o, const sim::FrameInfo& info, std::int64_t read
                 static_cast<unsigned long long>(skipped), info.layout.describe().c_str());
   }
   std::fflush(stdout);
+}
+
+// The stream's sensor description, printed before the first frame and again whenever the writer
+// changes it (a recalibration, a remount): FrameInfo::sensor_generation says when. A stream
+// without one gets no such line.
+void print_sensor(const Options& o, const sim::Reader& reader, std::uint64_t generation) {
+  std::string text;
+  std::string json = "null";
+  if (generation == 0) {
+    text = "none";
+  } else if (auto info = reader.sensor_info(); !info) {
+    text = "damaged: " + info.error().message;
+    json = "{\"problem\":" + sim::apps::json_string(info.error().message) + "}";
+  } else if (!info->has_value()) {
+    text = "none";
+  } else {
+    text = sim::apps::describe_sensor(**info);
+    json = sim::apps::sensor_json(**info);
+  }
+  if (o.json) {
+    std::printf("{\"sensor_generation\":%llu,\"sensor\":%s}\n",
+                static_cast<unsigned long long>(generation), json.c_str());
+  } else {
+    std::printf("sensor %s\n", text.c_str());
+  }
 }
 
 void print_stats(const Options& o, const char* label, const sim::echo::FrameStats& stats) {
@@ -112,6 +140,8 @@ int main(int argc, char** argv) {
   std::int64_t window_start = sim::monotonic_ns();
   std::int64_t last_frame_at = window_start;
   int exit_code = sim::apps::kExitOk;
+  // Of the last description printed: a stream without one prints no sensor line at all.
+  std::uint64_t sensor_generation = 0;
   const auto slice = std::chrono::milliseconds(100);
 
   while (!stop.requested() && !past(o.duration_s)) {
@@ -131,6 +161,10 @@ int main(int argc, char** argv) {
       if (o.stats) {
         window.add(frame);
       } else {
+        if (sensor_generation != info.sensor_generation) {
+          print_sensor(o, *reader, info.sensor_generation);
+          sensor_generation = info.sensor_generation;
+        }
         print_frame(o, info, frame.read_ns, frame.read_realtime_ns, total.skipped());
       }
       if (o.count != 0 && total.frames() >= o.count) break;

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "sim/apps/command_line.hpp"
+#include "sim/apps/sensor_text.hpp"
 #include "sim/apps/status_line.hpp"
 #include "sim/apps/stop_signal.hpp"
 #include "sim/clock.hpp"
@@ -131,7 +132,8 @@ void print_json(const Row& row, std::int64_t now) {
   std::printf(
       "{\"name\":\"%s\",\"layout\":\"%s\",\"capacity\":%llu,\"frames\":%llu,\"latest_seq\":%llu,"
       "\"rate_hz\":%.2f,\"age_ns\":%lld,\"max_interval_ns\":%lld,\"writer_alive\":%s,"
-      "\"writer_pid\":%d,\"writer\":\"%s\",\"checksum\":%s,\"sleeping_readers\":%u%s}\n",
+      "\"writer_pid\":%d,\"writer\":\"%s\",\"checksum\":%s,\"sleeping_readers\":%u%s,"
+      "\"sensor\":%s%s}\n",
       json_escape(s.name).c_str(), json_escape(s.layout.describe()).c_str(),
       static_cast<unsigned long long>(s.capacity),
       static_cast<unsigned long long>(s.frames_published),
@@ -139,7 +141,11 @@ void print_json(const Row& row, std::int64_t now) {
       static_cast<long long>(s.latest_publish_ns == 0 ? -1 : now - s.latest_publish_ns),
       static_cast<long long>(s.max_publish_interval_ns), s.writer_alive ? "true" : "false",
       s.writer_pid, json_escape(writer_name(s)).c_str(), s.checksum ? "true" : "false",
-      s.sleeping_readers, watched.c_str());
+      s.sleeping_readers, watched.c_str(),
+      s.sensor ? sim::apps::sensor_json(*s.sensor).c_str() : "null",
+      s.sensor_problem.empty()
+          ? ""
+          : (",\"sensor_problem\":" + sim::apps::json_string(s.sensor_problem)).c_str());
 }
 
 std::string writer_text(const sim::StreamStatus& s) {
@@ -187,6 +193,12 @@ void print_table(const std::vector<Row>& rows, std::int64_t now, bool watch) {
                   static_cast<unsigned long long>(s.frames_published), rate,
                   age_text(now, s.latest_publish_ns).c_str(), s.sleeping_readers,
                   writer_text(s).c_str(), s.checksum ? "xxh3" : "off");
+      // The sensor's description under its stream: frame, parent, mounting, calibration.
+      if (s.sensor) {
+        std::printf("%-*s   sensor: %s\n", w, "", sim::apps::describe_sensor(*s.sensor).c_str());
+      } else if (!s.sensor_problem.empty()) {
+        std::printf("%-*s   sensor: damaged: %s\n", w, "", s.sensor_problem.c_str());
+      }
     }
   }
 }

@@ -5,11 +5,15 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 
+#include "sim/apps/camera_info_file.hpp"
 #include "sim/sim.hpp"
 #include "sim_test/process.hpp"
 #include "test_images.hpp"
@@ -124,3 +128,68 @@ TEST_F(DumpPng, CorruptJpegIsAClearErrorAndNoFile) {
 }
 
 }  // namespace
+
+namespace {
+
+std::string text_of(const fs::path& file) {
+  std::ifstream in(file);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+}  // namespace
+
+TEST_F(DumpPng, WritesTheCalibrationBesideTheImageAndTheTransformInTheSidecar) {
+  sim::SensorInfo sensor;
+  sensor.frame_id = "camera_front_optical";
+  sensor.parent_frame = "base_link";
+  sensor.mounting = sim::Mounting::from_xyz_rpy(1.5, -0.25, 1.2, -1.5707963, 0, -1.5707963);
+  sim::CameraCalibration c;
+  c.width = kWidth;
+  c.height = kHeight;
+  c.camera_name = "front";
+  c.d = {-0.28, 0.07, 0.0004, -0.0003, 0.0};
+  c.k = {50.5, 0, 32.25, 0, 51.0, 24.5, 0, 0, 1};
+  c.p = {50.5, 0, 32.25, 0, 0, 51.0, 24.5, 0, 0, 0, 1, 0};
+  sensor.calibration = c;
+  const ImageLayout layout = ImageLayout::packed(kWidth, kHeight, PixelFormat::bgr8);
+  auto writer = sim::Writer::create({.name = stream_, .layout = sim::Layout::of(layout), .sensor = sensor});
+  ASSERT_TRUE(writer) << writer.error().message;
+  const Bytes bgr = sim::camera::testing::scene_bgr(kWidth, kHeight, 1);
+  ASSERT_EQ(writer->write(std::span<const std::byte>(bgr), 42), sim::WriteStatus::ok);
+  const auto result = run({SIM_DUMP, stream_, "--current", "--count", "1", "--out", dir_.string()});
+  ASSERT_EQ(result.code, 0) << result.err;
+
+  const std::string stem = stream_.substr(1) + "_00000001";
+  const fs::path yaml = dir_ / (stem + ".yaml");
+  ASSERT_TRUE(fs::exists(yaml));
+  const std::string text = text_of(yaml);
+  for (const char* key : {"image_width: 64", "image_height: 48", "camera_matrix:", "rows: 3",
+                          "distortion_model: \"plumb_bob\"", "projection_matrix:"}) {
+    EXPECT_NE(text.find(key), std::string::npos) << key << " in\n" << text;
+  }
+  auto back = sim::apps::load_camera_info(yaml.string());
+  ASSERT_TRUE(back) << back.error().message;
+  EXPECT_TRUE(*back == c);
+
+  const std::string sidecar = text_of(dir_ / (stem + ".json"));
+  EXPECT_NE(sidecar.find("\"frame_id\": \"camera_front_optical\""), std::string::npos) << sidecar;
+  EXPECT_NE(sidecar.find("\"transform\": {\"parent_frame\": \"base_link\", \"child_frame\": "
+                         "\"camera_front_optical\", \"translation\": [1.5, -0.25, 1.2]"),
+            std::string::npos)
+      << sidecar;
+  char rotation[160];
+  const auto& r = sensor.mounting->rotation;
+  std::snprintf(rotation, sizeof rotation, "\"rotation\": [%.17g, %.17g, %.17g, %.17g]", r[0], r[1],
+                r[2], r[3]);
+  EXPECT_NE(sidecar.find(rotation), std::string::npos) << sidecar;
+  EXPECT_NE(sidecar.find("\"calibration_file\": \"" + stem + ".yaml\""), std::string::npos) << sidecar;
+}
+
+TEST_F(DumpPng, AStreamWithoutADescriptionGetsNoCalibrationFileAndANullTransform) {
+  const Bytes bgr = sim::camera::testing::scene_bgr(kWidth, kHeight, 1);
+  (void)publish_and_dump(ImageLayout::packed(kWidth, kHeight, PixelFormat::bgr8), bgr);
+  const std::string stem = stream_.substr(1) + "_00000001";
+  EXPECT_FALSE(fs::exists(dir_ / (stem + ".yaml")));
+  const std::string sidecar = text_of(dir_ / (stem + ".json"));
+  EXPECT_NE(sidecar.find("\"transform\": null"), std::string::npos) << sidecar;
+}
