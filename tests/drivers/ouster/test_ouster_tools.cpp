@@ -172,12 +172,13 @@ class FakeSensorHttp {
   std::atomic<int> requests_{0};
 };
 
-void send_to(std::uint16_t port, const std::vector<std::vector<std::uint8_t>>& payloads) {
+void send_to(std::uint16_t port, const std::vector<std::vector<std::uint8_t>>& payloads,
+             const char* address = "127.0.0.1") {
   const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
   sockaddr_in to{};
   to.sin_family = AF_INET;
   to.sin_port = htons(port);
-  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ::inet_pton(AF_INET, address, &to.sin_addr);
   for (const auto& p : payloads) {
     (void)::sendto(fd, p.data(), p.size(), 0, reinterpret_cast<const sockaddr*>(&to), sizeof to);
   }
@@ -282,10 +283,54 @@ TEST(OusterLive, PacketsThatDoNotFitTheMetadataAreCountedAndToldOnceNeverPublish
   EXPECT_NE(reader->read_next(buffer, info, 0ms), sim::ReadStatus::new_frame);
 }
 
+TEST(OusterLive, AMulticastGroupIsJoinedAndPacketsOfAnotherSenderAreIgnored) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  const auto capture = ouster_test::load_capture(dual);
+  for (bool filtered : {false, true}) {
+    const std::string stream = unique_name("ouster_multicast");
+    StreamGuard guard(stream);
+    std::vector<std::string> argv = {live_tool, "--calibration", data(dual + ".json"), "--lidar-port", "0",
+                                     "--imu-port", "0", "--no-imu", "--multicast", "239.201.201.201",
+                                     "--stream", stream, "--summary", "--status-interval",
+                                     filtered ? "0.05" : "0"};
+    if (filtered) {
+      // The packets come from 127.0.0.1; the status lines (in a log: one per tick) count them.
+      argv.insert(argv.end(), {"--source", "127.0.0.2"});
+    }
+    Process driver(argv);
+    const auto ports = listening(driver);
+    ASSERT_TRUE(ports) << driver.err();
+    auto reader = sim::testing::wait_for_stream(stream);
+    ASSERT_TRUE(reader);
+    send_to(static_cast<std::uint16_t>(ports->lidar), capture.lidar, "239.201.201.201");
+    std::vector<std::byte> buffer(reader->capacity());
+    sim::FrameInfo info;
+    if (!filtered) {
+      EXPECT_EQ(reader->read_next(buffer, info, 30s), sim::ReadStatus::new_frame) << driver.err();
+    } else {
+      const std::string all = "other-source " + std::to_string(capture.lidar.size());
+      const auto deadline = std::chrono::steady_clock::now() + 30s;  // a hang guard
+      while (driver.err().find(all) == std::string::npos && std::chrono::steady_clock::now() < deadline) {
+        (void)driver.next_line(50ms);
+      }
+      EXPECT_NE(driver.err().find(all), std::string::npos) << driver.err();
+      EXPECT_NE(reader->read_next(buffer, info, 0ms), sim::ReadStatus::new_frame);
+    }
+    ::kill(driver.pid(), SIGTERM);
+    EXPECT_EQ(driver.wait(), 0) << driver.err();
+    if (filtered) {
+      EXPECT_NE(driver.out().find("frames=0 packets=0"), std::string::npos) << driver.out();
+      EXPECT_NE(driver.out().find("other_source=64"), std::string::npos) << driver.out();
+    } else {
+      EXPECT_NE(driver.out().find("frames=1 packets=64"), std::string::npos) << driver.out();
+    }
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  g_skip_reason = sim::testing::enter_private_network(sim::testing::Multicast::off);
+  g_skip_reason = sim::testing::enter_private_network(sim::testing::Multicast::on);
   ::testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
 }
