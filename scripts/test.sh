@@ -6,7 +6,9 @@
 #   scripts/test.sh                  everything (what CI runs)
 #   SIM_STRESS_FRAMES=10000000 SIM_FUZZ_SECONDS=600 scripts/test.sh   longer stress and fuzzing
 #   SIM_TEST_STAGES="release" scripts/test.sh                        one stage only
-# Stages: release (GCC, full suite, incl. the install and Python tests), deb (the Debian packages
+#   SIM_SOAK_SECONDS=3600 scripts/test.sh                            a longer soak (0: none)
+# Stages: release (GCC, full suite, incl. the install and Python tests, then the soak of the whole
+# vehicle: scripts/soak.sh), deb (the Debian packages
 # from the release tree, installed with apt-get, checked and removed: scripts/test-debs.sh),
 # asan, tsan. Warnings are errors here (SIM_WERROR=ON), as in the CMake presets.
 set -euo pipefail
@@ -17,6 +19,7 @@ stages=${SIM_TEST_STAGES:-"release deb asan tsan"}
 stress=${SIM_STRESS_FRAMES:-1000000}
 sanitizer_stress=${SIM_SANITIZER_STRESS_FRAMES:-200000}
 fuzz_seconds=${SIM_FUZZ_SECONDS:-30}
+soak_seconds=${SIM_SOAK_SECONDS:-120}
 
 "$root/scripts/install-deps.sh"
 
@@ -43,6 +46,11 @@ for s in $stages; do
       configure build/release -DCMAKE_BUILD_TYPE=Release -DCMAKE_INSTALL_PREFIX=/usr
       cmake --build build/release -j"$jobs"
       SIM_STRESS_FRAMES=$stress ctest --test-dir build/release -j"$jobs" --output-on-failure
+      # The whole vehicle under chaos for SIM_SOAK_SECONDS (tests/soak/README.md); 0 skips it.
+      if ((soak_seconds > 0)); then
+        stage "soak of the whole vehicle (${soak_seconds} s)"
+        SIM_SOAK_BUILD=build/release SIM_SOAK_SECONDS=$soak_seconds "$root/scripts/soak.sh"
+      fi
       ;;
     deb)
       stage "Debian packages: build, apt-get install, check, remove"

@@ -165,7 +165,6 @@ class Soak:
         self.failures = []   # crashes and hangs: (process, what)
         self.chaos = {"SIGKILL": 0, "SIGTERM": 0, "layout_replaced": 0, "sim_rm_dead": 0,
                       "sim_rm_dead_removed": 0, "record_segments": 0}
-        self.events = []     # (due, action, args)
         self.resources = {}
 
     # ---- processes ---------------------------------------------------------------------------

@@ -7,7 +7,7 @@
 //   node soak_foxglove_client.mjs PORT TOPIC…
 //
 // Follows channels that are re-advertised (a stream replaced with another layout). One JSON line
-// per second: messages per topic, stamps that went backwards, undecodable messages, page fetches
+// per second: messages per stream, stamps that went backwards, undecodable messages, page fetches
 // that failed. Exits 1 if the server closes the connection; SIGTERM ends it with exit 0.
 import http from "node:http";
 import { createRequire } from "node:module";
@@ -41,13 +41,26 @@ function violation(what, topic, detail) {
 }
 
 const client = new FoxgloveClient({ ws: new WebSocket(`ws://127.0.0.1:${port}`, [FoxgloveClient.SUPPORTED_SUBPROTOCOL]) });
+// The stream a channel carries frames of: LiDAR frames on the stream's own name, images on
+// STREAM/image_raw (or STREAM/compressed; before the topics moved, on the stream's name too).
+// Calibration and transform channels are not frames.
+function streamOf(topic) {
+  for (const suffix of ["", "/image_raw", "/compressed"]) {
+    if (topic.endsWith(suffix) && topics.includes(topic.slice(0, topic.length - suffix.length))) {
+      return topic.slice(0, topic.length - suffix.length);
+    }
+  }
+  return undefined;
+}
+
 client.on("advertise", (channels) => {
   for (const c of channels) {
-    if (!topics.includes(c.topic) || subscribedChannel.get(c.topic) === c.id) continue;
+    const stream = streamOf(c.topic);
+    if (!stream || subscribedChannel.get(c.topic) === c.id) continue;
     const reader = new MessageReader(parse(c.schema, { ros2: true }));
-    subscriptions.set(client.subscribe(c.id), { topic: c.topic, reader });
+    subscriptions.set(client.subscribe(c.id), { topic: stream, reader });
     subscribedChannel.set(c.topic, c.id);
-    counters[c.topic].subscriptions += 1;
+    counters[stream].subscriptions += 1;
   }
 });
 client.on("unadvertise", (ids) => {
