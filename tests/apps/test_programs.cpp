@@ -109,6 +109,31 @@ TEST(EveryProgram, AStreamNameWithoutItsSlashIsRefusedBeforeAnythingIsOpened) {
   }
 }
 
+// Every driver and replay (the programs that write a stream) takes the sensor options: a frame
+// name ROS 2 would refuse, a mounting that is not a number, and (cameras) a calibration file
+// that cannot be read are usage errors, found before the device, port or file is opened.
+TEST(EveryProgram, ABadFrameMountingOrCameraInfoIsRefusedBeforeAnythingIsOpened) {
+  for (const auto& p : programs()) {
+    if (p.stream_option != "--stream") continue;
+    std::vector<std::string> args = p.valid;
+    args.insert(args.end(), {"--stream", "/lidar_top"});
+    auto with = [&](std::vector<std::string> extra) {
+      std::vector<std::string> all = args;
+      all.insert(all.end(), extra.begin(), extra.end());
+      return all;
+    };
+    expect_usage_error({p.path, with({"--frame-id", "lidar top"}), "--frame-id"});
+    expect_usage_error({p.path, with({"--parent-frame", "/base_link"}), "--parent-frame"});
+    expect_usage_error({p.path, with({"--yaw", "nan"}), "finite"});
+    const std::string name = name_of(p.path);
+    if (name == "sim_replay_video" || name == "sim_camera_v4l2" || name == "sim_camera_aravis") {
+      expect_usage_error({p.path, with({"--camera-info", "/nonexistent/front.yaml"}),
+                          "/nonexistent/front.yaml"});
+      expect_usage_error({p.path, with({"--camera-info", "package://cam/front.yaml"}), "file://"});
+    }
+  }
+}
+
 TEST(EveryProgram, HelpExitsZeroAndShowsTheExitCodes) {
   for (const auto& p : programs()) {
     std::vector<std::string> argv = {p.path};
