@@ -17,12 +17,13 @@ SensorInfo describe_sensor(SensorInfo info, const DecoderOptions& options) {
   info.identity.vendor = "Unitree";
   info.identity.model = options.model == Model::l1 ? "L1" : "L2";
   info.point_time = PointTime::after_frame_stamp;
+  // A caller that knows better (a replay: the recording host's clock) has set time_sync already.
   if (options.time_source == TimeSource::sensor) {
     info.time_base = TimeBase::unknown;
-    info.time_sync = "the L2's own clock; its synchronisation is not reported";
+    if (info.time_sync.empty()) info.time_sync = "the L2's own clock; its synchronisation is not reported";
   } else {
     info.time_base = TimeBase::host;
-    info.time_sync = "host receive time";
+    if (info.time_sync.empty()) info.time_sync = "host receive time";
   }
   return info;
 }

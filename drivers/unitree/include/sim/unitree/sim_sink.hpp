@@ -38,7 +38,7 @@ struct SimSinkOptions {
 // `configured` (frame, parent, mounting from the command line) completed with what the decoder
 // knows: vendor Unitree and the model, per-point times after the scan's stamp, and the clock of
 // the stamps (the host's, or with TimeSource::sensor the L2's own, whose synchronisation the
-// packets do not report).
+// packets do not report), said in words in time_sync unless the caller set that already.
 SensorInfo describe_sensor(SensorInfo configured, const DecoderOptions& options);
 
 // "/lidar_top" → "/lidar_top.imu" (SIM names allow no second slash).
