@@ -29,10 +29,16 @@ int main(int argc, char** argv) {
   app.add_option("--fps", fps)->check(CLI::PositiveNumber);
   app.add_flag("--wait-for-reader", wait_for_reader);
   app.add_flag("--noise", noise, "random pixels (incompressible) instead of the test pattern");
+  bool calibrated = false;
+  app.add_flag("--calibrated", calibrated,
+               "describe the sensor: frame test_camera_optical on base_link, the calibration of "
+               "test_frames.hpp (test_calibration)");
   CLI11_PARSE(app, argc, argv);
 
   const auto layout = sim::ImageLayout::packed(width, height, sim::PixelFormat::bgr8);
-  auto writer = sim::Writer::create({.name = stream, .layout = sim::Layout::of(layout)});
+  std::optional<sim::SensorInfo> sensor;
+  if (calibrated) sensor = sim::testing::test_camera_sensor(width, height);
+  auto writer = sim::Writer::create({.name = stream, .layout = sim::Layout::of(layout), .sensor = sensor});
   if (!writer) {
     std::fprintf(stderr, "mcap_test_camera: %s\n", writer.error().message.c_str());
     return 1;

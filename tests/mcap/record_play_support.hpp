@@ -118,7 +118,8 @@ struct Recorded {
   std::vector<std::byte> frame;  // the SIM frame bytes the message carries
 };
 
-// Every message of `topic`, in file order, with the frame bytes its ROS 2 message carries.
+// The frame messages of every recorded stream (sim.stream, else the topic), in file order, with
+// the frame bytes their ROS 2 messages carry.
 inline std::map<std::string, std::vector<Recorded>> read_recording(const std::string& path) {
   std::map<std::string, std::vector<Recorded>> out;
   auto reader = sim::mcap::Reader::open(path);
@@ -126,6 +127,8 @@ inline std::map<std::string, std::vector<Recorded>> read_recording(const std::st
   while (auto m = reader->next()) {
     const auto& channel = reader->channels().at(m->header.channel_id);
     const auto* schema = reader->schema_of(channel);
+    const auto stream = channel.metadata.find("sim.stream");
+    const std::string key = stream != channel.metadata.end() ? stream->second : channel.topic;
     Recorded r{m->header.sequence, m->header.log_time, m->header.publish_time, 0, {}};
     if (schema && schema->name == "sensor_msgs/msg/Image") {
       auto image = sim::ros2::decode_image(m->data);
@@ -137,8 +140,10 @@ inline std::map<std::string, std::vector<Recorded>> read_recording(const std::st
       if (!cloud) continue;
       r.header_stamp_ns = cloud->header.stamp.to_ns();
       r.frame.assign(cloud->data.begin(), cloud->data.end());
+    } else {
+      continue;  // calibration, transforms: not frames
     }
-    out[channel.topic].push_back(std::move(r));
+    out[key].push_back(std::move(r));
   }
   return out;
 }

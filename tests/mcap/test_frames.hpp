@@ -8,6 +8,8 @@
 #include <cstring>
 #include <span>
 
+#include "sim/sensor_info.hpp"
+
 namespace sim::testing {
 
 inline constexpr std::int64_t kTestCameraFirstStamp = 1'700'000'000'000'000'000;
@@ -37,6 +39,24 @@ inline void fill_noise(std::span<std::byte> out, std::uint64_t index) {
     std::memcpy(out.data() + i, &x, 8);
   }
   for (; i < out.size(); ++i) out[i] = static_cast<std::byte>(i);
+}
+
+// What the test camera says about itself with --calibrated: a plumb_bob calibration of its size
+// and a mounting on base_link, every number distinct so a test sees each one arrive.
+inline SensorInfo test_camera_sensor(std::uint32_t width, std::uint32_t height) {
+  SensorInfo info;
+  info.frame_id = "test_camera_optical";
+  info.parent_frame = "base_link";
+  info.mounting = Mounting{{1.25, -0.5, 1.75}, {0.0, 0.0, 0.6, 0.8}};
+  CameraCalibration c;
+  c.width = width;
+  c.height = height;
+  c.camera_name = "test_camera";
+  c.d = {-0.25, 0.125, 0.001, -0.002, 0.03};
+  c.k = {410.5, 0, width / 2.0 + 0.5, 0, 411.5, height / 2.0 - 0.5, 0, 0, 1};
+  c.p = {405.25, 0, width / 2.0, 0, 0, 406.75, height / 2.0, 0, 0, 0, 1, 0};
+  info.calibration = c;
+  return info;
 }
 
 }  // namespace sim::testing

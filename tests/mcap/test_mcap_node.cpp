@@ -12,6 +12,7 @@
 #include "mcap_test_files.hpp"
 #include "record_play_support.hpp"
 #include "sim/lidar_point.hpp"
+#include "sim/ros2/type_hash.hpp"
 
 namespace {
 
@@ -52,7 +53,7 @@ TEST_P(ReadByMcapCore, SeesEveryChannelSchemaMessageAndTheSummary) {
         << line;
     EXPECT_NE(line.find(" meta:sim.kind=" + kind), std::string::npos) << line;
   };
-  expect_channel(rec.camera, "sensor_msgs/msg/Image", camera, "image");
+  expect_channel(rec.camera + "/image_raw", "sensor_msgs/msg/Image", camera, "image");  // the bridge's layout
   expect_channel(rec.lidar, "sensor_msgs/msg/PointCloud2", lidar, "points");
 }
 
@@ -128,6 +129,134 @@ TEST(PlayForeignRecording, PutsEveryPointAndPixelOfAnotherWritersFileIntoSim) {
       EXPECT_EQ(static_cast<std::uint8_t>(f.bytes[j]), (3 * m + j) % 256);
     }
   }
+}
+
+}  // namespace
+
+namespace {
+
+// Issue 21: what sim_record writes about the sensors, read by Foxglove's own libraries
+// (node/read_sensor_mcap.mjs), and what sim_play restores from it and from a rosbag2-style file
+// (node/write_rosbag2_sensor.mjs, written without any SIM code).
+
+// Lines of `out` that start with `prefix`.
+std::vector<std::string> lines_starting(const std::string& out, const std::string& prefix) {
+  std::vector<std::string> lines;
+  std::istringstream in(out);
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind(prefix, 0) == 0) lines.push_back(line);
+  }
+  return lines;
+}
+
+std::vector<std::string> words(const std::string& line) {
+  std::istringstream in(line);
+  std::vector<std::string> out;
+  for (std::string w; in >> w;) out.push_back(w);
+  return out;
+}
+
+// The stream's description as sim_play left it (the region stays after the player ends).
+std::optional<sim::SensorInfo> sensor_of(const std::string& stream) {
+  auto status = sim::inspect(stream);
+  if (!status) return std::nullopt;
+  return status->sensor;
+}
+
+TEST(SensorMetadataInMcap, FoxgloveReadsTheCalibrationBesideEveryImageLatchedTransformsAndTypeHashes) {
+  sim::testing::TempFile file;
+  sim::testing::StreamCleanup cleanup;
+  const std::string camera = sim::testing::unique_stream("calcam");
+  cleanup.names = {camera};
+  sim::testing::Process source({MCAP_TEST_CAMERA, "--stream", camera, "--width", "64", "--height", "48",
+                                "--frames", "12", "--fps", "30", "--wait-for-reader", "--calibrated"});
+  ASSERT_TRUE(source.wait_for_line("ready"));
+  sim::testing::Process recorder({SIM_RECORD, "-o", file.path(), camera, "--quiet"});
+  ASSERT_TRUE(recorder.wait_for_line("recording")) << recorder.err();
+  EXPECT_EQ(source.wait(), 0) << source.err();
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  recorder.signal(SIGINT);
+  ASSERT_EQ(recorder.wait(), 0) << recorder.err();
+
+  const auto node = sim::testing::run({NODE, READ_SENSOR_SCRIPT, file.path()});
+  ASSERT_EQ(node.code, 0) << node.err;
+  // Every channel: rosbag2's topic_type_hash, RIHS01 of its type.
+  const auto channels = lines_starting(node.out, "channel ");
+  ASSERT_EQ(channels.size(), 3u) << node.out;
+  for (const auto& line : channels) {
+    const auto w = words(line);
+    ASSERT_EQ(w.size(), 5u) << line;
+    EXPECT_TRUE(std::regex_match(w[3], std::regex("hash=RIHS01_[0-9a-f]{64}"))) << line;
+    EXPECT_EQ(w[3], "hash=" + std::string(sim::ros2::rihs01_type_hash(w[2]))) << line;
+  }
+  // The transforms: latched (transient local = 1 in rosbag2's offered QoS), with the mounting.
+  EXPECT_EQ(line_starting(node.out, "channel /tf_static "),
+            "channel /tf_static tf2_msgs/msg/TFMessage hash=" +
+                std::string(sim::ros2::rihs01_type_hash("tf2_msgs/msg/TFMessage")) + " durability=1");
+  EXPECT_EQ(line_starting(node.out, "tf "), "tf base_link test_camera_optical t=1.25,-0.5,1.75 r=0,0,0.6,0.8");
+  // One CameraInfo beside each image: the sibling topic, the identical stamp and frame id.
+  const auto images = lines_starting(node.out, "image ");
+  const auto infos = lines_starting(node.out, "camera_info ");
+  ASSERT_FALSE(images.empty()) << node.out;
+  EXPECT_EQ(images.size(), infos.size());
+  std::map<std::string, std::vector<std::string>> info_by_stamp;
+  for (const auto& line : infos) info_by_stamp[words(line)[2]] = words(line);
+  for (const auto& line : images) {
+    const auto w = words(line);
+    EXPECT_EQ(w[1], camera + "/image_raw");
+    EXPECT_EQ(w[3], "test_camera_optical");
+    ASSERT_TRUE(info_by_stamp.count(w[2])) << "no calibration with the stamp of " << line;
+    const auto& info = info_by_stamp[w[2]];
+    EXPECT_EQ(info[1], camera + "/camera_info");
+    EXPECT_EQ(info[3], w[3]);
+    EXPECT_EQ(info[4], "64x48");
+    EXPECT_EQ(info[5], "plumb_bob");
+    EXPECT_EQ(info[6], "d=-0.25,0.125,0.001,-0.002,0.03");
+    EXPECT_EQ(info[7], "k=410.5,0,32.5,0,411.5,23.5,0,0,1");
+    EXPECT_EQ(info[8], "p=405.25,0,32,0,0,406.75,24,0,0,0,1,0");
+  }
+
+  // sim_play gives the stream its description back.
+  const std::string out = sim::testing::unique_stream("calplay");
+  cleanup.names.push_back(out);
+  const auto played = sim::testing::run({SIM_PLAY, file.path(), "--remap", camera + "=" + out, "--max-rate"});
+  EXPECT_EQ(played.code, 0) << played.err;
+  const auto sensor = sensor_of(out);
+  ASSERT_TRUE(sensor) << played.err;
+  const auto want = sim::testing::test_camera_sensor(64, 48);
+  EXPECT_EQ(sensor->frame_id, want.frame_id);
+  EXPECT_EQ(sensor->parent_frame, want.parent_frame);
+  EXPECT_EQ(sensor->mounting, want.mounting);
+  ASSERT_TRUE(sensor->calibration);
+  EXPECT_EQ(sensor->calibration->k, want.calibration->k);
+  EXPECT_EQ(sensor->calibration->d, want.calibration->d);
+  EXPECT_EQ(sensor->calibration->p, want.calibration->p);
+  EXPECT_EQ(sensor->calibration->width, 64u);
+}
+
+TEST(SensorMetadataInMcap, ARosbag2RecordingPlaysBackWithItsCalibrationAndMounting) {
+  sim::testing::TempFile file;
+  sim::testing::StreamCleanup cleanup;
+  const auto written = sim::testing::run({NODE, WRITE_ROSBAG2_SENSOR_SCRIPT, file.path()});
+  ASSERT_EQ(written.code, 0) << written.err;
+  const std::string out = sim::testing::unique_stream("rosbag2cam");
+  cleanup.names = {out};
+  const auto played = sim::testing::run({SIM_PLAY, file.path(), "--remap", "/cam/front/image_raw=" + out,
+                                         "--max-rate"});
+  EXPECT_EQ(played.code, 0) << played.err;  // camera_info and /tf_static are metadata, not refused topics
+  EXPECT_NE(played.err.find(out + " 5"), std::string::npos) << played.err;
+  const auto sensor = sensor_of(out);
+  ASSERT_TRUE(sensor) << played.err;
+  EXPECT_EQ(sensor->frame_id, "cam_front_optical");
+  EXPECT_EQ(sensor->parent_frame, "base_link");
+  EXPECT_EQ(sensor->mounting, (sim::Mounting{{1.5, 0.25, 2.0}, {0.0, 0.0, 0.6, 0.8}}));
+  ASSERT_TRUE(sensor->calibration);
+  EXPECT_EQ(sensor->calibration->width, 4u);
+  EXPECT_EQ(sensor->calibration->height, 3u);
+  EXPECT_EQ(sensor->calibration->distortion_model, "plumb_bob");
+  EXPECT_EQ(sensor->calibration->d, (std::vector<double>{-0.2, 0.1, 0, 0, 0.01}));
+  EXPECT_EQ(sensor->calibration->k, (std::array<double, 9>{500, 0, 2, 0, 501, 1.5, 0, 0, 1}));
+  EXPECT_EQ(sensor->calibration->p, (std::array<double, 12>{499, 0, 2, 0, 0, 498, 1.5, 0, 0, 0, 1, 0}));
 }
 
 }  // namespace

@@ -90,6 +90,7 @@ std::optional<Error> ChannelPlayer::ensure_writer(const mcap::StreamShape& wante
   spec.layout = wanted.layout;
   spec.capacity = wanted.capacity;
   spec.heartbeat_period = std::chrono::milliseconds(500);
+  spec.sensor = sensor_;  // a replaced region keeps the description
   auto created = Writer::create(spec);
   if (!created) return created.error();
   writer_.emplace(std::move(*created));
@@ -166,6 +167,7 @@ std::optional<Error> ChannelPlayer::play(std::span<const std::byte> message, std
         if (!n) return n.error();
         size = *n * points.point_size;
       }
+      update_sensor(cloud->header.frame_id);
       return commit(std::move(loan), size, cloud->header.stamp.to_ns() + stamp_shift_ns);
     }
     case ros2::MessageType::image: {
@@ -181,6 +183,7 @@ std::optional<Error> ChannelPlayer::play(std::span<const std::byte> message, std
       Loan loan = writer_->loan();
       if (!loan.valid() || loan.bytes().size() < image->data.size()) return does_not_fit();
       std::memcpy(loan.bytes().data(), image->data.data(), image->data.size());
+      update_sensor(image->header.frame_id);
       return commit(std::move(loan), image->data.size(), image->header.stamp.to_ns() + stamp_shift_ns);
     }
     case ros2::MessageType::compressed_image: {
@@ -192,10 +195,52 @@ std::optional<Error> ChannelPlayer::play(std::span<const std::byte> message, std
       Loan loan = writer_->loan();
       if (!loan.valid() || loan.bytes().size() < image->data.size()) return does_not_fit();
       std::memcpy(loan.bytes().data(), image->data.data(), image->data.size());
+      update_sensor(image->header.frame_id);
       return commit(std::move(loan), image->data.size(), image->header.stamp.to_ns() + stamp_shift_ns);
     }
   }
   return bad("unknown message type");
+}
+
+void ChannelPlayer::set_calibration(const CameraCalibration& calibration) {
+  if (calibration_ && *calibration_ == calibration) return;
+  calibration_ = calibration;
+  sensor_dirty_ = true;
+  // rosbag2 logs a CameraInfo after its image: the stream has it now, not one frame later.
+  if (writer_ && !frame_id_.empty()) update_sensor(frame_id_);
+}
+
+void ChannelPlayer::update_sensor(std::string_view frame_id) {
+  if (frame_id != frame_id_) {  // one comparison per frame; a copy only when it changes
+    frame_id_ = frame_id;
+    sensor_dirty_ = true;
+  }
+  if (mountings_ != nullptr && mountings_->generation != mountings_seen_) {
+    mountings_seen_ = mountings_->generation;
+    sensor_dirty_ = true;
+  }
+  if (!sensor_dirty_ || !writer_) return;
+  sensor_dirty_ = false;
+  SensorInfo info;
+  info.frame_id = frame_id_;
+  info.calibration = calibration_;
+  if (mountings_ != nullptr) {
+    if (const auto it = mountings_->by_child.find(frame_id_); it != mountings_->by_child.end()) {
+      info.parent_frame = it->second.first;
+      info.mounting = it->second.second;
+    }
+  }
+  if (!info.calibration && !info.mounting) return;  // the recording says nothing about it
+  if (sensor_ && *sensor_ == info) return;
+  const std::string problem = sensor_info_problem(info);
+  auto set = problem.empty() ? writer_->set_sensor_info(info) : Expected<void>(Error{ErrorCode::invalid_argument, problem});
+  if (!set) {
+    if (sensor_problem_.empty()) {
+      sensor_problem_ = "the sensor description of " + stream_ + " is not restored: " + set.error().message;
+    }
+    return;
+  }
+  sensor_ = std::move(info);
 }
 
 std::optional<Error> ChannelPlayer::commit(Loan&& loan, std::uint64_t size, std::int64_t stamp_ns) {

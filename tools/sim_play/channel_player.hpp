@@ -7,6 +7,8 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <map>
 #include <optional>
 #include <span>
 #include <string>
@@ -19,6 +21,13 @@
 #include "sim/writer.hpp"
 
 namespace sim::play {
+
+// The mountings a recording's /tf_static holds: child frame -> (parent frame, mounting).
+// `generation` changes with every /tf_static message, so players notice without comparing.
+struct Mountings {
+  std::map<std::string, std::pair<std::string, Mounting>, std::less<>> by_child;
+  std::uint64_t generation = 0;
+};
 
 class ChannelPlayer {
  public:
@@ -43,6 +52,15 @@ class ChannelPlayer {
 
   std::uint64_t frames() const noexcept { return frames_; }
 
+  // What the stream says about its sensor comes from the recording: the calibration of the
+  // CameraInfo beside the images, the mounting of the frame its messages name from /tf_static.
+  // Both are applied before the next frame is published (the frame carries them).
+  void set_calibration(const CameraCalibration& calibration);
+  void use_mountings(const Mountings* mountings) noexcept { mountings_ = mountings; }
+  // Why the recording's description could not be given to the stream (empty: it could, or
+  // there was none).
+  const std::string& sensor_problem() const noexcept { return sensor_problem_; }
+
  private:
   ChannelPlayer(ros2::MessageType type, std::string topic, std::string stream,
                 std::optional<mcap::StreamShape> shape, std::uint64_t max_capacity)
@@ -50,6 +68,8 @@ class ChannelPlayer {
         max_capacity_(max_capacity) {}
   std::optional<Error> ensure_writer(const mcap::StreamShape& wanted);
   std::optional<Error> commit(Loan&& loan, std::uint64_t size, std::int64_t stamp_ns);
+  // Sets the stream's description when the frame id, calibration or mountings changed.
+  void update_sensor(std::string_view frame_id);
 
   ros2::MessageType type_;
   std::string topic_;
@@ -58,6 +78,16 @@ class ChannelPlayer {
   std::uint64_t max_capacity_;
   std::optional<Writer> writer_;
   std::uint64_t frames_ = 0;
+
+  const Mountings* mountings_ = nullptr;
+  std::uint64_t mountings_seen_ = 0;
+  std::optional<CameraCalibration> calibration_;
+  std::string frame_id_;               // of the last message played
+  bool sensor_dirty_ = false;
+  std::optional<SensorInfo> sensor_;   // the description the stream carries
+  std::string sensor_problem_;         // the first reason a description could not be set
 };
+
+using Players = std::map<std::uint16_t, ChannelPlayer>;  // by MCAP channel id
 
 }  // namespace sim::play

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "channel_player.hpp"
+#include "sensor_metadata.hpp"
 #include "sim/apps/command_line.hpp"
 #include "sim/apps/pacer.hpp"
 #include "sim/apps/status_line.hpp"
@@ -24,7 +25,8 @@
 
 namespace {
 
-using Players = std::map<std::uint16_t, sim::play::ChannelPlayer>;  // by MCAP channel id
+using sim::play::Players;
+using sim::play::SensorMetadata;
 
 struct PlayOptions {
   std::string file;
@@ -37,9 +39,15 @@ struct PlayOptions {
   bool quiet = false;
   std::uint64_t max_capacity_mib = 256;
 
-  std::string stream_for(const std::string& topic) const {
-    const auto it = remap.find(topic);
-    return it == remap.end() ? topic : it->second;
+  // The stream a channel plays into: --remap of its topic, else of the stream sim_record
+  // recorded it from (sim.stream: images are on <stream>/image_raw), else that stream, else
+  // the topic itself.
+  std::string stream_for(const sim::mcap::Channel& channel) const {
+    if (const auto it = remap.find(channel.topic); it != remap.end()) return it->second;
+    const auto recorded = channel.metadata.find("sim.stream");
+    if (recorded == channel.metadata.end()) return channel.topic;
+    const auto it = remap.find(recorded->second);
+    return it == remap.end() ? recorded->second : it->second;
   }
 };
 
@@ -85,10 +93,12 @@ std::optional<int> parse_command_line(sim::apps::CommandLine& cli, int argc, cha
 
 // One player per playable channel; several channels of one topic (a stream whose layout
 // changed while recording) share its stream name.
-Players make_players(const sim::mcap::Reader& reader, const PlayOptions& o, sim::apps::StatusLine& status) {
+Players make_players(const sim::mcap::Reader& reader, const SensorMetadata& metadata, const PlayOptions& o,
+                     sim::apps::StatusLine& status) {
   Players players;
   for (const auto& [id, channel] : reader.channels()) {
-    std::string stream = o.stream_for(channel.topic);
+    if (metadata.handles(id)) continue;
+    std::string stream = o.stream_for(channel);
     if (!sim::stream_name_problem(stream).empty()) {
       say(status, "topic " + channel.topic + " is not a SIM stream name; give it one with --remap " +
                       channel.topic + "=/name");
@@ -156,9 +166,9 @@ bool wait_for_readers(const std::vector<std::string>& streams, const sim::apps::
 // interval after the last, with times and stamps shifted so they keep going forward.
 class Playback {
  public:
-  Playback(sim::mcap::Reader& reader, Players& players, const PlayOptions& o,
+  Playback(sim::mcap::Reader& reader, Players& players, SensorMetadata& metadata, const PlayOptions& o,
            const sim::apps::StopSignal& stop, sim::apps::StatusLine& status)
-      : reader_(reader), players_(players), options_(o), stop_(stop), status_(status),
+      : reader_(reader), players_(players), metadata_(metadata), options_(o), stop_(stop), status_(status),
         pacer_(o.max_rate ? 0.0 : o.rate) {}
 
   void run() {
@@ -198,6 +208,12 @@ class Playback {
       auto m = reader_.next();
       if (!m) break;
       if (!window) window = skip_before(m->header.log_time);
+      if (metadata_.handles(m->header.channel_id)) {  // even before --start: /tf_static comes first
+        if (auto error = metadata_.take(m->header.channel_id, m->data, players_)) {
+          if (undecodable_++ == 0) say(status_, error->message);
+        }
+        continue;
+      }
       if (m->header.log_time < *window) continue;
       auto it = players_.find(m->header.channel_id);
       if (it == players_.end()) continue;
@@ -229,6 +245,7 @@ class Playback {
 
   sim::mcap::Reader& reader_;
   Players& players_;
+  SensorMetadata& metadata_;
   const PlayOptions& options_;
   const sim::apps::StopSignal& stop_;
   sim::apps::StatusLine& status_;
@@ -246,6 +263,9 @@ int report(const Playback& playback, const Players& players, const sim::mcap::Re
                                            {"passes", std::to_string(playback.passes())}});
   for (const auto& [id, player] : players) summary += "  " + player.stream() + " " + std::to_string(player.frames());
   status.finish(summary);
+  for (const auto& [id, player] : players) {
+    if (!player.sensor_problem().empty()) say(status, player.sensor_problem());
+  }
   if (playback.undecodable() > 0) {
     say(status, std::to_string(playback.undecodable()) + " messages could not be decoded and were skipped");
   }
@@ -274,7 +294,8 @@ int main(int argc, char** argv) {
   if (!reader) return cli.fail(sim::mcap::printable(reader.error().message));
   if (!reader->problem().empty()) say(status, reader->problem());
 
-  Players players = make_players(*reader, options, status);
+  SensorMetadata metadata(*reader);
+  Players players = make_players(*reader, metadata, options, status);
   if (players.empty()) {
     return cli.fail(sim::mcap::printable(options.file) +
                     " has no topic SIM can play (PointCloud2, Image or CompressedImage in CDR)");
@@ -287,7 +308,8 @@ int main(int argc, char** argv) {
   std::fflush(stdout);
   if (options.wait_readers && !wait_for_readers(streams, stop)) return sim::apps::kExitOk;
 
-  Playback playback(*reader, players, options, stop, status);
+  metadata.attach(players);
+  Playback playback(*reader, players, metadata, options, stop, status);
   playback.run();
   return report(playback, players, *reader, streams_failed, status);
 }

@@ -15,14 +15,21 @@
 #include "sim/reader.hpp"
 #include "sim/ros2/encode.hpp"
 #include "sim/ros2/message.hpp"
+#include "sim/ros2/metadata.hpp"
+#include "sim/ros2/type_hash.hpp"
 
 namespace sim::record {
 
 namespace {
 
+// What a message is: a frame (of its ROS 2 type), or what travels beside the frames: the
+// calibration beside each image, the mountings on /tf_static.
+enum class Kind { frame, camera_info, tf_static };
+
 // One serialized message on its way to the writer thread.
 struct Pending {
   std::size_t stream = 0;
+  Kind kind = Kind::frame;
   ros2::MessageType type = ros2::MessageType::image;
   Layout layout{};
   std::uint64_t capacity = 0;
@@ -106,8 +113,10 @@ class MessageQueue {
 
 struct StreamState {
   std::string name;
-  std::string frame_id;  // the stream name without its slash: "lidar_top"
+  std::string frame_id;  // the sensor's frame, else the stream name without its slash: "lidar_top"
   Reader reader;
+  std::uint64_t sensor_generation = UINT64_MAX;  // of the description below; MAX: not looked yet
+  std::vector<std::byte> camera_info;            // CameraInfo to restamp per image; empty: none
   std::atomic<std::uint64_t> frames{0};
   std::atomic<std::uint64_t> bytes{0};
   std::atomic<std::uint64_t> skipped{0};  // the reader's count of frames it never saw
@@ -115,9 +124,48 @@ struct StreamState {
   std::atomic<std::uint64_t> unrecordable{0};
 
   StreamState(std::string n, Reader r) : name(std::move(n)), reader(std::move(r)) {
-    frame_id = name.substr(name.find_first_not_of('/') == std::string::npos ? 0 : 1);
+    frame_id = default_frame_id();
+  }
+  std::string default_frame_id() const {
+    return name.substr(name.find_first_not_of('/') == std::string::npos ? 0 : 1);
   }
 };
+
+// A sensor's mounting as /tf_static carries it, owning its frame names.
+struct OwnedMounting {
+  std::string parent;
+  std::string child;
+  Mounting mounting;
+  friend bool operator==(const OwnedMounting&, const OwnedMounting&) = default;
+};
+
+// The topic of a stream's frames, laid out as sim_dds_bridge publishes them: images at
+// <stream>/image_raw (JPEG at <stream>/image_raw/compressed), their calibration at the sibling
+// <stream>/camera_info, point clouds at the stream's name.
+std::string frame_topic(const std::string& stream, ros2::MessageType type) {
+  switch (type) {
+    case ros2::MessageType::image: return stream + "/image_raw";
+    case ros2::MessageType::compressed_image: return stream + "/image_raw/compressed";
+    case ros2::MessageType::point_cloud2: break;
+  }
+  return stream;
+}
+
+// /tf_static as tf2's static broadcaster offers it: keep last 1, reliable, transient local, so
+// `ros2 bag play` republishes it latched and late subscribers get it.
+const std::string& latched_qos_yaml() {
+  static const std::string yaml =
+      "- history: 1\n"
+      "  depth: 1\n"
+      "  reliability: 1\n"
+      "  durability: 1\n"
+      "  deadline:\n    sec: 0\n    nsec: 0\n"
+      "  lifespan:\n    sec: 0\n    nsec: 0\n"
+      "  liveliness: 1\n"
+      "  liveliness_lease_duration:\n    sec: 0\n    nsec: 0\n"
+      "  avoid_ros_namespace_conventions: false\n";
+  return yaml;
+}
 
 }  // namespace
 
@@ -133,7 +181,12 @@ struct Recorder::Impl {
   std::thread writer_thread;
   std::int64_t start_monotonic_ns = 0;
   std::int64_t realtime_minus_monotonic_ns = 0;  // turns publish times into epoch times
-  std::map<std::uint16_t, std::size_t> channel_streams;  // MCAP channel id -> index in `streams`
+  // The writer thread's: schemas by type name, channels by (stream, what, capacity).
+  std::map<std::string, std::uint16_t> schemas;
+  std::map<std::tuple<std::size_t, std::string, std::uint64_t>, std::uint16_t> channels;
+  std::map<std::uint16_t, std::size_t> channel_streams;  // frame channel id -> index in `streams`
+  std::mutex mountings_mutex;
+  std::map<std::size_t, OwnedMounting> mountings;  // by stream index: what /tf_static holds
   bool stopped = false;
   bool closed = false;  // the file is closed: the writer knows what reached it
 
@@ -159,6 +212,7 @@ struct Recorder::Impl {
       s.skipped.store(s.reader.stats().skipped, std::memory_order_relaxed);
       if (frame.status() != ReadStatus::new_frame) continue;
       const FrameInfo& info = frame.info();
+      if (info.sensor_generation != s.sensor_generation) sensor_changed(s, index, info.sensor_generation);
       if (info.publish_ns < start_monotonic_ns) continue;  // published before recording began
 
       auto plan = ros2::plan_frame(info, s.frame_id);
@@ -175,13 +229,17 @@ struct Recorder::Impl {
         queue.recycle(std::move(data));
         continue;
       }
+      const auto log_time = static_cast<std::uint64_t>(info.publish_ns + realtime_minus_monotonic_ns);
+      // The calibration goes first, with the image's stamp and the same log time: a player
+      // restores it before the image it belongs to.
+      if (!s.camera_info.empty() && !push_camera_info(s, index, info, log_time)) break;
       Pending item;
       item.stream = index;
       item.type = plan->type();
       item.layout = info.layout;
       item.capacity = s.reader.capacity();
       item.header.sequence = static_cast<std::uint32_t>(info.seq);
-      item.header.log_time = static_cast<std::uint64_t>(info.publish_ns + realtime_minus_monotonic_ns);
+      item.header.log_time = log_time;
       item.header.publish_time = static_cast<std::uint64_t>(std::max<std::int64_t>(info.stamp_ns, 0));
       item.data = std::move(data);
       const std::size_t size = item.data.size();
@@ -191,32 +249,125 @@ struct Recorder::Impl {
     }
   }
 
+  // A new sensor description (or the first look): the frame id of the messages, the CameraInfo
+  // beside images, and the stream's mounting on /tf_static follow it.
+  void sensor_changed(StreamState& s, std::size_t index, std::uint64_t generation) {
+    s.sensor_generation = generation;
+    s.frame_id = s.default_frame_id();
+    s.camera_info.clear();
+    auto sensor = s.reader.sensor_info();
+    if (!sensor) {
+      note("stream " + s.name + ": " + sensor.error().message);
+      return;
+    }
+    const std::optional<SensorInfo>& info = *sensor;
+    if (!info) return set_mounting(index, std::nullopt);
+    if (!info->frame_id.empty()) s.frame_id = info->frame_id;
+    if (info->calibration && s.reader.layout().kind == LayoutKind::image) {
+      auto message = ros2::encode_camera_info({ros2::Time{}, s.frame_id}, *info->calibration);
+      if (message) {
+        s.camera_info = std::move(*message);
+      } else {
+        note("the calibration of " + s.name + " cannot be recorded: " + message.error().message);
+      }
+    }
+    if (info->mounting) {
+      set_mounting(index, OwnedMounting{info->parent_frame, s.frame_id, *info->mounting});
+    } else {
+      set_mounting(index, std::nullopt);
+    }
+  }
+
+  bool push_camera_info(StreamState& s, std::size_t index, const FrameInfo& info, std::uint64_t log_time) {
+    Pending item;
+    item.stream = index;
+    item.kind = Kind::camera_info;
+    item.header.sequence = static_cast<std::uint32_t>(info.seq);
+    item.header.log_time = log_time;
+    item.header.publish_time = static_cast<std::uint64_t>(std::max<std::int64_t>(info.stamp_ns, 0));
+    item.data = queue.buffer(s.camera_info.size());
+    std::copy(s.camera_info.begin(), s.camera_info.end(), item.data.begin());
+    ros2::restamp(item.data, ros2::Time::from_ns(info.stamp_ns));
+    return queue.push(std::move(item), stop_streams);
+  }
+
+  // Every mounting in one TFMessage, as tf2's static broadcaster sends it, whenever one changes.
+  void set_mounting(std::size_t index, std::optional<OwnedMounting> mounting) {
+    std::lock_guard lock(mountings_mutex);
+    const auto it = mountings.find(index);
+    if (mounting ? it != mountings.end() && it->second == *mounting : it == mountings.end()) return;
+    if (mounting) {
+      mountings[index] = std::move(*mounting);
+    } else {
+      mountings.erase(it);
+    }
+    const std::int64_t now = realtime_ns();
+    std::vector<ros2::TransformStamped> transforms;
+    for (const auto& [stream, m] : mountings) {
+      transforms.push_back({{ros2::Time::from_ns(now), m.parent}, m.child, m.mounting});
+    }
+    auto message = ros2::encode_tf_message(transforms);
+    if (!message) return note("the mountings cannot be recorded: " + message.error().message);
+    Pending item;
+    item.stream = index;
+    item.kind = Kind::tf_static;
+    item.header.log_time = static_cast<std::uint64_t>(now);
+    item.header.publish_time = static_cast<std::uint64_t>(now);
+    item.data = std::move(*message);
+    (void)queue.push(std::move(item), stop_streams);
+  }
+
+  // The channel of a message: one per stream and layout for frames (a stream whose writer
+  // changes its layout gets a second channel on the same topic), one per stream for its
+  // calibration, one /tf_static. Every channel carries rosbag2's offered_qos_profiles and
+  // topic_type_hash.
+  std::uint16_t channel_for(const Pending& item) {
+    const std::string& name = streams[item.stream]->name;
+    std::string schema_name, schema_text, topic;
+    mcap::Metadata metadata;
+    std::tuple<std::size_t, std::string, std::uint64_t> key;
+    switch (item.kind) {
+      case Kind::frame:
+        schema_name = ros2::ros_type_name(item.type);
+        schema_text = ros2::ros2msg_schema(item.type);
+        topic = frame_topic(name, item.type);
+        metadata = mcap::stream_metadata(name, item.layout, item.capacity);
+        key = {item.stream, item.layout.describe(), item.capacity};
+        break;
+      case Kind::camera_info:
+        schema_name = ros2::camera_info_type_name;
+        schema_text = ros2::camera_info_schema();
+        topic = ros2::camera_info_topic_for(frame_topic(name, ros2::MessageType::image));
+        metadata = {{"offered_qos_profiles", mcap::sensor_data_qos_yaml()}, {"sim.stream", name}};
+        key = {item.stream, "camera_info", 0};
+        break;
+      case Kind::tf_static:
+        schema_name = ros2::tf_message_type_name;
+        schema_text = ros2::tf_message_schema();
+        topic = "/tf_static";
+        metadata = {{"offered_qos_profiles", latched_qos_yaml()}};
+        key = {SIZE_MAX, "tf_static", 0};
+        break;
+    }
+    if (const auto found = channels.find(key); found != channels.end()) return found->second;
+    auto schema = schemas.find(schema_name);
+    if (schema == schemas.end()) {
+      schema = schemas.emplace(schema_name, writer->add_schema(schema_name, "ros2msg", schema_text)).first;
+    }
+    metadata["topic_type_hash"] = std::string(ros2::rihs01_type_hash(schema_name));
+    const auto id = writer->add_channel(schema->second, topic, "cdr", metadata);
+    channels.emplace(key, id);
+    if (item.kind == Kind::frame) channel_streams[id] = item.stream;
+    return id;
+  }
+
   void run_writer() {
-    // One schema per message type; one channel per stream and layout (a stream whose writer
-    // changes its layout gets a second channel with the same topic).
-    std::map<ros2::MessageType, std::uint16_t> schemas;
-    std::map<std::tuple<std::size_t, std::string, std::uint64_t>, std::uint16_t> channels;
     while (auto item = queue.pop()) {
       if (write_failed.load()) {
         queue.recycle(std::move(item->data));
         continue;  // drain so the stream threads never wait for room again
       }
-      auto schema = schemas.find(item->type);
-      if (schema == schemas.end()) {
-        const auto id = writer->add_schema(ros2::ros_type_name(item->type), "ros2msg",
-                                           ros2::ros2msg_schema(item->type));
-        schema = schemas.emplace(item->type, id).first;
-      }
-      const auto key = std::make_tuple(item->stream, item->layout.describe(), item->capacity);
-      auto channel = channels.find(key);
-      if (channel == channels.end()) {
-        const std::string& name = streams[item->stream]->name;
-        const auto id = writer->add_channel(schema->second, name, "cdr",
-                                            mcap::stream_metadata(name, item->layout, item->capacity));
-        channel = channels.emplace(key, id).first;
-        channel_streams[id] = item->stream;
-      }
-      item->header.channel_id = channel->second;
+      item->header.channel_id = channel_for(*item);
       if (auto error = writer->write(item->header, item->data)) {
         note(error->message);
         write_failed.store(true);

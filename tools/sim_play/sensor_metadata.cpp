@@ -1,0 +1,72 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "sensor_metadata.hpp"
+
+#include "sim/ros2/metadata.hpp"
+
+namespace sim::play {
+
+namespace {
+
+// "sensor_msgs/msg/CameraInfo" (ROS 2) or "sensor_msgs/CameraInfo" (older writers).
+bool is_type(const mcap::Schema* schema, std::string_view ros2_name) {
+  if (schema == nullptr) return false;
+  std::string shortened(ros2_name);
+  shortened.erase(shortened.find("/msg/"), 4);
+  return schema->name == ros2_name || schema->name == shortened;
+}
+
+// The image topic without the image_transport suffix of a compressed one.
+std::string_view image_base(std::string_view topic) {
+  constexpr std::string_view suffix = "/compressed";
+  if (topic.size() > suffix.size() && topic.substr(topic.size() - suffix.size()) == suffix) {
+    topic.remove_suffix(suffix.size());
+  }
+  return topic;
+}
+
+}  // namespace
+
+SensorMetadata::SensorMetadata(const mcap::Reader& reader) {
+  for (const auto& [id, channel] : reader.channels()) {
+    if (channel.message_encoding != "cdr") continue;
+    const mcap::Schema* schema = reader.schema_of(channel);
+    if (is_type(schema, ros2::camera_info_type_name)) {
+      kinds_[id] = Kind::camera_info;
+      topics_[id] = channel.topic;
+    } else if (is_type(schema, ros2::tf_message_type_name) && channel.topic == "/tf_static") {
+      kinds_[id] = Kind::tf_static;
+      topics_[id] = channel.topic;
+    }
+  }
+}
+
+void SensorMetadata::attach(Players& players) {
+  for (auto& [id, player] : players) {
+    player.use_mountings(&mountings_);
+    const std::string sibling = ros2::camera_info_topic_for(image_base(player.topic()));
+    for (const auto& [info_id, topic] : topics_) {
+      if (kinds_[info_id] == Kind::camera_info && topic == sibling) images_of_[info_id].push_back(id);
+    }
+  }
+}
+
+std::optional<Error> SensorMetadata::take(std::uint16_t channel, std::span<const std::byte> message,
+                                          Players& players) {
+  if (kinds_.at(channel) == Kind::camera_info) {
+    const auto targets = images_of_.find(channel);
+    if (targets == images_of_.end()) return std::nullopt;  // no image topic of ours beside it
+    auto info = ros2::decode_camera_info(message);
+    if (!info) return Error{info.error().code, topics_[channel] + ": " + info.error().message};
+    for (const std::uint16_t image : targets->second) players.at(image).set_calibration(info->calibration);
+    return std::nullopt;
+  }
+  auto transforms = ros2::decode_tf_message(message);
+  if (!transforms) return Error{transforms.error().code, "/tf_static: " + transforms.error().message};
+  for (const auto& t : *transforms) {
+    mountings_.by_child[std::string(t.child_frame_id)] = {std::string(t.header.frame_id), t.transform};
+  }
+  ++mountings_.generation;
+  return std::nullopt;
+}
+
+}  // namespace sim::play
