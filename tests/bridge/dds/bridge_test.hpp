@@ -46,14 +46,17 @@ inline long long json_counter(const std::string& line, const std::string& topic,
   return std::stoll(line.substr(k + key.size() + 3));
 }
 
-// Reads the bridge's JSON lines until `topic`'s `key` reaches `at_least`; the last line read.
+// Reads the bridge's JSON lines until `topic`'s `key` reaches `at_least`; the last line read, or
+// empty when the bridge ended or a minute passed (a hang guard, not a timing check).
 inline std::string wait_counter(Process& bridge, const std::string& topic, const std::string& key,
-                         long long at_least) {
-  for (;;) {
+                                long long at_least) {
+  const auto deadline = std::chrono::steady_clock::now() + 60s;
+  while (std::chrono::steady_clock::now() < deadline) {
     auto line = bridge.wait_for_line("\"topics\"");
     if (!line) return {};
     if (json_counter(*line, topic, key) >= at_least) return *line;
   }
+  return {};
 }
 
 inline std::int64_t stamp_of(const std_msgs_msg_dds__Header_& h) {
