@@ -42,21 +42,22 @@ void add_sensor_options(CommandLine& cli, SensorOptions& options, SensorKind kin
   struct Axis {
     const char* name;
     std::optional<double>* value;
+    const char* unit;
     const char* help;
   };
   const Axis axes[] = {
-      {"--x", &options.x, "mounting: translation along the parent's x, metres [0]"},
-      {"--y", &options.y, "mounting: translation along y, metres [0]"},
-      {"--z", &options.z, "mounting: translation along z, metres [0]"},
-      {"--roll", &options.roll, "mounting: rotation about x, radians [0]"},
-      {"--pitch", &options.pitch, "mounting: rotation about y, radians [0]"},
-      {"--yaw", &options.yaw,
+      {"--x", &options.x, "M", "mounting: translation along the parent's x, metres [0]"},
+      {"--y", &options.y, "M", "mounting: translation along y, metres [0]"},
+      {"--z", &options.z, "M", "mounting: translation along z, metres [0]"},
+      {"--roll", &options.roll, "RAD", "mounting: rotation about x, radians [0]"},
+      {"--pitch", &options.pitch, "RAD", "mounting: rotation about y, radians [0]"},
+      {"--yaw", &options.yaw, "RAD",
        "mounting: rotation about z, radians [0] (applied first, as tf2's setRPY); any of "
        "--x … --yaw makes the mounting known"},
   };
   for (const Axis& axis : axes) {
     app.add_option(axis.name, *axis.value, axis.help)
-        ->type_name(axis.name[2] == 'x' || axis.name[2] == 'y' || axis.name[2] == 'z' ? "M" : "RAD")
+        ->type_name(axis.unit)
         ->check(finite)
         ->group("Sensor");
   }
