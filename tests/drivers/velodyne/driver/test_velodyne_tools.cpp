@@ -1,0 +1,189 @@
+// SPDX-License-Identifier: Apache-2.0
+// sim_replay_pcap and sim_lidar_velodyne as real processes: the replay publishes exactly the
+// decoder's frames; the live driver over UDP publishes the same frames, counts bad datagrams,
+// and turns a position packet into the stream's time-sync description; a calibration of
+// another laser count is one sentence.
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstring>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "../packet_builder.hpp"
+#include "pcap_payloads.hpp"
+#include "sim/sim.hpp"
+#include "sim/velodyne/velodyne.hpp"
+#include "sim_test/network.hpp"
+#include "sim_test/process.hpp"
+
+namespace {
+
+using namespace std::chrono_literals;
+using sim::testing::Process;
+
+std::optional<std::string> g_skip_reason;
+const std::string data_dir = VELODYNE_TEST_DATA;
+const std::string capture = data_dir + "/vlp16_dual.pcap";
+const std::string calibration = data_dir + "/VLP16.yaml";
+
+struct StreamGuard {
+  std::string name = "/test_velodyne_tools_" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
+  static inline int counter = 0;
+  ~StreamGuard() { (void)sim::destroy(name, true); }
+};
+
+long long summary_value(const std::string& text, const std::string& key) {
+  const auto at = text.find(" " + key + "=", text.find("summary "));
+  if (at == std::string::npos) return -1;
+  return std::stoll(text.substr(at + key.size() + 2));
+}
+
+std::string summary_text(const std::string& text, const std::string& key) {
+  const auto at = text.find(" " + key + "=", text.find("summary "));
+  if (at == std::string::npos) return {};
+  const auto begin = at + key.size() + 2;
+  return text.substr(begin, text.find_first_of(" \n", begin) - begin);
+}
+
+// The frames the decoder makes of the capture, each packet's hour from its capture time.
+std::vector<std::vector<sim::LidarPoint>> decode_directly(const std::vector<hesai_test::UdpPayload>& payloads) {
+  auto loaded = sim::velodyne::Calibration::load(calibration);
+  EXPECT_TRUE(loaded);
+  auto assembler = sim::velodyne::FrameAssembler::create(std::move(loaded.value()), {});
+  EXPECT_TRUE(assembler);
+  std::vector<sim::LidarPoint> span(sim::velodyne::frame_capacity(sim::velodyne::Model::vlp16));
+  assembler->set_output(span);
+  std::vector<std::vector<sim::LidarPoint>> frames;
+  for (const auto& p : payloads) {
+    const auto r = assembler->push(p.bytes, 0, p.capture_ns);
+    if (!r.frame) continue;
+    frames.emplace_back(span.begin(), span.begin() + static_cast<std::ptrdiff_t>(r.frame->point_count));
+    assembler->set_output(span);
+  }
+  return frames;
+}
+
+sim::Expected<sim::Reader> open_when_created(const std::string& name) {
+  const auto deadline = std::chrono::steady_clock::now() + 30s;
+  for (;;) {
+    auto reader = sim::Reader::open(name);
+    if (reader || std::chrono::steady_clock::now() > deadline) return reader;
+    std::this_thread::sleep_for(1ms);
+  }
+}
+
+std::vector<std::vector<sim::LidarPoint>> receive(sim::Reader& reader, std::size_t count) {
+  std::vector<std::byte> buffer(reader.capacity());
+  std::vector<std::vector<sim::LidarPoint>> frames;
+  const auto deadline = std::chrono::steady_clock::now() + 60s;
+  while (frames.size() < count && std::chrono::steady_clock::now() < deadline) {
+    sim::FrameInfo info;
+    if (reader.read_next(buffer, info, 100ms) != sim::ReadStatus::new_frame) continue;
+    std::vector<sim::LidarPoint> points(info.size / sizeof(sim::LidarPoint));
+    std::memcpy(points.data(), buffer.data(), info.size);
+    frames.push_back(std::move(points));
+  }
+  return frames;
+}
+
+bool same(const std::vector<sim::LidarPoint>& a, const std::vector<sim::LidarPoint>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(sim::LidarPoint)) == 0;
+}
+
+void send_to(int port, const std::vector<std::uint8_t>& bytes) {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(static_cast<std::uint16_t>(port));
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ::sendto(fd, bytes.data(), bytes.size(), 0, reinterpret_cast<const sockaddr*>(&to), sizeof to);
+  ::close(fd);
+}
+
+TEST(VelodyneTools, ReplayPublishesExactlyTheDecodersFrames) {
+  const auto payloads = hesai_test::read_udp_payloads(capture);
+  const auto expected = decode_directly(payloads);
+  ASSERT_EQ(expected.size(), 3U);
+  StreamGuard stream;
+  Process replay({SIM_REPLAY_PCAP, capture, "--stream", stream.name, "--calibration", calibration, "--summary"});
+  auto reader = open_when_created(stream.name);
+  ASSERT_TRUE(reader) << reader.error().message;
+  const auto frames = receive(*reader, expected.size());
+  ASSERT_EQ(replay.wait(), 0) << replay.err();
+  ASSERT_EQ(frames.size(), expected.size());
+  for (std::size_t i = 0; i < frames.size(); ++i) EXPECT_TRUE(same(frames[i], expected[i])) << "frame " << i;
+  EXPECT_EQ(summary_value(replay.out(), "packets"), 603);
+}
+
+TEST(VelodyneTools, LiveDriverCountsBadDatagramsAndReportsThePositionPacketsTimeSync) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  const auto payloads = hesai_test::read_udp_payloads(capture);
+  const auto expected = decode_directly(payloads);
+  StreamGuard stream;
+  Process driver({SIM_LIDAR_VELODYNE, "--model", "VLP-16", "--port", "0", "--position-port", "0", "--bind",
+                  "127.0.0.1", "--stream", stream.name, "--calibration", calibration, "--status-interval", "0",
+                  "--summary", "--frame-id", "velodyne_top"});
+  const auto line = driver.wait_for_line("listening on");
+  ASSERT_TRUE(line) << driver.err();
+  const int port = std::stoi(line->substr(line->rfind(':') + 1));
+  const int position_port = std::stoi(line->substr(line->rfind("port ") + 5));
+  auto reader = open_when_created(stream.name);
+  ASSERT_TRUE(reader) << reader.error().message;
+
+  send_to(position_port, velodyne_test::position_packet(
+                             0, 2, velodyne_test::nmea("GPRMC,123519,A,4807.038,N,01131.000,E,022.4,084.4,230326,003.1,W")));
+  send_to(port, std::vector<std::uint8_t>(payloads[0].bytes.begin(), payloads[0].bytes.begin() + 700));  // cut short
+  send_to(port, std::vector<std::uint8_t>(1080, 0xEE));  // another vendor's datagram
+  std::thread feed([&] {
+    for (const auto& p : payloads) {
+      send_to(port, p.bytes);
+      std::this_thread::sleep_for(200us);
+    }
+  });
+  const auto frames = receive(*reader, 2);
+  feed.join();
+  std::this_thread::sleep_for(200ms);
+  auto info = reader->sensor_info();
+  driver.signal(SIGTERM);
+  ASSERT_EQ(driver.wait(), 0) << driver.err();
+  // The live stamps' hour comes from the host clock, so the points are compared (their times
+  // are offsets from the frame stamp): the live driver's frames are the decoder's.
+  ASSERT_GE(frames.size(), 1U);
+  bool matched = false;
+  for (const auto& e : expected) matched = matched || same(e, frames.back());
+  EXPECT_TRUE(matched);
+  EXPECT_EQ(summary_value(driver.out(), "malformed"), 2);
+  EXPECT_EQ(summary_value(driver.out(), "position_packets"), 1);
+  EXPECT_EQ(summary_text(driver.out(), "time_sync"), "PPS_locked__GPRMC_valid");
+  ASSERT_TRUE(info) << info.error().message;
+  ASSERT_TRUE(info->has_value());
+  EXPECT_EQ((*info)->frame_id, "velodyne_top");
+  EXPECT_EQ((*info)->time_sync, "PPS locked, GPRMC valid");
+  EXPECT_EQ((*info)->time_base, sim::TimeBase::sensor_synchronized);
+  EXPECT_EQ((*info)->identity.model, "VLP-16");
+  EXPECT_EQ((*info)->point_time, sim::PointTime::after_frame_stamp);
+}
+
+TEST(VelodyneTools, ACalibrationOfAnotherLaserCountIsOneSentenceAndExitOne) {
+  StreamGuard stream;
+  const auto r = sim::testing::run({SIM_REPLAY_PCAP, capture, "--stream", stream.name, "--calibration",
+                                    data_dir + "/VLS128.yaml"});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.err, "sim_replay_pcap: the calibration has 128 lasers but a VLP-16 has 16; give the file of this "
+                   "sensor (--calibration).\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  g_skip_reason = sim::testing::enter_private_network(sim::testing::Multicast::off);
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
