@@ -290,6 +290,56 @@ TEST(BridgeGraph, CameraInfoAndTfStaticFromRos2BecomeTheStreamsSensorDescription
   EXPECT_EQ(bridge.wait(), 0) << bridge.err();
 }
 
+// Review H1: the bridge's own messages are never taken back. Its own /tf_static names the frame
+// of the images it subscribes; that mounting must not come back as the subscribed stream's.
+TEST(BridgeGraph, TheBridgeNeverReadsItsOwnTfStaticBack) {
+  SKIP_WITHOUT_NETWORK();
+  StreamGuard lidar(unique_name("own_lidar"));
+  sim::StreamSpec spec{.name = lidar.name};
+  spec.layout = sim::Layout::of(sim::PointLayout::of(sim::PointType::xyz32, 10));
+  spec.sensor = lidar_sensor();  // frame lidar_top, mounted 1.75 m up
+  FramePump frames(spec);
+  ASSERT_TRUE(frames.ok()) << frames.error();
+  const std::string ns = unique_name("own_cam");
+  StreamGuard local(unique_name("own_cam_local"));
+  Process bridge = start_bridge({"--publish", lidar.name, "--subscribe", ns + "/image_raw", "--as", local.name});
+  ASSERT_FALSE(wait_counter(bridge, "/tf_static", "bridged", 1).empty()) << bridge.err();
+
+  CycloneParticipant node;
+  CycloneWriter images(node, &sensor_msgs_msg_dds__Image__desc, "rt" + ns + "/image_raw");
+  CycloneWriter infos(node, &sensor_msgs_msg_dds__CameraInfo__desc, "rt" + ns + "/camera_info");
+  std::vector<std::uint8_t> pixels(4 * 2, 1);
+  Image image{};
+  image.header.frame_id = const_cast<char*>("lidar_top");  // the frame the bridge itself mounts
+  image.width = 4;
+  image.height = 2;
+  image.encoding = const_cast<char*>("mono8");
+  image.step = 4;
+  image.data._buffer = pixels.data();
+  image.data._length = image.data._maximum = static_cast<std::uint32_t>(pixels.size());
+  CameraInfo info{};
+  info.header.frame_id = image.header.frame_id;
+  info.width = 4;
+  info.height = 2;
+  info.distortion_model = const_cast<char*>("plumb_bob");
+  const double k[9] = {4, 0, 2, 0, 4, 1, 0, 0, 1};
+  std::memcpy(info.k, k, sizeof k);
+  const double r[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  std::memcpy(info.r, r, sizeof r);
+  std::optional<sim::SensorInfo> described;
+  for (int n = 0; n < 600 && !(described && described->calibration); ++n) {
+    image.header.stamp = info.header.stamp = {1'700'000'000 + n, 0};
+    images.write(&image);
+    infos.write(&info);
+    std::this_thread::sleep_for(50ms);
+    if (auto status = sim::inspect(local.name); status && status->sensor) described = status->sensor;
+  }
+  ASSERT_TRUE(described && described->calibration) << bridge.err();
+  EXPECT_FALSE(described->mounting.has_value()) << "the bridge read its own /tf_static back";
+  bridge.signal(SIGTERM);
+  EXPECT_EQ(bridge.wait(), 0) << bridge.err();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
