@@ -553,7 +553,8 @@ std::vector<double> number_list(const py::handle& values, const char* what) {
   return {array.data(), array.data() + array.size()};
 }
 
-void bind_sensor_info(py::module_& m) {
+// TimeBase, PointTime and Mounting.
+void bind_sensor_basics(py::module_& m) {
   py::enum_<sim::TimeBase>(m, "TimeBase", "Which clock a stream's stamps are in.")
       .value("unknown", sim::TimeBase::unknown)
       .value("host", sim::TimeBase::host)
@@ -585,6 +586,10 @@ void bind_sensor_info(py::module_& m) {
           [](sim::Mounting& mnt, const py::object& v) { mnt.rotation = numbers<4>(v, "rotation"); })
       .def(py::self == py::self);
 
+}
+
+// CameraCalibration and its RegionOfInterest.
+void bind_calibration(py::module_& m) {
   using Roi = sim::CameraCalibration::RegionOfInterest;
   py::class_<Roi>(m, "RegionOfInterest", "A calibration's region of interest (all 0: the whole image).")
       .def(py::init([](std::uint32_t x_offset, std::uint32_t y_offset, std::uint32_t height,
@@ -648,6 +653,13 @@ void bind_sensor_info(py::module_& m) {
       .def("summary", &sim::summary, "\"1920x1200 plumb_bob fx=… fy=… cx=… cy=…\"")
       .def(py::self == py::self);
 
+}
+
+// SensorIdentity, SensorInfo and frame_id_problem (after the types they hold).
+void bind_sensor_info(py::module_& m) {
+  bind_sensor_basics(m);
+  bind_calibration(m);
+  using Calibration = sim::CameraCalibration;
   py::class_<sim::SensorIdentity>(m, "SensorIdentity", "The unit that makes the stream; \"\" is unknown.")
       .def(py::init([](std::string vendor, std::string model, std::string serial, std::string firmware) {
              return sim::SensorIdentity{std::move(vendor), std::move(model), std::move(serial),
