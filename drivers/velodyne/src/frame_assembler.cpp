@@ -27,13 +27,6 @@ std::int64_t floor_div(std::int64_t a, std::int64_t b) noexcept {
   return (a % b != 0 && (a < 0) != (b < 0)) ? q - 1 : q;
 }
 
-std::int32_t wrap_signed(std::int32_t centi) noexcept {
-  centi %= full_turn;
-  if (centi >= full_turn / 2) centi -= full_turn;
-  if (centi < -full_turn / 2) centi += full_turn;
-  return centi;
-}
-
 // Fraction of the step between sequences (VLP-16: between blocks, two sequences) at which the
 // unit of bank `bank` fires, from the manuals' firing tables.
 float unit_fraction(Model model, unsigned bank, unsigned unit) noexcept {
@@ -168,8 +161,15 @@ void FrameAssembler::start(FrameState& frame, std::int64_t point_ns, std::int64_
   frame.host_ns = host_ns;
 }
 
-void FrameAssembler::emit(const LidarPoint& point, std::int64_t revolution, std::int64_t point_ns,
+void FrameAssembler::emit(const LidarPoint& point, std::int64_t position, std::int64_t point_ns,
                           std::int64_t host_ns) noexcept {
+  // The revolution without a division in the common case: this one or the next.
+  const std::int64_t relative = position - current_revolution_ * full_turn;
+  const std::int64_t revolution = !current_.started               ? floor_div(position, full_turn)
+                                  : (relative >= 0 && relative < full_turn) ? current_revolution_
+                                  : (relative >= full_turn && relative < 2 * full_turn)
+                                      ? current_revolution_ + 1
+                                      : floor_div(position, full_turn);
   if (!current_.started) {
     current_revolution_ = revolution;
     start(current_, point_ns, host_ns, starts_whole(revolution));
@@ -418,11 +418,16 @@ void FrameAssembler::decode_block(const Packet& packet, unsigned block, const Bl
   if (windowed_ && options_.azimuth_window->block_azimuth_too && !in_window(azimuth.base)) return;
   const float unit_m = info_->distance_unit_m;
   const std::int64_t sequence_ns = info_->sequence_ns;
+  // Laser and sequence per unit without a per-point switch: the VLP-16 and Puck hold two
+  // sequences of 16 lasers in a block, every other model one laser per unit from a base.
+  const bool two_sequences = info_->sequences_per_block == 2;
+  const unsigned laser_base = packet.laser(block, 0);
+  const std::int64_t block_ns = packet_ns + std::int64_t{packet.sequence(block, 0)} * sequence_ns;
   for (unsigned u = 0; u < units_per_block; ++u) {
     const std::uint16_t raw = packet.raw_distance(block, u);
     if (raw == 0) continue;  // no return
     if (skip_identical && raw == packet.raw_distance(block - 1, u)) continue;
-    const unsigned laser = packet.laser(block, u);
+    const unsigned laser = two_sequences ? (u & 15U) : laser_base + u;
     const float distance = static_cast<float>(raw) * unit_m + dist_correction_[laser];
     if (!(distance > min_range_m_ && distance < max_range_m_)) continue;
 
@@ -432,7 +437,7 @@ void FrameAssembler::decode_block(const Packet& packet, unsigned block, const Bl
     const bool negative = corrected < 0.0f;
     if (negative) corrected += static_cast<float>(full_turn);
     auto rounded = static_cast<std::int32_t>(corrected + 0.5f);
-    const auto table = static_cast<std::uint16_t>(rounded % full_turn);
+    const auto table = static_cast<std::uint16_t>(rounded >= full_turn ? rounded - full_turn : rounded);
     if (negative) rounded -= full_turn;
 
     if (windowed_ && !in_window(table)) continue;
@@ -486,16 +491,20 @@ void FrameAssembler::decode_block(const Packet& packet, unsigned block, const Bl
     p.return_index = second ? 1 : 0;
     p.reserved = 0;
 
-    std::int64_t revolution;
+    // Where the point lies on the unwrapped azimuth axis (0.01° since the first revolution).
+    std::int64_t position;
     if (by_packet) {
-      revolution = current_.started ? current_revolution_ : 0;
+      position = (current_.started ? current_revolution_ : 0) * full_turn;
     } else {
-      const std::int64_t position = slot_position + wrap_signed(rounded - real_azimuth);
-      revolution = floor_div(position, full_turn);
+      std::int32_t offset = rounded - real_azimuth;  // within a few degrees, or across 0°
+      if (offset >= full_turn / 2) offset -= full_turn;
+      if (offset < -full_turn / 2) offset += full_turn;
+      position = slot_position + offset;
     }
-    const std::int64_t point_ns = packet_ns + packet.sequence(block, u) * sequence_ns + firing_ns_[laser];
+    const std::int64_t point_ns =
+        block_ns + (two_sequences ? std::int64_t{u >> 4} * sequence_ns : 0) + firing_ns_[laser];
     const std::size_t before = output_count_;
-    emit(p, revolution, point_ns, host_ns);
+    emit(p, position, point_ns, host_ns);
     if (by_packet && output_attached_ && output_count_ == before + 1 &&
         packet_points_ < packet_point_phase_.size()) {
       packet_point_phase_[packet_points_++] =

@@ -162,7 +162,7 @@ class FrameAssembler {
   void nebula_block_azimuths(const Packet& packet, std::array<BlockAzimuth, blocks_per_packet>& out) const noexcept;
   void decode_block(const Packet& packet, unsigned block, const BlockAzimuth& azimuth,
                     std::int64_t block_position, std::int64_t packet_ns, std::int64_t host_ns) noexcept;
-  void emit(const LidarPoint& point, std::int64_t revolution, std::int64_t point_ns,
+  void emit(const LidarPoint& point, std::int64_t position, std::int64_t point_ns,
             std::int64_t host_ns) noexcept;
   void start(FrameState& frame, std::int64_t point_ns, std::int64_t host_ns, bool whole) noexcept;
   void complete(PushResult& result) noexcept;
