@@ -347,6 +347,18 @@ class Soak:
         self.restart(name, argv, sig, self.rng.uniform(0.2, 2.0), long_lived,
                      self.python_env if "python" in name else None)
 
+    def guarded(self, action, target):
+        """A chaos action; one that cannot start a program is a failure, and the program is
+        started again (so one failure does not stop a stream for the rest of the run)."""
+        try:
+            action(target)
+        except Exception as e:  # noqa: BLE001 — reported, then recovered
+            self.fail(target, f"{action.__name__}: {e}")
+            name = ("writer" + target) if target in self.streams else target
+            argv = self.writer_argv(target) if target in self.streams else self.reader_argvs()[target][0]
+            time.sleep(1)
+            self.start(name, argv, False, self.python_env if "python" in target else None)
+
     def chaos_loop(self, until):
         busy = set()
         threads = []
@@ -364,7 +376,7 @@ class Soak:
                 target, action = self.rng.choice(victims), self.kill_reader
             if target in busy:
                 continue
-            t = threading.Thread(target=action, args=(target,), name=target, daemon=True)
+            t = threading.Thread(target=self.guarded, args=(action, target), name=target, daemon=True)
             t.start()
             threads.append(t)
         for t in threads:
@@ -605,7 +617,8 @@ def main():
         soak.run()
         ok = soak.report()
     finally:
-        for child in soak.children.values():
+        soak.running = False
+        for child in list(soak.children.values()):  # (a chaos thread may still add one)
             if child.alive():
                 child.proc.kill()
         subprocess.run([soak.bin("tools/sim_rm"), "--force", *soak.streams], capture_output=True)

@@ -179,6 +179,7 @@ class WaitClock {
     wait_.start_ns = monotonic_ns();
     own_start_ = own_.now();
     writer_start_ = writer.now(reader);
+    steal_start_ = soak::Steal::now();
     pid_ = writer.pid();
     const auto age = reader.newest_age().count();
     wait_.newer_at_start = age >= 0 && check.last_seq() != 0 &&
@@ -189,6 +190,7 @@ class WaitClock {
     const std::int64_t own_end = own_.now();
     const std::int64_t writer_end = writer.now(reader);
     wait_.own_delay_ns = own_start_ >= 0 && own_end >= 0 ? own_end - own_start_ : 0;
+    wait_.steal_ns = soak::Steal::now() - steal_start_;
     wait_.writer_delay_known = writer.pid() == pid_ && writer_start_ >= 0 && writer_end >= 0;
     wait_.writer_delay_ns = wait_.writer_delay_known ? writer_end - writer_start_ : 0;
     return wait_;
@@ -200,13 +202,13 @@ class WaitClock {
     const std::int64_t newest_publish = wait_.end_ns - age;
     if (newest_publish <= check.last_publish_ns() + 100'000) return 0;
     return wait_.end_ns - std::max(wait_.start_ns, newest_publish) - wait_.own_delay_ns -
-           wait_.writer_delay_ns;
+           wait_.writer_delay_ns - wait_.steal_ns;
   }
 
  private:
   RunDelay own_ = RunDelay::this_thread();
   Wait wait_;
-  std::int64_t own_start_ = -1, writer_start_ = -1;
+  std::int64_t own_start_ = -1, writer_start_ = -1, steal_start_ = 0;
   int pid_ = 0;
 };
 

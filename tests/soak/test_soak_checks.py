@@ -21,9 +21,11 @@ def run_pair(stream, writer_args, reader_env, seconds=3.0):
     env = dict(os.environ, **reader_env)
     reader = subprocess.Popen([AGENT, "read", "--mode", "block", f"{stream}:33.333"], env=env,
                               stdout=subprocess.PIPE, text=True)
+    first = reader.stdout.readline()  # its first line: it runs (a loaded machine starts slowly)
     time.sleep(seconds)
     reader.send_signal(signal.SIGTERM)
     out, _ = reader.communicate(timeout=30)
+    out = first + out
     writer.send_signal(signal.SIGTERM)
     writer.wait(timeout=30)
     subprocess.run([os.path.join(os.path.dirname(AGENT), "..", "..", "tools", "sim_rm"), "--force", stream],
