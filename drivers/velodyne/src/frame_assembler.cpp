@@ -48,6 +48,24 @@ float unit_fraction(Model model, unsigned bank, unsigned unit) noexcept {
   return 0.0f;
 }
 
+// cos and sin of 0.00°…359.99°, computed once for every assembler of the process.
+struct TrigTables {
+  std::vector<float> cos = std::vector<float>(full_turn);
+  std::vector<float> sin = std::vector<float>(full_turn);
+  TrigTables() {
+    for (std::int32_t a = 0; a < full_turn; ++a) {
+      const auto radians = static_cast<float>(0.01 * a * pi / 180.0);
+      cos[static_cast<std::size_t>(a)] = std::cos(radians);
+      sin[static_cast<std::size_t>(a)] = std::sin(radians);
+    }
+  }
+};
+
+const TrigTables& trig_tables() {
+  static const TrigTables tables;
+  return tables;
+}
+
 std::uint32_t clamp_offset(std::int64_t ns) noexcept {
   if (ns < 0) return 0;
   if (ns > std::numeric_limits<std::uint32_t>::max()) return std::numeric_limits<std::uint32_t>::max();
@@ -94,13 +112,8 @@ FrameAssembler::FrameAssembler(Calibration calibration, AssemblerOptions options
     window_min_centi_ = static_cast<std::int32_t>(std::lround(options_.azimuth_window->min_deg * 100));
     window_max_centi_ = static_cast<std::int32_t>(std::lround(options_.azimuth_window->max_deg * 100));
   }
-  cos_table_.resize(full_turn);
-  sin_table_.resize(full_turn);
-  for (std::int32_t a = 0; a < full_turn; ++a) {
-    const auto radians = static_cast<float>(0.01 * a * pi / 180.0);
-    cos_table_[a] = std::cos(radians);
-    sin_table_[a] = std::sin(radians);
-  }
+  cos_table_ = trig_tables().cos.data();
+  sin_table_ = trig_tables().sin.data();
   min_point_delta_centi_ = 0;
   max_point_delta_centi_ = 0;
   for (std::size_t l = 0; l < calibration_.lasers(); ++l) {

@@ -183,8 +183,8 @@ class FrameAssembler {
   bool windowed_ = false;
   std::int32_t window_min_centi_ = 0;
   std::int32_t window_max_centi_ = 0;
-  std::vector<float> cos_table_;  // 36,000 entries: cos/sin of 0.00°…359.99°
-  std::vector<float> sin_table_;
+  const float* cos_table_ = nullptr;  // 36,000 entries: cos/sin of 0.00°…359.99° (shared)
+  const float* sin_table_ = nullptr;
   // Per laser, computed once.
   std::array<float, max_lasers> cos_vert_{};
   std::array<float, max_lasers> sin_vert_{};
