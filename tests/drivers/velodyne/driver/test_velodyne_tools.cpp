@@ -180,6 +180,23 @@ TEST(VelodyneTools, ACalibrationOfAnotherLaserCountIsOneSentenceAndExitOne) {
                    "sensor (--calibration).\n");
 }
 
+TEST(VelodyneTools, UsageErrorsExitTwoWithOneSentence) {
+  const auto no_calibration = sim::testing::run({SIM_LIDAR_VELODYNE, "--port", "0"});
+  EXPECT_EQ(no_calibration.code, 2);
+  EXPECT_NE(no_calibration.err.find("no calibration file given"), std::string::npos) << no_calibration.err;
+  const auto bad_model = sim::testing::run({SIM_LIDAR_VELODYNE, "--model", "VLP-64", "--calibration", calibration});
+  EXPECT_EQ(bad_model.code, 2);
+  EXPECT_NE(bad_model.err.find("unknown model 'VLP-64'"), std::string::npos) << bad_model.err;
+  const auto bad_source = sim::testing::run({SIM_LIDAR_VELODYNE, "--source", "sensor", "--calibration", calibration});
+  EXPECT_EQ(bad_source.code, 2);
+  EXPECT_NE(bad_source.err.find("is not an IPv4 address"), std::string::npos) << bad_source.err;
+  StreamGuard stream;
+  const auto not_velodyne = sim::testing::run(
+      {SIM_REPLAY_PCAP, capture, "--model", "HDL-32E", "--stream", stream.name, "--calibration", calibration});
+  EXPECT_EQ(not_velodyne.code, 1);
+  EXPECT_NE(not_velodyne.err.find("holds VLP-16 packets, not HDL-32E"), std::string::npos) << not_velodyne.err;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
