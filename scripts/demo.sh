@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The main job with no sensor attached: installs what is missing, builds, replays the bundled
-# Pandar64 recording into /lidar_top and a real video into /camera_front, in a loop, and shows
+# Pandar64, VLP-16 and Ouster OS-1 recordings into /lidar_top, /lidar_front and /lidar_rear and a
+# real video into /camera_front, each with its frame and mounting, in a loop, and shows
 # every stream live with sim_ls --watch. Ctrl-C stops everything and removes the streams the
 # demo created (never a stream another program owns: the demo refuses to start instead).
 #
@@ -20,7 +21,7 @@ cmake --build build/release -j"${SIM_JOBS:-2}" --target sim_replay_pcap sim_repl
 cmake --build build/release -j"${SIM_JOBS:-2}" --target sim_foxglove  # the live view
 bin=build/release
 data=tests/drivers/hesai/data
-streams=(/lidar_top /camera_front)
+streams=(/lidar_top /lidar_front /lidar_rear /camera_front)
 
 # A live writer owns one of our names (a real driver, another demo): leave it alone.
 for name in "${streams[@]}"; do
@@ -46,12 +47,23 @@ cleanup() {
 trap cleanup EXIT
 trap 'exit 0' INT TERM
 
+# Each stream carries its frame and its mounting on the vehicle (base_link), as sim_ls shows.
 "$bin/replay/pcap/sim_replay_pcap" "$data/pandar64_dual.pcap" --stream /lidar_top \
-  --calibration "$data/pandar64.calibration.csv" --loop --quiet &
+  --calibration "$data/pandar64.calibration.csv" --loop --quiet --frame-id lidar_top --z 1.9 &
 pids+=($!)
 created+=(/lidar_top)
+"$bin/replay/pcap/sim_replay_pcap" tests/drivers/velodyne/data/vlp16_dual.pcap --stream /lidar_front \
+  --calibration tests/drivers/velodyne/data/VLP16.yaml --loop --quiet --frame-id lidar_front --x 2.1 --z 0.6 &
+pids+=($!)
+created+=(/lidar_front)
+"$bin/replay/pcap/sim_replay_pcap" tests/drivers/ouster/data/OS-1-32-G_v2.1.1_1024x10.pcap --stream /lidar_rear \
+  --calibration tests/drivers/ouster/data/OS-1-32-G_v2.1.1_1024x10.json --loop --quiet \
+  --frame-id lidar_rear --x -0.9 --z 1.7 --yaw 3.14159265 &
+pids+=($!)
+created+=(/lidar_rear)
 if [[ -f $video ]]; then
-  "$bin/replay/video/sim_replay_video" "$video" --stream /camera_front --loop --quiet &
+  "$bin/replay/video/sim_replay_video" "$video" --stream /camera_front --loop --quiet \
+    --frame-id camera_front_optical --x 1.8 --z 1.4 --roll -1.5707963 --yaw -1.5707963 &
   pids+=($!)
   created+=(/camera_front)
 else

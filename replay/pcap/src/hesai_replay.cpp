@@ -112,9 +112,12 @@ int run_hesai_replay(int argc, char** argv) {
   apps::CommandLine cli(
       "sim_replay_pcap",
       "Replays a LiDAR capture (pcap or pcapng) into a SIM stream, paced by the capture's "
-      "timestamps, through the same decoder and frame assembler as the live driver. Hesai "
-      "captures: the model is detected and --calibration is required. Unitree L1/L2 captures: "
-      "--model unitree-l2 (see sim_replay_pcap --model unitree-l2 --help).");
+      "timestamps, through the same decoder and frame assembler as the live driver. The "
+      "family is detected from the packets. Hesai: the model is detected and --calibration "
+      "(the angle CSV) is required; the options below are Hesai's. Velodyne and Ouster: see "
+      "sim_replay_pcap FILE --help (Velodyne needs --calibration FILE.yaml or db.xml, Ouster "
+      "its metadata --calibration FILE.json). Unitree L1/L2: --model unitree-l2 (see "
+      "sim_replay_pcap --model unitree-l2 --help).");
   ReplayArgs r;
   apps::HesaiStreamOptions s;
   add_replay_options(cli, r);
