@@ -104,6 +104,42 @@ std::optional<Error> JpegEncoder::encode(const ImageLayout& layout,
   return std::nullopt;
 }
 
+namespace {
+
+// Whether a start of scan (SOS) is followed by entropy-coded data. A header alone passes
+// libjpeg-turbo's header check but decodes to nothing, so it must not become a frame. Walks the
+// marker segments after SOI; every length is checked against the end of the bytes.
+bool has_scan_data(std::span<const std::byte> jpeg) noexcept {
+  const auto byte = [&](std::size_t i) { return static_cast<unsigned>(jpeg[i]); };
+  std::size_t i = 2;  // after SOI, which the header check has seen
+  while (i + 1 < jpeg.size()) {
+    if (byte(i) != 0xFF) return false;
+    const unsigned marker = byte(i + 1);
+    if (marker == 0xFF) {  // a fill byte before the marker
+      ++i;
+      continue;
+    }
+    if (marker == 0xD9) return false;  // EOI before any scan
+    if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD8)) {  // markers without a length
+      i += 2;
+      continue;
+    }
+    if (i + 3 >= jpeg.size()) return false;
+    const std::size_t length = (byte(i + 2) << 8) | byte(i + 3);
+    if (length < 2) return false;
+    const std::size_t next = i + 2 + length;
+    if (marker == 0xDA) {
+      if (next >= jpeg.size()) return false;
+      // At least one byte of scan data that is not the EOI marker itself.
+      return !(jpeg.size() - next == 2 && byte(next) == 0xFF && byte(next + 1) == 0xD9);
+    }
+    i = next;
+  }
+  return false;
+}
+
+}  // namespace
+
 Expected<JpegSize> read_jpeg_size(std::span<const std::byte> jpeg) {
   tjhandle handle = tjInitDecompress();
   if (handle == nullptr) {
@@ -121,6 +157,12 @@ Expected<JpegSize> read_jpeg_size(std::span<const std::byte> jpeg) {
     return Error{ErrorCode::invalid_argument,
                  "the " + std::to_string(jpeg.size()) +
                      " bytes are not a JPEG with a readable header"};
+  }
+  if (!has_scan_data(jpeg)) {
+    return Error{ErrorCode::invalid_argument,
+                 "the " + std::to_string(jpeg.size()) +
+                     "-byte JPEG has a header but no scan data (cut short, or only a header); "
+                     "send whole JPEG frames"};
   }
   return JpegSize{static_cast<std::uint32_t>(width), static_cast<std::uint32_t>(height)};
 }

@@ -110,6 +110,35 @@ TEST(JpegSize, TheHeaderGivesTheSizeAndOtherBytesGetOneSentence) {
   EXPECT_FALSE(read_jpeg_size(std::span(jpeg).first(10)));  // cut inside the header
 }
 
+// Review of the bridge, L5: a JPEG that is only its header (no scan data) was accepted and
+// published as a frame nobody can decode.
+TEST(JpegSize, AHeaderWithoutScanDataIsRefusedWithOneSentence) {
+  const ImageLayout layout = make_layout(64, 48, PixelFormat::rgb8);
+  auto encoder = JpegEncoder::create();
+  ASSERT_TRUE(encoder);
+  std::vector<std::byte> jpeg;
+  ASSERT_FALSE(encoder->encode(layout, gradient(layout), jpeg).has_value());
+  // Find the start of scan and keep the bytes up to the end of its header.
+  std::size_t sos = 0;
+  for (std::size_t i = 2; i + 3 < jpeg.size(); ++i) {
+    if (jpeg[i] == std::byte{0xFF} && jpeg[i + 1] == std::byte{0xDA}) {
+      sos = i;
+      break;
+    }
+  }
+  ASSERT_NE(sos, 0U);
+  const std::size_t header_end =
+      sos + 2 + ((static_cast<std::size_t>(jpeg[sos + 2]) << 8) | static_cast<std::size_t>(jpeg[sos + 3]));
+  std::vector<std::byte> header_only(jpeg.begin(), jpeg.begin() + static_cast<std::ptrdiff_t>(header_end));
+  const auto refused = read_jpeg_size(header_only);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().message.find("no scan data"), std::string::npos) << refused.error().message;
+  header_only.push_back(std::byte{0xFF});
+  header_only.push_back(std::byte{0xD9});  // a header closed by EOI is still no picture
+  EXPECT_FALSE(read_jpeg_size(header_only));
+  EXPECT_TRUE(read_jpeg_size(jpeg));  // the whole JPEG still passes
+}
+
 TEST(JpegEncoder, AGreyImageEncodes) {
   const ImageLayout layout = make_layout(32, 32, PixelFormat::mono8);
   const auto pixels = gradient(layout);

@@ -51,7 +51,8 @@ struct JpegSize {
   std::uint32_t width = 0;
   std::uint32_t height = 0;
 };
-// One sentence when the bytes do not start a JPEG with a readable header.
+// One sentence when the bytes do not start a JPEG with a readable header, or hold a header but
+// no scan data (nothing a decoder could turn into pixels).
 Expected<JpegSize> read_jpeg_size(std::span<const std::byte> jpeg);
 
 }  // namespace sim::imaging
