@@ -41,6 +41,16 @@ namespace sim {
 
 // x y z intensity ring time, field for field LIO-SAM's VelodynePointXYZIRT (and the Velodyne
 // ROS driver's PointXYZIRT), so a cloud converts to theirs by field name.
+// PCL_ADD_POINT4D declares an anonymous struct in an anonymous union, which -Wpedantic calls an
+// extension; PCL's own point types do the same, but here it expands in our header, not PCL's.
+#if defined(__clang__)
+#pragma clang diagnostic push
+#pragma clang diagnostic ignored "-Wgnu-anonymous-struct"
+#pragma clang diagnostic ignored "-Wnested-anon-types"
+#elif defined(__GNUC__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpedantic"
+#endif
 struct EIGEN_ALIGN16 PointXYZIRT {
   PCL_ADD_POINT4D;
   float intensity;
@@ -48,6 +58,11 @@ struct EIGEN_ALIGN16 PointXYZIRT {
   float time;  // seconds after the frame's stamp
   PCL_MAKE_ALIGNED_OPERATOR_NEW
 };
+#if defined(__clang__)
+#pragma clang diagnostic pop
+#elif defined(__GNUC__)
+#pragma GCC diagnostic pop
+#endif
 
 namespace pcl_detail {
 
