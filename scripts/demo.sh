@@ -60,7 +60,7 @@ created+=(/lidar_front)
   --calibration tests/drivers/ouster/data/OS-1-32-G_v2.1.1_1024x10.json --loop --quiet \
   --frame-id lidar_rear --x -0.9 --z 1.7 --yaw 3.14159265 &
 pids+=($!)
-created+=(/lidar_rear)
+created+=(/lidar_rear /lidar_rear.imu)  # the Ouster replay also publishes its IMU
 if [[ -f $video ]]; then
   "$bin/replay/video/sim_replay_video" "$video" --stream /camera_front --loop --quiet \
     --frame-id camera_front_optical --x 1.8 --z 1.4 --roll -1.5707963 --yaw -1.5707963 &
