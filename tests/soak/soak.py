@@ -32,6 +32,7 @@ FRAME_KIB = 1920 * 1200 * 3 // 1024  # the largest frame of the soak
 LIDAR_PERIOD_MS = 100.0
 STOP_GRACE_S = 15  # a process asked to stop with SIGTERM must be gone by then (else: a hang)
 SILENCE_S = 20     # a reader that prints nothing for this long hangs
+PROGRESS_EVERY_S = 60  # how often a running soak prints one line of progress
 
 _libc = ctypes.CDLL(None, use_errno=True)
 
@@ -409,8 +410,12 @@ class Soak:
     # ---- watching ----------------------------------------------------------------------------
     def watch(self):
         """Crashes (a process that ended without being asked) and hangs (silent readers)."""
+        next_progress = self.t0 + PROGRESS_EVERY_S
         while self.running:
             time.sleep(0.5)
+            if time.monotonic() >= next_progress:
+                next_progress += PROGRESS_EVERY_S
+                self.print_progress()
             for name, child in list(self.children.items()):
                 if child.signalled is not None or child.ended_reported or name == "sim_record":
                     continue
@@ -421,6 +426,15 @@ class Soak:
                         and time.monotonic() - child.last_line > SILENCE_S:
                     child.ended_reported = True
                     self.fail(name, f"printed nothing for {SILENCE_S} s (hung)")
+
+    def print_progress(self):
+        """One line a minute, so a person watching an hour-long run sees it alive and clean."""
+        elapsed = time.monotonic() - self.t0
+        kills = self.chaos["SIGKILL"] + self.chaos["SIGTERM"]
+        frames = sum(self.progress().values())
+        print(f"soak: {elapsed / 60:.0f} of {self.args.seconds / 60:.0f} min, {frames:,} frames to the "
+              f"long-lived readers, {kills} kills, {self.chaos['layout_replaced']} layout replacements, "
+              f"{len(self.violations)} violations, {len(self.failures)} failures", flush=True)
 
     def progress(self):
         """Frames each long-lived consumer has had so far, per stream."""
