@@ -2,8 +2,8 @@
 // Decode throughput of sim::velodyne::FrameAssembler on one core, in the style of
 // bench_hesai_decode: UDP payloads in memory → points in a caller's span, frames swapped as a
 // driver swaps loans, the capture looped. Real captures: VLP-16 dual, VLS-128 strongest;
-// synthetic revolutions (tests' packet_builder.hpp) for HDL-32E, VLP-32C dual, HDL-64E (its
-// db.xml: the full model with offsets and two-point correction) and the Puck Hi-Res.
+// synthetic revolutions (tests' packet_builder.hpp) for HDL-32E, VLP-32C dual, HDL-64E single and
+// S3 dual (its db.xml: the full model with offsets and two-point correction), the Puck Hi-Res.
 // x_real_time = seconds of sensor data decoded per second (target ≥ 50× for every model).
 //
 //   build-*/bench/velodyne/bench_velodyne_decode --benchmark_repetitions=5
@@ -149,6 +149,12 @@ void Hdl64eSynthetic(benchmark::State& s) {
       synthetic(Model::hdl64e, std::string(VELODYNE_TEST_DATA) + "/hdl64e_synthetic.db.xml", false);
   decode(s, c);
 }
+void Hdl64eDualSynthetic(benchmark::State& s) {
+  // S3 dual return: four blocks per firing with one azimuth (the layout the decoder detects).
+  static const Capture c =
+      synthetic(Model::hdl64e, std::string(VELODYNE_TEST_DATA) + "/hdl64e_synthetic.db.xml", true);
+  decode(s, c);
+}
 void Vls128DualSynthetic(benchmark::State& s) {
   static const Capture c = synthetic(Model::vls128, nominal + "/VLS128.yaml", true);
   decode(s, c);
@@ -162,5 +168,6 @@ BENCHMARK(Hdl32eSynthetic)->Unit(benchmark::kMillisecond);
 BENCHMARK(Vlp32cDualSynthetic)->Unit(benchmark::kMillisecond);
 BENCHMARK(PuckHiResSynthetic)->Unit(benchmark::kMillisecond);
 BENCHMARK(Hdl64eSynthetic)->Unit(benchmark::kMillisecond);
+BENCHMARK(Hdl64eDualSynthetic)->Unit(benchmark::kMillisecond);
 BENCHMARK(Vls128DualSynthetic)->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

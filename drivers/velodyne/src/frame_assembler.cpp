@@ -48,23 +48,8 @@ float unit_fraction(Model model, unsigned bank, unsigned unit) noexcept {
   return 0.0f;
 }
 
-// cos and sin of 0.00°…359.99°, computed once for every assembler of the process.
-struct TrigTables {
-  std::vector<float> cos = std::vector<float>(full_turn);
-  std::vector<float> sin = std::vector<float>(full_turn);
-  TrigTables() {
-    for (std::int32_t a = 0; a < full_turn; ++a) {
-      const auto radians = static_cast<float>(0.01 * a * pi / 180.0);
-      cos[static_cast<std::size_t>(a)] = std::cos(radians);
-      sin[static_cast<std::size_t>(a)] = std::sin(radians);
-    }
-  }
-};
-
-const TrigTables& trig_tables() {
-  static const TrigTables tables;
-  return tables;
-}
+// A block's units as read when a block has no pair to compare with: no distance equals a return.
+constexpr std::array<std::uint8_t, units_per_block * 3> no_returns{};
 
 std::uint32_t clamp_offset(std::int64_t ns) noexcept {
   if (ns < 0) return 0;
@@ -80,6 +65,19 @@ std::int64_t packet_time_ns(std::uint32_t timestamp_us, std::int64_t reference_n
   if (t - reference_ns > hour_ns / 2) t -= hour_ns;
   if (reference_ns - t > hour_ns / 2) t += hour_ns;
   return t;
+}
+
+// cos and sin of 0.00°…359.99°, computed once for every assembler of the process.
+const FrameAssembler::CosSin* FrameAssembler::shared_trig_table() {
+  static const std::vector<CosSin> table = [] {
+    std::vector<CosSin> t(full_turn);
+    for (std::int32_t a = 0; a < full_turn; ++a) {
+      const auto radians = static_cast<float>(0.01 * a * pi / 180.0);
+      t[static_cast<std::size_t>(a)] = {std::cos(radians), std::sin(radians)};
+    }
+    return t;
+  }();
+  return table.data();
 }
 
 Expected<FrameAssembler> FrameAssembler::create(Calibration calibration, AssemblerOptions options) {
@@ -112,33 +110,68 @@ FrameAssembler::FrameAssembler(Calibration calibration, AssemblerOptions options
     window_min_centi_ = static_cast<std::int32_t>(std::lround(options_.azimuth_window->min_deg * 100));
     window_max_centi_ = static_cast<std::int32_t>(std::lround(options_.azimuth_window->max_deg * 100));
   }
-  cos_table_ = trig_tables().cos.data();
-  sin_table_ = trig_tables().sin.data();
+  trig_table_ = shared_trig_table();
   min_point_delta_centi_ = 0;
   max_point_delta_centi_ = 0;
+  double largest_rot_centi = 0;
   for (std::size_t l = 0; l < calibration_.lasers(); ++l) {
-    const LaserCorrection& c = calibration_[l];
-    cos_vert_[l] = static_cast<float>(std::cos(c.vert_correction));
-    sin_vert_[l] = static_cast<float>(std::sin(c.vert_correction));
-    rot_centi_[l] = c.rot_correction * 180.0 / pi * 100.0;
-    dist_correction_[l] = static_cast<float>(c.dist_correction);
-    firing_ns_[l] = laser_firing_ns(options_.model, static_cast<unsigned>(l));
-    full_model_[l] = c.needs_full_model();
-    intensity_model_[l] = c.corrects_intensity();
-    min_point_delta_centi_ = std::min(min_point_delta_centi_, -rot_centi_[l]);
-    max_point_delta_centi_ = std::max(max_point_delta_centi_, -rot_centi_[l]);
+    const double rot_centi = calibration_[l].rot_correction * 180.0 / pi * 100.0;
+    min_point_delta_centi_ = std::min(min_point_delta_centi_, -rot_centi);
+    max_point_delta_centi_ = std::max(max_point_delta_centi_, -rot_centi);
+    largest_rot_centi = std::max(largest_rot_centi, std::abs(rot_centi));
   }
   // Rounding, and the interpolation (at most two steps of a plausible size) on top.
   min_point_delta_centi_ -= 1;
   max_point_delta_centi_ += 1 + 2 * max_plausible_step;
-  for (unsigned bank = 0; bank < 4; ++bank) {
-    for (unsigned u = 0; u < units_per_block; ++u) unit_fraction_[bank][u] = unit_fraction(options_.model, bank, u);
-  }
+  build_unit_geometry();
+  // In place needs every point's offset from its sequence azimuth within half a turn (no wrap
+  // ambiguity): rot_corrections of real sensors are a few degrees.
+  in_place_ = options_.interpolation == AzimuthInterpolation::firing_time &&
+              options_.cut_by == CutBy::point_azimuth && !windowed_ && largest_rot_centi < 17000;
   // Points of the next revolution decoded before the current one completes: those within the
   // laser offsets' spread of the cut (VLS-128: about 12°, 20 packets) plus two packets.
   const double spread_centi = max_point_delta_centi_ - min_point_delta_centi_;
   const double packets_in_spread = spread_centi / 10.0 + 2;  // ≥ 0.1° per packet at any rpm
   carry_.resize(static_cast<std::size_t>(packets_in_spread) * info_->max_points_per_packet());
+}
+
+void FrameAssembler::build_unit_geometry() noexcept {
+  const bool two_sequences = info_->sequences_per_block == 2;
+  for (unsigned bank = 0; bank < banks; ++bank) {
+    for (unsigned u = 0; u < units_per_block; ++u) {
+      UnitGeometry& g = units_[bank * units_per_block + u];
+      g.fraction = unit_fraction(options_.model, bank, u);
+      // VLP-16 and Puck: two sequences of 16 lasers per block; the rest one laser per unit.
+      const unsigned laser = two_sequences ? u % 16 : bank * 32 + u;
+      if (laser >= calibration_.lasers()) continue;  // a bank this model does not send
+      const LaserCorrection& c = calibration_[laser];
+      g.rot_centi = c.rot_correction * 180.0 / pi * 100.0;
+      g.cos_vert = static_cast<float>(std::cos(c.vert_correction));
+      g.sin_vert = static_cast<float>(std::sin(c.vert_correction));
+      g.dist_correction = static_cast<float>(c.dist_correction);
+      g.time_ns = laser_firing_ns(options_.model, laser) + (two_sequences ? (u / 16) * info_->sequence_ns : 0);
+      g.ring = calibration_.ring(laser);
+      max_unit_time_ns_ = std::max(max_unit_time_ns_, g.time_ns);
+      if (c.needs_full_model()) {
+        full_model_ = true;
+        g.vert_offset = static_cast<float>(c.vert_offset_correction);
+        g.horiz_offset = static_cast<float>(c.horiz_offset_correction);
+        if (c.two_point()) {
+          g.two_point_dc = static_cast<float>(c.dist_correction);
+          g.two_point_dx = static_cast<float>(c.dist_correction_x);
+          g.two_point_dy = static_cast<float>(c.dist_correction_y);
+        }
+      }
+      if (c.corrects_intensity()) {
+        intensity_model_ = true;
+        const double focal = 1.0 - c.focal_distance / 13100.0;
+        g.focal_term = 256.0 * focal * focal;
+        g.focal_slope = c.focal_slope;
+        g.min_intensity = c.min_intensity;
+        g.max_intensity = c.max_intensity;
+      }
+    }
+  }
 }
 
 void FrameAssembler::set_output(std::span<LidarPoint> output) noexcept {
@@ -417,111 +450,182 @@ bool FrameAssembler::in_window(std::int32_t azimuth_centi) const noexcept {
 }
 
 void FrameAssembler::decode_block(const Packet& packet, unsigned block, const BlockAzimuth& azimuth,
-                                  std::int64_t slot_position, std::int64_t packet_ns,
+                                  std::int64_t block_position, std::int64_t packet_ns,
                                   std::int64_t host_ns) noexcept {
-  const bool second = packet.dual() && (block % 2) == 1;
-  if (packet.dual()) {
-    if (options_.returns == ReturnFilter::last && second) return;
-    if (options_.returns == ReturnFilter::strongest && !second) return;
-  }
-  const bool skip_identical = second && options_.returns == ReturnFilter::both && options_.drop_identical_returns;
-  const bool by_packet = options_.cut_by == CutBy::packet;
-  const unsigned bank = packet.laser(block, 0) / 32 % 4;
-  const std::int32_t real_azimuth = packet.azimuth(block - block % (info_->blocks_per_sequence * (packet.dual() ? 2U : 1U)));
-  if (windowed_ && options_.azimuth_window->block_azimuth_too && !in_window(azimuth.base)) return;
-  const float unit_m = info_->distance_unit_m;
-  const std::int64_t sequence_ns = info_->sequence_ns;
-  // Laser and sequence per unit without a per-point switch: the VLP-16 and Puck hold two
-  // sequences of 16 lasers in a block, every other model one laser per unit from a base.
-  const bool two_sequences = info_->sequences_per_block == 2;
-  const unsigned laser_base = packet.laser(block, 0);
-  const std::int64_t block_ns = packet_ns + std::int64_t{packet.sequence(block, 0)} * sequence_ns;
-  for (unsigned u = 0; u < units_per_block; ++u) {
-    const std::uint16_t raw = packet.raw_distance(block, u);
-    if (raw == 0) continue;  // no return
-    if (skip_identical && raw == packet.raw_distance(block - 1, u)) continue;
-    const unsigned laser = two_sequences ? (u & 15U) : laser_base + u;
-    const float distance = static_cast<float>(raw) * unit_m + dist_correction_[laser];
-    if (!(distance > min_range_m_ && distance < max_range_m_)) continue;
-
-    // Azimuth in 0.01°, rounded as nebula and ros-drivers do (see the top of this file).
-    const float interpolated = static_cast<float>(azimuth.base) + azimuth.step * unit_fraction_[bank][u];
-    float corrected = static_cast<float>(static_cast<double>(interpolated) - rot_centi_[laser]);
-    const bool negative = corrected < 0.0f;
-    if (negative) corrected += static_cast<float>(full_turn);
-    auto rounded = static_cast<std::int32_t>(corrected + 0.5f);
-    const auto table = static_cast<std::uint16_t>(rounded >= full_turn ? rounded - full_turn : rounded);
-    if (negative) rounded -= full_turn;
-
-    if (windowed_ && !in_window(table)) continue;
-
-    LidarPoint p;
-    const float cos_a = cos_table_[table];
-    const float sin_a = sin_table_[table];
-    float intensity = packet.reflectivity(block, u);
-    if (!full_model_[laser]) {
-      const float xy = distance * cos_vert_[laser];
-      p.x = xy * cos_a;
-      p.y = -(xy * sin_a);
-      p.z = distance * sin_vert_[laser];
+  // One instance of the point loop per calibration kind, so no point asks which model it needs.
+  if (full_model_) {
+    if (intensity_model_) {
+      decode_block_as<true, true>(packet, block, azimuth, block_position, packet_ns, host_ns);
     } else {
-      // The HDL-64E model (ros-drivers/velodyne rawdata.cc): optical-centre offsets and the
-      // two-point distance correction, in the sensor's frame (x right, y forward), then ROS.
-      const LaserCorrection& c = calibration_[laser];
-      const auto vo = static_cast<float>(c.vert_offset_correction);
-      const auto ho = static_cast<float>(c.horiz_offset_correction);
-      float xy = distance * cos_vert_[laser] - vo * sin_vert_[laser];
-      const float xx = std::abs(xy * sin_a - ho * cos_a);
-      const float yy = std::abs(xy * cos_a + ho * sin_a);
-      float corr_x = 0;
-      float corr_y = 0;
-      if (c.two_point()) {
-        const auto dc = static_cast<float>(c.dist_correction);
-        corr_x = (dc - static_cast<float>(c.dist_correction_x)) * (xx - 2.4f) / (25.04f - 2.4f) +
-                 static_cast<float>(c.dist_correction_x) - dc;
-        corr_y = (dc - static_cast<float>(c.dist_correction_y)) * (yy - 1.93f) / (25.04f - 1.93f) +
-                 static_cast<float>(c.dist_correction_y) - dc;
-      }
-      xy = (distance + corr_x) * cos_vert_[laser] - vo * sin_vert_[laser];
-      const float vx = xy * sin_a - ho * cos_a;
-      xy = (distance + corr_y) * cos_vert_[laser] - vo * sin_vert_[laser];
-      const float vy = xy * cos_a + ho * sin_a;
-      p.x = vy;
-      p.y = -vx;
-      p.z = (distance + corr_y) * sin_vert_[laser] + vo * cos_vert_[laser];
+      decode_block_as<true, false>(packet, block, azimuth, block_position, packet_ns, host_ns);
     }
-    if (intensity_model_[laser]) {
-      const LaserCorrection& c = calibration_[laser];
-      const double focal = 1.0 - c.focal_distance / 13100.0;
-      const double scaled = 1.0 - static_cast<double>(raw) / 65535.0;
-      double value = intensity + c.focal_slope * std::abs(256.0 * focal * focal - 256.0 * scaled * scaled);
-      value = std::clamp(value, c.min_intensity, c.max_intensity);
-      intensity = static_cast<float>(value);
-    }
-    p.intensity = intensity;
-    p.time_offset_ns = 0;
-    p.ring = calibration_.ring(laser);
-    p.return_index = second ? 1 : 0;
-    p.reserved = 0;
+  } else if (intensity_model_) {
+    decode_block_as<false, true>(packet, block, azimuth, block_position, packet_ns, host_ns);
+  } else {
+    decode_block_as<false, false>(packet, block, azimuth, block_position, packet_ns, host_ns);
+  }
+}
 
+template <bool Full, bool Intensity>
+void FrameAssembler::decode_block_as(const Packet& packet, unsigned block, const BlockAzimuth& azimuth,
+                                     std::int64_t block_position, std::int64_t packet_ns,
+                                     std::int64_t host_ns) noexcept {
+  BlockContext context;
+  if (!block_context(packet, block, azimuth, packet_ns, context)) return;
+  if (fits_in_place(context, block_position)) {
+    decode_in_place<Full, Intensity>(context);
+  } else {
+    decode_point_by_point<Full, Intensity>(context, block_position, host_ns);
+  }
+}
+
+bool FrameAssembler::block_context(const Packet& packet, unsigned block, const BlockAzimuth& azimuth,
+                                   std::int64_t packet_ns, BlockContext& out) const noexcept {
+  const bool dual = packet.dual();
+  const unsigned return_index = dual ? packet.return_index(block) : 0;
+  if (dual && options_.returns == ReturnFilter::last && return_index != 0) return false;
+  if (dual && options_.returns == ReturnFilter::strongest && return_index == 0) return false;
+  if (windowed_ && options_.azimuth_window->block_azimuth_too && !in_window(azimuth.base)) return false;
+  // Both returns: the second is dropped where it repeats the first (the firing's only return).
+  const bool compare = return_index == 1 && options_.returns == ReturnFilter::both && options_.drop_identical_returns;
+  const unsigned bank = packet.laser(block, 0) / 32 % banks;
+  const unsigned per_slot = info_->blocks_per_sequence * (dual ? 2U : 1U);
+  out.units = packet.units(block);
+  out.partner = compare ? packet.units(packet.partner(block)) : no_returns.data();
+  out.geometry = &units_[bank * units_per_block];
+  out.trig = trig_table_;
+  out.base = static_cast<float>(azimuth.base);
+  out.step = azimuth.step;
+  out.unit_m = info_->distance_unit_m;
+  out.min_range_m = min_range_m_;
+  out.max_range_m = max_range_m_;
+  out.real_azimuth = packet.azimuth(block - block % per_slot);
+  out.ns = packet_ns + std::int64_t{packet.sequence(block, 0)} * info_->sequence_ns;
+  out.return_index = static_cast<std::uint8_t>(return_index);
+  return true;
+}
+
+bool FrameAssembler::fits_in_place(BlockContext& block, std::int64_t block_position) const noexcept {
+  if (!in_place_ || !current_.started || !output_attached_ || output_.size() - output_count_ < units_per_block) {
+    return false;
+  }
+  // Every point's position lies within the deltas of its sequence's: all in this revolution?
+  const auto first = static_cast<double>(current_revolution_ * full_turn);
+  const auto position = static_cast<double>(block_position);
+  if (position + min_point_delta_centi_ < first || position + max_point_delta_centi_ >= first + full_turn) {
+    return false;
+  }
+  // And every point's time offset fits without clamping.
+  block.time_base = block.ns - current_.stamp_ns;
+  return block.time_base >= 0 &&
+         block.time_base <= std::int64_t{std::numeric_limits<std::uint32_t>::max()} - max_unit_time_ns_;
+}
+
+// Decodes unit `unit` into `out` (every field; the time as an offset from block.time_base) and
+// says whether it is a point: a return, within the range limits, and not the repeat of its
+// pair's other return. `azimuth_centi` gets its azimuth, 0…35,999.
+template <bool Full, bool Intensity>
+bool FrameAssembler::decode_point(const BlockContext& block, unsigned unit, LidarPoint& out,
+                                  std::int32_t& azimuth_centi) noexcept {
+  const std::uint8_t* bytes = block.units + unit * 3;
+  const std::uint8_t* other = block.partner + unit * 3;
+  const auto raw = static_cast<std::uint16_t>(bytes[0] | (bytes[1] << 8));
+  const auto other_raw = static_cast<std::uint16_t>(other[0] | (other[1] << 8));
+  const UnitGeometry& g = block.geometry[unit];
+  const float distance = static_cast<float>(raw) * block.unit_m + g.dist_correction;
+  const bool keep = (raw != 0) & (raw != other_raw) & (distance > block.min_range_m) & (distance < block.max_range_m);
+
+  // Azimuth in 0.01°, rounded as nebula and ros-drivers do (see the top of this file).
+  const float interpolated = block.base + block.step * g.fraction;
+  float corrected = static_cast<float>(static_cast<double>(interpolated) - g.rot_centi);
+  corrected += corrected < 0.0f ? static_cast<float>(full_turn) : 0.0f;
+  const auto rounded = static_cast<std::int32_t>(corrected + 0.5f);
+  azimuth_centi = rounded >= full_turn ? rounded - full_turn : rounded;
+  const CosSin a = block.trig[azimuth_centi];
+
+  if constexpr (!Full) {
+    const float xy = distance * g.cos_vert;
+    out.x = xy * a.cos;
+    out.y = -(xy * a.sin);
+    out.z = distance * g.sin_vert;
+  } else {
+    // The HDL-64E model (ros-drivers/velodyne rawdata.cc): optical-centre offsets and the
+    // two-point distance correction, in the sensor's frame (x right, y forward), then ROS.
+    const float vo = g.vert_offset;
+    const float ho = g.horiz_offset;
+    float xy = distance * g.cos_vert - vo * g.sin_vert;
+    const float xx = std::abs(xy * a.sin - ho * a.cos);
+    const float yy = std::abs(xy * a.cos + ho * a.sin);
+    // Linear between the two calibration distances (2.4 m / 1.93 m and 25.04 m); a product with
+    // the constant reciprocal instead of a division per point.
+    const float dc = g.two_point_dc;
+    const float corr_x = (dc - g.two_point_dx) * (xx - 2.4f) * (1.0f / (25.04f - 2.4f)) + g.two_point_dx - dc;
+    const float corr_y = (dc - g.two_point_dy) * (yy - 1.93f) * (1.0f / (25.04f - 1.93f)) + g.two_point_dy - dc;
+    xy = (distance + corr_x) * g.cos_vert - vo * g.sin_vert;
+    const float vx = xy * a.sin - ho * a.cos;
+    xy = (distance + corr_y) * g.cos_vert - vo * g.sin_vert;
+    const float vy = xy * a.cos + ho * a.sin;
+    out.x = vy;
+    out.y = -vx;
+    out.z = (distance + corr_y) * g.sin_vert + vo * g.cos_vert;
+  }
+  float intensity = bytes[2];
+  if constexpr (Intensity) {
+    const double scaled = 1.0 - static_cast<double>(raw) * (1.0 / 65535.0);
+    const double value = intensity + g.focal_slope * std::abs(g.focal_term - 256.0 * scaled * scaled);
+    intensity = static_cast<float>(std::clamp(value, g.min_intensity, g.max_intensity));
+  }
+  out.intensity = intensity;
+  out.time_offset_ns = static_cast<std::uint32_t>(block.time_base + g.time_ns);
+  out.ring = g.ring;
+  out.return_index = block.return_index;
+  out.reserved = 0;
+  return keep;
+}
+
+// Every point of the block goes to the output; a slot is written for every unit and kept only
+// for a return, so the loop has no branch that depends on the data.
+template <bool Full, bool Intensity>
+void FrameAssembler::decode_in_place(const BlockContext& block) noexcept {
+  const BlockContext local = block;  // a copy the output writes cannot alias: kept in registers
+  LidarPoint* out = output_.data() + output_count_;
+  std::size_t kept = 0;
+  for (unsigned u = 0; u < units_per_block; ++u) {
+    LidarPoint p;
+    std::int32_t azimuth = 0;
+    const bool keep = decode_point<Full, Intensity>(local, u, p, azimuth);
+    out[kept] = p;
+    kept += keep ? 1U : 0U;
+  }
+  output_count_ += kept;
+}
+
+// Near a cut, in the nebula modes, or with an azimuth window: each point finds its frame.
+template <bool Full, bool Intensity>
+void FrameAssembler::decode_point_by_point(const BlockContext& block, std::int64_t block_position,
+                                           std::int64_t host_ns) noexcept {
+  const bool by_packet = options_.cut_by == CutBy::packet;
+  for (unsigned u = 0; u < units_per_block; ++u) {
+    LidarPoint p;
+    std::int32_t azimuth = 0;
+    if (!decode_point<Full, Intensity>(block, u, p, azimuth)) continue;
+    if (windowed_ && !in_window(azimuth)) continue;
     // Where the point lies on the unwrapped azimuth axis (0.01° since the first revolution).
     std::int64_t position;
     if (by_packet) {
       position = (current_.started ? current_revolution_ : 0) * full_turn;
     } else {
-      std::int32_t offset = rounded - real_azimuth;  // within a few degrees, or across 0°
+      std::int32_t offset = azimuth - block.real_azimuth;  // within a few degrees, or across 0°
       if (offset >= full_turn / 2) offset -= full_turn;
       if (offset < -full_turn / 2) offset += full_turn;
-      position = slot_position + offset;
+      position = block_position + offset;
     }
-    const std::int64_t point_ns =
-        block_ns + (two_sequences ? std::int64_t{u >> 4} * sequence_ns : 0) + firing_ns_[laser];
     const std::size_t before = output_count_;
-    emit(p, position, point_ns, host_ns);
+    emit(p, position, block.ns + block.geometry[u].time_ns, host_ns);
     if (by_packet && output_attached_ && output_count_ == before + 1 &&
         packet_points_ < packet_point_phase_.size()) {
       packet_point_phase_[packet_points_++] =
-          static_cast<std::uint16_t>((full_turn + table - cut_centi_) % full_turn);
+          static_cast<std::uint16_t>((full_turn + azimuth - cut_centi_) % full_turn);
     }
   }
 }

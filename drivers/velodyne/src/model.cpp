@@ -9,8 +9,10 @@
 namespace sim::velodyne {
 namespace {
 
-// The HDL-64E's manuals give no per-laser table: the upper and lower blocks fire together
-// about 20,800 times a second (1.33 M points/s ÷ 64), so a firing is taken as 48 µs.
+// The HDL-64E: the reference note gives no per-laser table (the manuals' tables differ between
+// the S2 and the S3, and a data packet does not say which it is; docs/velodyne.md bounds the
+// error). The upper and lower blocks fire together about 20,800 times a second (1.33 M
+// points/s ÷ 64), so a firing is taken as 48 µs and its 64 lasers share its time.
 constexpr std::uint32_t hdl64e_firing_ns = 48'000;
 
 constexpr std::array<ModelInfo, all_models.size()> infos{{

@@ -23,6 +23,19 @@ std::uint16_t expected_flag(Model model, unsigned block, bool dual) noexcept {
   }
 }
 
+// The HDL-64E names no return mode. An S3 in dual return sends three firings per packet, each as
+// four blocks (upper and lower strongest, upper and lower last) with the firing's azimuth; in
+// single return six firings of two blocks (upper, lower). So each group's two upper blocks and
+// two lower blocks at one azimuth, with a motor that turns between the groups (a stopped motor
+// is no data anyone decodes), mean dual.
+bool hdl64e_dual_layout(const std::uint8_t* data) noexcept {
+  const auto azimuth = [data](unsigned block) { return Packet::read_u16(data + block * block_size + 2); };
+  for (unsigned group = 0; group < blocks_per_packet; group += 4) {
+    if (azimuth(group) != azimuth(group + 2) || azimuth(group + 1) != azimuth(group + 3)) return false;
+  }
+  return azimuth(0) != azimuth(4) || azimuth(4) != azimuth(8);
+}
+
 }  // namespace
 
 const char* to_string(ReturnMode mode) noexcept {
@@ -62,6 +75,8 @@ PacketError Packet::parse(std::span<const std::uint8_t> payload, Model model, Pa
     const std::uint8_t byte = data[return_mode_offset];
     if (byte < 0x37 || byte > 0x39) return PacketError::bad_return_mode;
     mode = static_cast<ReturnMode>(byte);
+  } else if (hdl64e_dual_layout(data)) {
+    mode = ReturnMode::dual;
   }
   const bool dual = mode == ReturnMode::dual;
   const unsigned blocks = (model == Model::vls128 && dual) ? 8 : blocks_per_packet;
@@ -93,7 +108,7 @@ unsigned Packet::sequence(unsigned block, unsigned unit) const noexcept {
     case Model::vlp16:
     case Model::puck_hires: return slot * 2 + unit / 16;
     case Model::vls128: return dual() ? 0 : block / 4;
-    case Model::hdl64e: return block / 2;
+    case Model::hdl64e: return slot / 2;  // upper and lower block (dual: both returns of each)
     default: return slot;
   }
 }

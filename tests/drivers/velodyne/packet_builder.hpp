@@ -50,6 +50,30 @@ struct DataPacket {
   }
 };
 
+// HDL-64E S3 in dual return (the S3 user manual's dual-return packet, as valgur/velodyne_decoder
+// reads it): three firings per packet, each as four blocks with the firing's azimuth: upper
+// strongest (FF EE, lasers 0–31), lower strongest (FF DD, lasers 32–63), upper last, lower last.
+// `unit(f, laser, last)` gives firing f's (0–2) return. Bytes 1204–1205 are the rotating status.
+template <typename UnitOf>
+DataPacket hdl64e_dual_packet(std::uint32_t timestamp_us, const std::array<std::uint16_t, 3>& azimuths,
+                              UnitOf unit) {
+  DataPacket p;
+  p.timestamp_us = timestamp_us;
+  p.return_mode = 'T';  // a status type (temperature), not a return mode
+  p.product_id = 41;
+  for (unsigned f = 0; f < 3; ++f) {
+    for (unsigned b = 0; b < 4; ++b) {
+      const bool lower = b % 2 == 1;
+      const bool last = b >= 2;
+      Block& block = p.blocks[f * 4 + b];
+      block.flag = lower ? 0xDD : 0xEE;
+      block.azimuth = azimuths[f];
+      for (unsigned u = 0; u < 32; ++u) block.units[u] = unit(f, (lower ? 32U : 0U) + u, last);
+    }
+  }
+  return p;
+}
+
 // NMEA checksum: XOR of the characters between '$' and '*'.
 inline std::string nmea(const std::string& body) {
   unsigned sum = 0;

@@ -5,6 +5,8 @@
 // double precision, not by the decoder's code.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <vector>
@@ -189,6 +191,91 @@ TEST(VelodyneSynthetic, Hdl64eFromItsDbXmlUsesOffsetsTwoPointCorrectionAndUpperL
     }
   }
   EXPECT_EQ(i, frame.size());
+}
+
+// HDL-64E S3 dual return: its packets name no return mode; the block layout (four blocks of one
+// firing's azimuth) says it. Every point is checked against the model, in the decoder's order.
+TEST(VelodyneSynthetic, Hdl64eS3DualReturnPacketsGiveBothReturnsOfEachFiring) {
+  const Calibration cal = load(std::string(VELODYNE_TEST_DATA) + "/hdl64e_synthetic.db.xml");
+  constexpr unsigned step = 40;        // 0.4° per firing: 900 firings per revolution
+  constexpr unsigned packets = 700;    // 2,100 firings, 2.3 revolutions
+  constexpr unsigned period_us = 144;  // three firings of 48 µs
+  // The last return everywhere; a nearer strongest return on odd lasers only (even lasers had
+  // one return, which the sensor repeats in both blocks).
+  const auto last_raw = [](unsigned firing, unsigned laser) { return raw_distance(firing, laser); };
+  const auto strongest_raw = [&](unsigned firing, unsigned laser) {
+    const std::uint16_t last = last_raw(firing, laser);
+    return laser % 2 == 1 ? static_cast<std::uint16_t>(last / 2) : last;
+  };
+  std::vector<std::vector<std::uint8_t>> data;
+  for (unsigned k = 0; k < packets; ++k) {
+    std::array<std::uint16_t, 3> azimuths{};
+    for (unsigned f = 0; f < 3; ++f) azimuths[f] = static_cast<std::uint16_t>(((k * 3 + f) * step) % 36000);
+    data.push_back(velodyne_test::hdl64e_dual_packet(
+                       2'000'000 + k * period_us, azimuths,
+                       [&](unsigned f, unsigned laser, bool last) {
+                         const unsigned firing = k * 3 + f;
+                         return velodyne_test::Unit{last ? last_raw(firing, laser) : strongest_raw(firing, laser),
+                                                    static_cast<std::uint8_t>(last ? 10 : 200)};
+                       })
+                       .bytes());
+  }
+  ASSERT_EQ(detect_model(data[0]), Model::hdl64e);
+  Packet parsed;
+  ASSERT_EQ(Packet::parse(data[0], Model::hdl64e, parsed), PacketError::none);
+  EXPECT_EQ(parsed.return_mode(), ReturnMode::dual);
+  AssemblerOptions o;
+  o.model = Model::hdl64e;
+  o.min_range_m = 0.1f;
+  auto assembler = FrameAssembler::create(cal, o);
+  ASSERT_TRUE(assembler) << assembler.error().message;
+  const Decoded r = run(*assembler, data);
+  ASSERT_GE(r.frames.size(), 1U);
+  EXPECT_EQ(r.counters.lost_packets, 0U);
+  const auto& frame = r.frames[0];
+  // The revolution [0°, 360°) after the first wrap, block by block: strongest (only where it
+  // differs), then last; both returns of a firing at the firing's time.
+  std::size_t i = 0;
+  std::int64_t stamp = -1;
+  for (unsigned firing = 0; firing < packets * 3 && i < frame.size(); ++firing) {
+    const std::int64_t t = std::int64_t{2'000'000 + firing / 3 * period_us} * 1000 + (firing % 3) * 48'000;
+    for (unsigned block = 0; block < 4; ++block) {
+      const bool last = block >= 2;
+      for (unsigned u = 0; u < 32; ++u) {
+        const unsigned laser = (block % 2) * 32 + u;
+        const std::uint16_t raw = last ? last_raw(firing, laser) : strongest_raw(firing, laser);
+        if (!last && raw == last_raw(firing, laser)) continue;
+        const LaserCorrection& c = cal[laser];
+        const double az = firing * step - c.rot_correction * 18000 / M_PI;
+        const double rounded = std::floor(az + 0.5);
+        if (rounded < 36000 || rounded >= 72000) continue;
+        if (stamp < 0) stamp = t;
+        const ExpectedPoint e = hdl64e_point(c, raw, az);
+        const sim::LidarPoint& p = frame[i++];
+        ASSERT_NEAR(p.x, e.x, 5e-4) << "firing " << firing << " block " << block << " laser " << laser;
+        ASSERT_NEAR(p.y, e.y, 5e-4);
+        ASSERT_NEAR(p.z, e.z, 5e-4);
+        ASSERT_EQ(p.return_index, last ? 0 : 1);
+        ASSERT_EQ(p.ring, cal.ring(laser));
+        ASSERT_EQ(p.time_offset_ns, static_cast<std::uint32_t>(t - stamp));
+      }
+    }
+  }
+  EXPECT_EQ(i, frame.size());
+  const auto count = [](const std::vector<sim::LidarPoint>& points, unsigned index) {
+    return std::count_if(points.begin(), points.end(), [&](const auto& p) { return p.return_index == index; });
+  };
+  // The return filters keep one block of each upper and lower pair: 64 points per firing.
+  for (const ReturnFilter filter : {ReturnFilter::last, ReturnFilter::strongest}) {
+    o.returns = filter;
+    auto filtered = FrameAssembler::create(cal, o);
+    ASSERT_TRUE(filtered);
+    const Decoded f = run(*filtered, data);
+    ASSERT_GE(f.frames.size(), 1U);
+    const unsigned index = filter == ReturnFilter::last ? 0 : 1;
+    EXPECT_EQ(count(f.frames[0], index), static_cast<std::ptrdiff_t>(f.frames[0].size()));
+    EXPECT_EQ(f.frames[0].size(), static_cast<std::size_t>(count(frame, 0)));
+  }
 }
 
 TEST(VelodyneSynthetic, Vlp32cDualKeepsTheSecondReturnOnlyWhereItDiffers) {

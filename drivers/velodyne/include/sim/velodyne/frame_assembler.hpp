@@ -54,8 +54,8 @@ enum class CutBy : std::uint8_t {
 // Which returns of a dual-return packet become points. Single-return packets are unaffected.
 enum class ReturnFilter : std::uint8_t {
   both,       // the last return, and the strongest when it is another return
-  last,       // the even blocks only
-  strongest,  // the odd blocks only (the strongest, or the second strongest when that is last)
+  last,       // the last return's blocks only (Packet::return_index 0)
+  strongest,  // the strongest's only (or the second strongest when that is the last)
 };
 
 struct AssemblerOptions {
@@ -64,7 +64,7 @@ struct AssemblerOptions {
   std::optional<float> min_range_m;    // nullopt: the model's limits
   std::optional<float> max_range_m;
   ReturnFilter returns = ReturnFilter::both;
-  // Dual return, both: drop the second block's point when its distance equals the first's
+  // Dual return, both: drop the strongest return's point when its distance equals the last's
   // (the sensor repeats a firing's only return).
   bool drop_identical_returns = true;
   // The frame before the first cut (driver start, after a gap) covers part of a revolution.
@@ -158,10 +158,69 @@ class FrameAssembler {
     float step = 0;
   };
 
+  // cos and sin of one 0.01° step of the azimuth table (one cache line holds both).
+  struct CosSin {
+    float cos;
+    float sin;
+  };
+  // Everything about the laser that unit u of a block of bank b (block flag) fires that does not
+  // change per point, computed once. The HDL-64E's terms are zero, and its intensity model the
+  // identity, for lasers without them: the full formulas then give exactly the plain result.
+  struct UnitGeometry {
+    double rot_centi = 0;        // rot_correction in 0.01° (double: the rounding matches nebula)
+    float fraction = 0;          // of the azimuth step between sequences at which it fires
+    float cos_vert = 1;
+    float sin_vert = 0;
+    float dist_correction = 0;
+    std::uint32_t time_ns = 0;   // after the block's sequence start (VLP-16: its second one too)
+    std::uint16_t ring = 0;
+    float vert_offset = 0;       // HDL-64E model: optical-centre offsets, two-point correction
+    float horiz_offset = 0;
+    float two_point_dc = 0;
+    float two_point_dx = 0;
+    float two_point_dy = 0;
+    double focal_term = 0;       // intensity model: 256·(1 − focal_distance/13100)²
+    double focal_slope = 0;
+    double min_intensity = 0;
+    double max_intensity = 255;
+  };
+  // One block as the per-point decoding needs it, with the limits copied so the point loop
+  // reads no member the output writes could alias.
+  struct BlockContext {
+    const std::uint8_t* units = nullptr;    // 32 × (distance, reflectivity)
+    const std::uint8_t* partner = nullptr;  // the pair's other return to compare, or all zeros
+    const UnitGeometry* geometry = nullptr; // the bank's 32 entries
+    const CosSin* trig = nullptr;
+    float base = 0;                         // azimuth the points start from and step, 0.01°
+    float step = 0;
+    float unit_m = 0;
+    float min_range_m = 0;
+    float max_range_m = 0;
+    std::int32_t real_azimuth = 0;          // the sequence's own azimuth
+    std::int64_t ns = 0;                    // the sequence's start, ns since the epoch
+    std::int64_t time_base = 0;             // in place: ns after the frame's stamp
+    std::uint8_t return_index = 0;
+  };
+
+  static const CosSin* shared_trig_table();
   void block_azimuths(const Packet& packet, std::array<BlockAzimuth, blocks_per_packet>& out) noexcept;
   void nebula_block_azimuths(const Packet& packet, std::array<BlockAzimuth, blocks_per_packet>& out) const noexcept;
+  void build_unit_geometry() noexcept;
   void decode_block(const Packet& packet, unsigned block, const BlockAzimuth& azimuth,
                     std::int64_t block_position, std::int64_t packet_ns, std::int64_t host_ns) noexcept;
+  template <bool Full, bool Intensity>
+  void decode_block_as(const Packet& packet, unsigned block, const BlockAzimuth& azimuth,
+                       std::int64_t block_position, std::int64_t packet_ns, std::int64_t host_ns) noexcept;
+  bool block_context(const Packet& packet, unsigned block, const BlockAzimuth& azimuth, std::int64_t packet_ns,
+                     BlockContext& out) const noexcept;
+  bool fits_in_place(BlockContext& block, std::int64_t block_position) const noexcept;
+  template <bool Full, bool Intensity>
+  void decode_in_place(const BlockContext& block) noexcept;
+  template <bool Full, bool Intensity>
+  void decode_point_by_point(const BlockContext& block, std::int64_t block_position, std::int64_t host_ns) noexcept;
+  template <bool Full, bool Intensity>
+  [[gnu::always_inline]] static inline bool decode_point(const BlockContext& block, unsigned unit, LidarPoint& out,
+                           std::int32_t& azimuth_centi) noexcept;
   void emit(const LidarPoint& point, std::int64_t position, std::int64_t point_ns,
             std::int64_t host_ns) noexcept;
   void start(FrameState& frame, std::int64_t point_ns, std::int64_t host_ns, bool whole) noexcept;
@@ -173,6 +232,7 @@ class FrameAssembler {
   void count_packet(std::int64_t packet_ns) noexcept;
 
   static constexpr std::size_t max_lasers = 128;
+  static constexpr std::size_t banks = 4;
 
   Calibration calibration_;
   AssemblerOptions options_;
@@ -183,19 +243,14 @@ class FrameAssembler {
   bool windowed_ = false;
   std::int32_t window_min_centi_ = 0;
   std::int32_t window_max_centi_ = 0;
-  const float* cos_table_ = nullptr;  // 36,000 entries: cos/sin of 0.00°…359.99° (shared)
-  const float* sin_table_ = nullptr;
-  // Per laser, computed once.
-  std::array<float, max_lasers> cos_vert_{};
-  std::array<float, max_lasers> sin_vert_{};
-  std::array<double, max_lasers> rot_centi_{};   // rot_correction in 0.01°
-  std::array<float, max_lasers> dist_correction_{};
-  std::array<std::uint32_t, max_lasers> firing_ns_{};
-  std::array<bool, max_lasers> full_model_{};
-  std::array<bool, max_lasers> intensity_model_{};
-  // Per bank (block flag) and unit: the fraction of the sequence's azimuth step the unit's
-  // firing comes after its block azimuth (VLP-16: two sequences per block, up to 2).
-  std::array<std::array<float, units_per_block>, 4> unit_fraction_{};
+  const CosSin* trig_table_ = nullptr;  // 36,000 entries: 0.00°…359.99° (shared by the process)
+  std::array<UnitGeometry, banks * units_per_block> units_{};
+  bool full_model_ = false;        // some laser has HDL-64E offsets or a two-point correction
+  bool intensity_model_ = false;   // some laser has the focal intensity model
+  // Blocks whose points all land in the frame in progress are decoded straight into the output
+  // without a branch per point; only with the default interpolation and cut, no azimuth window.
+  bool in_place_ = false;
+  std::uint32_t max_unit_time_ns_ = 0;
   double min_point_delta_centi_ = 0;  // smallest (interpolation − rot_correction) any point gets
   double max_point_delta_centi_ = 0;
 

@@ -14,8 +14,9 @@
 
 namespace sim::velodyne {
 
-// Byte 1204. The HDL-64E uses bytes 1204–1205 for its rotating status and always reads as
-// strongest here.
+// Byte 1204. The HDL-64E uses bytes 1204–1205 for its rotating status instead: its packets
+// read as dual when their block azimuths have the S3's dual-return layout (see
+// Packet::return_index), as strongest otherwise.
 enum class ReturnMode : std::uint8_t { strongest = 0x37, last = 0x38, dual = 0x39 };
 const char* to_string(ReturnMode mode) noexcept;  // "strongest", "last", "dual"
 
@@ -56,6 +57,18 @@ class Packet {
   std::uint8_t reflectivity(unsigned block, unsigned unit) const noexcept {
     return block_at(block)[4 + unit * 3 + 2];
   }
+  // The block's 32 × (distance u16, reflectivity u8) bytes.
+  const std::uint8_t* units(unsigned block) const noexcept { return block_at(block) + 4; }
+
+  // Dual return: which return `block` holds, 0 for the last, 1 for the strongest (or the second
+  // strongest when the strongest is the last), and the block with the other return of the same
+  // firing. VLP-16/32C, HDL-32E, VLS-128: pairs (0|1, 2|3, …), the even block the last return.
+  // HDL-64E S3: groups of four blocks of one firing, upper and lower strongest, then upper and
+  // lower last.
+  unsigned return_index(unsigned block) const noexcept {
+    return model_ == Model::hdl64e ? ((block / 2) % 2 == 0 ? 1U : 0U) : block % 2;
+  }
+  unsigned partner(unsigned block) const noexcept { return model_ == Model::hdl64e ? block ^ 2U : block ^ 1U; }
 
   // The laser (calibration index) of `unit` in `block`: the VLS-128's bank flag (FF EE, DD, CC,
   // BB) adds 0, 32, 64 or 96, the HDL-64E's lower block (FF DD) 32, the VLP-16 holds two
