@@ -12,6 +12,12 @@ function(sim_target_defaults target)
   endif()
 endfunction()
 
+# The ThreadSanitizer stage of scripts/test.sh builds only this target: the suites labelled
+# "concurrency" and the programs they start (folders add those with add_dependencies).
+if(NOT TARGET sim_concurrency_suites)
+  add_custom_target(sim_concurrency_suites)
+endif()
+
 # sim_add_test(NAME name SOURCES a.cpp… [LIBS lib…] [LABELS concurrency…] [TIMEOUT s])
 # One GoogleTest executable registered as one ctest test, so ctest -j2 schedules whole suites.
 # Label "concurrency" marks the suites the ThreadSanitizer build also runs.
@@ -25,6 +31,9 @@ function(sim_add_test)
     set(T_TIMEOUT 300)
   endif()
   set_tests_properties(${T_NAME} PROPERTIES TIMEOUT ${T_TIMEOUT} LABELS "${T_LABELS}")
+  if("concurrency" IN_LIST T_LABELS)
+    add_dependencies(sim_concurrency_suites ${T_NAME})
+  endif()
 endfunction()
 
 # sim_add_fuzzer(NAME name SOURCES a.cpp… [LIBS lib…] [CORPUS dir])
