@@ -541,7 +541,7 @@ StreamStatus Reader::status() noexcept {
   s.frames_this_writer = h.liveness.frames_this_writer.load(std::memory_order_relaxed);
   s.writer_start_realtime_ns = h.writer.start_realtime_ns.load(std::memory_order_relaxed);
   s.writer_pid = h.writer.pid.load(std::memory_order_relaxed);
-  s.writer_command = unpack_command(h.writer.command);
+  s.writer_command = writer_name(h.writer, h.program);
   s.writer_alive = alive;
   if (const WaitPage* wp = file.wait_page()) {
     s.sleeping_readers = wp->sleepers.load(std::memory_order_relaxed);

@@ -4,6 +4,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
@@ -144,30 +145,93 @@ std::string printable(std::string_view text) {
   return out;
 }
 
-void pack_command(std::atomic<std::uint64_t> (&out)[2]) noexcept {
-  char name[16] = {};
-  const int fd = open("/proc/self/comm", O_RDONLY | O_CLOEXEC);
-  if (fd >= 0) {
-    const ssize_t n = read(fd, name, sizeof(name) - 1);
-    close(fd);
-    for (ssize_t i = 0; i < n; ++i) {
-      if (name[i] == '\n') name[i] = '\0';
-    }
-  }
-  std::uint64_t words[2];
-  std::memcpy(words, name, sizeof(words));
-  out[0].store(words[0], std::memory_order_relaxed);
-  out[1].store(words[1], std::memory_order_relaxed);
+namespace {
+
+constexpr std::size_t kCommandBytes = 16;  // TASK_COMM_LEN: 15 characters and a NUL
+constexpr std::size_t kCutCommand = kCommandBytes - 1;
+
+// The start of a small /proc file of this process (empty if it cannot be read).
+std::string read_own_proc(const char* path) {
+  char text[kProgramField * 2];
+  const int fd = open(path, O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return {};
+  const ssize_t n = read(fd, text, sizeof text);
+  close(fd);
+  return n > 0 ? std::string(text, static_cast<std::size_t>(n)) : std::string();
 }
 
-std::string unpack_command(const std::atomic<std::uint64_t> (&in)[2]) {
-  const std::uint64_t words[2] = {in[0].load(std::memory_order_relaxed),
-                                  in[1].load(std::memory_order_relaxed)};
-  char name[17] = {};
-  std::memcpy(name, words, 16);
-  std::string out;
-  for (const char c : std::string_view(name)) out += (c >= 32 && c < 127) ? c : '?';
-  return out;
+std::string base_name(std::string_view path) {
+  const std::size_t slash = path.rfind('/');
+  return std::string(slash == std::string_view::npos ? path : path.substr(slash + 1));
+}
+
+// The program name the kernel cut to 15 characters in `comm`: the base name of argv[0] (a
+// symlink's own name, as the kernel took it), else of the executable, whichever continues
+// `comm`. Empty when neither does (a process that renamed itself keeps the name it chose).
+std::string whole_program_name(std::string_view comm) {
+  const std::string cmdline = read_own_proc("/proc/self/cmdline");
+  char exe[4096];
+  const ssize_t exe_size = readlink("/proc/self/exe", exe, sizeof exe);
+  std::string executable = exe_size > 0 ? std::string(exe, static_cast<std::size_t>(exe_size)) : "";
+  if (executable.ends_with(" (deleted)")) executable.resize(executable.size() - 10);  // rebuilt
+  for (const std::string& candidate :
+       {base_name(cmdline.substr(0, cmdline.find('\0'))), base_name(executable)}) {
+    if (candidate.size() > comm.size() && candidate.size() < kProgramField &&
+        candidate.starts_with(comm)) {
+      return candidate;
+    }
+  }
+  return {};
+}
+
+template <std::size_t Words>
+void store_text(std::atomic<std::uint64_t> (&out)[Words], std::string_view text) noexcept {
+  char bytes[Words * 8] = {};
+  std::memcpy(bytes, text.data(), std::min(text.size(), sizeof bytes - 1));
+  for (std::size_t i = 0; i < Words; ++i) {
+    std::uint64_t word;
+    std::memcpy(&word, bytes + 8 * i, 8);
+    out[i].store(word, std::memory_order_relaxed);
+  }
+}
+
+// The text up to its first NUL; `terminated` says whether there was one.
+template <std::size_t Words>
+std::string load_text(const std::atomic<std::uint64_t> (&in)[Words], bool* terminated = nullptr) {
+  char bytes[Words * 8 + 1] = {};
+  for (std::size_t i = 0; i < Words; ++i) {
+    const std::uint64_t word = in[i].load(std::memory_order_relaxed);
+    std::memcpy(bytes + 8 * i, &word, 8);
+  }
+  const std::size_t length = std::strlen(bytes);
+  if (terminated != nullptr) *terminated = length < Words * 8;
+  return std::string(bytes, length);
+}
+
+std::string shown(std::string text) {
+  for (char& c : text) {
+    if (c < 32 || c >= 127) c = '?';
+  }
+  return text;
+}
+
+}  // namespace
+
+void store_writer_names(WriterIdentity& writer, ProgramName& program) {
+  std::string comm = read_own_proc("/proc/self/comm");
+  comm = comm.substr(0, std::min(comm.find('\n'), kCutCommand));
+  store_text(writer.command, comm);
+  // Only a cut name has more to say; anything else clears what an earlier writer left.
+  store_text(program.words, comm.size() == kCutCommand ? whole_program_name(comm) : std::string());
+}
+
+std::string writer_name(const WriterIdentity& writer, const ProgramName& program) {
+  const std::string command = load_text(writer.command);
+  bool terminated = false;
+  const std::string whole = load_text(program.words, &terminated);
+  const bool continues = command.size() == kCutCommand && terminated &&
+                         whole.size() > command.size() && whole.starts_with(command);
+  return shown(continues ? whole : command);
 }
 
 Error errno_error(ErrorCode code, std::string what, int err) {

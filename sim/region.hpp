@@ -204,6 +204,16 @@ struct alignas(kCacheLine) SensorBlock {
   SensorRecord record;
 };
 
+// The writer's whole program name ("sim_replay_video"), of which WriterIdentity::command keeps
+// the kernel's 15 characters ("sim_replay_vide"). NUL-terminated and NUL-padded. Readers show it
+// only when it continues a 15-character `command`: all zero (writers that predate it) or a name
+// that does not (left by an earlier writer, which a writer that predates it does not clear)
+// shows `command` instead, so the format stays version 1.
+inline constexpr std::size_t kProgramField = 256;
+struct alignas(kCacheLine) ProgramName {
+  std::atomic<std::uint64_t> words[kProgramField / 8];
+};
+
 struct alignas(kPage) RegionHeader {
   Identity identity;
   WriterIdentity writer;
@@ -212,9 +222,12 @@ struct alignas(kPage) RegionHeader {
   SlotMeta slots[2];
   // Added in place of padding (zero from older writers: no description).
   SensorBlock sensor;
+  // Added in place of padding (zero from older writers: the 15 characters of `writer.command`).
+  ProgramName program;
 };
 static_assert(sizeof(RegionHeader) == kPage);
 static_assert(offsetof(RegionHeader, sensor) == 448, "the sensor block stays in the old padding");
+static_assert(offsetof(RegionHeader, program) == 1792, "the program name stays in the old padding");
 
 inline constexpr std::uint64_t kHeaderOffset = kPage;
 inline constexpr std::uint64_t kFirstSlotOffset = 2 * kPage;
@@ -258,9 +271,12 @@ inline void unlock_writer(int fd) noexcept { unlock_byte(fd, kWriterLockByte); }
 // `text` with every byte outside printable ASCII shown as \xNN, for error messages.
 std::string printable(std::string_view text);
 
-// The process name of the caller, packed for WriterIdentity::command.
-void pack_command(std::atomic<std::uint64_t> (&out)[2]) noexcept;
-std::string unpack_command(const std::atomic<std::uint64_t> (&in)[2]);
+// Stores the caller's names for readers: the kernel's process name in `writer.command` and, when
+// the kernel cut it to 15 characters, the whole program name in `program` (else zeros).
+void store_writer_names(WriterIdentity& writer, ProgramName& program);
+// The writer's whole program name, or its process name where no longer one continues it;
+// bytes outside printable ASCII are shown as '?'.
+std::string writer_name(const WriterIdentity& writer, const ProgramName& program);
 
 Error errno_error(ErrorCode code, std::string what, int err);
 

@@ -62,6 +62,16 @@ struct detail::WriterState {
     std::atomic_thread_fence(std::memory_order_release);
   }
 
+  // Refreshes the heartbeat `every` period from a thread while no frame is published.
+  void start_heartbeat(std::chrono::milliseconds every) {
+    heartbeat_thread = std::thread([this, every] {
+      std::unique_lock lock(heartbeat_mutex);
+      while (!heartbeat_stop_cv.wait_for(lock, every, [this] { return heartbeat_stop; })) {
+        header->liveness.heartbeat_ns.store(monotonic_ns(), std::memory_order_relaxed);
+      }
+    });
+  }
+
   void stop_heartbeat() {
     if (!heartbeat_thread.joinable()) return;
     {
@@ -139,10 +149,6 @@ void initialise_header(RegionHeader& h, std::uint64_t capacity, const StreamSpec
   id.magic = kMagic;
 }
 
-}  // namespace
-
-namespace {
-
 // Why a writer of `spec` cannot take `name` now, naming the live writer; for the error message.
 Error live_writer_error(const StreamSpec& spec, RegionFile& file) {
   std::string who;
@@ -150,19 +156,17 @@ Error live_writer_error(const StreamSpec& spec, RegionFile& file) {
   if (file.read_identity(id) && header_problem(id, file.file_size()).empty() &&
       file.map_read_write()) {
     who = " (pid " + std::to_string(file.header()->writer.pid.load()) + ", " +
-          unpack_command(file.header()->writer.command) + ")";
+          writer_name(file.header()->writer, file.header()->program) + ")";
   }
   return Error{ErrorCode::writer_exists, "stream " + spec.name + " already has a live writer" + who +
                                              "; stop it first or use another name"};
 }
 
-}  // namespace
-
-Expected<Writer> Writer::create(const StreamSpec& spec) {
+// What is wrong with `spec`, whose slots hold `capacity` bytes, in one sentence; nullopt if nothing.
+std::optional<Error> spec_problem(const StreamSpec& spec, std::uint64_t capacity) {
   if (const std::string problem = name_problem(spec.name); !problem.empty()) {
     return Error{ErrorCode::invalid_name, problem};
   }
-  const std::uint64_t capacity = spec.capacity != 0 ? spec.capacity : spec.layout.min_capacity();
   if (capacity == 0 || capacity > kMaxCapacity) {
     return Error{ErrorCode::invalid_argument,
                  "stream " + spec.name + " needs a capacity between 1 byte and 1 TiB per frame"};
@@ -183,87 +187,110 @@ Expected<Writer> Writer::create(const StreamSpec& spec) {
                      ": mode must give the owner read and write and others at most read (0600, 0640 "
                      "or 0644)"};
   }
+  return std::nullopt;
+}
 
-  auto impl = std::make_unique<WriterState>();
-  impl->name = spec.name;
-  impl->capacity = capacity;
-  impl->layout = spec.layout;
-  impl->checksum = spec.checksum;
-  impl->wakes_every_publish = (spec.mode & 0044u) != 0;
+// Makes `file`, the writer-locked region this writer now owns, the writer's.
+void adopt_region(WriterState& w, RegionFile&& file) {
+  *w.file = std::move(file);  // the lock stays with this open file
+  w.header = w.file->header();
+  w.last_seq = w.header->publication.latest_seq.load(std::memory_order_acquire);
+}
 
-  // Each pass looks at what the name holds now. Another pass is needed when a second writer won a
-  // race for a new name, or when destroy() was removing the region while this writer opened it.
+// What claim_existing() did with the region the name holds.
+enum class Claim {
+  taken_over,  // it is this writer's now
+  replace,     // it must be replaced by a new region (it is kept locked until then)
+  look_again,  // the name changed meanwhile (removed, replaced, being removed)
+};
+
+// Locks the region `file` the name holds and takes it over when it fits `spec` (same layout,
+// capacity and checksum setting, one name); otherwise moves it into `old`, still locked, so no
+// other writer can slip in before it is replaced.
+Expected<Claim> claim_existing(WriterState& w, const StreamSpec& spec, std::uint64_t capacity,
+                               RegionFile& file, RegionFile& old) {
+  if (!try_lock_writer(file.fd())) return live_writer_error(spec, file);
+  // destroy() takes the remover lock, then checks the writer lock; this writer took the
+  // writer lock and now checks the remover lock. Whichever order the two ran in, one sees the
+  // other: a removal in progress is waited out and the name looked at again.
+  if (byte_locked(file.fd(), kRemoverLockByte)) {
+    unlock_writer(file.fd());
+    wait_until_unlocked(file.fd(), kRemoverLockByte);
+    return Claim::look_again;
+  }
+  if (!name_refers_to(spec.name, file.inode())) return Claim::look_again;  // removed or replaced
+  Identity id{};
+  const bool valid = file.read_identity(id) && header_problem(id, file.file_size()).empty();
+  // A second name for the same file (a hard link) would let its readers read this stream
+  // under that name: such a region is replaced, never taken over.
+  if (valid && compatible(id, spec, capacity) && file.link_count() == 1) {
+    if (auto mapped = file.map_read_write(); !mapped) return mapped.error();
+    adopt_region(w, std::move(file));
+    fchmod(w.file->fd(), spec.mode & 0777);
+    return Claim::taken_over;
+  }
+  // Layout or capacity changed, or the region is corrupt or linked twice.
+  if (valid) (void)file.map_read_write();  // to carry its numbering on; unmapped: start afresh
+  old = std::move(file);
+  return Claim::replace;
+}
+
+// Builds a new region for `spec` and gives it the name, replacing `old` when `replace` (old is
+// then retired, so its readers reopen the name). False when another writer won the race for a
+// new name: the caller looks again.
+Expected<bool> create_region(WriterState& w, const StreamSpec& spec, std::uint64_t capacity,
+                             RegionFile& old, bool replace) {
+  auto created = RegionFile::create_unnamed(geometry_for(capacity).file_size, spec.mode);
+  if (!created) return created.error();
+  if (!try_lock_writer(created->fd())) {
+    return Error{ErrorCode::system_error, "cannot lock the new region of " + spec.name};
+  }
+  initialise_header(*created->header(), capacity, spec, old.header());
+  created->reload_identity();
+  if (auto published = created->publish_as(spec.name, replace); !published) {
+    if (published.error().code == ErrorCode::writer_exists) return false;
+    return published.error();
+  }
+  if (old.header() != nullptr) {
+    // Tell readers of the old region to reopen the name.
+    old.header()->publication.retired.store(1, std::memory_order_release);
+    old.header()->publication.futex_word.fetch_add(1, std::memory_order_release);
+    futex_wake_all(&old.header()->publication.futex_word);
+  }
+  adopt_region(w, std::move(*created));
+  return true;
+}
+
+// Gives `w` the region of `spec.name`: the one there (taken over), or a new one. Each pass looks
+// at what the name holds now; another pass is needed when a second writer won a race for a new
+// name, or when destroy() was removing the region while this writer opened it.
+Expected<void> attach_region(WriterState& w, const StreamSpec& spec, std::uint64_t capacity) {
   for (int attempt = 0; attempt < 8; ++attempt) {
     auto existing = RegionFile::open_for_writing(spec.name);
-    bool replace = false;
     RegionFile old;
     if (existing) {
-      RegionFile& file = *existing;
-      if (!try_lock_writer(file.fd())) return live_writer_error(spec, file);
-      // destroy() takes the remover lock, then checks the writer lock; this writer took the
-      // writer lock and now checks the remover lock. Whichever order the two ran in, one sees the
-      // other: a removal in progress is waited out and the name looked at again.
-      if (byte_locked(file.fd(), kRemoverLockByte)) {
-        unlock_writer(file.fd());
-        wait_until_unlocked(file.fd(), kRemoverLockByte);
-        continue;
-      }
-      if (!name_refers_to(spec.name, file.inode())) continue;  // removed or replaced meanwhile
-      Identity id{};
-      const bool valid = file.read_identity(id) && header_problem(id, file.file_size()).empty();
-      // A second name for the same file (a hard link) would let its readers read this stream
-      // under that name: such a region is replaced, never taken over.
-      if (valid && compatible(id, spec, capacity) && file.link_count() == 1) {
-        if (auto mapped = file.map_read_write(); !mapped) return mapped.error();
-        *impl->file = std::move(file);  // take it over: the lock stays with this open file
-        impl->header = impl->file->header();
-        impl->last_seq = impl->header->publication.latest_seq.load(std::memory_order_acquire);
-        fchmod(impl->file->fd(), spec.mode & 0777);
-        break;
-      }
-      // Layout or capacity changed, or the region is corrupt or linked twice: build a new one
-      // and replace it, keeping the old one locked until then so no other writer can slip in.
-      if (valid) (void)file.map_read_write();  // to carry its numbering on; unmapped: start afresh
-      old = std::move(file);
-      replace = true;
+      auto claim = claim_existing(w, spec, capacity, *existing, old);
+      if (!claim) return claim.error();
+      if (*claim == Claim::taken_over) return {};
+      if (*claim == Claim::look_again) continue;
     } else if (existing.error().code != ErrorCode::not_found) {
       return existing.error();
     }
-
-    auto created = RegionFile::create_unnamed(geometry_for(capacity).file_size, spec.mode);
+    auto created = create_region(w, spec, capacity, old, /*replace=*/existing.has_value());
     if (!created) return created.error();
-    if (!try_lock_writer(created->fd())) {
-      return Error{ErrorCode::system_error, "cannot lock the new region of " + spec.name};
-    }
-    initialise_header(*created->header(), capacity, spec, old.header());
-    created->reload_identity();
-    if (auto published = created->publish_as(spec.name, replace); !published) {
-      if (published.error().code == ErrorCode::writer_exists) continue;  // lost the race: look again
-      return published.error();
-    }
-    if (old.header() != nullptr) {
-      // Tell readers of the old region to reopen the name.
-      old.header()->publication.retired.store(1, std::memory_order_release);
-      old.header()->publication.futex_word.fetch_add(1, std::memory_order_release);
-      futex_wake_all(&old.header()->publication.futex_word);
-    }
-    *impl->file = std::move(*created);
-    impl->header = impl->file->header();
-    impl->last_seq = impl->header->publication.latest_seq.load(std::memory_order_relaxed);
-    break;
+    if (*created) return {};
   }
-  if (impl->header == nullptr) {
-    return Error{ErrorCode::writer_exists,
-                 "stream " + spec.name + " is being created or removed by another process; try again"};
-  }
+  return Error{ErrorCode::writer_exists,
+               "stream " + spec.name + " is being created or removed by another process; try again"};
+}
 
-  RegionHeader& h = *impl->header;
+// Says who writes the region now and starts this writer's own liveness figures afresh.
+void announce_writer(RegionHeader& h, const StreamSpec& spec, bool wakes_every_publish) {
   h.writer.pid.store(getpid(), std::memory_order_relaxed);
   h.writer.attach_count.fetch_add(1, std::memory_order_relaxed);
   h.writer.start_realtime_ns.store(realtime_ns(), std::memory_order_relaxed);
-  pack_command(h.writer.command);
-  h.publication.wakes_every_publish.store(impl->wakes_every_publish ? 1 : 0,
-                                          std::memory_order_relaxed);
+  store_writer_names(h.writer, h.program);
+  h.publication.wakes_every_publish.store(wakes_every_publish ? 1 : 0, std::memory_order_relaxed);
   h.liveness.heartbeat_ns.store(monotonic_ns(), std::memory_order_relaxed);
   h.liveness.max_publish_interval_ns.store(0, std::memory_order_relaxed);
   h.liveness.period_ns.store(0, std::memory_order_relaxed);
@@ -274,6 +301,22 @@ Expected<Writer> Writer::create(const StreamSpec& spec) {
   if (spec.sensor || h.sensor.word.load(std::memory_order_relaxed) != 0) {
     write_sensor_block(h.sensor, spec.sensor);
   }
+}
+
+}  // namespace
+
+Expected<Writer> Writer::create(const StreamSpec& spec) {
+  const std::uint64_t capacity = spec.capacity != 0 ? spec.capacity : spec.layout.min_capacity();
+  if (auto problem = spec_problem(spec, capacity)) return *problem;
+
+  auto impl = std::make_unique<WriterState>();
+  impl->name = spec.name;
+  impl->capacity = capacity;
+  impl->layout = spec.layout;
+  impl->checksum = spec.checksum;
+  impl->wakes_every_publish = (spec.mode & 0044u) != 0;
+  if (auto attached = attach_region(*impl, spec, capacity); !attached) return attached.error();
+  announce_writer(*impl->header, spec, impl->wakes_every_publish);
 
   if (spec.lock_memory && mlock(impl->file->base(), impl->file->file_size()) != 0) {
     return errno_error(ErrorCode::system_error,
@@ -281,18 +324,11 @@ Expected<Writer> Writer::create(const StreamSpec& spec) {
                            " in memory; raise RLIMIT_MEMLOCK (ulimit -l) or drop lock_memory",
                        errno);
   }
-
-  if (spec.heartbeat_period.count() > 0) {
-    WriterState* raw = impl.get();
-    impl->heartbeat_thread = std::thread([raw, period = spec.heartbeat_period] {
-      std::unique_lock lock(raw->heartbeat_mutex);
-      while (!raw->heartbeat_stop_cv.wait_for(lock, period, [raw] { return raw->heartbeat_stop; })) {
-        raw->header->liveness.heartbeat_ns.store(monotonic_ns(), std::memory_order_relaxed);
-      }
-    });
-  }
+  if (spec.heartbeat_period.count() > 0) impl->start_heartbeat(spec.heartbeat_period);
   return Writer(std::move(impl));
 }
+
+std::uint64_t region_size(std::uint64_t capacity) noexcept { return geometry_for(capacity).file_size; }
 
 Writer::Writer(std::unique_ptr<WriterState> impl) noexcept : impl_(std::move(impl)) {}
 Writer::Writer(Writer&&) noexcept = default;

@@ -134,7 +134,9 @@ struct StreamStatus {
   std::uint64_t frames_this_writer = 0;
   std::int64_t writer_start_realtime_ns = 0;
   std::int32_t writer_pid = 0;
-  std::string writer_command;               // the writer's process name
+  // The writer's program name ("sim_replay_video"), kept after it died; writers that predate
+  // the whole name give the kernel's 15 characters of it ("sim_replay_vide").
+  std::string writer_command;
   bool writer_alive = false;
   std::uint32_t sleeping_readers = 0;  // the owner's readers asleep in wait()
   std::uint32_t owner_uid = 0;         // who owns the region file

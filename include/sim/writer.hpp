@@ -45,6 +45,10 @@ enum class WriteStatus {
 
 const char* to_string(WriteStatus status) noexcept;
 
+// The bytes of shared memory (/dev/shm) a stream of `capacity` bytes per frame takes: its two
+// slots, page rounded, and two pages of header. For budgets (sim_play --max-shm).
+std::uint64_t region_size(std::uint64_t capacity) noexcept;
+
 class Writer;
 namespace detail {
 struct WriterState;

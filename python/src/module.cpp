@@ -398,7 +398,6 @@ class LoanObject {
   std::shared_ptr<const void> mapping_;
 };
 
-
 class WriterObject {
  public:
   WriterObject(const std::string& name, const sim::Layout& layout, std::uint64_t capacity,
@@ -717,11 +716,8 @@ void bind_sensor_info(py::module_& m) {
         "One sentence saying why `frame` is not a valid frame name, or \"\".");
 }
 
-}  // namespace
-
-PYBIND11_MODULE(_sim, m) {
-  m.doc() = "SIM (Sensor-in-Memory): camera and LiDAR frames between processes through shared memory.";
-
+// SimError: the library's one-sentence explanation, with its kind in `code`.
+void bind_errors(py::module_& m) {
   static py::exception<SimException> sim_error(m, "SimError", PyExc_RuntimeError);
   sim_error.doc() = "An error from SIM; str(e) is the library's one-sentence explanation, e.code its kind.";
   py::register_exception_translator([](std::exception_ptr p) {
@@ -733,7 +729,10 @@ PYBIND11_MODULE(_sim, m) {
       PyErr_SetObject(sim_error.ptr(), error.ptr());
     }
   });
+}
 
+// The enumerations: ReadStatus, PixelFormat, PointType, LayoutKind.
+void bind_enums(py::module_& m) {
   py::enum_<sim::ReadStatus>(m, "ReadStatus", "Why a read returned what it did (Reader.last_status).")
       .value("new_frame", sim::ReadStatus::new_frame)
       .value("no_new_frame", sim::ReadStatus::no_new_frame)
@@ -758,7 +757,10 @@ PYBIND11_MODULE(_sim, m) {
       .value("bytes", sim::LayoutKind::bytes)
       .value("image", sim::LayoutKind::image)
       .value("points", sim::LayoutKind::points);
+}
 
+// Layout: what a stream's payload looks like.
+void bind_layout(py::module_& m) {
   py::class_<sim::Layout>(m, "Layout", "What a stream's payload looks like (stored in the stream).")
       .def_static("raw", &sim::Layout::raw, "Raw bytes.")
       .def_static(
@@ -798,7 +800,10 @@ PYBIND11_MODULE(_sim, m) {
       .def("describe", &sim::Layout::describe)
       .def("__repr__", [](const sim::Layout& l) { return "<sim.Layout " + l.describe() + ">"; })
       .def(py::self == py::self);
+}
 
+// What a reader learns about a frame: FrameInfo, ReaderStats.
+void bind_frame_info(py::module_& m) {
   py::class_<sim::FrameInfo>(m, "FrameInfo", "What the writer said about a frame.")
       .def_readonly("seq", &sim::FrameInfo::seq, "Frame number; 1 for the first frame of the stream.")
       .def_readonly("stamp_ns", &sim::FrameInfo::stamp_ns, "Sensor time of the frame (CLOCK_REALTIME, ns).")
@@ -822,7 +827,10 @@ PYBIND11_MODULE(_sim, m) {
       .def_readonly("overruns", &sim::ReaderStats::overruns)
       .def_readonly("checksum_failures", &sim::ReaderStats::checksum_failures)
       .def_readonly("reopens", &sim::ReaderStats::reopens);
+}
 
+// Frame (a copy) and Borrow (in place): what a read returns.
+void bind_frames(py::module_& m) {
   py::class_<FrameObject>(m, "Frame", "A copied frame: `array` (numpy, yours to keep) and `info`. Unpacks as (array, info).")
       .def_readonly("array", &FrameObject::array)
       .def_readonly("info", &FrameObject::info)
@@ -843,7 +851,10 @@ PYBIND11_MODULE(_sim, m) {
       .def_property_readonly("info", &BorrowObject::info)
       .def("still_valid", &BorrowObject::still_valid,
            "True while the writer has not begun to overwrite the frame; call it after using the data.");
+}
 
+// Reader: reads one stream.
+void bind_reader(py::module_& m) {
   py::class_<ReaderObject>(m, "Reader", "Reads one stream: copies (read, read_next) or borrows in place.")
       .def(py::init<const std::string&, double, bool, const std::string&, const std::string&>(),
            py::arg("name"), py::kw_only(), py::arg("stale_after") = 0.0, py::arg("verify_checksum") = true,
@@ -874,7 +885,10 @@ PYBIND11_MODULE(_sim, m) {
                              "when the description in the stream is damaged (frames still flow).")
       .def("__enter__", [](py::object self) { return self; })
       .def("__exit__", [](ReaderObject& r, py::args) { r.close(); });
+}
 
+// Loan and Writer: publish into one stream.
+void bind_writer(py::module_& m) {
   py::class_<LoanObject>(m, "Loan",
                          "The writer's back slot, to fill in place; commit() publishes it. Its `array` "
                          "views must not be written after commit().")
@@ -908,12 +922,29 @@ PYBIND11_MODULE(_sim, m) {
       .def_property_readonly("last_seq", &WriterObject::last_seq)
       .def("__enter__", [](py::object self) { return self; })
       .def("__exit__", [](WriterObject& w, py::args) { w.close(); });
+}
 
-  bind_sensor_info(m);
+// The module's functions and constants.
+void bind_functions(py::module_& m) {
   m.def("list_streams", &sim::list_streams, "Names of every SIM stream on this machine, sorted.");
   m.def(
       "destroy", [](const std::string& name, bool force) { raise_if_error(sim::destroy(name, force)); },
       py::arg("name"), py::kw_only(), py::arg("force") = false,
       "Removes a stream. Refused while its writer is alive unless force=True.");
   m.attr("LIDAR_POINT_DTYPE") = point_dtype(sim::PointType::lidar_point);
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_sim, m) {
+  m.doc() = "SIM (Sensor-in-Memory): camera and LiDAR frames between processes through shared memory.";
+  bind_errors(m);
+  bind_enums(m);
+  bind_layout(m);
+  bind_frame_info(m);
+  bind_frames(m);
+  bind_reader(m);
+  bind_writer(m);
+  bind_sensor_info(m);
+  bind_functions(m);
 }

@@ -5,7 +5,9 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstddef>
+#include <cstring>
 #include <random>
 #include <vector>
 
@@ -153,4 +155,45 @@ TEST(Hostile, AWriterReplacesACorruptRegion) {
   auto w = Writer::create({.name = g.name, .capacity = 4096});
   ASSERT_TRUE(w) << w.error().message;
   EXPECT_TRUE(Reader::open(g.name));
+}
+
+namespace {
+
+// Writes `text` NUL-padded into the `size` bytes of the region at `offset` (a name field).
+void poke_text(const std::string& name, std::size_t offset, std::size_t size, const std::string& text) {
+  std::vector<char> bytes(size, '\0');
+  std::memcpy(bytes.data(), text.data(), std::min(size, text.size()));
+  const int fd = open(path_of(name).c_str(), O_RDWR);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(pwrite(fd, bytes.data(), size, static_cast<off_t>(offset)), static_cast<ssize_t>(size));
+  close(fd);
+}
+
+}  // namespace
+
+// The whole program name lives in the header's old padding: regions of older writers (zero
+// there) and names an earlier writer left behind must show the kernel's 15 characters instead.
+TEST(Hostile, AStoredProgramNameIsShownOnlyWhereItContinuesTheProcessName) {
+  StreamGuard g{unique_name("program")};
+  make_region(g.name);
+  const std::size_t command =
+      kHeader + offsetof(RegionHeader, writer) + offsetof(detail::WriterIdentity, command);
+  const std::size_t program = kHeader + offsetof(RegionHeader, program);
+  auto shown = [&] {
+    auto status = inspect(g.name);
+    return status ? status->writer_command : status.error().message;
+  };
+  poke_text(g.name, command, 16, "sim_replay_vide");
+  poke_text(g.name, program, detail::kProgramField, "");  // a writer that predates the field
+  EXPECT_EQ(shown(), "sim_replay_vide");
+  poke_text(g.name, program, detail::kProgramField, "sim_replay_video");
+  EXPECT_EQ(shown(), "sim_replay_video");
+  poke_text(g.name, program, detail::kProgramField, "sim_dds_bridge_node");  // an earlier writer's
+  EXPECT_EQ(shown(), "sim_replay_vide");
+  poke_text(g.name, program, detail::kProgramField, "sim_replay_vide" + std::string(241, 'o'));
+  EXPECT_EQ(shown(), "sim_replay_vide");  // not NUL-terminated
+  poke_text(g.name, program, detail::kProgramField, "sim_replay_video\x1b]0;x");
+  EXPECT_EQ(shown(), "sim_replay_video?]0;x");
+  poke_text(g.name, command, 16, "sim_replay");  // not cut by the kernel: nothing more to say
+  EXPECT_EQ(shown(), "sim_replay");
 }

@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 // Writers and readers in separate processes (sim_test_peer), including killed ones.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <memory>
 #include <thread>
 
@@ -116,4 +118,40 @@ TEST(MultiProcess, ASecondWriterProcessIsRefused) {
   holder.signal(SIGKILL);
   holder.wait();
   EXPECT_TRUE(Writer::create({.name = g.name, .capacity = 4096}));  // free once it died
+}
+
+// Foxglove review L6: the kernel keeps 15 characters of a process name ("sim_replay_vide"); the
+// stream keeps the writer's whole program name for every reader and tool, also once it died.
+TEST(MultiProcess, AWriterWhoseProgramNameIsLongerThan15CharactersIsNamedInFullAlsoAfterItDied) {
+  StreamGuard g{unique_name("longname")};
+  char dir_template[] = "/tmp/sim_test_longname_XXXXXX";
+  ASSERT_NE(::mkdtemp(dir_template), nullptr);
+  const std::string dir = dir_template;
+  const std::string program = "sim_test_peer_with_a_long_program_name";
+  const std::string link = dir + "/" + program;  // the kernel takes the name run, the symlink's
+  ASSERT_EQ(::symlink(kPeer.c_str(), link.c_str()), 0);
+  {
+    Process writer({link, "hold", g.name});
+    ASSERT_EQ(writer.next_line().value_or("").rfind("ready", 0), 0u);
+    auto live = inspect(g.name);
+    ASSERT_TRUE(live) << live.error().message;
+    EXPECT_TRUE(live->writer_alive);
+    EXPECT_EQ(live->writer_command, program);
+    auto refused = Writer::create({.name = g.name, .capacity = 4096});
+    ASSERT_FALSE(refused);
+    EXPECT_NE(refused.error().message.find(", " + program + ")"), std::string::npos)
+        << refused.error().message;
+    writer.signal(SIGKILL);
+    EXPECT_EQ(writer.wait(), 128 + SIGKILL);
+  }
+  ::unlink(link.c_str());
+  ::rmdir(dir.c_str());
+  auto dead = inspect(g.name);
+  ASSERT_TRUE(dead) << dead.error().message;
+  EXPECT_FALSE(dead->writer_alive);
+  EXPECT_EQ(dead->writer_command, program);
+  const auto listed = sim::testing::run({SIM_LS, g.name});
+  EXPECT_NE(listed.out.find("gone (was " + program + ")"), std::string::npos) << listed.out;
+  const auto json = sim::testing::run({SIM_LS, "--json", g.name});
+  EXPECT_NE(json.out.find("\"writer\":\"" + program + "\""), std::string::npos) << json.out;
 }

@@ -2,9 +2,6 @@
 // sim_ls: every SIM stream on this machine, with its layout, rate, age and writer; --watch
 // keeps a live view of them all (rate, bandwidth, age, latency, skips, sleeping readers, writer),
 // refreshed in place.
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -45,24 +42,6 @@ std::string json_escape(const std::string& in) {
     }
   }
   return out;
-}
-
-// The writer's program name as the core stored it (the kernel keeps 15 characters of it); while
-// the writer lives, the full name from its command line when it starts with the stored one.
-std::string writer_name(const sim::StreamStatus& s) {
-  if (!s.writer_alive || s.writer_pid <= 0) return s.writer_command;
-  const std::string path = "/proc/" + std::to_string(s.writer_pid) + "/cmdline";
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return s.writer_command;
-  char buffer[512];
-  const ssize_t n = ::read(fd, buffer, sizeof buffer - 1);
-  ::close(fd);
-  if (n <= 0) return s.writer_command;
-  buffer[n] = '\0';
-  std::string argv0(buffer);  // up to the first NUL
-  const auto slash = argv0.rfind('/');
-  if (slash != std::string::npos) argv0 = argv0.substr(slash + 1);
-  return argv0.rfind(s.writer_command, 0) == 0 ? argv0 : s.writer_command;
 }
 
 std::string age_text(std::int64_t now, std::int64_t then) {
@@ -140,7 +119,7 @@ void print_json(const Row& row, std::int64_t now) {
       static_cast<unsigned long long>(s.latest_seq), row.rate_hz,
       static_cast<long long>(s.latest_publish_ns == 0 ? -1 : now - s.latest_publish_ns),
       static_cast<long long>(s.max_publish_interval_ns), s.writer_alive ? "true" : "false",
-      s.writer_pid, json_escape(writer_name(s)).c_str(), s.checksum ? "true" : "false",
+      s.writer_pid, json_escape(s.writer_command).c_str(), s.checksum ? "true" : "false",
       s.sleeping_readers, watched.c_str(),
       s.sensor ? sim::apps::sensor_json(*s.sensor).c_str() : "null",
       s.sensor_problem.empty()
@@ -149,7 +128,7 @@ void print_json(const Row& row, std::int64_t now) {
 }
 
 std::string writer_text(const sim::StreamStatus& s) {
-  return s.writer_alive ? "pid " + std::to_string(s.writer_pid) + " " + writer_name(s)
+  return s.writer_alive ? "pid " + std::to_string(s.writer_pid) + " " + s.writer_command
                         : "gone (was " + s.writer_command + ")";
 }
 
