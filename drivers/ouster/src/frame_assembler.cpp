@@ -2,7 +2,9 @@
 #include "sim/ouster/frame_assembler.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <limits>
 #include <numbers>
@@ -12,8 +14,10 @@ namespace {
 
 Error invalid(std::string message) { return Error{ErrorCode::invalid_argument, std::move(message)}; }
 
-std::uint32_t to_mm(float metres) {
-  return static_cast<std::uint32_t>(std::lround(static_cast<double>(metres) * 1000.0));
+// Millimetres, at most 2^31 − 1 (far beyond any return: ranges have 20 bits).
+std::int32_t to_mm(float metres) {
+  const double mm = std::min(static_cast<double>(metres) * 1000.0, double{std::numeric_limits<std::int32_t>::max()});
+  return static_cast<std::int32_t>(std::lround(mm));
 }
 
 // The largest UDP payload over IPv4: room for any packet that waits for the next span.
@@ -43,7 +47,7 @@ Expected<FrameAssembler> FrameAssembler::create(const Metadata& metadata, Assemb
                    " profile carries no signal channel; choose reflectivity or near-ir as intensity");
   }
   FrameAssembler assembler(metadata, options);
-  assembler.build_lookup_table();
+  assembler.build_geometry();
   return assembler;
 }
 
@@ -52,9 +56,9 @@ FrameAssembler::FrameAssembler(const Metadata& metadata, AssemblerOptions option
   beams_ = metadata.beams();
   columns_ = metadata.columns();
   returns_ = options.first_return_only ? 1 : returns_of(metadata.format.profile);
-  min_range_mm_ = to_mm(options.min_range_m);
-  max_range_mm_ = options.max_range_m > 0 ? to_mm(options.max_range_m)
-                                          : std::numeric_limits<std::uint32_t>::max();
+  image_points_ = std::size_t{beams_} * columns_;
+  min_range_mm_ = std::max<std::int32_t>(to_mm(options.min_range_m), 1);  // 0 is no return
+  max_range_mm_ = options.max_range_m > 0 ? to_mm(options.max_range_m) : std::numeric_limits<std::int32_t>::max();
   intensity_ = options.intensity;
   if (intensity_ == IntensityField::automatic) {
     intensity_ = has_signal(metadata.format.profile) ? IntensityField::signal : IntensityField::reflectivity;
@@ -67,36 +71,43 @@ FrameAssembler::FrameAssembler(const Metadata& metadata, AssemblerOptions option
 // beam u (azimuth offset θa = −2π·az/360, altitude φ = 2π·alt/360), the pixel of range r lies
 // at (r − n)·d + o in the lidar frame, d = (cos(θe+θa)·cos φ, sin(θe+θa)·cos φ, sin φ) and
 // o = (T03·cos θe, T03·sin θe, T23) with T the beam-to-lidar transform (T03 = n on FW 2.x).
-// In the sensor frame that is (r − n)·R·d + (R·o + t): a direction per pixel and an origin per
-// column, so decoding a point is three multiply-adds and the table stays small (12 B a pixel).
-void FrameAssembler::build_lookup_table() {
-  direction_.resize(3 * std::size_t{columns_} * beams_);
-  column_origin_.resize(3 * std::size_t{columns_});
-  row_shift_.resize(beams_);
+// Angle addition splits d into a beam part and a column part:
+//   d = cos φ·cos θa·(cos θe, sin θe, 0) + cos φ·sin θa·(−sin θe, cos θe, 0) + sin φ·(0, 0, 1),
+// and lidar_to_sensor (R, t; mm) is linear, so in the sensor frame, metres,
+//   d = a_u·E_m + b_u·F_m + g_u,  O_m = (R·o + t) / 1000.
+// Everything is computed in double and rounded once to float.
+void FrameAssembler::build_geometry() {
   const auto& m = metadata_;
+  const auto& s = m.lidar_to_sensor;
+  auto rotated = [&s](const std::array<double, 3>& v, unsigned row) {
+    return (s[4 * row] * v[0] + s[4 * row + 1] * v[1] + s[4 * row + 2] * v[2]) / 1000.0;
+  };
+  auto f32 = [](double v) { return static_cast<float>(v); };
+  constexpr double pi = std::numbers::pi;
   const double t03 = m.beam_to_lidar[3];
   const double t23 = m.beam_to_lidar[11];
-  const auto& s = m.lidar_to_sensor;
-  constexpr double pi = std::numbers::pi;
+  column_geometry_.resize(columns_);
   for (unsigned col = 0; col < columns_; ++col) {
     const double encoder = 2 * pi * (1.0 - static_cast<double>(col) / columns_);
-    const double o[3] = {t03 * std::cos(encoder), t03 * std::sin(encoder), t23};
-    for (unsigned row = 0; row < 3; ++row) {
-      const double* r = &s[4 * row];
-      column_origin_[3 * col + row] = static_cast<float>((r[0] * o[0] + r[1] * o[1] + r[2] * o[2] + r[3]) / 1000.0);
-    }
-    for (unsigned u = 0; u < beams_; ++u) {
-      const double azimuth = encoder - 2 * pi * m.beam_azimuth_deg[u] / 360.0;
-      const double altitude = 2 * pi * m.beam_altitude_deg[u] / 360.0;
-      const double d[3] = {std::cos(azimuth) * std::cos(altitude),
-                           std::sin(azimuth) * std::cos(altitude), std::sin(altitude)};
-      const std::size_t at = std::size_t{u} * columns_ + col;
-      for (unsigned row = 0; row < 3; ++row) {
-        const double* r = &s[4 * row];
-        direction_[3 * at + row] = static_cast<float>((r[0] * d[0] + r[1] * d[1] + r[2] * d[2]) / 1000.0);
-      }
-    }
+    const double c = std::cos(encoder);
+    const double sn = std::sin(encoder);
+    const std::array<double, 3> e{c, sn, 0}, f{-sn, c, 0}, o{t03 * c, t03 * sn, t23};
+    column_geometry_[col] = {f32(rotated(e, 0)), f32(rotated(e, 1)), f32(rotated(e, 2)),
+                             f32(rotated(f, 0)), f32(rotated(f, 1)), f32(rotated(f, 2)),
+                             f32(rotated(o, 0) + s[3] / 1000.0), f32(rotated(o, 1) + s[7] / 1000.0),
+                             f32(rotated(o, 2) + s[11] / 1000.0)};
   }
+  const std::array<double, 3> up{0, 0, 1};
+  beam_geometry_.resize(beams_);
+  for (unsigned u = 0; u < beams_; ++u) {
+    const double azimuth = -2 * pi * m.beam_azimuth_deg[u] / 360.0;
+    const double altitude = 2 * pi * m.beam_altitude_deg[u] / 360.0;
+    const double level = std::cos(altitude);
+    const double rise = std::sin(altitude);
+    beam_geometry_[u] = {f32(level * std::cos(azimuth)), f32(level * std::sin(azimuth)),
+                         f32(rise * rotated(up, 0)), f32(rise * rotated(up, 1)), f32(rise * rotated(up, 2))};
+  }
+  row_shift_.resize(beams_);
   const long w = columns_;
   for (unsigned u = 0; u < beams_; ++u) {
     row_shift_[u] = static_cast<unsigned>((m.pixel_shift_by_row[u] % w + w) % w);
@@ -105,7 +116,7 @@ void FrameAssembler::build_lookup_table() {
 }
 
 std::size_t FrameAssembler::max_points() const noexcept {
-  return std::size_t{beams_} * columns_ * returns_;
+  return image_points_ * returns_;
 }
 
 void FrameAssembler::set_output(std::span<LidarPoint> output) noexcept {
@@ -196,22 +207,96 @@ void FrameAssembler::decode(const LidarPacket& packet) noexcept {
   }
 }
 
+// The hot path. A packet is decoded beam by beam over its columns: an organised frame is
+// row-major, so one beam's pixels in neighbouring columns are neighbouring points, and writing
+// them together fills whole cache lines at once (rows lie W × 24 bytes apart, a multiple of 4 KiB
+// that maps every row to the same cache set). Each beam goes through three short loops over the
+// packet's columns: gather the pixels (load_beam), compute the points in small arrays
+// (locate_beam: branch-free arithmetic the compiler vectorises) and write them out as whole
+// 24-byte points (store_organized, store_dense). Everything that does not change within a packet
+// (which columns count, their times and geometry, the range limits, the intensity channel, the
+// room in the output span) is decided once per packet or per beam, never per point.
+
+// The columns of one packet that this frame takes, as arrays over the column (so the per-beam
+// loops over them vectorise).
+struct FrameAssembler::PacketColumns {
+  static constexpr unsigned capacity = max_columns_per_packet;
+  unsigned count = 0;
+  std::size_t pixel_bytes = 0;
+  const std::uint8_t* first_pixel[capacity];
+  std::uint32_t measurement_id[capacity];
+  std::uint32_t time_offset[capacity];
+  alignas(16) float ex[capacity];
+  alignas(16) float ey[capacity];
+  alignas(16) float ez[capacity];
+  alignas(16) float fx[capacity];
+  alignas(16) float fy[capacity];
+  alignas(16) float fz[capacity];
+  alignas(16) float ox[capacity];
+  alignas(16) float oy[capacity];
+  alignas(16) float oz[capacity];
+};
+
+// One beam's pixels across a packet's columns: raw range and intensity, then each return's
+// x, y, z and intensity as arrays (what the loop vectoriser handles best).
+struct FrameAssembler::BeamPixels {
+  static constexpr unsigned capacity = max_columns_per_packet;
+  alignas(16) std::int32_t range[capacity];
+  alignas(16) std::int32_t range2[capacity];
+  alignas(16) std::int32_t intensity[capacity];
+  alignas(16) std::int32_t intensity2[capacity];
+  alignas(16) float x[capacity], y[capacity], z[capacity], value[capacity];
+  alignas(16) float x2[capacity], y2[capacity], z2[capacity], value2[capacity];
+};
+
+namespace {
+
+// The pixel's channel that goes into LidarPoint::intensity, for the first or second return.
+template <bool Second>
+std::int32_t channel(const Pixel& p, IntensityField field) noexcept {
+  switch (field) {
+    case IntensityField::signal: return Second ? p.signal2 : p.signal;
+    case IntensityField::reflectivity: return Second ? p.reflectivity2 : p.reflectivity;
+    case IntensityField::near_ir:
+    case IntensityField::automatic: break;  // resolved at construction
+  }
+  return p.near_ir;
+}
+
+// One whole point.
+inline void store_point(LidarPoint& p, float x, float y, float z, float intensity, std::uint32_t time_offset,
+                        std::uint16_t ring, std::uint8_t return_index) noexcept {
+  p.x = x;
+  p.y = y;
+  p.z = z;
+  p.intensity = intensity;
+  p.time_offset_ns = time_offset;
+  p.ring = ring;
+  p.return_index = return_index;
+  p.reserved = 0;
+}
+
+}  // namespace
+
 template <Profile P>
 void FrameAssembler::decode_columns(const LidarPacket& packet) noexcept {
-  const bool organized = options_.layout == CloudLayout::organized;
-  const std::size_t image = std::size_t{beams_} * columns_;
-  const unsigned stride = pixel_bytes(P);
+  PacketColumns columns;
+  accept_columns(packet, columns);
+  if (columns.count == 0) return;
   constexpr bool dual = P == Profile::rng19_rfl8_sig16_nir16_dual || P == Profile::fusa_rng15_rfl8_nir8_dual;
-  const bool second = dual && returns_ > 1;
-  // First the columns' headers: which to decode, and their times.
-  struct Accepted {
-    unsigned index;  // in the packet
-    unsigned m;      // measurement_id
-    std::uint32_t time_offset;
-  };
-  std::array<Accepted, max_columns_per_packet> accepted;
-  unsigned count = 0;
-  for (unsigned c = 0; c < packet.columns() && c < max_columns_per_packet; ++c) {
+  if (dual && returns_ > 1) {
+    decode_beams<P, true>(columns);
+  } else {
+    decode_beams<P, false>(columns);
+  }
+}
+
+// Which of the packet's columns count (valid, not seen before in this frame), with their time
+// after the frame's stamp and their geometry.
+void FrameAssembler::accept_columns(const LidarPacket& packet, PacketColumns& out) noexcept {
+  out.count = 0;
+  out.pixel_bytes = pixel_bytes(metadata_.format.profile);
+  for (unsigned c = 0; c < packet.columns() && c < PacketColumns::capacity; ++c) {
     const Column column = packet.column(c);
     if (!column.valid) {
       ++invalid_columns_;
@@ -231,76 +316,191 @@ void FrameAssembler::decode_columns(const LidarPacket& packet) noexcept {
     }
     const std::int64_t offset =
         std::clamp<std::int64_t>(timestamp - stamp_ns_, 0, std::numeric_limits<std::uint32_t>::max());
-    accepted[count++] = {c, m, static_cast<std::uint32_t>(offset)};
+    const unsigned k = out.count++;
+    const ColumnGeometry& g = column_geometry_[m];
+    out.first_pixel[k] = packet.pixel_bytes(c, 0);
+    out.measurement_id[k] = m;
+    out.time_offset[k] = static_cast<std::uint32_t>(offset);
+    out.ex[k] = g.ex;
+    out.ey[k] = g.ey;
+    out.ez[k] = g.ez;
+    out.fx[k] = g.fx;
+    out.fy[k] = g.fy;
+    out.fz[k] = g.fz;
+    out.ox[k] = g.ox;
+    out.oy[k] = g.oy;
+    out.oz[k] = g.oz;
   }
-  // Then beam by beam: an organised frame is row-major, so the packet's neighbouring columns of
-  // one beam are neighbouring points; writing them together fills whole cache lines at once
-  // (rows lie W × 24 bytes apart, a multiple of 4 KiB that maps every row to the same cache set).
-  for (unsigned u = 0; u < beams_; ++u) {
-    const std::size_t row_start = std::size_t{u} * columns_;
-    for (unsigned k = 0; k < count; ++k) {
-      const Accepted& col = accepted[k];
-      const Pixel px = decode_pixel_as<P>(packet.pixel_bytes(col.index, 0) + std::size_t{u} * stride);
-      const std::size_t lut = row_start + col.m;
-      float intensity = 0;
-      float intensity2 = 0;
-      switch (intensity_) {
-        case IntensityField::signal: intensity = px.signal; intensity2 = px.signal2; break;
-        case IntensityField::reflectivity: intensity = px.reflectivity; intensity2 = px.reflectivity2; break;
-        case IntensityField::near_ir:
-        case IntensityField::automatic: intensity = intensity2 = px.near_ir; break;
-      }
-      if (organized) {
-        const std::size_t at = organized_index(u, col.m);
-        write_point(at, u, col.m, lut, px.range_mm, intensity, col.time_offset, 0);
-        if (second) write_point(at + image, u, col.m, lut, px.range2_mm, intensity2, col.time_offset, 1);
-      } else {
-        if (px.range_mm != 0 && px.range_mm >= min_range_mm_ && px.range_mm <= max_range_mm_) {
-          write_point(dense_count_++, u, col.m, lut, px.range_mm, intensity, col.time_offset, 0);
-        }
-        if (second && px.range2_mm != 0 && px.range2_mm >= min_range_mm_ && px.range2_mm <= max_range_mm_) {
-          write_point(dense_count_++, u, col.m, lut, px.range2_mm, intensity2, col.time_offset, 1);
-        }
-      }
+}
+
+template <Profile P, bool Dual>
+void FrameAssembler::decode_beams(const PacketColumns& columns) noexcept {
+  BeamPixels px;
+  if (options_.layout == CloudLayout::dense) {
+    for (unsigned u = 0; u < beams_; ++u) {
+      load_beam<P, Dual>(columns, u, px);
+      locate_beam<Dual>(columns, u, px);
+      store_dense<Dual>(columns, u, px);
+    }
+    return;
+  }
+  // A span with room for the whole frame (always, from a SIM loan) needs no check per point.
+  if (attached_ && output_.size() >= max_points()) {
+    for (unsigned u = 0; u < beams_; ++u) {
+      load_beam<P, Dual>(columns, u, px);
+      locate_beam<Dual>(columns, u, px);
+      store_organized<Dual, false>(columns, u, px);
+    }
+  } else {
+    for (unsigned u = 0; u < beams_; ++u) {
+      load_beam<P, Dual>(columns, u, px);
+      locate_beam<Dual>(columns, u, px);
+      store_organized<Dual, true>(columns, u, px);
     }
   }
 }
 
-void FrameAssembler::write_point(std::size_t index, unsigned row, unsigned column, std::size_t lut,
-                                 std::uint32_t range_mm, float intensity, std::uint32_t time_offset,
-                                 std::uint8_t return_index) noexcept {
-  if (!attached_ || index >= output_.size()) {
-    ++counters_.dropped_points;
-    return;
+template <Profile P, bool Dual>
+void FrameAssembler::load_beam(const PacketColumns& columns, unsigned beam, BeamPixels& out) const noexcept {
+  const std::size_t offset = std::size_t{beam} * columns.pixel_bytes;
+  const IntensityField field = intensity_;
+  const unsigned count = columns.count;
+  // The pixels a few beams further down each column, so they are in L1 when their beam comes
+  // (16 columns 0.4–2 kB apart are more streams than the hardware prefetcher follows).
+  constexpr unsigned ahead_bytes = 256;
+  if (offset + ahead_bytes < std::size_t{beams_} * columns.pixel_bytes) {
+    for (unsigned k = 0; k < count; ++k) __builtin_prefetch(columns.first_pixel[k] + offset + ahead_bytes);
   }
-  LidarPoint& p = output_[index];
-  // Out of the range limits counts as no return: the organised slot stays at the origin.
-  if (range_mm != 0 && range_mm >= min_range_mm_ && range_mm <= max_range_mm_) {
-    const float r = static_cast<float>(range_mm) - beam_origin_mm_;
-    const float* d = &direction_[3 * lut];
-    const float* o = &column_origin_[3 * std::size_t{column}];
-    p.x = r * d[0] + o[0];
-    p.y = r * d[1] + o[1];
-    p.z = r * d[2] + o[2];
-  } else {
-    p.x = p.y = p.z = 0;
+  for (unsigned k = 0; k < count; ++k) {
+    const Pixel p = decode_pixel_as<P>(columns.first_pixel[k] + offset);
+    out.range[k] = static_cast<std::int32_t>(p.range_mm);
+    out.intensity[k] = channel<false>(p, field);
+    if constexpr (Dual) {
+      out.range2[k] = static_cast<std::int32_t>(p.range2_mm);
+      out.intensity2[k] = channel<true>(p, field);
+    }
   }
-  p.intensity = intensity;
-  p.time_offset_ns = time_offset;
-  p.ring = static_cast<std::uint16_t>(row);
-  p.return_index = return_index;
-  p.reserved = 0;
+}
+
+// x, y, z of each return: (r − n)·d + O, or the origin when the range is outside [lo, hi] (0, no
+// return, always is). Branch-free arithmetic on arrays: the compiler vectorises the loops.
+template <bool Dual>
+void FrameAssembler::locate_beam(const PacketColumns& columns, unsigned beam, BeamPixels& px) const noexcept {
+  const BeamGeometry g = beam_geometry_[beam];
+  const std::int32_t lo = min_range_mm_;
+  const std::int32_t hi = max_range_mm_;
+  const float n = beam_origin_mm_;
+  const unsigned count = columns.count;
+  auto place = [&](const std::int32_t* range, const std::int32_t* intensity, float* x, float* y, float* z,
+                   float* value) {
+    for (unsigned k = 0; k < count; ++k) {
+      const float dx = g.a * columns.ex[k] + g.b * columns.fx[k] + g.gx;
+      const float dy = g.a * columns.ey[k] + g.b * columns.fy[k] + g.gy;
+      const float dz = g.a * columns.ez[k] + g.b * columns.fz[k] + g.gz;
+      // All ones for a return inside the limits, else 0 (+0.0 once applied to a float's bits).
+      const std::uint32_t keep = 0u - static_cast<std::uint32_t>((range[k] >= lo) & (range[k] <= hi));
+      const float r = static_cast<float>(range[k]) - n;
+      x[k] = std::bit_cast<float>(std::bit_cast<std::uint32_t>(r * dx + columns.ox[k]) & keep);
+      y[k] = std::bit_cast<float>(std::bit_cast<std::uint32_t>(r * dy + columns.oy[k]) & keep);
+      z[k] = std::bit_cast<float>(std::bit_cast<std::uint32_t>(r * dz + columns.oz[k]) & keep);
+      value[k] = static_cast<float>(intensity[k]);
+    }
+  };
+  place(px.range, px.intensity, px.x, px.y, px.z, px.value);
+  if constexpr (Dual) place(px.range2, px.intensity2, px.x2, px.y2, px.z2, px.value2);
+}
+
+// Organised: pixel (u, m) goes to row u, destaggered column (m + shift_u) mod W; the second
+// return's image follows the first's. Checked: the span may be missing or short; points beyond
+// it are counted as dropped.
+template <bool Dual, bool Checked>
+void FrameAssembler::store_organized(const PacketColumns& columns, unsigned beam, const BeamPixels& px) noexcept {
+  LidarPoint* out = output_.data();
+  const std::size_t limit = attached_ ? output_.size() : 0;
+  const std::size_t row = std::size_t{beam} * columns_;
+  const std::size_t image = image_points_;
+  const unsigned shift = row_shift_[beam];
+  const unsigned w = columns_;
+  const auto ring = static_cast<std::uint16_t>(beam);
+  const unsigned count = columns.count;
+  if constexpr (!Checked) {
+    // The sensor sends columns in order: the next packet's columns of this row follow these.
+    // Ask for their cache lines now; when that packet comes (127 rows of work later) the stores
+    // find them in cache instead of each waiting for its line from memory. A point every 48
+    // bytes touches every 64-byte line; the index wraps within the row like the columns do.
+    unsigned next = columns.measurement_id[count - 1] + 1 + shift;
+    for (unsigned j = 0; j < count; j += 2, next += 2) {
+      const std::size_t at = row + (next % w);
+      __builtin_prefetch(&out[at], 1);
+      if constexpr (Dual) __builtin_prefetch(&out[at + image], 1);
+    }
+  }
+  std::uint64_t dropped = 0;
+  for (unsigned k = 0; k < count; ++k) {
+    unsigned c = columns.measurement_id[k] + shift;
+    c = c >= w ? c - w : c;
+    const std::size_t at = row + c;
+    if (!Checked || at < limit) {
+      store_point(out[at], px.x[k], px.y[k], px.z[k], px.value[k], columns.time_offset[k], ring, 0);
+    } else {
+      ++dropped;
+    }
+    if constexpr (Dual) {
+      if (!Checked || at + image < limit) {
+        store_point(out[at + image], px.x2[k], px.y2[k], px.z2[k], px.value2[k], columns.time_offset[k], ring, 1);
+      } else {
+        ++dropped;
+      }
+    }
+  }
+  counters_.dropped_points += dropped;
+}
+
+// Dense: only returns inside the range limits, in packet order (beam by beam, column by column,
+// first then second return).
+template <bool Dual>
+void FrameAssembler::store_dense(const PacketColumns& columns, unsigned beam, const BeamPixels& px) noexcept {
+  LidarPoint* out = output_.data();
+  const std::size_t limit = attached_ ? output_.size() : 0;
+  const std::int32_t lo = min_range_mm_;
+  const std::int32_t hi = max_range_mm_;
+  const auto ring = static_cast<std::uint16_t>(beam);
+  const unsigned count = columns.count;
+  std::size_t next = dense_count_;
+  std::uint64_t dropped = 0;
+  // Every pixel is written at the next free place, which advances only for a return: no
+  // branch on the data (a scene is half returns, a branch on them mispredicts half the time).
+  auto keep = [&](std::int32_t range, float x, float y, float z, float value, std::uint32_t time_offset,
+                  std::uint8_t return_index) {
+    const bool hit = (range >= lo) & (range <= hi);
+    if (next < limit) {
+      store_point(out[next], x, y, z, value, time_offset, ring, return_index);
+    } else {
+      dropped += hit;
+    }
+    next += hit;
+  };
+  for (unsigned k = 0; k < count; ++k) {
+    keep(px.range[k], px.x[k], px.y[k], px.z[k], px.value[k], columns.time_offset[k], 0);
+    if constexpr (Dual) keep(px.range2[k], px.x2[k], px.y2[k], px.z2[k], px.value2[k], columns.time_offset[k], 1);
+  }
+  dense_count_ = next;
+  counters_.dropped_points += dropped;
 }
 
 // Organised frames: columns that never came (lost packets, invalid status) hold no return.
 void FrameAssembler::fill_missing_columns() noexcept {
-  const std::size_t image = std::size_t{beams_} * columns_;
+  const std::size_t limit = attached_ ? output_.size() : 0;
   for (unsigned m = 0; m < columns_; ++m) {
     if (received_[m] != 0) continue;
     for (unsigned u = 0; u < beams_; ++u) {
-      const std::size_t lut = std::size_t{u} * columns_ + m;
       for (unsigned r = 0; r < returns_; ++r) {
-        write_point(organized_index(u, m) + r * image, u, m, lut, 0, 0, 0, static_cast<std::uint8_t>(r));
+        const std::size_t at = organized_index(u, m) + r * image_points_;
+        if (at < limit) {
+          store_point(output_[at], 0, 0, 0, 0, 0, static_cast<std::uint16_t>(u), static_cast<std::uint8_t>(r));
+        } else {
+          ++counters_.dropped_points;
+        }
       }
     }
   }

@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -306,6 +308,80 @@ TEST(OusterFrames, AFrameJoinedMidRotationIsDroppedUnlessPartialFramesAreAsked) 
       EXPECT_EQ(points[5].time_offset_ns, 0u);
     } else {
       EXPECT_EQ(assembler.counters().partial_frames_dropped, 1u);
+    }
+  }
+}
+
+TEST(OusterFrames, ColumnsMissingFromAReusedSpanHoldNoReturnInEitherReturnsImage) {
+  // The span still holds the previous frame's points (a SIM loan is reused): the columns of a
+  // lost packet must be overwritten, not left over.
+  const Metadata m = metadata_for(Layout::rng19_dual, 32);
+  auto second = rotation(Layout::rng19_dual, 32, 2);
+  second.erase(second.begin() + 10);  // columns 160–175
+  std::vector<std::vector<std::uint8_t>> packets = rotation(Layout::rng19_dual, 32, 1);
+  packets.insert(packets.end(), second.begin(), second.end());
+  auto assembler = FrameAssembler::create(m, {}).value();
+  std::vector<sim::LidarPoint> points(assembler.max_points());
+  const auto frames = feed(assembler, packets, points);
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[1].missing_columns, 16u);
+  for (unsigned ret = 0; ret < 2; ++ret) {
+    for (unsigned u = 0; u < 32; ++u) {
+      for (unsigned v : {159u, 160u, 175u, 176u}) {
+        const auto& p = points[(ret * 32 + u) * 1024 + v];  // no pixel shift
+        const bool lost = v >= 160 && v <= 175;
+        const EncodedPixel want = pixel_value(Layout::rng19_dual, v, u);
+        const std::uint32_t range = ret == 0 ? want.range_mm : want.range2_mm;
+        EXPECT_EQ(p.ring, u);
+        EXPECT_EQ(p.return_index, ret);
+        if (lost || range == 0) {
+          EXPECT_EQ(p.x, 0.0F) << "column " << v << " beam " << u << " return " << ret;
+          EXPECT_EQ(p.y, 0.0F);
+          EXPECT_EQ(p.z, 0.0F);
+        } else {
+          EXPECT_NEAR(std::sqrt(p.x * p.x + p.y * p.y + p.z * p.z), range / 1000.0, 2e-3 + range * 1e-6);
+        }
+        if (lost) {
+          EXPECT_EQ(p.intensity, 0.0F);
+          EXPECT_EQ(p.time_offset_ns, 0u);
+        } else {
+          EXPECT_EQ(p.intensity, ret == 0 ? want.signal : want.signal2);
+          EXPECT_EQ(p.time_offset_ns, v * 97'656u);
+        }
+      }
+    }
+  }
+}
+
+TEST(OusterFrames, ASpanSmallerThanAFrameGetsItsFirstPointsAndTheRestAreCountedAsDropped) {
+  const Metadata m = metadata_for(Layout::rng19_dual, 32);
+  const auto packets = rotation(Layout::rng19_dual, 32, 1);
+  std::size_t returns = 0;  // what a dense frame holds
+  for (unsigned v = 0; v < 1024; ++v) {
+    for (unsigned u = 0; u < 32; ++u) {
+      const EncodedPixel p = pixel_value(Layout::rng19_dual, v, u);
+      returns += (p.range_mm != 0) + (p.range2_mm != 0);
+    }
+  }
+  for (CloudLayout layout : {CloudLayout::organized, CloudLayout::dense}) {
+    AssemblerOptions options;
+    options.layout = layout;
+    auto assembler = FrameAssembler::create(m, options).value();
+    const std::size_t room = 1000;
+    sim::LidarPoint guard{};
+    guard.ring = 0xBEEF;
+    std::vector<sim::LidarPoint> points(assembler.max_points(), guard);
+    assembler.set_output(std::span<sim::LidarPoint>(points).first(room));
+    std::optional<CompletedFrame> frame;
+    for (const auto& payload : packets) {
+      if (auto r = assembler.push(payload, 0); r.frame) frame = r.frame;
+    }
+    ASSERT_TRUE(frame);
+    EXPECT_EQ(frame->point_count, room);
+    const std::size_t made = layout == CloudLayout::organized ? assembler.max_points() : returns;
+    EXPECT_EQ(assembler.counters().dropped_points, made - room);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      ASSERT_EQ(points[i].ring == 0xBEEF, i >= room) << "point " << i << " of a span of " << room;
     }
   }
 }

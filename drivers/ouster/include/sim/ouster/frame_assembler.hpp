@@ -116,14 +116,41 @@ class FrameAssembler {
   unsigned returns() const noexcept { return returns_; }
 
  private:
+  // The geometry, precomputed in double and kept in float (see build_geometry()). The direction
+  // of pixel (u, m) in the sensor frame, in metres per millimetre of range, is
+  //   d = a_u·E_m + b_u·F_m + g_u
+  // (angle addition: the beam's azimuth offset and altitude, the column's encoder angle), and the
+  // pixel of range r lies at (r − n)·d + O_m. Per beam and per column, not per pixel: a few
+  // kilobytes that stay in L1 instead of a 12-byte-a-pixel table read once a frame (3 MB at 128×2048).
+  struct BeamGeometry {
+    float a, b;        // cos φ·cos θa, cos φ·sin θa
+    float gx, gy, gz;  // sin φ · R·(0, 0, 1) / 1000
+  };
+  struct ColumnGeometry {
+    float ex, ey, ez;  // R·(cos θe, sin θe, 0) / 1000
+    float fx, fy, fz;  // R·(−sin θe, cos θe, 0) / 1000
+    float ox, oy, oz;  // (R·(T03·cos θe, T03·sin θe, T23) + t) / 1000: the beams' origin, metres
+  };
+  struct PacketColumns;  // one packet's accepted columns (frame_assembler.cpp)
+  struct BeamPixels;     // one beam's pixels across them
+
   FrameAssembler(const Metadata& metadata, AssemblerOptions options);
-  void build_lookup_table();
+  void build_geometry();
   void begin(const LidarPacket& packet, std::int64_t host_ns) noexcept;
   void decode(const LidarPacket& packet) noexcept;
   template <Profile P>
   void decode_columns(const LidarPacket& packet) noexcept;
-  void write_point(std::size_t index, unsigned row, unsigned column, std::size_t lut, std::uint32_t range_mm,
-                   float intensity, std::uint32_t time_offset, std::uint8_t return_index) noexcept;
+  template <Profile P, bool Dual>
+  void decode_beams(const PacketColumns& columns) noexcept;
+  void accept_columns(const LidarPacket& packet, PacketColumns& out) noexcept;
+  template <Profile P, bool Dual>
+  void load_beam(const PacketColumns& columns, unsigned beam, BeamPixels& out) const noexcept;
+  template <bool Dual>
+  void locate_beam(const PacketColumns& columns, unsigned beam, BeamPixels& px) const noexcept;
+  template <bool Dual, bool Checked>
+  void store_organized(const PacketColumns& columns, unsigned beam, const BeamPixels& px) noexcept;
+  template <bool Dual>
+  void store_dense(const PacketColumns& columns, unsigned beam, const BeamPixels& px) noexcept;
   std::optional<CompletedFrame> close() noexcept;
   void fill_missing_columns() noexcept;
 
@@ -132,14 +159,14 @@ class FrameAssembler {
   unsigned beams_ = 0;
   unsigned columns_ = 0;
   unsigned returns_ = 1;
-  std::uint32_t min_range_mm_ = 0;
-  std::uint32_t max_range_mm_ = 0;
+  std::size_t image_points_ = 0;  // H × W
+  // Returns inside [min_range_mm_, max_range_mm_] make points; 0 (no return) never does.
+  std::int32_t min_range_mm_ = 1;
+  std::int32_t max_range_mm_ = 0;
   IntensityField intensity_ = IntensityField::signal;
-  // xyz = (range_mm − beam_origin_mm_) · direction + column origin, metres, sensor frame.
-  // direction_: 3 per pixel, beam-major (u·W + measurement_id, the order decode walks them).
-  std::vector<float> direction_;
-  std::vector<float> column_origin_;  // 3 per column
-  float beam_origin_mm_ = 0;
+  std::vector<BeamGeometry> beam_geometry_;      // H
+  std::vector<ColumnGeometry> column_geometry_;  // W
+  float beam_origin_mm_ = 0;                     // n
   // Destaggering: row u's column m lands in column (m + row_shift_[u]) mod W.
   std::vector<unsigned> row_shift_;
   std::size_t organized_index(unsigned u, unsigned m) const noexcept {
