@@ -125,6 +125,28 @@ struct GroupInput {
   const float* sin_azimuth_offset;
 };
 
+// Return pairing, as nebula filters multi-return groups: a return other than the last is
+// dropped when another return of its channel has the same distance and reflectivity (one echo
+// reported twice) or lies within `threshold` of it; the last return is never dropped here.
+template <unsigned returns>
+void drop_duplicate_returns(GroupScratch& g, unsigned n, float threshold,
+                            bool drop_identical) noexcept {
+  for (unsigned r = 0; r + 1 < returns; ++r) {
+    for (unsigned other = 0; other < returns; ++other) {
+      if (other == r) continue;
+      for (unsigned ch = 0; ch < n; ++ch) {
+        // Bitwise on 0/1 values, not && and ||: no branch in the loop.
+        const unsigned identical = unsigned{drop_identical} &
+                                   unsigned{g.raw[other][ch] == g.raw[r][ch]} &
+                                   unsigned{g.reflectivity[other][ch] == g.reflectivity[r][ch]};
+        const unsigned close =
+            unsigned{std::fabs(g.distance[other][ch] - g.distance[r][ch]) < threshold};
+        g.keep[r][ch] = static_cast<std::uint8_t>(g.keep[r][ch] & ~(identical | close) & 1u);
+      }
+    }
+  }
+}
+
 // Pass 1 of decode_group: every point of the group, kept or not, one quantity at a time in
 // loops with no branch and no call, which the compiler turns into SIMD code. The float
 // operations are the same, in the same order, as for one point at a time, so the results are
@@ -160,8 +182,7 @@ void compute_points(const GroupInput& in, GroupScratch& g) noexcept {
     g.sin_az[ch] = sin_block * cos_azimuth_offset[ch] + cos_block * sin_azimuth_offset[ch];
     g.cos_az[ch] = cos_block * cos_azimuth_offset[ch] - sin_block * sin_azimuth_offset[ch];
   }
-  // The filters, as nebula applies them: no return, out of range, and for every return but
-  // the last one of a multi-return group, a duplicate of another return of the group.
+  // The filters, as nebula applies them: no return, out of range, then return pairing.
   for (unsigned r = 0; r < returns; ++r) {
     for (unsigned ch = 0; ch < n; ++ch) {
       const float distance = static_cast<float>(g.raw[r][ch]) * unit;
@@ -171,20 +192,7 @@ void compute_points(const GroupInput& in, GroupScratch& g) noexcept {
                                                 unsigned{!(distance > max_range)});
     }
   }
-  for (unsigned r = 0; r + 1 < returns; ++r) {
-    for (unsigned other = 0; other < returns; ++other) {
-      if (other == r) continue;
-      for (unsigned ch = 0; ch < n; ++ch) {
-        // Bitwise on 0/1 values, not && and ||: no branch in the loop.
-        const unsigned identical = unsigned{drop_identical} &
-                                   unsigned{g.raw[other][ch] == g.raw[r][ch]} &
-                                   unsigned{g.reflectivity[other][ch] == g.reflectivity[r][ch]};
-        const unsigned close =
-            unsigned{std::fabs(g.distance[other][ch] - g.distance[r][ch]) < threshold};
-        g.keep[r][ch] = static_cast<std::uint8_t>(g.keep[r][ch] & ~(identical | close) & 1u);
-      }
-    }
-  }
+  drop_duplicate_returns<returns>(g, n, threshold, drop_identical);
   for (unsigned r = 0; r < returns; ++r) {
     for (unsigned ch = 0; ch < n; ++ch) {
       const float distance = g.distance[r][ch];
@@ -221,6 +229,122 @@ std::size_t copy_kept_points(GroupScratch& g, unsigned n, std::uint32_t time_bas
     }
   }
   return count;
+}
+
+// The return count as the constant compute_points and copy_kept_points are instantiated for.
+void compute_group_points(const GroupInput& in, unsigned returns, GroupScratch& g) noexcept {
+  switch (returns) {
+    case 1: compute_points<1>(in, g); break;
+    case 2: compute_points<2>(in, g); break;
+    default: compute_points<3>(in, g); break;
+  }
+}
+std::size_t copy_group_points(GroupScratch& g, unsigned n, unsigned returns,
+                              std::uint32_t time_base, const std::int32_t* channel_offset_ns,
+                              LidarPoint* out) noexcept {
+  switch (returns) {
+    case 1: return copy_kept_points<1>(g, n, time_base, channel_offset_ns, out);
+    case 2: return copy_kept_points<2>(g, n, time_base, channel_offset_ns, out);
+    default: return copy_kept_points<3>(g, n, time_base, channel_offset_ns, out);
+  }
+}
+
+// Which frame a channel's points go to, as an index into GroupSinks::of.
+enum FrameTarget : std::uint8_t { to_current = 0, to_next = 1, to_nowhere = 2 };
+
+// How the group's points are stamped: the group's firing time relative to the stamp of the
+// current and of the next frame, plus each channel's firing offset in the group's firing loop,
+// whose range tells at once whether every point's offset fits its uint32 unclamped.
+struct GroupTimes {
+  std::array<std::int64_t, 2> base;
+  const std::int32_t* channel_offset_ns;
+  std::int32_t min_channel_offset_ns;
+  std::int32_t max_channel_offset_ns;
+};
+
+}  // namespace
+
+namespace detail {
+
+struct GroupTargets {
+  std::array<std::uint8_t, group_channels> of_channel{};  // FrameTarget of each channel
+  bool one_frame = true;  // every channel goes where channel 0 goes
+};
+
+// Where one frame's points go during one group: its storage and count, copied into locals so
+// the hot loops do not re-read members (FrameAssembler::store_sinks writes them back).
+struct PointSink {
+  LidarPoint* out = nullptr;
+  std::size_t capacity = 0;
+  std::size_t count = 0;
+  std::uint32_t dropped = 0;  // kept points that found no room
+  bool active = false;        // the group has points for this frame and it is open
+};
+struct GroupSinks {
+  // Indexed by FrameTarget; to_nowhere's sink is never active, so a point's target indexes
+  // the array without a test.
+  std::array<PointSink, 3> of{};
+};
+
+}  // namespace detail
+
+namespace {
+
+// Pass 2 near the cut, in a frame's nearly full storage or after a clock jump: point by point,
+// each to its own channel's frame, with the time offset clamped and a point that finds no
+// room counted as dropped.
+void write_points_one_by_one(const GroupScratch& g, unsigned n, unsigned returns,
+                             const detail::GroupTargets& targets, const GroupTimes& times,
+                             detail::GroupSinks& sinks) noexcept {
+  for (unsigned ch = 0; ch < n; ++ch) {
+    const std::uint8_t target = targets.of_channel[ch];
+    detail::PointSink& sink = sinks.of[target];
+    if (!sink.active) continue;
+    // Offsets are ≥ 0 by the stamp's choice; clamped only against a clock that jumps.
+    const auto time_offset = static_cast<std::uint32_t>(
+        std::clamp<std::int64_t>(times.base[target] + times.channel_offset_ns[ch], 0,
+                                 std::numeric_limits<std::uint32_t>::max()));
+    for (unsigned r = 0; r < returns; ++r) {
+      if (!g.keep[r][ch]) continue;
+      if (sink.count >= sink.capacity) {
+        ++sink.dropped;
+        continue;
+      }
+      const GroupScratch::Xyzi& p = g.xyzi[r][ch];
+      sink.out[sink.count++] = LidarPoint{p.x,
+                                          p.y,
+                                          p.z,
+                                          p.intensity,
+                                          time_offset,
+                                          static_cast<std::uint16_t>(ch),
+                                          static_cast<std::uint8_t>(r),
+                                          0};
+    }
+  }
+}
+
+// Pass 2 of decode_group: the kept points, in channel then return order, into their frame's
+// storage. Common case: the whole group goes to one frame, its storage has room for every
+// point of the group, and every time offset fits without the clamp; then copy_kept_points
+// writes them without a branch on the data.
+void write_kept_points(GroupScratch& g, unsigned n, unsigned returns,
+                       const detail::GroupTargets& targets, const GroupTimes& times,
+                       detail::GroupSinks& sinks) noexcept {
+  const std::uint8_t target = targets.of_channel[0];
+  if (targets.one_frame && target != to_nowhere) {
+    detail::PointSink& sink = sinks.of[target];
+    const std::int64_t base = times.base[target];
+    if (sink.active && sink.capacity - sink.count >= std::size_t{n} * returns &&
+        base + times.min_channel_offset_ns >= 0 &&
+        base + times.max_channel_offset_ns <=
+            std::int64_t{std::numeric_limits<std::uint32_t>::max()}) {
+      // Base + offset lies in [0, 2^32): the sum modulo 2^32 is the exact value.
+      sink.count += copy_group_points(g, n, returns, static_cast<std::uint32_t>(base),
+                                      times.channel_offset_ns, sink.out + sink.count);
+      return;
+    }
+  }
+  write_points_one_by_one(g, n, returns, targets, times, sinks);
 }
 
 }  // namespace
@@ -504,14 +628,7 @@ PushResult FrameAssembler::push(std::span<const std::uint8_t> payload,
   Packet packet;
   result.error = Packet::parse(payload, options_.model, packet);
   if (result.error != PacketError::none) {
-    ++counters_.rejected[static_cast<std::size_t>(result.error)];
-    if (result.error == PacketError::wrong_model) {
-      ++counters_.wrong_model;
-    } else if (result.error == PacketError::bad_crc) {
-      ++counters_.crc_errors;
-    } else {
-      ++counters_.malformed;
-    }
+    count_rejected(result.error);
     return result;
   }
   ++counters_.packets;
@@ -529,153 +646,90 @@ PushResult FrameAssembler::push(std::span<const std::uint8_t> payload,
     const std::uint16_t azimuth = packet.azimuth(block);
     const auto phase =
         static_cast<std::uint16_t>((azimuth + full_turn - cut_centi_deg_) % full_turn);
-    std::int64_t group_revolution = block_revolution_;
-    if (!have_last_) {
-      // Joining mid-revolution (start, reset, flush): the frame in progress is partial.
-      block_revolution_ = 0;
-      group_revolution = 0;
-      current_revolution_ = 0;
-      current_ = FrameState{};
-      next_ = FrameState{};
-      have_last_ = true;
-      last_phase_ = phase;
-      last_azimuth_ = azimuth;
-    } else {
-      const unsigned forward = (phase + full_turn - last_phase_) % full_turn;
-      if (forward > full_turn - reorder_window) {
-        // A late packet: decode it where it belongs without moving the cut state.
-        if (phase > last_phase_) group_revolution = block_revolution_ - 1;
-      } else {
-        if (phase < last_phase_) ++block_revolution_;
-        group_revolution = block_revolution_;
-        last_phase_ = phase;
-        last_azimuth_ = azimuth;
-      }
-    }
-    // The current frame is complete once no channel of this group can still fall in it.
-    const double position = static_cast<double>(group_revolution) * full_turn + phase;
-    const double current_end = static_cast<double>(current_revolution_ + 1) * full_turn;
-    if (position + min_cut_offset_centi_ >= current_end) {
-      // A second completion in one packet (only a corrupt stream can do that) finds no span
-      // attached and is counted as frames_without_output by close_current.
-      PushResult closed;
-      close_current(closed, true);
-      if (closed.frame && !result.frame) result.frame = closed.frame;
-      ++current_revolution_;
-      // With no point across the cut yet (cutting by block), the new frame starts here.
-      if (!current_.started) begin(current_, packet, block, host_receive_ns, true);
-      if (position + min_cut_offset_centi_ >= current_end + full_turn) {
-        // A gap of more than a revolution: restart from this group.
-        current_revolution_ = group_revolution;
-        current_ = FrameState{};
-        next_ = FrameState{};
-        if (output_attached_) output_count_ = 0;
-        carry_count_ = 0;
-      }
-    }
+    const std::int64_t group_revolution = revolution_of_group(azimuth, phase);
+    close_frame_before(packet, block, group_revolution, phase, host_receive_ns, result);
     decode_group(packet, block, group_revolution, phase, host_receive_ns);
   }
   return result;
 }
 
+void FrameAssembler::count_rejected(PacketError error) noexcept {
+  ++counters_.rejected[static_cast<std::size_t>(error)];
+  if (error == PacketError::wrong_model) {
+    ++counters_.wrong_model;
+  } else if (error == PacketError::bad_crc) {
+    ++counters_.crc_errors;
+  } else {
+    ++counters_.malformed;
+  }
+}
+
+// Which revolution a firing group belongs to, counted by the block azimuth wrapping at the
+// cut. `phase` is the azimuth relative to the cut.
+std::int64_t FrameAssembler::revolution_of_group(std::uint16_t azimuth,
+                                                 std::uint16_t phase) noexcept {
+  if (!have_last_) {
+    // Joining mid-revolution (start, reset, flush): the frame in progress is partial.
+    block_revolution_ = 0;
+    current_revolution_ = 0;
+    current_ = FrameState{};
+    next_ = FrameState{};
+    have_last_ = true;
+    last_phase_ = phase;
+    last_azimuth_ = azimuth;
+    return 0;
+  }
+  const unsigned forward = (phase + full_turn - last_phase_) % full_turn;
+  if (forward > full_turn - reorder_window) {
+    // A late packet: decode it where it belongs without moving the cut state.
+    return phase > last_phase_ ? block_revolution_ - 1 : block_revolution_;
+  }
+  if (phase < last_phase_) ++block_revolution_;
+  last_phase_ = phase;
+  last_azimuth_ = azimuth;
+  return block_revolution_;
+}
+
+// The current frame is complete once no channel of this group can still fall in it: it is
+// closed (handed out in `result` when it has a span) and the next one takes its place.
+void FrameAssembler::close_frame_before(const Packet& packet, unsigned block,
+                                        std::int64_t group_revolution, std::uint16_t phase,
+                                        std::int64_t host_ns, PushResult& result) noexcept {
+  const double position = static_cast<double>(group_revolution) * full_turn + phase;
+  const double current_end = static_cast<double>(current_revolution_ + 1) * full_turn;
+  if (position + min_cut_offset_centi_ < current_end) return;
+  // A second completion in one packet (only a corrupt stream can do that) finds no span
+  // attached and is counted as frames_without_output by close_current.
+  PushResult closed;
+  close_current(closed, true);
+  if (closed.frame && !result.frame) result.frame = closed.frame;
+  ++current_revolution_;
+  // With no point across the cut yet (cutting by block), the new frame starts here.
+  if (!current_.started) begin(current_, packet, block, host_ns, true);
+  if (position + min_cut_offset_centi_ >= current_end + full_turn) {
+    // A gap of more than a revolution: restart from this group.
+    current_revolution_ = group_revolution;
+    current_ = FrameState{};
+    next_ = FrameState{};
+    if (output_attached_) output_count_ = 0;
+    carry_count_ = 0;
+  }
+}
+
 void FrameAssembler::decode_group(const Packet& packet, unsigned first_block,
                                   std::int64_t group_revolution, std::uint16_t phase,
                                   std::int64_t host_ns) noexcept {
-  // Where a channel's points go: the current frame, the next one, or nowhere (late points of
-  // a frame already handed out). Kept in locals so the hot loop does not re-read members.
-  struct Sink {
-    FrameState* frame = nullptr;
-    LidarPoint* out = nullptr;
-    std::size_t capacity = 0;
-    std::size_t count = 0;
-    std::uint32_t dropped = 0;
-    bool active = false;
-  };
-  std::array<Sink, 3> sinks{};
-  std::array<std::uint8_t, max_channels> target{};
-  static_assert(group_channels >= max_channels);
-
-  // Common case: every channel of the group falls in the same revolution.
-  const bool straddles =
-      phase + min_cut_offset_centi_ < 0 || phase + max_cut_offset_centi_ >= full_turn;
-  auto target_of = [&](std::int64_t revolution) -> std::uint8_t {
-    if (revolution == current_revolution_) return 0;
-    if (revolution == current_revolution_ + 1) return 1;
-    return 2;
-  };
-  if (straddles) {
-    for (unsigned ch = 0; ch < channels_; ++ch) {
-      const double point_phase = phase + cut_offset_centi_[ch];
-      std::int64_t revolution = group_revolution;
-      if (point_phase < 0) --revolution;
-      if (point_phase >= full_turn) ++revolution;
-      target[ch] = target_of(revolution);
-    }
-  } else {
-    std::fill_n(target.begin(), channels_, target_of(group_revolution));
-  }
-  bool used[2] = {false, false};
-  if (straddles) {
-    for (unsigned ch = 0; ch < channels_; ++ch) {
-      if (target[ch] < 2) used[target[ch]] = true;
-    }
-  } else if (target[0] < 2) {
-    used[target[0]] = true;
-  }
-  if (used[0]) {
-    if (!current_.started) begin(current_, packet, first_block, host_ns, false);
-    Sink& s = sinks[0];
-    s.frame = &current_;
-    s.active = true;
-    if (output_attached_) {
-      s.out = output_.data();
-      s.capacity = output_.size();
-      s.count = output_count_;
-    } else {
-      s.out = carry_.data();
-      s.capacity = carry_.size();
-      s.count = carry_count_;
-    }
-  }
-  if (used[1]) {
-    if (!next_.started) begin(next_, packet, first_block, host_ns, true);
-    Sink& s = sinks[1];
-    s.frame = &next_;
-    s.active = true;
-    if (output_attached_) {
-      s.out = carry_.data();
-      s.capacity = carry_.size();
-      s.count = carry_count_;
-    } else {
-      // The carry-over still holds the current frame (no span yet): the next one loses
-      // these points and is not a whole revolution.
-      next_.whole = false;
-    }
-  }
-  for (unsigned t = 0; t < 2; ++t) {
-    if (sinks[t].active && sinks[t].frame->last_packet != packet_counter_) {
-      FrameState& frame = *sinks[t].frame;
-      frame.last_packet = packet_counter_;
-      ++frame.packets;
-      frame.rpm = packet.motor_rpm();
-      if (const auto safety = packet.functional_safety()) {
-        if (!frame.safety || worse(safety->state, frame.safety->state)) frame.safety = safety;
-      }
-    }
-  }
-
+  const detail::GroupTargets targets = frames_of_channels(phase, group_revolution);
+  detail::GroupSinks sinks = open_sinks(targets, packet, first_block, host_ns);
   // Every point of the group belongs to a frame already handed out.
-  if (!sinks[0].active && !sinks[1].active) return;
+  if (!sinks.of[to_current].active && !sinks.of[to_next].active) return;
 
+  // Pass 1: every point of the group, kept or not, one quantity at a time (see GroupScratch).
+  // The block azimuth's sine and cosine are the group's only trigonometry: each channel's
+  // direction is this one turned by its precomputed azimuth offset.
   const unsigned n = channels_;
   const unsigned returns = packet.returns();
   const double azimuth_rad = packet.azimuth(first_block) * (std::numbers::pi / 18000.0);
-  const std::int64_t group_time = packet.time_ns() + packet.block_offset_ns(first_block);
-  const unsigned loop = packet.firing_loop(first_block);
-  const std::array<std::int32_t, max_channels>& channel_offset_ns = channel_offset_ns_[loop];
-  const std::int64_t time_base[2] = {group_time - current_.stamp_ns, group_time - next_.stamp_ns};
-
-  // Pass 1: every point of the group, kept or not, one quantity at a time (see GroupScratch).
   GroupInput input{{},
                    packet.unit_size(),
                    n,
@@ -693,68 +747,115 @@ void FrameAssembler::decode_group(const Packet& packet, unsigned first_block,
                    sin_azimuth_offset_.data()};
   for (unsigned r = 0; r < returns; ++r) input.units[r] = packet.units(first_block + r);
   GroupScratch g;  // not zeroed: each loop writes the [returns][n] part the next ones read
-  switch (returns) {
-    case 1: compute_points<1>(input, g); break;
-    case 2: compute_points<2>(input, g); break;
-    default: compute_points<3>(input, g); break;
-  }
+  compute_group_points(input, returns, g);
 
-  // Pass 2: the kept points, in channel then return order, into their frame's storage.
-  // Common case: the whole group goes to one frame, its storage has room for every point of
-  // the group, and every time offset fits without the clamp.
-  const std::uint8_t first_target = target[0];
-  const bool one_target =
-      !straddles || std::all_of(target.begin(), target.begin() + n,
-                                [first_target](std::uint8_t t) { return t == first_target; });
-  if (one_target && first_target < 2 && sinks[first_target].active &&
-      sinks[first_target].capacity - sinks[first_target].count >= std::size_t{n} * returns &&
-      time_base[first_target] + min_channel_offset_ns_[loop] >= 0 &&
-      time_base[first_target] + max_channel_offset_ns_[loop] <=
-          std::int64_t{std::numeric_limits<std::uint32_t>::max()}) {
-    Sink& sink = sinks[first_target];
-    // Base + offset lies in [0, 2^32): the sum modulo 2^32 is the exact value.
-    const auto base = static_cast<std::uint32_t>(time_base[first_target]);
-    LidarPoint* out = sink.out + sink.count;
-    switch (returns) {
-      case 1: sink.count += copy_kept_points<1>(g, n, base, channel_offset_ns.data(), out); break;
-      case 2: sink.count += copy_kept_points<2>(g, n, base, channel_offset_ns.data(), out); break;
-      default: sink.count += copy_kept_points<3>(g, n, base, channel_offset_ns.data(), out); break;
-    }
-  } else {
-    // Near the cut, a frame's storage nearly full, a clock that jumped: point by point.
-    for (unsigned ch = 0; ch < n; ++ch) {
-      Sink& sink = sinks[target[ch]];
-      if (!sink.active) continue;
-      // Offsets are ≥ 0 by the stamp's choice; clamped only against a clock that jumps.
-      const auto time_offset = static_cast<std::uint32_t>(
-          std::clamp<std::int64_t>(time_base[target[ch]] + channel_offset_ns[ch], 0,
-                                   std::numeric_limits<std::uint32_t>::max()));
-      for (unsigned r = 0; r < returns; ++r) {
-        if (!g.keep[r][ch]) continue;
-        if (sink.count >= sink.capacity) {
-          ++sink.dropped;
-          continue;
-        }
-        const GroupScratch::Xyzi& p = g.xyzi[r][ch];
-        sink.out[sink.count++] = LidarPoint{p.x,
-                                            p.y,
-                                            p.z,
-                                            p.intensity,
-                                            time_offset,
-                                            static_cast<std::uint16_t>(ch),
-                                            static_cast<std::uint8_t>(r),
-                                            0};
-      }
-    }
-  }
+  // Pass 2: the kept points into their frames, stamped relative to each frame's stamp.
+  const std::int64_t group_time = packet.time_ns() + packet.block_offset_ns(first_block);
+  const unsigned loop = packet.firing_loop(first_block);
+  const GroupTimes times{{group_time - current_.stamp_ns, group_time - next_.stamp_ns},
+                         channel_offset_ns_[loop].data(),
+                         min_channel_offset_ns_[loop],
+                         max_channel_offset_ns_[loop]};
+  write_kept_points(g, n, returns, targets, times, sinks);
+  store_sinks(sinks);
+}
 
-  // Write the local counts back where they live.
-  if (sinks[0].active) (output_attached_ ? output_count_ : carry_count_) = sinks[0].count;
-  if (sinks[1].active && output_attached_) carry_count_ = sinks[1].count;
+// A point belongs to the revolution its own azimuth falls in: the group's, unless the
+// channel's cut offset (its azimuth offset, when cutting by point) carries it across the cut.
+// Points of a revolution other than the current one or the next go nowhere: late points of a
+// frame already handed out.
+detail::GroupTargets FrameAssembler::frames_of_channels(
+    std::uint16_t phase, std::int64_t group_revolution) const noexcept {
+  auto target_of = [this](std::int64_t revolution) -> std::uint8_t {
+    if (revolution == current_revolution_) return to_current;
+    if (revolution == current_revolution_ + 1) return to_next;
+    return to_nowhere;
+  };
+  static_assert(group_channels >= max_channels);
+  detail::GroupTargets targets;
+  // Common case: every channel of the group falls in the same revolution.
+  const bool straddles =
+      phase + min_cut_offset_centi_ < 0 || phase + max_cut_offset_centi_ >= full_turn;
+  if (!straddles) {
+    std::fill_n(targets.of_channel.begin(), channels_, target_of(group_revolution));
+    return targets;
+  }
+  for (unsigned ch = 0; ch < channels_; ++ch) {
+    const double point_phase = phase + cut_offset_centi_[ch];
+    std::int64_t revolution = group_revolution;
+    if (point_phase < 0) --revolution;
+    if (point_phase >= full_turn) ++revolution;
+    targets.of_channel[ch] = target_of(revolution);
+  }
+  const std::uint8_t first = targets.of_channel[0];
+  const auto end = targets.of_channel.begin() + channels_;
+  targets.one_frame = std::all_of(targets.of_channel.begin(), end,
+                                  [first](std::uint8_t t) { return t == first; });
+  return targets;
+}
+
+// Opens the frames the group has points for (a frame starts at its first group) and points a
+// sink at each one's storage: the current frame's is the caller's span once attached, the
+// carry-over before; the next frame's is the carry-over, or nothing while the carry-over
+// still holds the current frame.
+detail::GroupSinks FrameAssembler::open_sinks(const detail::GroupTargets& targets,
+                                              const Packet& packet, unsigned first_block,
+                                              std::int64_t host_ns) noexcept {
+  bool used[2] = {false, false};
+  const unsigned distinct = targets.one_frame ? 1 : channels_;
+  for (unsigned ch = 0; ch < distinct; ++ch) {
+    if (targets.of_channel[ch] != to_nowhere) used[targets.of_channel[ch]] = true;
+  }
+  detail::GroupSinks sinks;
+  if (used[to_current]) {
+    if (!current_.started) begin(current_, packet, first_block, host_ns, false);
+    detail::PointSink& s = sinks.of[to_current];
+    s.active = true;
+    s.out = output_attached_ ? output_.data() : carry_.data();
+    s.capacity = output_attached_ ? output_.size() : carry_.size();
+    s.count = output_attached_ ? output_count_ : carry_count_;
+    note_packet(current_, packet);
+  }
+  if (used[to_next]) {
+    if (!next_.started) begin(next_, packet, first_block, host_ns, true);
+    detail::PointSink& s = sinks.of[to_next];
+    s.active = true;
+    if (output_attached_) {
+      s.out = carry_.data();
+      s.capacity = carry_.size();
+      s.count = carry_count_;
+    } else {
+      // The carry-over still holds the current frame (no span yet): the next one loses
+      // these points and is not a whole revolution.
+      next_.whole = false;
+    }
+    note_packet(next_, packet);
+  }
+  return sinks;
+}
+
+// A packet counts once in each frame it gives points to, however many of its groups do.
+void FrameAssembler::note_packet(FrameState& frame, const Packet& packet) noexcept {
+  if (frame.last_packet == packet_counter_) return;
+  frame.last_packet = packet_counter_;
+  ++frame.packets;
+  frame.rpm = packet.motor_rpm();
+  if (const auto safety = packet.functional_safety()) {
+    if (!frame.safety || worse(safety->state, frame.safety->state)) frame.safety = safety;
+  }
+}
+
+// Writes the sinks' counts back where they live, and their drops into the frame and counters.
+void FrameAssembler::store_sinks(const detail::GroupSinks& sinks) noexcept {
+  const detail::PointSink& current = sinks.of[to_current];
+  const detail::PointSink& next = sinks.of[to_next];
+  if (current.active) (output_attached_ ? output_count_ : carry_count_) = current.count;
+  if (next.active && output_attached_) carry_count_ = next.count;
+  FrameState* const frames[2] = {&current_, &next_};
   for (unsigned t = 0; t < 2; ++t) {
-    if (sinks[t].active) {
-      sinks[t].frame->dropped += sinks[t].dropped;
-      counters_.dropped_points += sinks[t].dropped;
+    if (sinks.of[t].active) {
+      frames[t]->dropped += sinks.of[t].dropped;
+      counters_.dropped_points += sinks.of[t].dropped;
     }
   }
 }

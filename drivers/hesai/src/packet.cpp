@@ -124,13 +124,133 @@ PacketError size_error(std::span<const std::uint8_t> payload, Model model) noexc
                                                    : PacketError::bad_size;
 }
 
+// Where a model keeps each field Packet::parse reads (docs/hesai.md): the models differ in
+// offsets far more than in what they send, so one table entry per model and one reader for
+// all, rather than one parser per model.
+struct PacketLayout {
+  std::uint16_t first_block;   // offset of block 0 (after the header; the Pandar40P has none)
+  std::uint16_t block_stride;  // bytes per block
+  std::uint8_t azimuth;        // offset of the block azimuth inside a block
+  std::uint8_t units;          // offset of channel 0's unit inside a block
+  std::uint8_t unit_size;      // distance u16, reflectivity, and on 4-byte units one more byte
+  std::uint8_t distance_unit;  // header byte holding the distance unit in mm; 0: none (4 mm)
+  std::uint16_t tail;          // offset of the tail; the fields below are relative to it
+  std::uint8_t rpm;
+  std::uint8_t micros;
+  std::uint8_t return_mode;
+  std::uint8_t date;           // six bytes Y M D h m s
+  std::uint8_t sequence;       // the UDP sequence, when the packet carries one
+  bool unix_seconds_date;      // protocol 6.1: a year byte of 0 means Unix seconds (xt_time_ns)
+};
+
+constexpr PacketLayout layout_of(Model model) noexcept {
+  // Columns: first block, block stride, azimuth, units, unit size, distance unit | tail, rpm,
+  // µs, return mode, date, sequence, Unix-seconds date.
+  switch (model) {
+    case Model::pandar64:  // header 8 | 6 blocks of azimuth 2 + 64 units of 3 | tail
+      return {8, 2 + 64 * 3, 0, 2, 3, 5, 8 + 6 * 194, 8, 10, 14, 16, 22, false};
+    case Model::pandar40p:  // 10 blocks of marker 2 + azimuth 2 + 40 units of 3 | tail
+      return {0, 4 + 40 * 3, 2, 4, 3, 0, 10 * 124, 8, 10, 14, 16, 22, false};
+    case Model::pandar_xt32:  // header 12 | 8 blocks of azimuth 2 + 32 units of 4 | tail
+      return {12, 2 + 32 * 4, 0, 2, 4, 9, 12 + 8 * 130, 11, 19, 10, 13, 24, true};
+    case Model::pandar_xt16:  // header 12 | 8 blocks of azimuth 2 + 16 units of 4 | tail
+      return {12, 2 + 16 * 4, 0, 2, 4, 9, 12 + 8 * 66, 11, 19, 10, 13, 24, true};
+    case Model::pandar_xt32m:  // header 12 | 6 blocks of azimuth 2 + 32 units of 4 | tail
+      return {12, 2 + 32 * 4, 0, 2, 4, 9, 12 + 6 * 130, 11, 19, 10, 13, 24, true};
+    case Model::pandar_qt64:  // header 12 | 4 blocks of azimuth 2 + 64 units of 4 | tail
+      return {12, 2 + 64 * 4, 0, 2, 4, 9, 12 + 4 * 258, 10, 12, 16, 18, 24, false};
+    // Header 12 | 2 blocks of azimuth 2 + 128 units of 4 | body CRC 4 | functional safety 17
+    // | tail 34 | optional signature 32.
+    case Model::pandar_qt128:
+      return {12, 2 + 128 * 4, 0, 2, 4, 9, 12 + 2 * 514 + 4 + 17, 13, 21, 12, 15, 26, false};
+  }
+  return {};
+}
+
+// QT128 sections around the tail: the blocks end at 1040, the body CRC follows, then the
+// functional-safety section; the tail's mode flag names the firing loop of a multi-return packet.
+constexpr std::size_t qt128_blocks_end = 12 + 2 * (2 + 128 * 4);
+constexpr std::size_t qt128_safety = qt128_blocks_end + 4;
+constexpr std::size_t qt128_mode_flag = 5;  // in the tail
+static_assert(layout_of(Model::pandar_qt128).tail == qt128_safety + 17);
+
+// Protocol version (major, minor) in header bytes 2 and 3 of the models whose header has one.
+std::array<std::uint8_t, 2> protocol_version(Model model) noexcept {
+  switch (model) {
+    case Model::pandar_xt32:
+    case Model::pandar_xt16:
+    case Model::pandar_xt32m: return {6, 1};
+    case Model::pandar_qt64: return {3, 1};
+    case Model::pandar_qt128: return {3, 2};
+    case Model::pandar64:
+    case Model::pandar40p: break;
+  }
+  return {0, 0};
+}
+
+// The start-of-packet marker and the header's fixed bytes. The Pandar40P has no header: each of
+// its blocks starts with a marker instead. The Pandar64's header has its laser and block count
+// in bytes 2 and 3; the others have their protocol version there and the counts in 6 and 7.
+PacketError check_header(const std::uint8_t* p, Model model, const ModelInfo& m,
+                         const PacketLayout& layout) noexcept {
+  if (model == Model::pandar40p) {
+    for (unsigned b = 0; b < m.blocks_per_packet; ++b) {
+      const std::uint8_t* block = p + b * layout.block_stride;
+      if (block[0] != 0xFF || block[1] != 0xEE) return PacketError::bad_marker;
+    }
+    return PacketError::none;
+  }
+  if (p[0] != 0xEE || p[1] != 0xFF) return PacketError::bad_marker;
+  if (model == Model::pandar64) {
+    return p[2] == 64 && p[3] == 6 ? PacketError::none : PacketError::bad_header;
+  }
+  const auto version = protocol_version(model);
+  const bool fixed_bytes_match = p[2] == version[0] && p[3] == version[1] &&
+                                 p[6] == m.channels && p[7] == m.blocks_per_packet;
+  return fixed_bytes_match ? PacketError::none : PacketError::bad_header;
+}
+
+// Whether the packet carries its UDP sequence: the XT says so in a header flag, the QT128
+// always does, the others in the long form of their payload.
+bool carries_sequence(const std::uint8_t* p, Model model, bool long_payload) noexcept {
+  switch (model) {
+    case Model::pandar_xt32:
+    case Model::pandar_xt16:
+    case Model::pandar_xt32m: return (p[11] & 0x01) != 0;
+    case Model::pandar_qt128: return true;
+    case Model::pandar64:
+    case Model::pandar40p:
+    case Model::pandar_qt64: return long_payload;
+  }
+  return false;
+}
+
 // QT128 CRCs (stored little-endian after the bytes they cover): body = the blocks, safety =
 // the functional-safety section after its version byte, tail = the tail before its CRC.
-bool qt128_crcs_match(const std::uint8_t* p, std::size_t blocks_end, std::size_t safety,
-                      std::size_t tail) noexcept {
-  return detail::crc32_mpeg2(p + 12, blocks_end - 12) == u32(p + blocks_end) &&
-         detail::crc32_mpeg2(p + safety + 1, 12) == u32(p + safety + 13) &&
+bool qt128_crcs_match(const std::uint8_t* p) noexcept {
+  constexpr std::size_t tail = layout_of(Model::pandar_qt128).tail;
+  return detail::crc32_mpeg2(p + 12, qt128_blocks_end - 12) == u32(p + qt128_blocks_end) &&
+         detail::crc32_mpeg2(p + qt128_safety + 1, 12) == u32(p + qt128_safety + 13) &&
          detail::crc32_mpeg2(p + tail, 30) == u32(p + tail + 30);
+}
+
+// Azimuths: in range, equal inside a return group, and moving forward by a small step from
+// group to group (real sensors step 0.18°–0.6°; 10° leaves room for any rpm). This also
+// guarantees that one packet crosses the cut azimuth at most once.
+bool azimuths_step_forward(const Packet& pk) noexcept {
+  constexpr unsigned max_group_step = 1000;  // 0.01°
+  const unsigned returns = pk.returns();
+  for (unsigned b = 0; b < pk.blocks(); ++b) {
+    const std::uint16_t az = pk.azimuth(b);
+    if (az >= 36000) return false;
+    if (b % returns != 0) {
+      if (az != pk.azimuth(b - b % returns)) return false;
+    } else if (b > 0) {
+      const unsigned step = (az + 36000u - pk.azimuth(b - returns)) % 36000u;
+      if (step == 0 || step > max_group_step) return false;
+    }
+  }
+  return true;
 }
 
 FunctionalSafety read_safety(const std::uint8_t* fs) noexcept {
@@ -198,153 +318,50 @@ PacketError Packet::parse(std::span<const std::uint8_t> payload, Model model,
   const std::size_t n = payload.size();
   if (n != m.payload_size && n != m.long_payload_size) return size_error(payload, model);
   const std::uint8_t* p = payload.data();
+  const PacketLayout layout = layout_of(model);
 
+  if (const PacketError e = check_header(p, model, m, layout); e != PacketError::none) return e;
+  // Checked before any field is believed: a corrupted packet is dropped as such.
+  if (model == Model::pandar_qt128 && !qt128_crcs_match(p)) return PacketError::bad_crc;
+
+  // The payload has the model's length, so every offset of its layout lies inside it.
   Packet pk;
   pk.data_ = p;
   pk.model_ = model;
   pk.blocks_ = static_cast<std::uint8_t>(m.blocks_per_packet);
   pk.channels_ = static_cast<std::uint8_t>(m.channels);
+  pk.first_block_ = layout.first_block;
+  pk.block_stride_ = layout.block_stride;
+  pk.az_offset_ = layout.azimuth;
+  pk.units_offset_ = layout.units;
+  pk.unit_size_ = layout.unit_size;
 
-  std::size_t tail = 0;  // offset of the tail
-  std::uint32_t micros = 0;
-  const std::uint8_t* date = nullptr;
-  bool xt_date = false;
-  std::uint8_t mode_byte = 0;
-  std::uint8_t dis_unit_mm = 4;
-
-  switch (model) {
-    case Model::pandar64: {
-      if (p[0] != 0xEE || p[1] != 0xFF) return PacketError::bad_marker;
-      if (p[2] != 64 || p[3] != 6) return PacketError::bad_header;
-      dis_unit_mm = p[5];
-      pk.first_block_ = 8;
-      pk.block_stride_ = 2 + 64 * 3;
-      pk.az_offset_ = 0;
-      pk.units_offset_ = 2;
-      pk.unit_size_ = 3;
-      tail = 8 + 6 * pk.block_stride_;  // 1172
-      pk.rpm_ = u16(p + tail + 8);
-      micros = u32(p + tail + 10);
-      mode_byte = p[tail + 14];
-      date = p + tail + 16;
-      pk.has_sequence_ = n == m.long_payload_size;
-      if (pk.has_sequence_) pk.sequence_ = u32(p + tail + 22);
-      break;
-    }
-    case Model::pandar40p: {
-      pk.first_block_ = 0;
-      pk.block_stride_ = 4 + 40 * 3;
-      pk.az_offset_ = 2;
-      pk.units_offset_ = 4;
-      pk.unit_size_ = 3;
-      for (unsigned b = 0; b < 10; ++b) {
-        const std::uint8_t* block = p + b * pk.block_stride_;
-        if (block[0] != 0xFF || block[1] != 0xEE) return PacketError::bad_marker;
-      }
-      tail = 10 * pk.block_stride_;  // 1240
-      pk.rpm_ = u16(p + tail + 8);
-      micros = u32(p + tail + 10);
-      mode_byte = p[tail + 14];
-      date = p + tail + 16;
-      pk.has_sequence_ = n == m.long_payload_size;
-      if (pk.has_sequence_) pk.sequence_ = u32(p + tail + 22);
-      break;
-    }
-    case Model::pandar_xt32:
-    case Model::pandar_xt16:
-    case Model::pandar_xt32m: {
-      if (p[0] != 0xEE || p[1] != 0xFF) return PacketError::bad_marker;
-      if (p[2] != 6 || p[3] != 1 || p[6] != m.channels || p[7] != m.blocks_per_packet) {
-        return PacketError::bad_header;
-      }
-      dis_unit_mm = p[9];
-      pk.first_block_ = 12;
-      pk.block_stride_ = static_cast<std::uint16_t>(2 + m.channels * 4);
-      pk.az_offset_ = 0;
-      pk.units_offset_ = 2;
-      pk.unit_size_ = 4;
-      tail = 12 + std::size_t{m.blocks_per_packet} * pk.block_stride_;  // 1052 / 540 / 792
-      mode_byte = p[tail + 10];
-      pk.rpm_ = u16(p + tail + 11);
-      date = p + tail + 13;
-      xt_date = true;
-      micros = u32(p + tail + 19);
-      pk.has_sequence_ = (p[11] & 0x01) != 0;
-      if (pk.has_sequence_) pk.sequence_ = u32(p + tail + 24);
-      break;
-    }
-    case Model::pandar_qt64: {
-      if (p[0] != 0xEE || p[1] != 0xFF) return PacketError::bad_marker;
-      if (p[2] != 3 || p[3] != 1 || p[6] != 64 || p[7] != 4) return PacketError::bad_header;
-      dis_unit_mm = p[9];
-      pk.first_block_ = 12;
-      pk.block_stride_ = 2 + 64 * 4;
-      pk.az_offset_ = 0;
-      pk.units_offset_ = 2;
-      pk.unit_size_ = 4;
-      tail = 12 + 4 * pk.block_stride_;  // 1044
-      pk.rpm_ = u16(p + tail + 10);
-      micros = u32(p + tail + 12);
-      mode_byte = p[tail + 16];
-      date = p + tail + 18;
-      pk.has_sequence_ = n == m.long_payload_size;
-      if (pk.has_sequence_) pk.sequence_ = u32(p + tail + 24);
-      break;
-    }
-    case Model::pandar_qt128: {
-      // Header 12 | 2 blocks of 2 + 128·4 | body CRC 4 | functional safety 17 | tail 34
-      // | optional signature 32.
-      if (p[0] != 0xEE || p[1] != 0xFF) return PacketError::bad_marker;
-      if (p[2] != 3 || p[3] != 2 || p[6] != 128 || p[7] != 2) return PacketError::bad_header;
-      dis_unit_mm = p[9];
-      pk.first_block_ = 12;
-      pk.block_stride_ = 2 + 128 * 4;
-      pk.az_offset_ = 0;
-      pk.units_offset_ = 2;
-      pk.unit_size_ = 4;
-      const std::size_t blocks_end = 12 + 2 * std::size_t{pk.block_stride_};  // 1040
-      const std::size_t safety = blocks_end + 4;                              // 1044
-      tail = safety + 17;                                                     // 1061
-      // Checked before any field is believed: a corrupted packet is dropped as such.
-      if (!qt128_crcs_match(p, blocks_end, safety, tail)) return PacketError::bad_crc;
-      pk.has_safety_ = true;
-      pk.safety_ = read_safety(p + safety);
-      pk.mode_flag_ = p[tail + 5];
-      mode_byte = p[tail + 12];
-      pk.rpm_ = u16(p + tail + 13);
-      date = p + tail + 15;
-      micros = u32(p + tail + 21);
-      pk.has_sequence_ = true;
-      pk.sequence_ = u32(p + tail + 26);
-      break;
-    }
+  const std::uint8_t* tail = p + layout.tail;
+  pk.rpm_ = u16(tail + layout.rpm);
+  pk.has_sequence_ = carries_sequence(p, model, n == m.long_payload_size);
+  if (pk.has_sequence_) pk.sequence_ = u32(tail + layout.sequence);
+  if (model == Model::pandar_qt128) {
+    pk.mode_flag_ = tail[qt128_mode_flag];
+    pk.has_safety_ = true;
+    pk.safety_ = read_safety(p + qt128_safety);
   }
 
-  if (dis_unit_mm == 0) return PacketError::bad_distance_unit;
-  pk.distance_unit_m_ = static_cast<float>(dis_unit_mm) * 0.001f;
+  std::uint8_t distance_unit_mm = 4;  // the Pandar40P's, which does not send it
+  if (layout.distance_unit != 0) distance_unit_mm = p[layout.distance_unit];
+  if (distance_unit_mm == 0) return PacketError::bad_distance_unit;
+  pk.distance_unit_m_ = static_cast<float>(distance_unit_mm) * 0.001f;
 
-  pk.return_mode_ = static_cast<ReturnMode>(mode_byte);
+  pk.return_mode_ = static_cast<ReturnMode>(tail[layout.return_mode]);
   const unsigned returns = returns_of(pk.return_mode_);
   if (returns == 0 || pk.blocks_ % returns != 0) return PacketError::bad_return_mode;
   pk.returns_ = static_cast<std::uint8_t>(returns);
 
-  // Azimuths: in range, equal inside a return group, and moving forward by a small step from
-  // group to group (real sensors step 0.18°–0.6°; 10° leaves room for any rpm). This also
-  // guarantees that one packet crosses the cut azimuth at most once.
-  constexpr unsigned max_group_step = 1000;  // 0.01°
-  for (unsigned b = 0; b < pk.blocks_; ++b) {
-    const std::uint16_t az = pk.azimuth(b);
-    if (az >= 36000) return PacketError::bad_azimuth;
-    if (b % returns != 0) {
-      if (az != pk.azimuth(b - b % returns)) return PacketError::bad_azimuth;
-    } else if (b > 0) {
-      const unsigned step = (az + 36000u - pk.azimuth(b - returns)) % 36000u;
-      if (step == 0 || step > max_group_step) return PacketError::bad_azimuth;
-    }
-  }
+  if (!azimuths_step_forward(pk)) return PacketError::bad_azimuth;
 
-  const bool time_ok = xt_date ? xt_time_ns(date, micros, pk.time_ns_)
-                               : utc_time_ns(date, micros, pk.time_ns_);
+  const std::uint8_t* date = tail + layout.date;
+  const std::uint32_t micros = u32(tail + layout.micros);
+  const bool time_ok = layout.unix_seconds_date ? xt_time_ns(date, micros, pk.time_ns_)
+                                                : utc_time_ns(date, micros, pk.time_ns_);
   if (!time_ok) return PacketError::bad_time;
 
   out = pk;

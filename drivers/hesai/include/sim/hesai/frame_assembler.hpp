@@ -37,6 +37,12 @@
 
 namespace sim::hesai {
 
+namespace detail {
+// FrameAssembler::decode_group's working state for one firing group (frame_assembler.cpp).
+struct GroupTargets;  // which frame each channel's points go to
+struct GroupSinks;    // where those frames' points are written
+}  // namespace detail
+
 // Where a revolution ends.
 enum class CutBy : std::uint8_t {
   // Each point by its own azimuth (block azimuth + channel offset): a frame holds exactly the
@@ -168,8 +174,20 @@ class FrameAssembler {
   void begin(FrameState& frame, const Packet& packet, unsigned block, std::int64_t host_ns,
              bool whole) noexcept;
   void close_current(PushResult& result, bool ended_at_cut) noexcept;
+  // push()'s steps.
+  void count_rejected(PacketError error) noexcept;
+  std::int64_t revolution_of_group(std::uint16_t azimuth, std::uint16_t phase) noexcept;
+  void close_frame_before(const Packet& packet, unsigned block, std::int64_t group_revolution,
+                          std::uint16_t phase, std::int64_t host_ns, PushResult& result) noexcept;
   void decode_group(const Packet& packet, unsigned first_block, std::int64_t group_revolution,
                     std::uint16_t phase, std::int64_t host_ns) noexcept;
+  // decode_group's steps around the point computation (frame_assembler.cpp).
+  detail::GroupTargets frames_of_channels(std::uint16_t phase,
+                                          std::int64_t group_revolution) const noexcept;
+  detail::GroupSinks open_sinks(const detail::GroupTargets& targets, const Packet& packet,
+                                unsigned first_block, std::int64_t host_ns) noexcept;
+  void note_packet(FrameState& frame, const Packet& packet) noexcept;
+  void store_sinks(const detail::GroupSinks& sinks) noexcept;
   void count_loss(const Packet& packet) noexcept;
   void update_azimuth_offsets(std::uint16_t rpm) noexcept;
 
