@@ -8,6 +8,7 @@
 #include <cstring>
 #include <limits>
 #include <numbers>
+#include <type_traits>
 
 namespace sim::ouster {
 namespace {
@@ -371,14 +372,25 @@ void FrameAssembler::load_beam(const PacketColumns& columns, unsigned beam, Beam
   if (offset + ahead_bytes < std::size_t{beams_} * columns.pixel_bytes) {
     for (unsigned k = 0; k < count; ++k) __builtin_prefetch(columns.first_pixel[k] + offset + ahead_bytes);
   }
-  for (unsigned k = 0; k < count; ++k) {
-    const Pixel p = decode_pixel_as<P>(columns.first_pixel[k] + offset);
-    out.range[k] = static_cast<std::int32_t>(p.range_mm);
-    out.intensity[k] = channel<false>(p, field);
-    if constexpr (Dual) {
-      out.range2[k] = static_cast<std::int32_t>(p.range2_mm);
-      out.intensity2[k] = channel<true>(p, field);
+  // One loop per intensity channel, so the choice is not made again for every pixel.
+  auto gather = [&](auto channel_constant) {
+    constexpr IntensityField f = decltype(channel_constant)::value;
+    for (unsigned k = 0; k < count; ++k) {
+      const Pixel p = decode_pixel_as<P>(columns.first_pixel[k] + offset);
+      out.range[k] = static_cast<std::int32_t>(p.range_mm);
+      out.intensity[k] = channel<false>(p, f);
+      if constexpr (Dual) {
+        out.range2[k] = static_cast<std::int32_t>(p.range2_mm);
+        out.intensity2[k] = channel<true>(p, f);
+      }
     }
+  };
+  using F = IntensityField;
+  switch (field) {
+    case F::signal: gather(std::integral_constant<F, F::signal>{}); break;
+    case F::reflectivity: gather(std::integral_constant<F, F::reflectivity>{}); break;
+    case F::near_ir:
+    case F::automatic: gather(std::integral_constant<F, F::near_ir>{}); break;  // automatic is resolved at construction
   }
 }
 
@@ -428,9 +440,11 @@ void FrameAssembler::store_organized(const PacketColumns& columns, unsigned beam
     // Ask for their cache lines now; when that packet comes (127 rows of work later) the stores
     // find them in cache instead of each waiting for its line from memory. A point every 48
     // bytes touches every 64-byte line; the index wraps within the row like the columns do.
-    unsigned next = columns.measurement_id[count - 1] + 1 + shift;
-    for (unsigned j = 0; j < count; j += 2, next += 2) {
-      const std::size_t at = row + (next % w);
+    unsigned next = columns.measurement_id[count - 1] + 1 + shift;  // < 2W
+    next = next >= w ? next - w : next;
+    for (unsigned j = 0; j < count; j += 2) {
+      const unsigned c = next + j;  // no % (a division): next < W and j < W
+      const std::size_t at = row + (c >= w ? c - w : c);
       __builtin_prefetch(&out[at], 1);
       if constexpr (Dual) __builtin_prefetch(&out[at + image], 1);
     }
