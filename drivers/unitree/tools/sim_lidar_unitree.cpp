@@ -22,6 +22,7 @@
 #include "sim/apps/status_line.hpp"
 #include "sim/apps/stop_signal.hpp"
 #include "sim/clock.hpp"
+#include "sim/result.hpp"
 #include "sim/unitree/decoder.hpp"
 #include "sim/unitree/sim_sink.hpp"
 
@@ -149,32 +150,42 @@ class SerialSource {
   std::array<std::byte, 16384> buffer_{};
 };
 
-int run(const Options& opt, const sim::apps::CommandLine& cli) {
-  const sim::unitree::Model model = *sim::unitree::parse_model(opt.model_text);
+// --lidar-ip and --bind-address as addresses.
+struct Addresses {
+  std::optional<asio::ip::address> lidar;  // none: datagrams from anyone
+  asio::ip::address bind;
+};
+
+// The sources the options ask for, checked before anything is opened: an L1 needs a serial port
+// (or a UDP port it sits behind), and the addresses must be addresses. A usage error otherwise.
+sim::Expected<Addresses> check_sources(const Options& opt, sim::unitree::Model model) {
+  const auto usage = [](std::string sentence) {
+    return sim::Error{sim::ErrorCode::invalid_argument, std::move(sentence)};
+  };
   if (model == sim::unitree::Model::l1 && opt.serial_device.empty() && !opt.udp_port_given) {
-    return cli.usage_error(
+    return usage(
         "the L1 speaks over a serial port: give --serial /dev/ttyUSB0, or --udp-port N when it "
         "sits behind a serial-to-UDP board");
   }
-  std::optional<asio::ip::address> lidar;
+  Addresses addresses;
   if (!opt.lidar_ip.empty()) {
     boost::system::error_code ec;
-    lidar = asio::ip::make_address(opt.lidar_ip, ec);
+    addresses.lidar = asio::ip::make_address(opt.lidar_ip, ec);
     if (ec) {
-      return cli.usage_error("--lidar-ip '" + opt.lidar_ip +
-                             "' is not an IP address; give one like 192.168.1.62");
+      return usage("--lidar-ip '" + opt.lidar_ip +
+                   "' is not an IP address; give one like 192.168.1.62");
     }
   }
-  boost::system::error_code addr_ec;
-  const asio::ip::address bind_address = asio::ip::make_address(opt.bind_address, addr_ec);
-  if (addr_ec) {
-    return cli.usage_error("--bind-address '" + opt.bind_address +
-                           "' is not an IP address; give one like 0.0.0.0");
+  boost::system::error_code ec;
+  addresses.bind = asio::ip::make_address(opt.bind_address, ec);
+  if (ec) {
+    return usage("--bind-address '" + opt.bind_address +
+                 "' is not an IP address; give one like 0.0.0.0");
   }
-  // Before any port or stream is opened: a stop request ends the program cleanly from here on.
-  const auto& stop = sim::apps::StopSignal::install();
-  if (auto code = cli.apply_placement(opt.placement)) return *code;
+  return addresses;
+}
 
+sim::unitree::UnitreeStreamOptions stream_options(const Options& opt, sim::unitree::Model model) {
   sim::unitree::DecoderOptions decoder_options;
   decoder_options.model = model;
   decoder_options.packets_per_scan = opt.scan_packets;
@@ -183,58 +194,72 @@ int run(const Options& opt, const sim::apps::CommandLine& cli) {
   decoder_options.range_min_m = opt.range_min;
   decoder_options.range_max_m = opt.range_max;
 
-  sim::unitree::UnitreeStreamOptions stream_options;
-  stream_options.decoder = decoder_options;
-  stream_options.points_stream = opt.stream;
-  stream_options.imu_stream = opt.imu_stream;
-  stream_options.no_imu = opt.no_imu;
-  stream_options.checksum = opt.checksum;
-  stream_options.sensor = opt.sensor_info;
+  sim::unitree::UnitreeStreamOptions options;
+  options.decoder = decoder_options;
+  options.points_stream = opt.stream;
+  options.imu_stream = opt.imu_stream;
+  options.no_imu = opt.no_imu;
+  options.checksum = opt.checksum;
+  options.sensor = opt.sensor_info;
+  return options;
+}
 
-  Pipeline pipeline;
-
-  asio::io_context io;
-  int exit_code = sim::apps::kExitOk;
+// Where the bytes come from: --serial, or else UDP.
+struct Source {
   std::optional<UdpSource> udp;
   std::optional<SerialSource> serial;
-  const unsigned baud =
+  unsigned baud = 0;  // of the serial port
+};
+
+// Opens the source (before the streams exist: a busy port or a missing device leaves no stream
+// behind); one sentence when it cannot.
+sim::Expected<void> open_source(const Options& opt, const Addresses& addresses,
+                                sim::unitree::Model model, asio::io_context& io,
+                                Pipeline& pipeline, Source& source) {
+  source.baud =
       opt.baud != 0 ? opt.baud : (model == sim::unitree::Model::l1 ? 2'000'000U : 4'000'000U);
   if (!opt.serial_device.empty()) {
-    serial.emplace(io, pipeline);
+    source.serial.emplace(io, pipeline);
     try {
-      serial->open(opt.serial_device, baud);
+      source.serial->open(opt.serial_device, source.baud);
     } catch (const boost::system::system_error& e) {
-      return cli.fail("cannot open serial port " + opt.serial_device + " at " +
-                      std::to_string(baud) + " baud (" + e.code().message() +
-                      "); check the device path and that you may use it (group dialout)");
+      return sim::Error{sim::ErrorCode::system_error,
+                        "cannot open serial port " + opt.serial_device + " at " +
+                            std::to_string(source.baud) + " baud (" + e.code().message() +
+                            "); check the device path and that you may use it (group dialout)"};
     }
   } else {
-    udp.emplace(io, pipeline, lidar);
+    source.udp.emplace(io, pipeline, addresses.lidar);
     try {
-      udp->open(asio::ip::udp::endpoint(bind_address, opt.udp_port));
+      source.udp->open(asio::ip::udp::endpoint(addresses.bind, opt.udp_port));
     } catch (const boost::system::system_error& e) {
-      return cli.fail("cannot listen on UDP " + opt.bind_address + ":" +
-                      std::to_string(opt.udp_port) + " (" + e.code().message() +
-                      "); pick a free port with --udp-port or stop the other listener");
+      return sim::Error{sim::ErrorCode::system_error,
+                        "cannot listen on UDP " + opt.bind_address + ":" +
+                            std::to_string(opt.udp_port) + " (" + e.code().message() +
+                            "); pick a free port with --udp-port or stop the other listener"};
     }
   }
+  return {};
+}
 
-  auto stream = sim::unitree::UnitreeStream::create(stream_options);
-  if (!stream) return cli.fail(stream.error());
-
-  std::ofstream record;
-  if (!opt.record_path.empty()) {
-    record.open(opt.record_path, std::ios::binary | std::ios::trunc);
-    if (!record) {
-      return cli.fail("cannot write the recording '" + opt.record_path +
-                      "'; check the folder exists and is writable");
-    }
+// --record FILE, opened (truncated) when given.
+sim::Expected<void> open_recording(const std::string& path, std::ofstream& record) {
+  if (path.empty()) return {};
+  record.open(path, std::ios::binary | std::ios::trunc);
+  if (!record) {
+    return sim::Error{sim::ErrorCode::system_error,
+                      "cannot write the recording '" + path +
+                          "'; check the folder exists and is writable"};
   }
-  pipeline.attach(**stream, record.is_open() ? &record : nullptr);
+  return {};
+}
 
-  if (serial) {
-    std::cout << "reading " << opt.serial_device << " at " << baud << " baud" << std::endl;
-    serial->start([&](const boost::system::error_code& ec) {
+// Starts reading the source. A serial port that fails ends the run with exit code 1.
+void start_reading(const Options& opt, const sim::apps::CommandLine& cli, asio::io_context& io,
+                   Source& source, int& exit_code) {
+  if (source.serial) {
+    std::cout << "reading " << opt.serial_device << " at " << source.baud << " baud" << std::endl;
+    source.serial->start([&](const boost::system::error_code& ec) {
       cli.fail("serial port " + opt.serial_device + " failed (" + ec.message() +
                "); check the cable and restart");
       exit_code = sim::apps::kExitFailure;
@@ -242,25 +267,22 @@ int run(const Options& opt, const sim::apps::CommandLine& cli) {
     });
   } else {
     // Printed on stdout so scripts (and tests binding port 0) learn the port.
-    std::cout << "listening on udp port " << udp->port() << std::endl;
-    udp->start();
+    std::cout << "listening on udp port " << source.udp->port() << std::endl;
+    source.udp->start();
   }
+}
 
+// Runs the sources until a stop (or a failed serial port stops `io`), redrawing the status line
+// and flushing the recording once a second.
+void run_until_stopped(asio::io_context& io, const sim::apps::StopSignal& stop,
+                       sim::apps::StatusLine& status, const std::function<std::string()>& status_text,
+                       std::ofstream& record) {
   // The stop signal's descriptor ends io.run() like any other event.
   asio::posix::stream_descriptor stop_events(io, ::dup(stop.fd()));
   stop_events.async_wait(asio::posix::stream_descriptor::wait_read,
                          [&](const boost::system::error_code& ec) {
                            if (!ec) io.stop();
                          });
-
-  auto status = sim::apps::StatusLine::for_stderr("sim_lidar_unitree", opt.quiet);
-  auto status_text = [&] {
-    std::string line = (*stream)->status();
-    if (udp && udp->ignored_datagrams() > 0) {
-      line += "  other_senders " + std::to_string(udp->ignored_datagrams());
-    }
-    return line;
-  };
   asio::steady_timer status_timer(io);
   std::function<void()> tick = [&] {
     status_timer.expires_after(std::chrono::seconds(1));
@@ -272,8 +294,42 @@ int run(const Options& opt, const sim::apps::CommandLine& cli) {
     });
   };
   tick();
-
   if (!stop.requested()) io.run();
+}
+
+int run(const Options& opt, const sim::apps::CommandLine& cli) {
+  const sim::unitree::Model model = *sim::unitree::parse_model(opt.model_text);
+  auto addresses = check_sources(opt, model);
+  if (!addresses) return cli.fail(addresses.error());
+  // Before any port or stream is opened: a stop request ends the program cleanly from here on.
+  const auto& stop = sim::apps::StopSignal::install();
+  if (auto code = cli.apply_placement(opt.placement)) return *code;
+
+  Pipeline pipeline;
+  asio::io_context io;
+  Source source;
+  if (auto opened = open_source(opt, *addresses, model, io, pipeline, source); !opened) {
+    return cli.fail(opened.error());
+  }
+  auto stream = sim::unitree::UnitreeStream::create(stream_options(opt, model));
+  if (!stream) return cli.fail(stream.error());
+  std::ofstream record;
+  if (auto opened = open_recording(opt.record_path, record); !opened) {
+    return cli.fail(opened.error());
+  }
+  pipeline.attach(**stream, record.is_open() ? &record : nullptr);
+
+  int exit_code = sim::apps::kExitOk;
+  start_reading(opt, cli, io, source, exit_code);
+  auto status = sim::apps::StatusLine::for_stderr("sim_lidar_unitree", opt.quiet);
+  const std::function<std::string()> status_text = [&] {
+    std::string line = (*stream)->status();
+    if (source.udp && source.udp->ignored_datagrams() > 0) {
+      line += "  other_senders " + std::to_string(source.udp->ignored_datagrams());
+    }
+    return line;
+  };
+  run_until_stopped(io, stop, status, status_text, record);
   (*stream)->finish();
   if (record.is_open()) record.flush();
   status.finish(status_text());
