@@ -202,8 +202,27 @@ struct AravisCapture::Impl {
     return std::optional<SensorInfo>(std::move(info));
   }
 
+  // Connects to the camera, configures it, makes (or keeps) the stream and starts acquisition;
+  // on the first connect also creates the writer. Every failure disconnects.
   std::optional<Error> connect() {
     const bool first = !writer.has_value();
+    if (auto e = open_camera()) return e;
+    if (auto e = configure()) return e;
+    ArvDevice* device = arv_camera_get_device(camera);
+    if (auto e = apply_features(device)) return e;
+    device_time = uses_device_time(device);
+    if (auto e = create_decoder()) return e;
+    if (auto e = prepare_writer(device, first)) return e;
+    return start_acquisition(device);
+  }
+
+  // The failure "the camera refused <what>: <why>" when `error` is set (and clears it).
+  std::optional<Error> refused(GError*& error, const std::string& what) {
+    if (error == nullptr) return std::nullopt;
+    return fail("the camera refused " + what + ": " + take_message(error, "unknown error"));
+  }
+
+  std::optional<Error> open_camera() {
     GError* error = nullptr;
     camera = arv_camera_new(config.device_id.empty() ? nullptr : config.device_id.c_str(), &error);
     if (camera == nullptr) {
@@ -216,73 +235,87 @@ struct AravisCapture::Impl {
     const char* model = arv_camera_get_model_name(camera, nullptr);
     const char* vendor = arv_camera_get_vendor_name(camera, nullptr);
     name = std::string(vendor != nullptr ? vendor : "?") + " " + (model != nullptr ? model : "?");
+    return std::nullopt;
+  }
 
-    auto step = [&](const std::string& what) -> std::optional<Error> {
-      if (error == nullptr) return std::nullopt;
-      return fail("the camera refused " + what + ": " + take_message(error, "unknown error"));
-    };
+  // The pixel format, region, frame rate, exposure and gain the options ask for.
+  std::optional<Error> configure() {
+    GError* error = nullptr;
     if (!config.pixel_format.empty()) {
       if (pixel_format_of_genicam(config.pixel_format) == PixelFormat::unknown) {
         return fail("pixel format " + config.pixel_format +
                     " cannot be decoded: use Mono8, Mono16, RGB8, BGR8, Bayer??8 or YUV422_8");
       }
       arv_camera_set_pixel_format_from_string(camera, config.pixel_format.c_str(), &error);
-      if (auto e = step("pixel format " + config.pixel_format)) return e;
+      if (auto e = refused(error, "pixel format " + config.pixel_format)) return e;
     }
     if (config.width > 0 && config.height > 0) {
       arv_camera_set_region(camera, config.offset_x, config.offset_y, config.width, config.height,
                             &error);
-      if (auto e = step("the region of interest")) return e;
+      if (auto e = refused(error, "the region of interest")) return e;
     }
     if (config.fps > 0) {
       arv_camera_set_frame_rate(camera, config.fps, &error);
-      if (auto e = step("the frame rate")) return e;
+      if (auto e = refused(error, "the frame rate")) return e;
     }
     if (config.exposure_us > 0) {
       arv_camera_set_exposure_time(camera, config.exposure_us, &error);
-      if (auto e = step("the exposure time")) return e;
+      if (auto e = refused(error, "the exposure time")) return e;
     }
     if (config.gain >= 0) {
       arv_camera_set_gain(camera, config.gain, &error);
-      if (auto e = step("the gain")) return e;
+      if (auto e = refused(error, "the gain")) return e;
     }
-    ArvDevice* device = arv_camera_get_device(camera);
+    return std::nullopt;
+  }
+
+  // The GenICam features given by name, and GigE Vision's packet size and socket.
+  std::optional<Error> apply_features(ArvDevice* device) {
+    GError* error = nullptr;
     for (const auto& [feature, value] : config.features) {
       ArvGcNode* node = arv_device_get_feature(device, feature.c_str());
       if (node == nullptr || !ARV_IS_GC_FEATURE_NODE(node)) {
         return fail("the camera has no GenICam feature '" + feature + "'");
       }
       arv_gc_feature_node_set_value_from_string(ARV_GC_FEATURE_NODE(node), value.c_str(), &error);
-      if (auto e = step(feature + "=" + value)) return e;
+      if (auto e = refused(error, feature + "=" + value)) return e;
     }
     if (arv_camera_is_gv_device(camera)) {
       if (config.packet_size > 0) {
         arv_camera_gv_set_packet_size(camera, config.packet_size, &error);
-        if (auto e = step("packet size " + std::to_string(config.packet_size))) return e;
+        if (auto e = refused(error, "packet size " + std::to_string(config.packet_size))) return e;
       }
       if (!config.packet_socket) {
         arv_camera_gv_set_stream_options(camera, ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED);
       }
     }
+    return std::nullopt;
+  }
 
-    // A camera synchronised by PTP has a clock worth using; otherwise the host receive time is
-    // the better stamp (free-running camera clocks start at power-up).
-    device_time = config.device_timestamps;
+  // A camera synchronised by PTP has a clock worth using; otherwise the host receive time is the
+  // better stamp (free-running camera clocks start at power-up).
+  bool uses_device_time(ArvDevice* device) const {
+    bool use = config.device_timestamps;
     for (const char* ptp : {"PtpEnable", "GevIEEE1588"}) {
-      if (device_time || arv_device_get_feature(device, ptp) == nullptr) continue;
+      if (use || arv_device_get_feature(device, ptp) == nullptr) continue;
       GError* ignored = nullptr;
-      device_time = arv_device_get_boolean_feature_value(device, ptp, &ignored) != FALSE;
+      use = arv_device_get_boolean_feature_value(device, ptp, &ignored) != FALSE;
       g_clear_error(&ignored);
     }
+    return use;
+  }
 
+  // The decoder for the region and pixel format the camera now sends.
+  std::optional<Error> create_decoder() {
+    GError* error = nullptr;
     gint x = 0;
     gint y = 0;
     gint width = 0;
     gint height = 0;
     arv_camera_get_region(camera, &x, &y, &width, &height, &error);
-    if (auto e = step("reading its region")) return e;
+    if (auto e = refused(error, "reading its region")) return e;
     const ArvPixelFormat arv_format = arv_camera_get_pixel_format(camera, &error);
-    if (auto e = step("reading its pixel format")) return e;
+    if (auto e = refused(error, "reading its pixel format")) return e;
     const PixelFormat format = pixel_format_of_arv(arv_format);
     if (format == PixelFormat::unknown) {
       return fail("the camera's pixel format cannot be decoded: choose one with --pixel-format");
@@ -292,7 +325,12 @@ struct AravisCapture::Impl {
     auto created = imaging::FrameDecoder::create(input, config.output);
     if (!created) return fail(created.error().message);
     decoder.emplace(std::move(created.value()));
+    return std::nullopt;
+  }
 
+  // The writer of the decoder's frames: made on the first connect, made again when a reconnected
+  // camera sends another layout, else kept, with the description updated when it changed.
+  std::optional<Error> prepare_writer(ArvDevice* device, bool first) {
     auto described = describe(device, first);
     if (!described) {
       disconnect();
@@ -319,9 +357,14 @@ struct AravisCapture::Impl {
       if (auto set = writer->set_sensor_info(**described); !set) log("warning: " + set.error().message);
     }
     sensor = *described;
+    return std::nullopt;
+  }
 
+  // Opens the camera's stream with its buffers, hooks the signals and starts acquisition.
+  std::optional<Error> start_acquisition(ArvDevice* device) {
+    GError* error = nullptr;
     const guint payload = arv_camera_get_payload(camera, &error);
-    if (auto e = step("reading its payload size")) return e;
+    if (auto e = refused(error, "reading its payload size")) return e;
     stream = arv_camera_create_stream(camera, nullptr, nullptr, &error);
     if (stream == nullptr) {
       return fail("cannot open the camera's stream: " + take_message(error, "unknown error"));
@@ -336,9 +379,9 @@ struct AravisCapture::Impl {
     g_signal_connect(stream, "new-buffer", G_CALLBACK(&Impl::on_new_buffer), this);
     arv_stream_set_emit_signals(stream, TRUE);
     arv_camera_set_acquisition_mode(camera, ARV_ACQUISITION_MODE_CONTINUOUS, &error);
-    if (auto e = step("continuous acquisition")) return e;
+    if (auto e = refused(error, "continuous acquisition")) return e;
     arv_camera_start_acquisition(camera, &error);
-    if (auto e = step("starting acquisition")) return e;
+    if (auto e = refused(error, "starting acquisition")) return e;
     return std::nullopt;
   }
 
