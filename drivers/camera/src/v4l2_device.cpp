@@ -335,6 +335,91 @@ std::optional<Error> V4l2Device::set_control(std::string_view key, std::string_v
   return std::nullopt;
 }
 
+namespace {
+
+const FormatInfo* find_format(const std::vector<FormatInfo>& offered, FourCc fourcc) {
+  const auto it = std::find_if(offered.begin(), offered.end(),
+                               [&](const FormatInfo& f) { return f.fourcc == fourcc; });
+  return it == offered.end() ? nullptr : &*it;
+}
+
+// --format FOURCC: offered by the device and decodable.
+Expected<FourCc> requested_format(const std::vector<FormatInfo>& offered, FourCc fourcc,
+                                  const std::string& path) {
+  if (find_format(offered, fourcc) == nullptr) {
+    return Error{ErrorCode::invalid_argument,
+                 path + " does not offer format " + fourcc.str() +
+                     ": see --list-formats, or use --format auto"};
+  }
+  if (pixel_format_of(fourcc) == PixelFormat::unknown) {
+    return Error{ErrorCode::invalid_argument,
+                 "format " + fourcc.str() + " cannot be decoded: use --format auto"};
+  }
+  return fourcc;
+}
+
+// Whether the device offers `fourcc`, at width × height when `need_size`, and at the request's
+// rate or faster when `need_rate` (a size without listed rates offers any).
+bool offers(const std::vector<FormatInfo>& offered, FourCc fourcc, std::uint32_t width,
+            std::uint32_t height, double fps, bool need_size, bool need_rate) {
+  const FormatInfo* format = find_format(offered, fourcc);
+  if (format == nullptr) return false;
+  if (!need_size) return true;
+  for (const auto& size : format->sizes) {
+    if (size.width != width || size.height != height) continue;
+    if (!need_rate || size.fps.empty()) return true;
+    for (const double offered_fps : size.fps) {
+      if (offered_fps + 0.01 >= fps) return true;
+    }
+  }
+  return false;
+}
+
+// --format auto: uncompressed first (cheapest to decode), MJPEG when it is the only way to reach
+// the requested size and rate (USB 2 cameras give YUYV at full size only at low rates).
+Expected<FourCc> preferred_format(const std::vector<FormatInfo>& offered,
+                                  const FormatRequest& request, std::uint32_t width,
+                                  std::uint32_t height, const std::string& path) {
+  std::vector<FourCc> preference = {kYuyv, kUyvy, kMjpg, kJpeg, kGrey, kY16, kBgr3, kRgb3,
+                                    kRggb, kBa81, kGbrg, kGrbg};
+  if (request.output == imaging::OutputFormat::mono8) {
+    preference.insert(preference.begin(), {kGrey, kY16});
+  }
+  for (const auto& [need_size, need_rate] :
+       {std::pair{true, request.fps > 0}, std::pair{true, false}, std::pair{false, false}}) {
+    for (const FourCc candidate : preference) {
+      if (offers(offered, candidate, width, height, request.fps, need_size, need_rate)) {
+        return candidate;
+      }
+    }
+  }
+  return Error{ErrorCode::invalid_argument,
+               path + " offers no format SIM can decode: see --list-formats"};
+}
+
+// What is wrong with the format the device settled on, if anything: another pixel format than
+// asked for, or sizes no frame can have.
+std::optional<Error> settled_format_problem(const v4l2_pix_format& pix, FourCc chosen,
+                                            const std::string& path) {
+  if (pix.pixelformat != chosen.code) {
+    return Error{ErrorCode::invalid_argument,
+                 path + " switched the format to " + FourCc{pix.pixelformat}.str() +
+                     " instead of " + chosen.str() + ": choose another --format"};
+  }
+  const PixelFormat pixel = pixel_format_of(chosen);
+  const std::uint64_t row = imaging::row_bytes(pix.width, pixel);
+  if (pix.width == 0 || pix.height == 0 || (!imaging::is_compressed(pixel) && pix.bytesperline < row) ||
+      (!imaging::is_compressed(pixel) && pix.sizeimage < std::uint64_t{pix.bytesperline} * pix.height)) {
+    return Error{ErrorCode::invalid_argument,
+                 path + " reported an impossible format (" + std::to_string(pix.width) + "x" +
+                     std::to_string(pix.height) + ", " + std::to_string(pix.bytesperline) +
+                     " bytes per line): the camera driver is broken"};
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
 Expected<StreamFormat> V4l2Device::negotiate(const FormatRequest& request) {
   v4l2_format current{};
   current.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
@@ -345,58 +430,10 @@ Expected<StreamFormat> V4l2Device::negotiate(const FormatRequest& request) {
   const std::uint32_t width = request.width != 0 ? request.width : current.fmt.pix.width;
   const std::uint32_t height = request.height != 0 ? request.height : current.fmt.pix.height;
   const auto offered = formats();
-
-  FourCc chosen{};
-  if (request.fourcc) {
-    const auto it = std::find_if(offered.begin(), offered.end(),
-                                 [&](const FormatInfo& f) { return f.fourcc == *request.fourcc; });
-    if (it == offered.end()) {
-      return Error{ErrorCode::invalid_argument,
-                   path_ + " does not offer format " + request.fourcc->str() +
-                       ": see --list-formats, or use --format auto"};
-    }
-    if (pixel_format_of(*request.fourcc) == PixelFormat::unknown) {
-      return Error{ErrorCode::invalid_argument,
-                   "format " + request.fourcc->str() + " cannot be decoded: use --format auto"};
-    }
-    chosen = *request.fourcc;
-  } else {
-    // Uncompressed first (cheapest to decode), MJPEG when it is the only way to reach the
-    // requested size and rate (USB 2 cameras give YUYV at full size only at low rates).
-    std::vector<FourCc> preference = {kYuyv, kUyvy, kMjpg, kJpeg, kGrey, kY16, kBgr3, kRgb3,
-                                      kRggb, kBa81, kGbrg, kGrbg};
-    if (request.output == imaging::OutputFormat::mono8) {
-      preference.insert(preference.begin(), {kGrey, kY16});
-    }
-    auto offers = [&](FourCc fourcc, bool need_size, bool need_rate) {
-      const auto it = std::find_if(offered.begin(), offered.end(),
-                                   [&](const FormatInfo& f) { return f.fourcc == fourcc; });
-      if (it == offered.end()) return false;
-      if (!need_size) return true;
-      for (const auto& size : it->sizes) {
-        if (size.width != width || size.height != height) continue;
-        if (!need_rate || size.fps.empty()) return true;
-        for (const double fps : size.fps) {
-          if (fps + 0.01 >= request.fps) return true;
-        }
-      }
-      return false;
-    };
-    for (const auto& [need_size, need_rate] :
-         {std::pair{true, request.fps > 0}, std::pair{true, false}, std::pair{false, false}}) {
-      for (const FourCc candidate : preference) {
-        if (offers(candidate, need_size, need_rate)) {
-          chosen = candidate;
-          break;
-        }
-      }
-      if (chosen.code != 0) break;
-    }
-    if (chosen.code == 0) {
-      return Error{ErrorCode::invalid_argument,
-                   path_ + " offers no format SIM can decode: see --list-formats"};
-    }
-  }
+  auto choice = request.fourcc ? requested_format(offered, *request.fourcc, path_)
+                               : preferred_format(offered, request, width, height, path_);
+  if (!choice) return choice.error();
+  const FourCc chosen = *choice;
 
   v4l2_format format{};
   format.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
@@ -410,23 +447,11 @@ Expected<StreamFormat> V4l2Device::negotiate(const FormatRequest& request) {
                                               std::to_string(height) + ": " + errno_text(errno)};
   }
   const auto& pix = format.fmt.pix;
-  if (pix.pixelformat != chosen.code) {
-    return Error{ErrorCode::invalid_argument,
-                 path_ + " switched the format to " + FourCc{pix.pixelformat}.str() +
-                     " instead of " + chosen.str() + ": choose another --format"};
-  }
-  const PixelFormat pixel = pixel_format_of(chosen);
-  const std::uint64_t row = imaging::row_bytes(pix.width, pixel);
-  if (pix.width == 0 || pix.height == 0 || (!imaging::is_compressed(pixel) && pix.bytesperline < row) ||
-      (!imaging::is_compressed(pixel) && pix.sizeimage < std::uint64_t{pix.bytesperline} * pix.height)) {
-    return Error{ErrorCode::invalid_argument,
-                 path_ + " reported an impossible format (" + std::to_string(pix.width) + "x" +
-                     std::to_string(pix.height) + ", " + std::to_string(pix.bytesperline) +
-                     " bytes per line): the camera driver is broken"};
-  }
+  if (auto problem = settled_format_problem(pix, chosen, path_)) return *problem;
   StreamFormat result;
   result.fourcc = chosen;
-  result.layout = imaging::make_layout(pix.width, pix.height, pixel, pix.bytesperline);
+  result.layout =
+      imaging::make_layout(pix.width, pix.height, pixel_format_of(chosen), pix.bytesperline);
   result.size_image = pix.sizeimage;
 
   v4l2_streamparm parm{};
