@@ -193,33 +193,41 @@ TEST(VelodyneSynthetic, Hdl64eFromItsDbXmlUsesOffsetsTwoPointCorrectionAndUpperL
   EXPECT_EQ(i, frame.size());
 }
 
+// HDL-64E S3 dual return test data: 0.4° per firing (900 firings per revolution), three firings
+// of 48 µs per packet. The last return everywhere; a nearer strongest return on odd lasers only
+// (even lasers had one return, which the sensor repeats in both blocks).
+constexpr unsigned hdl64e_dual_step = 40;
+constexpr unsigned hdl64e_dual_period_us = 144;
+std::uint16_t hdl64e_last_raw(unsigned firing, unsigned laser) { return raw_distance(firing, laser); }
+std::uint16_t hdl64e_strongest_raw(unsigned firing, unsigned laser) {
+  const std::uint16_t last = hdl64e_last_raw(firing, laser);
+  return laser % 2 == 1 ? static_cast<std::uint16_t>(last / 2) : last;
+}
+std::vector<std::vector<std::uint8_t>> hdl64e_dual_capture(unsigned packets) {
+  std::vector<std::vector<std::uint8_t>> data;
+  for (unsigned k = 0; k < packets; ++k) {
+    std::array<std::uint16_t, 3> azimuths{};
+    for (unsigned f = 0; f < 3; ++f) azimuths[f] = static_cast<std::uint16_t>(((k * 3 + f) * hdl64e_dual_step) % 36000);
+    const auto unit = [&](unsigned f, unsigned laser, bool last) {
+      const unsigned firing = k * 3 + f;
+      return velodyne_test::Unit{last ? hdl64e_last_raw(firing, laser) : hdl64e_strongest_raw(firing, laser),
+                                 static_cast<std::uint8_t>(last ? 10 : 200)};
+    };
+    data.push_back(velodyne_test::hdl64e_dual_packet(2'000'000 + k * hdl64e_dual_period_us, azimuths, unit).bytes());
+  }
+  return data;
+}
+
 // HDL-64E S3 dual return: its packets name no return mode; the block layout (four blocks of one
 // firing's azimuth) says it. Every point is checked against the model, in the decoder's order.
 TEST(VelodyneSynthetic, Hdl64eS3DualReturnPacketsGiveBothReturnsOfEachFiring) {
   const Calibration cal = load(std::string(VELODYNE_TEST_DATA) + "/hdl64e_synthetic.db.xml");
-  constexpr unsigned step = 40;        // 0.4° per firing: 900 firings per revolution
-  constexpr unsigned packets = 700;    // 2,100 firings, 2.3 revolutions
-  constexpr unsigned period_us = 144;  // three firings of 48 µs
-  // The last return everywhere; a nearer strongest return on odd lasers only (even lasers had
-  // one return, which the sensor repeats in both blocks).
-  const auto last_raw = [](unsigned firing, unsigned laser) { return raw_distance(firing, laser); };
-  const auto strongest_raw = [&](unsigned firing, unsigned laser) {
-    const std::uint16_t last = last_raw(firing, laser);
-    return laser % 2 == 1 ? static_cast<std::uint16_t>(last / 2) : last;
-  };
-  std::vector<std::vector<std::uint8_t>> data;
-  for (unsigned k = 0; k < packets; ++k) {
-    std::array<std::uint16_t, 3> azimuths{};
-    for (unsigned f = 0; f < 3; ++f) azimuths[f] = static_cast<std::uint16_t>(((k * 3 + f) * step) % 36000);
-    data.push_back(velodyne_test::hdl64e_dual_packet(
-                       2'000'000 + k * period_us, azimuths,
-                       [&](unsigned f, unsigned laser, bool last) {
-                         const unsigned firing = k * 3 + f;
-                         return velodyne_test::Unit{last ? last_raw(firing, laser) : strongest_raw(firing, laser),
-                                                    static_cast<std::uint8_t>(last ? 10 : 200)};
-                       })
-                       .bytes());
-  }
+  constexpr unsigned packets = 700;  // 2,100 firings, 2.3 revolutions
+  constexpr unsigned step = hdl64e_dual_step;
+  constexpr unsigned period_us = hdl64e_dual_period_us;
+  const auto last_raw = hdl64e_last_raw;
+  const auto strongest_raw = hdl64e_strongest_raw;
+  const auto data = hdl64e_dual_capture(packets);
   ASSERT_EQ(detect_model(data[0]), Model::hdl64e);
   Packet parsed;
   ASSERT_EQ(Packet::parse(data[0], Model::hdl64e, parsed), PacketError::none);
