@@ -1,0 +1,290 @@
+// SPDX-License-Identifier: Apache-2.0
+// sim::lidar_common, what the Hesai, Velodyne and Ouster live ends share: the UDP receiver
+// (sender filter, oversized datagrams, ports in use, addresses, silences), the TCP exchange
+// with its deadline, the fetched-file cache and the frame publisher.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "sim/lidar/frame_publisher.hpp"
+#include "sim/lidar/tcp_client.hpp"
+#include "sim/lidar/udp_receiver.hpp"
+#include "sim/reader.hpp"
+#include "sim_test/network.hpp"
+#include "sim_test/streams.hpp"
+
+namespace {
+
+using sim::lidar::IpVersions;
+using sim::lidar::UdpListen;
+using sim::lidar::UdpPort;
+using sim::lidar::UdpReceiver;
+
+std::optional<std::string> g_skip_reason;
+
+// A UDP socket bound to `address` (any 127.x.y.z is the loopback) that sends to 127.0.0.1:port.
+class Sender {
+ public:
+  explicit Sender(const char* address) : fd_(::socket(AF_INET, SOCK_DGRAM, 0)) {
+    sockaddr_in local{};
+    local.sin_family = AF_INET;
+    ::inet_pton(AF_INET, address, &local.sin_addr);
+    EXPECT_EQ(::bind(fd_, reinterpret_cast<const sockaddr*>(&local), sizeof local), 0) << address;
+  }
+  ~Sender() { ::close(fd_); }
+  void send(std::uint16_t port, std::size_t size, std::uint8_t fill) const {
+    const std::vector<std::uint8_t> payload(size, fill);
+    sockaddr_in to{};
+    to.sin_family = AF_INET;
+    to.sin_port = htons(port);
+    ::inet_pton(AF_INET, "127.0.0.1", &to.sin_addr);
+    EXPECT_EQ(::sendto(fd_, payload.data(), payload.size(), 0, reinterpret_cast<const sockaddr*>(&to), sizeof to),
+              static_cast<ssize_t>(size));
+  }
+
+ private:
+  int fd_;
+};
+
+// Keeps what the receiver hands over; ends the run after `wanted` datagrams.
+struct Collector final : sim::lidar::DatagramHandler {
+  explicit Collector(std::size_t w) : wanted(w) {}
+  bool on_datagram(const sim::lidar::Datagram& d) override {
+    payloads.emplace_back(d.payload.begin(), d.payload.end());
+    truncated.push_back(d.truncated);
+    senders.push_back(sim::lidar::address_text(*d.sender));
+    return payloads.size() < wanted;
+  }
+  std::size_t wanted;
+  std::vector<std::vector<std::uint8_t>> payloads;
+  std::vector<bool> truncated;
+  std::vector<std::string> senders;
+};
+
+UdpListen loopback() {
+  UdpListen listen;
+  listen.bind = "127.0.0.1";
+  listen.receive_buffer = 1 << 20;
+  return listen;
+}
+
+TEST(UdpReceiver, DatagramsFromAnotherSenderAreCountedAndNotHandled) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  UdpListen listen = loopback();
+  listen.source = "127.0.0.2";
+  const std::array ports{UdpPort{0, "UDP", "--port"}};
+  auto receiver = UdpReceiver::open(listen, ports, 2048);
+  ASSERT_TRUE(receiver) << receiver.error().message;
+  Sender other("127.0.0.3");
+  Sender sensor("127.0.0.2");
+  other.send(receiver->port(), 100, 0xAA);
+  sensor.send(receiver->port(), 120, 0x55);  // queued before run(): one take sees both
+
+  Collector collector(1);
+  receiver->run(-1, collector);
+  ASSERT_EQ(collector.payloads.size(), 1u);
+  EXPECT_EQ(collector.payloads[0], std::vector<std::uint8_t>(120, 0x55));
+  EXPECT_EQ(collector.senders[0], "127.0.0.2");
+  EXPECT_EQ(receiver->counters().datagrams, 2u);
+  EXPECT_EQ(receiver->counters().other_source, 1u);
+}
+
+TEST(UdpReceiver, ADatagramLargerThanTheBufferArrivesMarkedTruncated) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  const std::array ports{UdpPort{0, "UDP", "--port"}};
+  auto receiver = UdpReceiver::open(loopback(), ports, 64);
+  ASSERT_TRUE(receiver) << receiver.error().message;
+  Sender sender("127.0.0.1");
+  sender.send(receiver->port(), 100, 1);
+  sender.send(receiver->port(), 64, 2);
+
+  Collector collector(2);
+  receiver->run(-1, collector);
+  ASSERT_EQ(collector.payloads.size(), 2u);
+  EXPECT_TRUE(collector.truncated[0]);
+  EXPECT_EQ(collector.payloads[0].size(), 64u);
+  EXPECT_FALSE(collector.truncated[1]);
+  EXPECT_EQ(collector.payloads[1], std::vector<std::uint8_t>(64, 2));
+}
+
+TEST(UdpReceiver, EachSocketsDatagramsCarryItsIndex) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  const std::array ports{UdpPort{0, "the lidar", "--lidar-port"}, UdpPort{0, "the IMU", "--imu-port"}};
+  auto receiver = UdpReceiver::open(loopback(), ports, 2048);
+  ASSERT_TRUE(receiver) << receiver.error().message;
+  ASSERT_NE(receiver->port(0), receiver->port(1));
+  EXPECT_EQ(receiver->port(2), 0) << "no third socket";
+  Sender sender("127.0.0.1");
+  sender.send(receiver->port(1), 48, 7);
+
+  struct Index final : sim::lidar::DatagramHandler {
+    bool on_datagram(const sim::lidar::Datagram& d) override {
+      socket = d.socket;
+      return false;
+    }
+    std::size_t socket = 99;
+  } index;
+  receiver->run(-1, index);
+  EXPECT_EQ(index.socket, 1u);
+}
+
+TEST(UdpReceiver, APortInUseIsOneSentenceNamingTheOptionThatChoosesIt) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  const std::array first_ports{UdpPort{0, "UDP", "--port"}};
+  auto first = UdpReceiver::open(loopback(), first_ports, 2048);
+  ASSERT_TRUE(first) << first.error().message;
+  const std::array ports{UdpPort{first->port(), "the IMU", "--imu-port"}};
+  auto second = UdpReceiver::open(loopback(), ports, 2048);
+  ASSERT_FALSE(second);
+  EXPECT_EQ(second.error().code, sim::ErrorCode::system_error);
+  EXPECT_EQ(second.error().message, "the IMU port " + std::to_string(first->port()) +
+                                        " on 127.0.0.1 is already in use by another process (another "
+                                        "driver?); stop it or choose another --imu-port.");
+}
+
+TEST(UdpReceiver, AnAddressThatIsNotOneIsRefusedBeforeAnySocketIsOpened) {
+  UdpListen listen = loopback();
+  listen.source = "192.168.1";
+  const std::array ports{UdpPort{0, "UDP", "--port"}};
+  auto refused = UdpReceiver::open(listen, ports, 2048);
+  ASSERT_FALSE(refused);
+  EXPECT_EQ(refused.error().code, sim::ErrorCode::invalid_argument);
+  EXPECT_EQ(refused.error().message,
+            "the source address '192.168.1' is not an IPv4 address (e.g. 192.168.1.201); give the "
+            "sensor's address.");
+  EXPECT_EQ(sim::lidar::address_problem("::1", IpVersions::v4), "'::1' is not an IPv4 address (e.g. 192.168.1.201)");
+  EXPECT_EQ(sim::lidar::address_problem("::1", IpVersions::v4_and_v6), "");
+  EXPECT_EQ(sim::lidar::multicast_group_problem("239.255.0.1", IpVersions::v4), "");
+  EXPECT_NE(sim::lidar::multicast_group_problem("192.168.1.201", IpVersions::v4), "");
+  EXPECT_EQ(sim::lidar::multicast_group_problem("ff02::1", IpVersions::v4_and_v6), "");
+}
+
+TEST(UdpReceiver, OnlyAGapLongerThanTheSilenceTimeoutIsAResume) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  UdpListen listen = loopback();
+  listen.silence_timeout = std::chrono::milliseconds(500);
+  const std::array ports{UdpPort{0, "UDP", "--port"}};
+  auto receiver = UdpReceiver::open(listen, ports, 2048);
+  ASSERT_TRUE(receiver) << receiver.error().message;
+  constexpr std::int64_t second = 1'000'000'000;
+  EXPECT_FALSE(receiver->resumed_after_silence(10 * second));               // the first packet
+  EXPECT_FALSE(receiver->resumed_after_silence(10 * second + second / 2));  // exactly the timeout
+  EXPECT_TRUE(receiver->resumed_after_silence(12 * second));
+  EXPECT_FALSE(receiver->resumed_after_silence(12 * second + 1000));
+  EXPECT_EQ(receiver->counters().resumes, 1u);
+}
+
+TEST(TcpConnection, ARefusedConnectionIsOneSentenceNamingTheSensorAndTheService) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  // A port nobody listens on: bound once, then closed.
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in local{};
+  local.sin_family = AF_INET;
+  local.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::bind(fd, reinterpret_cast<const sockaddr*>(&local), sizeof local), 0);
+  socklen_t length = sizeof local;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&local), &length);
+  ::close(fd);
+  const std::uint16_t port = ntohs(local.sin_port);
+
+  auto refused = sim::lidar::TcpConnection::connect({"127.0.0.1", port, std::chrono::milliseconds(2000), "PTC"});
+  ASSERT_FALSE(refused);
+  EXPECT_EQ(refused.error().message.rfind("sensor 127.0.0.1:" + std::to_string(port) + " refused the PTC connection (", 0),
+            0u)
+      << refused.error().message;
+  auto not_ipv4 = sim::lidar::TcpConnection::connect({"sensor.local", port, std::chrono::milliseconds(2000), "HTTP"});
+  ASSERT_FALSE(not_ipv4);
+  EXPECT_EQ(not_ipv4.error().code, sim::ErrorCode::invalid_argument);
+}
+
+TEST(TcpConnection, ASensorThatAcceptsButNeverAnswersEndsTheReadAtTheDeadline) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  // The kernel accepts for a listening socket; nobody ever writes.
+  const int listener = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in local{};
+  local.sin_family = AF_INET;
+  local.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::bind(listener, reinterpret_cast<const sockaddr*>(&local), sizeof local), 0);
+  ASSERT_EQ(::listen(listener, 1), 0);
+  socklen_t length = sizeof local;
+  ::getsockname(listener, reinterpret_cast<sockaddr*>(&local), &length);
+
+  auto connection = sim::lidar::TcpConnection::connect(
+      {"127.0.0.1", ntohs(local.sin_port), std::chrono::milliseconds(200), "HTTP"});
+  ASSERT_TRUE(connection) << connection.error().message;
+  EXPECT_EQ(connection->within(), "within 0.2 s");
+  const std::array<std::uint8_t, 4> request{'G', 'E', 'T', ' '};
+  EXPECT_EQ(connection->send_all(request), sim::lidar::TcpIo::done);
+  std::array<std::uint8_t, 64> buffer{};
+  EXPECT_EQ(connection->read_some(buffer).status, sim::lidar::TcpIo::timed_out);
+  ::close(listener);
+}
+
+TEST(SensorCache, AFileIsWrittenWholeAndAnUnwritablePlaceIsRefused) {
+  const auto folder = std::filesystem::temp_directory_path() / ("sim_lidar_common_" + std::to_string(::getpid()));
+  const auto file = folder / "sub" / "sensor.json";
+  ASSERT_TRUE(sim::lidar::write_atomically(file, "{\"a\": 1}"));
+  std::ifstream in(file);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text, "{\"a\": 1}");
+  EXPECT_FALSE(std::filesystem::exists(file.string() + ".part"));
+  EXPECT_FALSE(sim::lidar::write_atomically("/proc/sim-cannot-write/sensor.json", "x"));
+  std::filesystem::remove_all(folder);
+  EXPECT_EQ(sim::lidar::default_cache_path("ouster-1.2.3.4.json").filename(), "ouster-1.2.3.4.json");
+}
+
+TEST(FramePublisher, AFrameIsPublishedWithTheStampOffsetAndCounted) {
+  const std::string name = sim::testing::unique_name("lidar_common");
+  sim::testing::StreamGuard guard(name);
+  struct Config {
+    std::string stream;
+    bool checksum = false;
+    bool lock_memory = false;
+    std::chrono::milliseconds heartbeat_period{0};
+  } config{.stream = name};
+  auto writer = sim::Writer::create(sim::lidar::point_stream_spec(config, 16));
+  ASSERT_TRUE(writer) << writer.error().message;
+  sim::lidar::PublishCounters counters;
+  sim::lidar::FramePublisher frames(std::move(writer.value()), counters);
+  ASSERT_EQ(frames.slot().size(), 16u);
+  EXPECT_EQ(frames.max_points(), 16u);
+  frames.slot()[0].x = 1.5F;
+  frames.set_stamp_offset(1000);
+  const auto next = frames.publish(3, 5000, 7000, /*whole=*/false);
+  EXPECT_EQ(next.size(), 16u);
+
+  auto reader = sim::Reader::open(name);
+  ASSERT_TRUE(reader) << reader.error().message;
+  std::vector<std::byte> buffer(reader->capacity());
+  sim::FrameInfo info;
+  ASSERT_EQ(reader->read(buffer, info), sim::ReadStatus::new_frame);
+  EXPECT_EQ(info.size, 3 * sizeof(sim::LidarPoint));
+  EXPECT_EQ(info.stamp_ns, 6000);
+  sim::LidarPoint first;
+  std::memcpy(&first, buffer.data(), sizeof first);
+  EXPECT_EQ(first.x, 1.5F);
+  EXPECT_EQ(counters.frames, 1u);
+  EXPECT_EQ(counters.points, 3u);
+  EXPECT_EQ(counters.partial_frames, 1u);
+  EXPECT_EQ(counters.failed, 0u);
+  EXPECT_EQ(frames.last_points(), 3u);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  g_skip_reason = sim::testing::enter_private_network(sim::testing::Multicast::off);
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
