@@ -16,48 +16,29 @@
 
 #include <chrono>
 #include <cstdint>
-#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
-#include <string_view>
 
 #include "sim/hesai/lidar_stream.hpp"
 #include "sim/hesai/model.hpp"
+#include "sim/lidar/udp_receiver.hpp"
 #include "sim/result.hpp"
 
 namespace sim::hesai {
 
 struct NetworkConfig {
-  std::string bind = "0.0.0.0";   // local address to receive on (IPv4 or IPv6)
-  std::uint16_t port = 2368;      // 0: a free port, read back with LiveReceiver::port()
-  std::string multicast_group;    // empty: unicast or broadcast
-  std::string source;             // empty: packets from any sender
-  int receive_buffer = 16 << 20;  // SO_RCVBUF asked for, bytes (SO_RCVBUFFORCE when root)
-  std::chrono::nanoseconds silence_timeout = std::chrono::milliseconds(500);
+  // Where to listen and whom to hear: bind, multicast group, source, receive buffer, silence
+  // timeout. IPv4 or IPv6 (lidar::address_problem(…, IpVersions::v4_and_v6) checks an address).
+  lidar::UdpListen listen{.receive_buffer = 16 << 20, .versions = lidar::IpVersions::v4_and_v6};
+  std::uint16_t port = 2368;  // 0: a free port, read back with LiveReceiver::port()
 };
 
-// What is wrong with an address ("'x' is not an IP address (e.g. …)"), or "" when it is one:
-// for checking a value before anything is opened.
-std::string address_problem(const std::string& address);
-// The same for a multicast group address.
-std::string multicast_group_problem(const std::string& group);
-
-struct ReceiveCounters {
-  std::uint64_t datagrams = 0;     // every datagram taken from the socket
-  std::uint64_t other_source = 0;  // from another sender than NetworkConfig::source
-  std::uint64_t unrecognised = 0;  // not a Hesai point-cloud packet, before the model was known
-  std::uint64_t resumes = 0;       // packets came back after a silence
-};
-
-// What run() tells the program while it runs; each part is optional.
-struct ReceiverCallbacks {
-  // One sentence for the user: the model detected, packets resumed after a silence.
-  std::function<void(std::string_view)> note;
-  // Called every tick_period (0: never), to print a status line.
-  std::chrono::nanoseconds tick_period{0};
-  std::function<void()> tick;
-};
+// datagrams, other_source, unrecognised (not a Hesai point-cloud packet, before the model was
+// known) and resumes (packets came back after a silence).
+using ReceiveCounters = lidar::ReceiveCounters;
+// note: the model detected, packets resumed after a silence; tick: a status line.
+using ReceiverCallbacks = lidar::ReceiverCallbacks;
 
 class LiveReceiver {
  public:

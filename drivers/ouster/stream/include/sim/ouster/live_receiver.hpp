@@ -14,42 +14,28 @@
 
 #include <chrono>
 #include <cstdint>
-#include <functional>
 #include <memory>
 #include <string>
-#include <string_view>
 
+#include "sim/lidar/udp_receiver.hpp"
 #include "sim/ouster/lidar_stream.hpp"
 #include "sim/result.hpp"
 
 namespace sim::ouster {
 
 struct NetworkConfig {
-  std::string bind = "0.0.0.0";  // IPv4 address to receive on
+  // Where to listen and whom to hear: bind, multicast group, source, receive buffer (per
+  // socket), silence timeout. IPv4 (lidar::address_problem(…, IpVersions::v4) checks an address).
+  lidar::UdpListen listen{.receive_buffer = 32 << 20};
   std::uint16_t lidar_port = 7502;  // 0: a free port (read back with lidar_port())
   std::uint16_t imu_port = 7503;    // 0: a free port
-  std::string multicast_group;      // empty: unicast
-  std::string source;               // empty: datagrams from any sender
-  int receive_buffer = 32 << 20;    // SO_RCVBUF asked for (SO_RCVBUFFORCE when root)
-  std::chrono::nanoseconds silence_timeout = std::chrono::milliseconds(500);
 };
 
-// "'x' is not an IPv4 address (e.g. 192.168.1.201)", or "" when it is one.
-std::string ipv4_problem(const std::string& address);
-std::string multicast_group_problem(const std::string& group);
-
-struct ReceiveCounters {
-  std::uint64_t datagrams = 0;
-  std::uint64_t other_source = 0;  // from another sender than NetworkConfig::source
-  std::uint64_t oversized = 0;     // larger than any Ouster packet (cut by the buffer)
-  std::uint64_t resumes = 0;       // packets came back after a silence
-};
-
-struct ReceiverCallbacks {
-  std::function<void(std::string_view)> note;  // one sentence: a metadata mismatch, a resume
-  std::chrono::nanoseconds tick_period{0};
-  std::function<void()> tick;
-};
+// datagrams (lidar and IMU), other_source, oversized (larger than any Ouster packet, cut by the
+// buffer) and resumes (packets came back after a silence).
+using ReceiveCounters = lidar::ReceiveCounters;
+// note: a metadata mismatch, a resume; tick: every tick_period, for a status line.
+using ReceiverCallbacks = lidar::ReceiverCallbacks;
 
 class LiveReceiver {
  public:

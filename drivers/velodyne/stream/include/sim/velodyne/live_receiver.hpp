@@ -13,43 +13,29 @@
 
 #include <chrono>
 #include <cstdint>
-#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
-#include <string_view>
 
+#include "sim/lidar/udp_receiver.hpp"
 #include "sim/result.hpp"
 #include "sim/velodyne/lidar_stream.hpp"
 
 namespace sim::velodyne {
 
 struct NetworkConfig {
-  std::string bind = "0.0.0.0";          // local IPv4 address to receive on
+  // Where to listen and whom to hear: bind, multicast group, source, receive buffer, silence
+  // timeout. IPv4 (lidar::address_problem(…, IpVersions::v4) checks an address).
+  lidar::UdpListen listen;
   std::uint16_t data_port = default_data_port;  // 0: a free port, read back with data_port()
   std::optional<std::uint16_t> position_port = default_position_port;  // nullopt: not listened to
-  std::string multicast_group;           // empty: unicast or broadcast
-  std::string source;                    // empty: packets from any sender
-  int receive_buffer = 8 << 20;          // SO_RCVBUF asked for (SO_RCVBUFFORCE when root)
-  std::chrono::nanoseconds silence_timeout = std::chrono::milliseconds(500);
 };
 
-// What is wrong with an IPv4 address, or "" when it is one (for checking options early).
-std::string address_problem(const std::string& address);
-std::string multicast_group_problem(const std::string& group);
-
-struct ReceiveCounters {
-  std::uint64_t datagrams = 0;     // data and position datagrams taken from the sockets
-  std::uint64_t other_source = 0;  // from another sender than NetworkConfig::source
-  std::uint64_t unrecognised = 0;  // not a Velodyne data packet, before the model was known
-  std::uint64_t resumes = 0;       // packets came back after a silence
-};
-
-struct ReceiverCallbacks {
-  std::function<void(std::string_view)> note;  // one sentence: model detected, resumed…
-  std::chrono::nanoseconds tick_period{0};
-  std::function<void()> tick;                  // every tick_period, for a status line
-};
+// datagrams (data and position), other_source, unrecognised (not a Velodyne data packet,
+// before the model was known) and resumes (packets came back after a silence).
+using ReceiveCounters = lidar::ReceiveCounters;
+// note: the model detected, packets resumed…; tick: every tick_period, for a status line.
+using ReceiverCallbacks = lidar::ReceiverCallbacks;
 
 class LiveReceiver {
  public:
