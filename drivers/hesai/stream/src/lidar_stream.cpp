@@ -5,42 +5,12 @@
 #include <sstream>
 #include <utility>
 
-#include "sim/lidar_point.hpp"
+#include "sim/lidar/frame_publisher.hpp"
 
 namespace sim::hesai {
 
-struct LidarStream::Impl {
-  Impl(Writer w, FrameAssembler a) : writer(std::move(w)), assembler(std::move(a)) {}
-
-  // The loan keeps a pointer to the writer, so the writer must not move: Impl lives on the
-  // heap and is never moved itself.
-  Writer writer;
-  FrameAssembler assembler;
-  Loan loan;
-  PublishCounters published;
-  std::size_t last_points = 0;
-  std::int64_t stamp_offset_ns = 0;
-
-  void attach() noexcept {
-    loan = Loan{};  // a writer lends one slot at a time: give back the one still open first
-    loan = writer.loan();
-    assembler.set_output(loan.as<LidarPoint>());
-  }
-
-  void publish(const CompletedFrame& frame) noexcept {
-    const WriteStatus status =
-        std::move(loan).commit(frame.point_count * sizeof(LidarPoint), frame.stamp_ns + stamp_offset_ns,
-                    frame.host_receive_ns);
-    if (status == WriteStatus::ok) {
-      ++published.frames;
-      published.points += frame.point_count;
-      if (!frame.whole_revolution) ++published.partial_frames;
-      last_points = frame.point_count;
-    } else {
-      ++published.failed;
-    }
-    attach();  // the next revolution goes to the new back slot
-  }
+struct LidarStream::Impl : lidar::PointPipeline<FrameAssembler, PublishCounters> {
+  using PointPipeline::PointPipeline;
 };
 
 namespace {
@@ -51,11 +21,7 @@ SensorInfo describe_sensor(const LidarStreamConfig& config, Model model) {
   info.point_time = PointTime::after_frame_stamp;
   if (info.identity.vendor.empty()) info.identity.vendor = "Hesai";
   if (info.identity.model.empty()) info.identity.model = std::string(to_string(model));
-  if (info.calibration_source.empty()) {
-    std::error_code ignored;
-    const auto file = std::filesystem::absolute(config.calibration, ignored).lexically_normal();
-    info.calibration_source = ("file://" + file.string()).substr(0, SensorInfo::kMaxSource);
-  }
+  if (info.calibration_source.empty()) info.calibration_source = lidar::file_source(config.calibration);
   return info;
 }
 
@@ -79,20 +45,12 @@ Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config) {
   auto assembler = FrameAssembler::create(std::move(calibration.value()), std::move(options));
   if (!assembler) return assembler.error();
 
-  StreamSpec spec;
-  spec.name = config.stream;
-  spec.layout = Layout::of(PointLayout::of(
-      PointType::lidar_point, frame_capacity(model, config.returns, config.min_rpm)));
-  spec.checksum = config.checksum;
-  spec.lock_memory = config.lock_memory;
-  spec.heartbeat_period = config.heartbeat_period;
+  StreamSpec spec = lidar::point_stream_spec(config, frame_capacity(model, config.returns, config.min_rpm));
   if (config.sensor) spec.sensor = describe_sensor(config, model);
   auto writer = Writer::create(spec);
   if (!writer) return writer.error();
 
-  auto impl = std::make_unique<Impl>(std::move(writer.value()), std::move(assembler.value()));
-  impl->attach();
-  return LidarStream(std::move(impl));
+  return LidarStream(std::make_unique<Impl>(std::move(writer.value()), std::move(assembler.value())));
 }
 
 LidarStream::LidarStream(std::unique_ptr<Impl> impl) noexcept : impl_(std::move(impl)) {}
@@ -102,9 +60,7 @@ LidarStream::~LidarStream() = default;
 
 PushResult LidarStream::push(std::span<const std::uint8_t> payload,
                              std::int64_t host_receive_ns) noexcept {
-  PushResult result = impl_->assembler.push(payload, host_receive_ns);
-  if (result.frame) impl_->publish(*result.frame);
-  return result;
+  return impl_->push(payload, host_receive_ns);
 }
 
 std::optional<CompletedFrame> LidarStream::finish() noexcept {
@@ -112,14 +68,12 @@ std::optional<CompletedFrame> LidarStream::finish() noexcept {
     impl_->assembler.reset();
     return std::nullopt;
   }
-  std::optional<CompletedFrame> frame = impl_->assembler.flush();
-  if (frame) impl_->publish(*frame);
-  return frame;
+  return impl_->flush();
 }
 
 void LidarStream::reset() noexcept { impl_->assembler.reset(); }
-void LidarStream::set_stamp_offset(std::int64_t offset_ns) noexcept { impl_->stamp_offset_ns = offset_ns; }
-std::int64_t LidarStream::stamp_offset() const noexcept { return impl_->stamp_offset_ns; }
+void LidarStream::set_stamp_offset(std::int64_t offset_ns) noexcept { impl_->frames.set_stamp_offset(offset_ns); }
+std::int64_t LidarStream::stamp_offset() const noexcept { return impl_->frames.stamp_offset(); }
 
 Model LidarStream::model() const noexcept { return impl_->assembler.options().model; }
 const AssemblerCounters& LidarStream::counters() const noexcept { return impl_->assembler.counters(); }
@@ -127,19 +81,15 @@ const PublishCounters& LidarStream::published() const noexcept { return impl_->p
 std::optional<std::int64_t> LidarStream::time_to_cut_ns() const noexcept {
   return impl_->assembler.time_to_cut_ns();
 }
-std::uint64_t LidarStream::max_points() const noexcept {
-  return impl_->writer.layout().points.max_points;
-}
-Writer& LidarStream::writer() noexcept { return impl_->writer; }
+std::uint64_t LidarStream::max_points() const noexcept { return impl_->frames.max_points(); }
+Writer& LidarStream::writer() noexcept { return impl_->frames.writer(); }
 
 std::string LidarStream::describe_counters(bool machine) const {
   const AssemblerCounters& c = impl_->assembler.counters();
   const PublishCounters& p = impl_->published;
   std::ostringstream out;
-  const char* sep = machine ? "=" : " ";
-  out << "frames" << sep << p.frames << " packets" << sep << c.packets << " lost" << sep
-      << c.lost_packets << " malformed" << sep << c.malformed << (machine ? " wrong_model" : " wrong-model")
-      << sep << c.wrong_model;
+  lidar::describe_frames(out, machine, p.frames, c.packets, c.lost_packets, c.malformed);
+  out << (machine ? " wrong_model=" : " wrong-model ") << c.wrong_model;
   const FrameAssembler& a = impl_->assembler;
   const auto& safety = a.functional_safety();
   if (machine) {
@@ -153,7 +103,7 @@ std::string LidarStream::describe_counters(bool machine) const {
       out << " safety=" << state << " fault_code=" << safety->fault_code;
     }
   } else {
-    out << " points/frame " << impl_->last_points;
+    out << " points/frame " << impl_->frames.last_points();
     if (c.dropped_points != 0) out << " dropped-points " << c.dropped_points;
     if (c.crc_errors != 0) out << " crc-errors " << c.crc_errors;
     if (a.motor_rpm() != 0) out << " rpm " << a.motor_rpm();

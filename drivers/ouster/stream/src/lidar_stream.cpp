@@ -22,38 +22,11 @@ ImuSample to_sample(const ImuPacket& packet) noexcept {
 
 std::string default_imu_stream(const std::string& points_stream) { return points_stream + ".imu"; }
 
-struct LidarStream::Impl {
+struct LidarStream::Impl : lidar::PointPipeline<FrameAssembler, PublishCounters> {
   Impl(Writer w, std::optional<Writer> i, FrameAssembler a)
-      : writer(std::move(w)), imu(std::move(i)), assembler(std::move(a)) {}
+      : PointPipeline(std::move(w), std::move(a)), imu(std::move(i)) {}
 
-  // The loan points at the writer: Impl lives on the heap and never moves.
-  Writer writer;
-  std::optional<Writer> imu;
-  FrameAssembler assembler;
-  Loan loan;
-  PublishCounters published;
-  std::size_t last_points = 0;
-  std::int64_t stamp_offset_ns = 0;
-
-  void attach() noexcept {
-    loan = Loan{};
-    loan = writer.loan();
-    assembler.set_output(loan.as<LidarPoint>());
-  }
-
-  void publish(const CompletedFrame& frame) noexcept {
-    const WriteStatus status = std::move(loan).commit(
-        frame.point_count * sizeof(LidarPoint), frame.stamp_ns + stamp_offset_ns, frame.host_receive_ns);
-    if (status == WriteStatus::ok) {
-      ++published.frames;
-      published.points += frame.point_count;
-      if (!frame.whole) ++published.partial_frames;
-      last_points = frame.point_count;
-    } else {
-      ++published.failed;
-    }
-    attach();
-  }
+  std::optional<Writer> imu;  // its own stream, one frame per IMU packet
 };
 
 namespace {
@@ -75,12 +48,7 @@ Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config, const
   auto assembler = FrameAssembler::create(metadata, config.assembler);
   if (!assembler) return assembler.error();
 
-  StreamSpec spec;
-  spec.name = config.stream;
-  spec.layout = Layout::of(PointLayout::of(PointType::lidar_point, assembler->max_points()));
-  spec.checksum = config.checksum;
-  spec.lock_memory = config.lock_memory;
-  spec.heartbeat_period = config.heartbeat_period;
+  StreamSpec spec = lidar::point_stream_spec(config, assembler->max_points());
   if (config.sensor) spec.sensor = describe_sensor(config, metadata);
   auto writer = Writer::create(spec);
   if (!writer) return writer.error();
@@ -97,9 +65,7 @@ Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config, const
     if (!imu_writer) return imu_writer.error();
     imu.emplace(std::move(imu_writer.value()));
   }
-  auto impl = std::make_unique<Impl>(std::move(writer.value()), std::move(imu), std::move(assembler.value()));
-  impl->attach();
-  return LidarStream(std::move(impl));
+  return LidarStream(std::make_unique<Impl>(std::move(writer.value()), std::move(imu), std::move(assembler.value())));
 }
 
 LidarStream::LidarStream(std::unique_ptr<Impl> impl) noexcept : impl_(std::move(impl)) {}
@@ -109,9 +75,7 @@ LidarStream::~LidarStream() = default;
 
 PushResult LidarStream::push_lidar(std::span<const std::uint8_t> payload,
                                    std::int64_t host_receive_ns) noexcept {
-  PushResult result = impl_->assembler.push(payload, host_receive_ns);
-  if (result.frame) impl_->publish(*result.frame);
-  return result;
+  return impl_->push(payload, host_receive_ns);
 }
 
 bool LidarStream::push_imu(std::span<const std::uint8_t> payload) noexcept {
@@ -123,22 +87,20 @@ bool LidarStream::push_imu(std::span<const std::uint8_t> payload) noexcept {
   ++impl_->published.imu_samples;
   if (impl_->imu) {
     ImuSample sample = to_sample(*packet);
-    sample.stamp_ns += impl_->stamp_offset_ns;
-    sample.gyro_stamp_ns += impl_->stamp_offset_ns;
+    sample.stamp_ns += impl_->frames.stamp_offset();
+    sample.gyro_stamp_ns += impl_->frames.stamp_offset();
     (void)impl_->imu->write(std::span<const ImuSample>(&sample, 1), sample.stamp_ns);
   }
   return true;
 }
 
 std::optional<CompletedFrame> LidarStream::finish() noexcept {
-  std::optional<CompletedFrame> frame = impl_->assembler.flush();
-  if (frame) impl_->publish(*frame);
-  return frame;
+  return impl_->flush();
 }
 
 void LidarStream::reset() noexcept { impl_->assembler.reset(); }
-void LidarStream::set_stamp_offset(std::int64_t offset_ns) noexcept { impl_->stamp_offset_ns = offset_ns; }
-std::int64_t LidarStream::stamp_offset() const noexcept { return impl_->stamp_offset_ns; }
+void LidarStream::set_stamp_offset(std::int64_t offset_ns) noexcept { impl_->frames.set_stamp_offset(offset_ns); }
+std::int64_t LidarStream::stamp_offset() const noexcept { return impl_->frames.stamp_offset(); }
 const Metadata& LidarStream::metadata() const noexcept { return impl_->assembler.metadata(); }
 const AssemblerCounters& LidarStream::counters() const noexcept { return impl_->assembler.counters(); }
 const PublishCounters& LidarStream::published() const noexcept { return impl_->published; }
@@ -168,9 +130,8 @@ std::string LidarStream::describe_counters(bool machine) const {
   const AssemblerCounters& c = impl_->assembler.counters();
   const PublishCounters& p = impl_->published;
   std::ostringstream out;
-  const char* sep = machine ? "=" : " ";
-  out << "frames" << sep << p.frames << " packets" << sep << c.packets << " lost" << sep
-      << c.lost_packets << " malformed" << sep << c.malformed << " imu" << sep << p.imu_samples;
+  lidar::describe_frames(out, machine, p.frames, c.packets, c.lost_packets, c.malformed);
+  out << (machine ? " imu=" : " imu ") << p.imu_samples;
   if (machine) {
     out << " points=" << p.points << " partial_frames=" << p.partial_frames
         << " partial_frames_dropped=" << c.partial_frames_dropped
@@ -183,7 +144,7 @@ std::string LidarStream::describe_counters(bool machine) const {
       out << " " << name << "=" << c.rejected[e];
     }
   } else {
-    out << " points/frame " << impl_->last_points;
+    out << " points/frame " << impl_->frames.last_points();
     if (p.imu_malformed != 0) out << " imu-malformed " << p.imu_malformed;
     if (c.invalid_columns != 0) out << " invalid-columns " << c.invalid_columns;
   }

@@ -4,8 +4,6 @@
 #include <sstream>
 #include <utility>
 
-#include "sim/lidar_point.hpp"
-
 namespace sim::velodyne {
 
 TimeSync time_sync_of(const PositionReport& report) {
@@ -22,38 +20,10 @@ TimeSync time_sync_of(const PositionReport& report) {
   return sync;
 }
 
-struct LidarStream::Impl {
-  Impl(Writer w, FrameAssembler a) : writer(std::move(w)), assembler(std::move(a)) {}
-
-  // The loan points at the writer: Impl lives on the heap and never moves.
-  Writer writer;
-  FrameAssembler assembler;
-  Loan loan;
-  PublishCounters published;
-  std::size_t last_points = 0;
-  std::int64_t stamp_offset_ns = 0;
+struct LidarStream::Impl : lidar::PointPipeline<FrameAssembler, PublishCounters> {
+  using PointPipeline::PointPipeline;
   std::optional<SensorInfo> sensor;  // the description, re-set when the time sync changes
   TimeSync sync;
-
-  void attach() noexcept {
-    loan = Loan{};  // a writer lends one slot at a time
-    loan = writer.loan();
-    assembler.set_output(loan.as<LidarPoint>());
-  }
-
-  void publish(const CompletedFrame& frame) noexcept {
-    const WriteStatus status = std::move(loan).commit(
-        frame.point_count * sizeof(LidarPoint), frame.stamp_ns + stamp_offset_ns, frame.host_receive_ns);
-    if (status == WriteStatus::ok) {
-      ++published.frames;
-      published.points += frame.point_count;
-      if (!frame.whole_revolution) ++published.partial_frames;
-      last_points = frame.point_count;
-    } else {
-      ++published.failed;
-    }
-    attach();
-  }
 };
 
 Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config) {
@@ -68,19 +38,12 @@ Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config) {
   auto assembler = FrameAssembler::create(std::move(calibration.value()), config.assembler);
   if (!assembler) return assembler.error();
 
-  StreamSpec spec;
-  spec.name = config.stream;
-  spec.layout = Layout::of(PointLayout::of(PointType::lidar_point,
-                                           frame_capacity(model, config.returns, config.min_rpm)));
-  spec.checksum = config.checksum;
-  spec.lock_memory = config.lock_memory;
-  spec.heartbeat_period = config.heartbeat_period;
+  StreamSpec spec = lidar::point_stream_spec(config, frame_capacity(model, config.returns, config.min_rpm));
   std::optional<SensorInfo> sensor = config.sensor;
   if (sensor) {
     sensor->identity.vendor = "Velodyne";
     sensor->identity.model = std::string(to_string(model));
-    sensor->calibration_source = ("file://" + std::filesystem::absolute(config.calibration).string())
-                                     .substr(0, SensorInfo::kMaxSource);
+    sensor->calibration_source = lidar::file_source(config.calibration);
     sensor->point_time = PointTime::after_frame_stamp;
     sensor->time_base = TimeBase::unknown;
     sensor->time_sync = TimeSync{}.text;
@@ -91,7 +54,6 @@ Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config) {
 
   auto impl = std::make_unique<Impl>(std::move(writer.value()), std::move(assembler.value()));
   impl->sensor = sensor;
-  impl->attach();
   return LidarStream(std::move(impl));
 }
 
@@ -102,9 +64,7 @@ LidarStream::~LidarStream() = default;
 
 PushResult LidarStream::push(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns,
                              std::int64_t time_reference_ns) noexcept {
-  PushResult result = impl_->assembler.push(payload, host_receive_ns, time_reference_ns);
-  if (result.frame) impl_->publish(*result.frame);
-  return result;
+  return impl_->push(payload, host_receive_ns, time_reference_ns);
 }
 
 bool LidarStream::push_position(std::span<const std::uint8_t> payload) noexcept {
@@ -121,7 +81,7 @@ bool LidarStream::push_position(std::span<const std::uint8_t> payload) noexcept 
     // Position packets come about once a second; the description changes only with the state.
     impl_->sensor->time_base = impl_->sync.base;
     impl_->sensor->time_sync = impl_->sync.text;
-    (void)impl_->writer.set_sensor_info(*impl_->sensor);
+    (void)impl_->frames.writer().set_sensor_info(*impl_->sensor);
   }
   return true;
 }
@@ -131,35 +91,32 @@ std::optional<CompletedFrame> LidarStream::finish() noexcept {
     impl_->assembler.reset();
     return std::nullopt;
   }
-  std::optional<CompletedFrame> frame = impl_->assembler.flush();
-  if (frame) impl_->publish(*frame);
-  return frame;
+  return impl_->flush();
 }
 
 void LidarStream::reset() noexcept { impl_->assembler.reset(); }
-void LidarStream::set_stamp_offset(std::int64_t offset_ns) noexcept { impl_->stamp_offset_ns = offset_ns; }
-std::int64_t LidarStream::stamp_offset() const noexcept { return impl_->stamp_offset_ns; }
+void LidarStream::set_stamp_offset(std::int64_t offset_ns) noexcept { impl_->frames.set_stamp_offset(offset_ns); }
+std::int64_t LidarStream::stamp_offset() const noexcept { return impl_->frames.stamp_offset(); }
 Model LidarStream::model() const noexcept { return impl_->assembler.options().model; }
 const AssemblerCounters& LidarStream::counters() const noexcept { return impl_->assembler.counters(); }
 const PublishCounters& LidarStream::published() const noexcept { return impl_->published; }
 const TimeSync& LidarStream::time_sync() const noexcept { return impl_->sync; }
-Writer& LidarStream::writer() noexcept { return impl_->writer; }
+Writer& LidarStream::writer() noexcept { return impl_->frames.writer(); }
 
 std::string LidarStream::describe_counters(bool machine) const {
   const AssemblerCounters& c = impl_->assembler.counters();
   const PublishCounters& p = impl_->published;
   std::ostringstream out;
+  lidar::describe_frames(out, machine, p.frames, c.packets, c.lost_packets, c.malformed);
   if (machine) {
     std::string sync = impl_->sync.text;
     for (char& ch : sync) ch = (ch == ' ' || ch == ',') ? '_' : ch;
-    out << "frames=" << p.frames << " packets=" << c.packets << " lost=" << c.lost_packets
-        << " malformed=" << c.malformed << " wrong_model=" << c.wrong_model << " points=" << p.points
+    out << " wrong_model=" << c.wrong_model << " points=" << p.points
         << " partial_frames=" << p.partial_frames << " dropped_points=" << c.dropped_points
         << " publish_failures=" << p.failed << " position_packets=" << p.position_packets
         << " time_sync=" << sync;
   } else {
-    out << "frames " << p.frames << " packets " << c.packets << " lost " << c.lost_packets << " malformed "
-        << c.malformed << " wrong-model " << c.wrong_model << " points/frame " << impl_->last_points;
+    out << " wrong-model " << c.wrong_model << " points/frame " << impl_->frames.last_points();
     if (c.dropped_points != 0) out << " dropped-points " << c.dropped_points;
     if (const auto mode = impl_->assembler.return_mode()) out << " " << to_string(*mode);
     out << " time " << impl_->sync.text;

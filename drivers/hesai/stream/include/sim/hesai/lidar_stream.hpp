@@ -15,6 +15,7 @@
 #include <string>
 
 #include "sim/hesai/hesai.hpp"
+#include "sim/lidar/frame_publisher.hpp"
 #include "sim/result.hpp"
 #include "sim/sensor_info.hpp"
 #include "sim/writer.hpp"
@@ -39,14 +40,9 @@ struct LidarStreamConfig {
   std::optional<SensorInfo> sensor;
 };
 
-// What the stream published, beside the assembler's own counters.
-struct PublishCounters {
-  std::uint64_t frames = 0;          // frames committed to the SIM stream
-  std::uint64_t points = 0;          // points in those frames
-  std::uint64_t partial_frames = 0;  // of those, frames that did not start at the cut azimuth
-  std::uint64_t failed = 0;          // commits refused by the writer (cannot happen when sized
-                                     // from the model; counted rather than assumed)
-};
+// What the stream published, beside the assembler's own counters: frames, points,
+// partial_frames (did not start at the cut azimuth) and failed commits.
+using PublishCounters = lidar::PublishCounters;
 
 class LidarStream {
  public:

@@ -12,6 +12,7 @@
 #include <span>
 #include <string>
 
+#include "sim/lidar/frame_publisher.hpp"
 #include "sim/ouster/ouster.hpp"
 #include "sim/result.hpp"
 #include "sim/sensor_info.hpp"
@@ -47,11 +48,9 @@ struct LidarStreamConfig {
   std::chrono::milliseconds heartbeat_period{0};
 };
 
-struct PublishCounters {
-  std::uint64_t frames = 0;
-  std::uint64_t points = 0;          // in those frames (organised: with and without a return)
-  std::uint64_t partial_frames = 0;  // frames that did not start at the window's first column
-  std::uint64_t failed = 0;          // commits the writer refused
+// frames, points (organised: with and without a return), partial_frames (did not start at the
+// window's first column), failed (commits the writer refused), and the IMU samples.
+struct PublishCounters : lidar::PublishCounters {
   std::uint64_t imu_samples = 0;
   std::uint64_t imu_malformed = 0;   // IMU datagrams that were not 48-byte IMU packets
 };

@@ -14,6 +14,7 @@
 #include <span>
 #include <string>
 
+#include "sim/lidar/frame_publisher.hpp"
 #include "sim/result.hpp"
 #include "sim/sensor_info.hpp"
 #include "sim/velodyne/velodyne.hpp"
@@ -35,11 +36,8 @@ struct LidarStreamConfig {
   std::chrono::milliseconds heartbeat_period{0};
 };
 
-struct PublishCounters {
-  std::uint64_t frames = 0;
-  std::uint64_t points = 0;
-  std::uint64_t partial_frames = 0;
-  std::uint64_t failed = 0;            // commits the writer refused
+// frames, points, partial_frames, failed (commits the writer refused), and position packets.
+struct PublishCounters : lidar::PublishCounters {
   std::uint64_t position_packets = 0;  // GPRMC/PPS reports taken
   std::uint64_t position_malformed = 0;
 };
