@@ -53,10 +53,7 @@ void add_hesai_stream_options(CommandLine& cli, HesaiStreamOptions& o) {
       ->check(CLI::Range(1U, 3U));
   app.add_option("--min-rpm", o.min_rpm, "lowest motor speed the stream is sized for, rpm")
       ->check(CLI::Range(300U, 1200U));
-  app.add_flag("--checksum", o.checksum, "add an XXH3 checksum to every frame, verified by readers");
-  app.add_flag("--lock-memory", o.lock_memory, "mlock the stream's shared memory");
-  add_sensor_options(cli, o.sensor, SensorKind::lidar);
-  cli.add_placement(o.placement);
+  add_lidar_writer_options(cli, o);
 }
 
 std::optional<hesai::Model> hesai_model(const HesaiStreamOptions& o) {
@@ -80,11 +77,7 @@ Expected<hesai::LidarStreamConfig> hesai_stream_config(const HesaiStreamOptions&
   config.assembler.firetime_azimuth_compensation = o.firetime_azimuth_compensation;
   config.returns = o.returns;
   config.min_rpm = o.min_rpm;
-  config.checksum = o.checksum;
-  config.lock_memory = o.lock_memory;
-  auto sensor = sensor_info_from(o.sensor, o.stream);
-  if (!sensor) return sensor.error();
-  config.sensor = std::move(sensor.value());
+  if (auto applied = apply_lidar_writer_options(config, o); !applied) return applied.error();
   return config;
 }
 

@@ -37,10 +37,7 @@ void add_ouster_stream_options(CommandLine& cli, OusterStreamOptions& o) {
       ->check(CLI::NonNegativeNumber);
   app.add_flag("--partial-frames", o.partial_frames,
                "also publish frames that did not start at the first column (start, gaps)");
-  app.add_flag("--checksum", o.checksum, "add an XXH3 checksum to every frame, verified by readers");
-  app.add_flag("--lock-memory", o.lock_memory, "mlock the stream's shared memory");
-  add_sensor_options(cli, o.sensor, SensorKind::lidar);
-  cli.add_placement(o.placement);
+  add_lidar_writer_options(cli, o);
 }
 
 Expected<ouster::LidarStreamConfig> ouster_stream_config(const OusterStreamOptions& o) {
@@ -53,11 +50,7 @@ Expected<ouster::LidarStreamConfig> ouster_stream_config(const OusterStreamOptio
   config.assembler.min_range_m = o.min_range;
   config.assembler.max_range_m = o.max_range;
   config.assembler.emit_partial_frames = o.partial_frames;
-  config.checksum = o.checksum;
-  config.lock_memory = o.lock_memory;
-  auto info = sensor_info_from(o.sensor, o.stream);
-  if (!info) return info.error();
-  config.sensor = *info;
+  if (auto applied = apply_lidar_writer_options(config, o); !applied) return applied.error();
   return config;
 }
 

@@ -49,10 +49,7 @@ void add_velodyne_stream_options(CommandLine& cli, VelodyneStreamOptions& o) {
                "also publish revolutions that did not start at the cut azimuth (start, gaps, end)");
   app.add_option("--min-rpm", o.min_rpm, "lowest motor speed the stream is sized for, rpm")
       ->check(CLI::Range(300U, 1200U));
-  app.add_flag("--checksum", o.checksum, "add an XXH3 checksum to every frame, verified by readers");
-  app.add_flag("--lock-memory", o.lock_memory, "mlock the stream's shared memory");
-  add_sensor_options(cli, o.sensor, SensorKind::lidar);
-  cli.add_placement(o.placement);
+  add_lidar_writer_options(cli, o);
 }
 
 std::optional<velodyne::Model> velodyne_model(const VelodyneStreamOptions& o) {
@@ -77,11 +74,7 @@ Expected<velodyne::LidarStreamConfig> velodyne_stream_config(const VelodyneStrea
   config.assembler.cut_by = o.cut_by == "packet" ? velodyne::CutBy::packet : velodyne::CutBy::point_azimuth;
   config.assembler.emit_partial_frames = o.partial_frames;
   config.min_rpm = o.min_rpm;
-  config.checksum = o.checksum;
-  config.lock_memory = o.lock_memory;
-  auto info = sensor_info_from(o.sensor, o.stream);
-  if (!info) return info.error();
-  config.sensor = *info;
+  if (auto applied = apply_lidar_writer_options(config, o); !applied) return applied.error();
   return config;
 }
 

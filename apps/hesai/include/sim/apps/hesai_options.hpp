@@ -8,13 +8,15 @@
 #include <string>
 
 #include "sim/apps/command_line.hpp"
+#include "sim/apps/lidar_options.hpp"
 #include "sim/apps/sensor_options.hpp"
 #include "sim/hesai/lidar_stream.hpp"
 #include "sim/os.hpp"
 
 namespace sim::apps {
 
-struct HesaiStreamOptions {
+// With LidarWriterOptions: --checksum, --lock-memory, the sensor options, --cpu/--rt-priority.
+struct HesaiStreamOptions : LidarWriterOptions {
   std::string stream = "/lidar_top";
   std::string model = "auto";  // a model name, or auto: detect it from the first packet
   std::string calibration;     // required (or fetched from the sensor by sim_lidar_hesai)
@@ -29,10 +31,6 @@ struct HesaiStreamOptions {
   bool firetime_azimuth_compensation = false;
   unsigned returns = 2;
   unsigned min_rpm = 600;
-  bool checksum = false;
-  bool lock_memory = false;
-  ThreadPlacement placement;  // --cpu, --rt-priority
-  SensorOptions sensor;       // --frame-id, --parent-frame, --x … --yaw
 };
 
 // Adds --stream --model --calibration --firetimes --cut-azimuth --min-range --max-range

@@ -7,13 +7,15 @@
 #include <string>
 
 #include "sim/apps/command_line.hpp"
+#include "sim/apps/lidar_options.hpp"
 #include "sim/apps/sensor_options.hpp"
 #include "sim/ouster/lidar_stream.hpp"
 #include "sim/os.hpp"
 
 namespace sim::apps {
 
-struct OusterStreamOptions {
+// With LidarWriterOptions: --checksum, --lock-memory, the sensor options, --cpu/--rt-priority.
+struct OusterStreamOptions : LidarWriterOptions {
   std::string stream = "/lidar_top";
   std::string imu_stream;  // empty: <stream>.imu
   bool no_imu = false;
@@ -24,10 +26,6 @@ struct OusterStreamOptions {
   float min_range = 0;
   float max_range = 0;
   bool partial_frames = false;
-  bool checksum = false;
-  bool lock_memory = false;
-  SensorOptions sensor;       // --frame-id, --parent-frame, --x … --yaw
-  ThreadPlacement placement;  // --cpu, --rt-priority
 };
 
 // Adds --stream --imu-stream --no-imu --calibration --layout --intensity --first-return-only

@@ -7,13 +7,15 @@
 #include <string>
 
 #include "sim/apps/command_line.hpp"
+#include "sim/apps/lidar_options.hpp"
 #include "sim/apps/sensor_options.hpp"
 #include "sim/os.hpp"
 #include "sim/velodyne/lidar_stream.hpp"
 
 namespace sim::apps {
 
-struct VelodyneStreamOptions {
+// With LidarWriterOptions: --checksum, --lock-memory, the sensor options, --cpu/--rt-priority.
+struct VelodyneStreamOptions : LidarWriterOptions {
   std::string stream = "/lidar_top";
   std::string model = "auto";  // a model name, or auto: from the first packet's product ID
   std::string calibration;     // YAML or db.xml (required)
@@ -26,10 +28,6 @@ struct VelodyneStreamOptions {
   std::string cut_by = "point";               // point, packet (nebula)
   bool partial_frames = false;
   unsigned min_rpm = 300;
-  bool checksum = false;
-  bool lock_memory = false;
-  SensorOptions sensor;       // --frame-id, --parent-frame, --x … --yaw
-  ThreadPlacement placement;  // --cpu, --rt-priority
 };
 
 // Adds --stream --model --calibration --cut-azimuth --min-range --max-range --returns
