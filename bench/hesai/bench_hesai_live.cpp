@@ -193,14 +193,171 @@ std::uint64_t wake_ups(pid_t pid) {
   return 0;
 }
 
-int measure_driver_cpu(const Payloads& payloads, const std::string& calibration, double seconds) {
-  // Decodes the packets beside the driver, to know which ones complete a revolution.
-  auto calibration_table = sim::hesai::Calibration::load(calibration, sim::hesai::Model::pandar64);
-  if (!calibration_table) {
-    std::fprintf(stderr, "bench_hesai_live: %s\n", calibration_table.error().message.c_str());
+// An assembler beside the driver, decoding the same packets in step: it tells which packet
+// completes each revolution, and the stamp of the frame it completes.
+sim::Expected<sim::hesai::FrameAssembler> twin_assembler(const std::string& calibration) {
+  auto table = sim::hesai::Calibration::load(calibration, sim::hesai::Model::pandar64);
+  if (!table) return table.error();
+  return sim::hesai::FrameAssembler::create(std::move(*table), {});
+}
+
+// sim_lidar_hesai on an ephemeral loopback port, publishing `stream`; port -1 if it did not
+// start (then nothing is left running).
+struct Driver {
+  Child process;
+  int port = -1;
+};
+Driver start_driver(const std::string& stream, const std::string& calibration) {
+  Driver driver;
+  driver.process = spawn_driver({SIM_LIDAR_HESAI, "--model", "Pandar64", "--bind", "127.0.0.1",
+                                 "--port", "0", "--stream", stream, "--calibration", calibration,
+                                 "--status-interval", "0"});
+  driver.port = driver.process.pid > 0 ? read_port(driver.process.out) : -1;
+  if (driver.port > 0) return driver;
+  if (driver.process.pid > 0) {
+    kill(driver.process.pid, SIGKILL);
+    waitpid(driver.process.pid, nullptr, 0);
+  }
+  if (driver.process.out >= 0) close(driver.process.out);
+  return driver;
+}
+
+void stop_driver(const Driver& driver) {
+  kill(driver.process.pid, SIGTERM);
+  waitpid(driver.process.pid, nullptr, 0);
+  close(driver.process.out);
+}
+
+// One frame seen from one side: its sensor stamp (which pairs the sides) and a monotonic time
+// (when its completing packet was sent, or when it woke the reader).
+struct Event {
+  std::int64_t stamp_ns;
+  std::int64_t at_ns;
+};
+
+// A reader blocked in wait() on its own thread, noting when each frame woke it.
+class WakeRecorder {
+ public:
+  explicit WakeRecorder(const std::string& stream) : thread_([this, stream] { run(stream); }) {}
+  ~WakeRecorder() {
+    if (thread_.joinable()) finish();
+  }
+  WakeRecorder(const WakeRecorder&) = delete;
+  WakeRecorder& operator=(const WakeRecorder&) = delete;
+  // Stops the thread and hands over what it saw.
+  std::vector<Event> finish() {
+    stop_.store(true);
+    thread_.join();
+    return std::move(woken_);
+  }
+
+ private:
+  void run(const std::string& stream) {
+    // The driver creates the stream just after it reports its port.
+    auto reader = sim::Reader::open(stream);
+    for (int attempt = 0; !reader && attempt < 200 && !stop_.load(); ++attempt) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      reader = sim::Reader::open(stream);
+    }
+    if (!reader) return;
+    std::vector<std::byte> frame(reader->capacity());
+    while (!stop_.load()) {
+      if (reader->wait(std::chrono::milliseconds(50)) != sim::ReadStatus::new_frame) continue;
+      const std::int64_t now = sim::monotonic_ns();
+      sim::FrameInfo info;
+      if (reader->read(frame, info) == sim::ReadStatus::new_frame) woken_.push_back({info.stamp_ns, now});
+    }
+  }
+
+  std::atomic<bool> stop_{false};
+  std::vector<Event> woken_;
+  std::thread thread_;  // last: it starts once the members it uses exist
+};
+
+struct SendLog {
+  std::uint64_t sent = 0;
+  std::vector<Event> cuts_sent;  // the packets that complete a revolution
+};
+
+// Sends the payloads to the driver for `seconds`, paced on an absolute schedule from the
+// capture's own timestamps and looped; the twin decodes each packet as it goes.
+SendLog send_at_recorded_rate(const Payloads& payloads, int port, double seconds,
+                              sim::hesai::FrameAssembler& twin,
+                              std::vector<sim::LidarPoint>& twin_points) {
+  const int sock = socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(static_cast<std::uint16_t>(port));
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  const std::int64_t capture_span = payloads.back().capture_ns - payloads.front().capture_ns +
+                                    (payloads.back().capture_ns - payloads.front().capture_ns) /
+                                        static_cast<std::int64_t>(payloads.size() - 1);
+  SendLog log;
+  const std::int64_t start = sim::monotonic_ns();
+  const auto end = start + static_cast<std::int64_t>(seconds * 1e9);
+  for (std::int64_t loop_start = start; loop_start < end; loop_start += capture_span) {
+    for (const auto& p : payloads) {
+      const std::int64_t due = loop_start + (p.capture_ns - payloads.front().capture_ns);
+      if (due >= end) break;
+      timespec at{static_cast<time_t>(due / 1'000'000'000), static_cast<long>(due % 1'000'000'000)};
+      const auto completes = twin.push(p.bytes, 0).frame;
+      if (completes) twin.set_output(twin_points);
+      clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &at, nullptr);
+      const std::int64_t send_ns = sim::monotonic_ns();
+      sendto(sock, p.bytes.data(), p.bytes.size(), 0, reinterpret_cast<const sockaddr*>(&to), sizeof to);
+      if (completes) log.cuts_sent.push_back({completes->stamp_ns, send_ns});
+      ++log.sent;
+    }
+  }
+  close(sock);
+  return log;
+}
+
+// From sending each revolution's completing packet to the reader running with that frame.
+std::vector<std::int64_t> send_to_reader_ns(const std::vector<Event>& woken,
+                                            const std::vector<Event>& cuts_sent) {
+  std::vector<std::int64_t> latencies;
+  std::size_t next_cut = 0;
+  for (const Event& w : woken) {
+    while (next_cut < cuts_sent.size() && cuts_sent[next_cut].stamp_ns != w.stamp_ns) ++next_cut;
+    if (next_cut == cuts_sent.size()) break;
+    latencies.push_back(w.at_ns - cuts_sent[next_cut++].at_ns);
+  }
+  return latencies;
+}
+
+struct DriverRun {
+  double wall_s = 0;
+  double cpu_s = 0;  // the driver's user + system time
+  std::uint64_t sent = 0;
+  std::uint64_t wakes = 0;
+  std::uint64_t frames = 0;
+  std::vector<std::int64_t> send_to_reader_ns;
+};
+
+int report(const DriverRun& run) {
+  std::printf("live driver CPU, Pandar64 dual at the recorded rate over UDP on 127.0.0.1\n");
+  std::printf("  %.1f s, %llu packets (%.0f/s), %llu frames published\n", run.wall_s,
+              static_cast<unsigned long long>(run.sent), static_cast<double>(run.sent) / run.wall_s,
+              static_cast<unsigned long long>(run.frames));
+  std::printf("  sim_lidar_hesai used %.3f s of CPU = %.2f %% of one core (target < 5 %%)\n",
+              run.cpu_s, 100.0 * run.cpu_s / run.wall_s);
+  std::printf("  it woke %.0f times a second (%.1f packets per wake-up)\n",
+              static_cast<double>(run.wakes) / run.wall_s,
+              run.wakes == 0 ? 0.0 : static_cast<double>(run.sent) / static_cast<double>(run.wakes));
+  if (run.send_to_reader_ns.empty()) {
+    std::printf("  no frame reached the reader: the send-to-reader time cannot be measured\n");
     return 1;
   }
-  auto twin = sim::hesai::FrameAssembler::create(std::move(*calibration_table), {});
+  const Percentiles latency = summarise(run.send_to_reader_ns);
+  std::printf("  completing packet sent → blocked reader runs (%zu revolutions, µs: p50 / p99 / max)\n"
+              "                                                 %8.1f / %8.1f / %8.1f\n",
+              run.send_to_reader_ns.size(), latency.p50_us, latency.p99_us, latency.max_us);
+  return 0;
+}
+
+int measure_driver_cpu(const Payloads& payloads, const std::string& calibration, double seconds) {
+  auto twin = twin_assembler(calibration);
   if (!twin) {
     std::fprintf(stderr, "bench_hesai_live: %s\n", twin.error().message.c_str());
     return 1;
@@ -208,108 +365,29 @@ int measure_driver_cpu(const Payloads& payloads, const std::string& calibration,
   std::vector<sim::LidarPoint> twin_points(sim::hesai::frame_capacity(sim::hesai::Model::pandar64, 2));
   twin->set_output(twin_points);
   const std::string stream = unique_stream("live");
-  Child driver = spawn_driver({SIM_LIDAR_HESAI, "--model", "Pandar64", "--bind", "127.0.0.1",
-                               "--port", "0", "--stream", stream, "--calibration", calibration,
-                               "--status-interval", "0"});
-  const int port = driver.pid > 0 ? read_port(driver.out) : -1;
-  if (port <= 0) {
+  const Driver driver = start_driver(stream, calibration);
+  if (driver.port <= 0) {
     std::fprintf(stderr, "bench_hesai_live: %s did not start\n", SIM_LIDAR_HESAI);
-    if (driver.pid > 0) kill(driver.pid, SIGKILL), waitpid(driver.pid, nullptr, 0);
     return 1;
   }
-  const int sock = socket(AF_INET, SOCK_DGRAM, 0);
-  sockaddr_in to{};
-  to.sin_family = AF_INET;
-  to.sin_port = htons(static_cast<std::uint16_t>(port));
-  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
 
-  // A blocked reader notes when each frame woke it; the sender notes when it sent each packet
-  // that completes a revolution (found by decoding the same packets here, in step).
-  struct Event {
-    std::int64_t stamp_ns;  // the frame's sensor stamp, to pair the two sides
-    std::int64_t at_ns;     // monotonic
-  };
-  std::vector<Event> woken, cuts_sent;
-  std::atomic<bool> stop{false};
-  std::thread consumer([&] {
-    // The driver creates the stream just after it reports its port.
-    auto reader = sim::Reader::open(stream);
-    for (int attempt = 0; !reader && attempt < 200 && !stop.load(); ++attempt) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-      reader = sim::Reader::open(stream);
-    }
-    if (!reader) return;
-    std::vector<std::byte> frame(reader->capacity());
-    while (!stop.load()) {
-      if (reader->wait(std::chrono::milliseconds(50)) != sim::ReadStatus::new_frame) continue;
-      const std::int64_t now = sim::monotonic_ns();
-      sim::FrameInfo info;
-      if (reader->read(frame, info) == sim::ReadStatus::new_frame) woken.push_back({info.stamp_ns, now});
-    }
-  });
-
-  // Paced on an absolute schedule from the capture's own timestamps, looped.
-  const std::int64_t capture_span = payloads.back().capture_ns - payloads.front().capture_ns +
-                                    (payloads.back().capture_ns - payloads.front().capture_ns) /
-                                        static_cast<std::int64_t>(payloads.size() - 1);
-  const double cpu_before = cpu_seconds(driver.pid);
-  const std::uint64_t wake_ups_before = wake_ups(driver.pid);
+  WakeRecorder reader(stream);
+  const pid_t pid = driver.process.pid;
+  const double cpu_before = cpu_seconds(pid);
+  const std::uint64_t wake_ups_before = wake_ups(pid);
   const std::int64_t start = sim::monotonic_ns();
-  const auto end = start + static_cast<std::int64_t>(seconds * 1e9);
-  std::uint64_t sent = 0;
-  for (std::int64_t loop_start = start; loop_start < end; loop_start += capture_span) {
-    for (const auto& p : payloads) {
-      const std::int64_t due = loop_start + (p.capture_ns - payloads.front().capture_ns);
-      if (due >= end) break;
-      timespec at{static_cast<time_t>(due / 1'000'000'000), static_cast<long>(due % 1'000'000'000)};
-      const auto completes = twin->push(p.bytes, 0).frame;
-      if (completes) twin->set_output(twin_points);
-      clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &at, nullptr);
-      const std::int64_t send_ns = sim::monotonic_ns();
-      sendto(sock, p.bytes.data(), p.bytes.size(), 0, reinterpret_cast<const sockaddr*>(&to), sizeof to);
-      if (completes) cuts_sent.push_back({completes->stamp_ns, send_ns});
-      ++sent;
-    }
-  }
-  const double wall = static_cast<double>(sim::monotonic_ns() - start) / 1e9;
-  const double cpu = cpu_seconds(driver.pid) - cpu_before;
-  const std::uint64_t wakes = wake_ups(driver.pid) - wake_ups_before;
-  std::uint64_t frames = 0;
-  if (auto status = sim::inspect(stream)) frames = status->frames_published;
+  SendLog log = send_at_recorded_rate(payloads, driver.port, seconds, *twin, twin_points);
+  DriverRun run;
+  run.wall_s = static_cast<double>(sim::monotonic_ns() - start) / 1e9;
+  run.cpu_s = cpu_seconds(pid) - cpu_before;
+  run.wakes = wake_ups(pid) - wake_ups_before;
+  run.sent = log.sent;
+  if (auto status = sim::inspect(stream)) run.frames = status->frames_published;
   std::this_thread::sleep_for(std::chrono::milliseconds(100));  // the last frame's wake-up
-  stop.store(true);
-  consumer.join();
-  std::vector<std::int64_t> send_to_reader;
-  std::size_t next_cut = 0;
-  for (const Event& w : woken) {
-    while (next_cut < cuts_sent.size() && cuts_sent[next_cut].stamp_ns != w.stamp_ns) ++next_cut;
-    if (next_cut == cuts_sent.size()) break;
-    send_to_reader.push_back(w.at_ns - cuts_sent[next_cut++].at_ns);
-  }
-  close(sock);
-  kill(driver.pid, SIGTERM);
-  waitpid(driver.pid, nullptr, 0);
-  close(driver.out);
+  run.send_to_reader_ns = send_to_reader_ns(reader.finish(), log.cuts_sent);
+  stop_driver(driver);
   (void)sim::destroy(stream, true);
-
-  std::printf("live driver CPU, Pandar64 dual at the recorded rate over UDP on 127.0.0.1\n");
-  std::printf("  %.1f s, %llu packets (%.0f/s), %llu frames published\n", wall,
-              static_cast<unsigned long long>(sent), static_cast<double>(sent) / wall,
-              static_cast<unsigned long long>(frames));
-  std::printf("  sim_lidar_hesai used %.3f s of CPU = %.2f %% of one core (target < 5 %%)\n", cpu,
-              100.0 * cpu / wall);
-  std::printf("  it woke %.0f times a second (%.1f packets per wake-up)\n",
-              static_cast<double>(wakes) / wall,
-              wakes == 0 ? 0.0 : static_cast<double>(sent) / static_cast<double>(wakes));
-  if (send_to_reader.empty()) {
-    std::printf("  no frame reached the reader: the send-to-reader time cannot be measured\n");
-    return 1;
-  }
-  const Percentiles latency = summarise(send_to_reader);
-  std::printf("  completing packet sent → blocked reader runs (%zu revolutions, µs: p50 / p99 / max)\n"
-              "                                                 %8.1f / %8.1f / %8.1f\n",
-              send_to_reader.size(), latency.p50_us, latency.p99_us, latency.max_us);
-  return 0;
+  return report(run);
 }
 
 }  // namespace
