@@ -156,7 +156,7 @@ std::vector<std::string> words(const std::string& line) {
   return out;
 }
 
-// The stream's description as sim_play left it (the region stays after the player ends).
+// The stream's description as sim_play left it (--keep-streams: the region stays after it ends).
 std::optional<sim::SensorInfo> sensor_of(const std::string& stream) {
   auto status = sim::inspect(stream);
   if (!status) return std::nullopt;
@@ -219,7 +219,8 @@ TEST(SensorMetadataInMcap, FoxgloveReadsTheCalibrationBesideEveryImageLatchedTra
   // sim_play gives the stream its description back.
   const std::string out = sim::testing::unique_stream("calplay");
   cleanup.names.push_back(out);
-  const auto played = sim::testing::run({SIM_PLAY, file.path(), "--remap", camera + "=" + out, "--max-rate"});
+  const auto played = sim::testing::run({SIM_PLAY, file.path(), "--remap", camera + "=" + out, "--max-rate",
+                                         "--keep-streams"});
   EXPECT_EQ(played.code, 0) << played.err;
   const auto sensor = sensor_of(out);
   ASSERT_TRUE(sensor) << played.err;
@@ -242,7 +243,7 @@ TEST(SensorMetadataInMcap, ARosbag2RecordingPlaysBackWithItsCalibrationAndMounti
   const std::string out = sim::testing::unique_stream("rosbag2cam");
   cleanup.names = {out};
   const auto played = sim::testing::run({SIM_PLAY, file.path(), "--remap", "/cam/front/image_raw=" + out,
-                                         "--max-rate"});
+                                         "--max-rate", "--keep-streams"});
   EXPECT_EQ(played.code, 0) << played.err;  // camera_info and /tf_static are metadata, not refused topics
   EXPECT_NE(played.err.find(out + " 5"), std::string::npos) << played.err;
   const auto sensor = sensor_of(out);

@@ -6,8 +6,10 @@
 // files without SIM metadata play too.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <turbojpeg.h>
 
+#include <algorithm>
 #include <cstring>
 
 #include "mcap_test_files.hpp"
@@ -352,6 +354,131 @@ TEST(SimPlay, PrintsTheTopicsOfAFileWithoutTheirControlCharacters) {
   EXPECT_EQ(played.err.find('\x1b'), std::string::npos) << played.err;
   EXPECT_EQ(played.err.find('\x07'), std::string::npos) << played.err;
   EXPECT_NE(played.err.find("/cam\\x1b]0;owned\\x07"), std::string::npos) << played.err;
+}
+
+// MCAP review L4: a small file naming many channels made one region each (500 from a 45 KB
+// file), and they stayed after sim_play ended. A crafted file of byte streams, shapes from
+// their metadata, so each channel makes its region before any message.
+std::vector<std::string> byte_channels(sim::testing::RawMcap& raw, sim::testing::StreamCleanup& cleanup,
+                                       int count, std::uint64_t capacity, const std::string& what) {
+  raw.schema(1, "sensor_msgs/msg/Image", image_schema());
+  std::vector<std::string> streams;
+  for (int i = 0; i < count; ++i) {
+    streams.push_back(unique_stream(what + std::to_string(i)));
+    raw.channel(static_cast<std::uint16_t>(i + 1), 1, streams.back(),
+                {{"sim.kind", "bytes"}, {"sim.capacity", std::to_string(capacity)}});
+  }
+  cleanup.names.insert(cleanup.names.end(), streams.begin(), streams.end());
+  return streams;
+}
+
+bool removed(const std::string& stream) {
+  const auto status = sim::inspect(stream);
+  return !status && status.error().code == sim::ErrorCode::not_found;
+}
+
+std::size_t existing(const std::vector<std::string>& streams) {
+  return static_cast<std::size_t>(
+      std::count_if(streams.begin(), streams.end(), [](const std::string& s) { return bool(sim::inspect(s)); }));
+}
+
+TEST(SimPlay, ARecordingOfMoreStreamsThanMaxStreamsIsRefusedBeforeAnyIsCreated) {
+  sim::testing::TempFile file;
+  sim::testing::StreamCleanup cleanup;
+  sim::testing::RawMcap raw;
+  const auto streams = byte_channels(raw, cleanup, 65, 64, "many");
+  sim::testing::write_bytes(file.path(), raw.finish());
+  const auto refused = sim::testing::run({SIM_PLAY, file.path(), "--max-rate"});
+  EXPECT_EQ(refused.code, 1) << refused.err;
+  EXPECT_NE(refused.err.find("would make 65 streams, more than --max-streams 64"), std::string::npos)
+      << refused.err;
+  EXPECT_EQ(std::count(refused.err.begin(), refused.err.end(), '\n'), 1) << refused.err;
+  EXPECT_EQ(existing(streams), 0u);
+  const auto allowed = sim::testing::run({SIM_PLAY, file.path(), "--max-rate", "--max-streams", "65",
+                                          "--keep-streams"});
+  EXPECT_EQ(allowed.code, 0) << allowed.err;
+  EXPECT_EQ(existing(streams), 65u);
+}
+
+TEST(SimPlay, TheStreamsOfOneRecordingShareOneSharedMemoryBudget) {
+  sim::testing::TempFile file;
+  sim::testing::StreamCleanup cleanup;
+  sim::testing::RawMcap raw;
+  const auto streams = byte_channels(raw, cleanup, 3, 3u << 20, "budget");  // 6 MiB each
+  sim::testing::write_bytes(file.path(), raw.finish());
+  const auto played = sim::testing::run({SIM_PLAY, file.path(), "--max-rate", "--max-shm", "10",
+                                         "--keep-streams"});
+  EXPECT_EQ(played.code, 1) << played.err;
+  EXPECT_NE(played.err.find("stream " + streams[1] + " would take 6.0 MiB of shared memory"), std::string::npos)
+      << played.err;
+  EXPECT_NE(played.err.find("--max-shm 10 MiB"), std::string::npos) << played.err;
+  EXPECT_TRUE(sim::inspect(streams[0]));  // the first fits, the others are not created
+  EXPECT_FALSE(sim::inspect(streams[1]));
+  EXPECT_FALSE(sim::inspect(streams[2]));
+}
+
+TEST(SimPlay, AStreamLargerThanWhatDevShmHasFreeIsRefusedBeforeItIsReserved) {
+  struct statvfs shm {};
+  ASSERT_EQ(::statvfs("/dev/shm", &shm), 0);
+  const std::uint64_t capacity = std::uint64_t{1} << 39;  // 1 TiB for its two slots
+  if (static_cast<std::uint64_t>(shm.f_bavail) * shm.f_frsize >= 2 * capacity) {
+    GTEST_SKIP() << "/dev/shm has more than 1 TiB free";
+  }
+  sim::testing::TempFile file;
+  sim::testing::StreamCleanup cleanup;
+  sim::testing::RawMcap raw;
+  const auto streams = byte_channels(raw, cleanup, 1, capacity, "nofree");
+  sim::testing::write_bytes(file.path(), raw.finish());
+  const auto played = sim::testing::run({SIM_PLAY, file.path(), "--max-rate", "--max-capacity", "1048576",
+                                         "--max-shm", "1073741824"});
+  EXPECT_EQ(played.code, 1) << played.err;
+  EXPECT_NE(played.err.find("MiB are free"), std::string::npos) << played.err;
+  EXPECT_FALSE(sim::inspect(streams[0]));
+}
+
+std::string tiny_image_file(const std::string& path, std::uint64_t interval_ns) {
+  const std::string topic = unique_stream("ends");
+  sim::testing::RawMcap raw;
+  raw.schema(1, "sensor_msgs/msg/Image", image_schema()).channel(1, 1, topic);
+  for (std::uint32_t i = 0; i < 5; ++i) {
+    const std::uint64_t t = kTinyStart + i * interval_ns;
+    raw.message(1, i, t, tiny_image_message(i, static_cast<std::int64_t>(t)));
+  }
+  sim::testing::write_bytes(path, raw.finish());
+  return topic;
+}
+
+TEST(SimPlay, RemovesTheStreamsItMadeWhenItEndsOrIsStoppedUnlessToldToKeepThem) {
+  sim::testing::TempFile file;
+  sim::testing::StreamCleanup cleanup;
+  const std::string stream = tiny_image_file(file.path(), 10'000'000);
+  cleanup.names = {stream};
+  const auto played = sim::testing::run({SIM_PLAY, file.path(), "--max-rate"});
+  EXPECT_EQ(played.code, 0) << played.err;
+  EXPECT_NE(played.err.find(stream + " 5"), std::string::npos) << played.err;  // it did play
+  EXPECT_TRUE(removed(stream));
+
+  const auto kept = sim::testing::run({SIM_PLAY, file.path(), "--max-rate", "--keep-streams"});
+  EXPECT_EQ(kept.code, 0) << kept.err;
+  auto status = sim::inspect(stream);
+  ASSERT_TRUE(status) << status.error().message;
+  EXPECT_EQ(status->frames_published, 5u);
+  ASSERT_TRUE(sim::destroy(stream));
+
+  // Stopped (Ctrl-C, SIGTERM) in the middle of a slow recording: removed all the same.
+  const std::string slow = tiny_image_file(file.path(), 60'000'000'000);
+  cleanup.names.push_back(slow);
+  Process player({SIM_PLAY, file.path(), "--quiet"});
+  ASSERT_TRUE(player.wait_for_line("playing")) << player.err();
+  for (int i = 0; i < 3000; ++i) {  // until the first frame is out (bounded: 30 s)
+    auto now = sim::inspect(slow);
+    if (now && now->frames_published > 0) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_TRUE(sim::inspect(slow)) << "the stream was never created";
+  player.signal(SIGTERM);
+  EXPECT_EQ(player.wait(), 0) << player.err();
+  EXPECT_TRUE(removed(slow));
 }
 
 TEST(SimRecord, ExitsWith1WhenTheLastChunkCannotBeWritten) {

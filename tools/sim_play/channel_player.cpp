@@ -1,9 +1,11 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "channel_player.hpp"
 
+#include <sys/statvfs.h>
 #include <turbojpeg.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
 
 #include "sim/ros2/decode.hpp"
@@ -45,9 +47,35 @@ PointType repack_type(const ros2::PointCloud2View& cloud) {
 
 }  // namespace
 
+std::optional<Error> ShmBudget::take(const std::string& stream, std::uint64_t current,
+                                     std::uint64_t needed) {
+  const auto mib = [](std::uint64_t bytes) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.1f", static_cast<double>(bytes) / (1u << 20));
+    return std::string(text);
+  };
+  if (used_ - std::min(used_, current) + needed > limit_) {
+    return bad("stream " + stream + " would take " + mib(needed) + " MiB of shared memory, and the " +
+               "recording's streams together may take at most --max-shm " + std::to_string(limit_ >> 20) +
+               " MiB; raise it if you trust the recording");
+  }
+  // The new region exists beside the one it replaces until it is complete: all of it must fit.
+  struct statvfs shm {};
+  if (statvfs("/dev/shm", &shm) == 0) {
+    const std::uint64_t free_bytes = static_cast<std::uint64_t>(shm.f_bavail) * shm.f_frsize;
+    if (needed > free_bytes) {
+      return bad("stream " + stream + " needs " + mib(needed) + " MiB of /dev/shm but only " +
+                 mib(free_bytes) + " MiB are free; remove streams nobody writes (sim_rm --dead) or " +
+                 "play fewer topics (--remap, --max-shm)");
+    }
+  }
+  used_ = used_ - std::min(used_, current) + needed;
+  return std::nullopt;
+}
+
 Expected<ChannelPlayer> ChannelPlayer::for_channel(const mcap::Channel& channel,
                                                    const mcap::Schema* schema, std::string stream,
-                                                   std::uint64_t max_capacity) {
+                                                   std::uint64_t max_capacity, ShmBudget& budget) {
   const std::string topic = mcap::printable(channel.topic);
   if (channel.message_encoding != "cdr") {
     return bad("topic " + topic + " is encoded as \"" + mcap::printable(channel.message_encoding) +
@@ -67,7 +95,7 @@ Expected<ChannelPlayer> ChannelPlayer::for_channel(const mcap::Channel& channel,
                ", which SIM cannot play (PointCloud2, Image or CompressedImage); it is skipped");
   }
   auto shape = mcap::stream_shape(channel.metadata);
-  return ChannelPlayer(*type, topic, std::move(stream), shape, max_capacity);
+  return ChannelPlayer(*type, topic, std::move(stream), shape, max_capacity, budget);
 }
 
 std::optional<Error> ChannelPlayer::create_stream() {
@@ -84,6 +112,9 @@ std::optional<Error> ChannelPlayer::ensure_writer(const mcap::StreamShape& wante
                " MiB per frame, more than --max-capacity " + std::to_string(max_capacity_ >> 20) +
                " MiB; raise it if you trust the recording");
   }
+  const std::uint64_t current = writer_ ? region_size(writer_->capacity()) : 0;
+  const std::uint64_t needed = region_size(wanted.capacity);
+  if (auto error = budget_->take(stream_, current, needed)) return error;
   writer_.reset();  // a changed shape replaces the region; readers follow
   StreamSpec spec;
   spec.name = stream_;
@@ -92,8 +123,12 @@ std::optional<Error> ChannelPlayer::ensure_writer(const mcap::StreamShape& wante
   spec.heartbeat_period = std::chrono::milliseconds(500);
   spec.sensor = sensor_;  // a replaced region keeps the description
   auto created = Writer::create(spec);
-  if (!created) return created.error();
+  if (!created) {
+    budget_->give_back(needed);
+    return created.error();
+  }
   writer_.emplace(std::move(*created));
+  made_stream_ = true;
   shape_ = wanted;
   return std::nullopt;
 }

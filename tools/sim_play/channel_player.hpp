@@ -6,6 +6,7 @@
 // recorded elsewhere); a later message that does not fit makes the stream grow.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -29,13 +30,32 @@ struct Mountings {
   std::uint64_t generation = 0;
 };
 
+// The shared memory all streams of one playback take together: at most `limit` bytes
+// (--max-shm), and never more than /dev/shm has free, checked before a region is created or grown.
+// A file of a few kilobytes must not be able to fill /dev/shm, however many channels it names.
+class ShmBudget {
+ public:
+  explicit ShmBudget(std::uint64_t limit) noexcept : limit_(limit) {}
+  // Takes `needed` bytes for a region of `stream` that replaces one of `current` bytes (0 for a
+  // new stream); the sentence of what to do when they do not fit.
+  std::optional<Error> take(const std::string& stream, std::uint64_t current, std::uint64_t needed);
+  // Gives back the bytes of a region that is gone.
+  void give_back(std::uint64_t bytes) noexcept { used_ -= std::min(used_, bytes); }
+
+ private:
+  std::uint64_t limit_;
+  std::uint64_t used_ = 0;
+};
+
 class ChannelPlayer {
  public:
   // Checks the channel can be played (ROS 2 CDR of a type SIM has) without creating anything.
   // `max_capacity`: bytes per slot the stream may take at most, whatever the file says (a file
-  // of a few bytes must not reserve gigabytes of shared memory).
+  // of a few bytes must not reserve gigabytes of shared memory); `budget`: what all streams may
+  // take together (it must outlive the player).
   static Expected<ChannelPlayer> for_channel(const mcap::Channel& channel, const mcap::Schema* schema,
-                                             std::string stream, std::uint64_t max_capacity);
+                                             std::string stream, std::uint64_t max_capacity,
+                                             ShmBudget& budget);
 
   const std::string& stream() const noexcept { return stream_; }
   const std::string& topic() const noexcept { return topic_; }
@@ -51,6 +71,8 @@ class ChannelPlayer {
   std::optional<Error> play(std::span<const std::byte> message, std::int64_t stamp_shift_ns);
 
   std::uint64_t frames() const noexcept { return frames_; }
+  // Whether this player made (or took over) a region of its stream at some point.
+  bool made_stream() const noexcept { return made_stream_; }
 
   // What the stream says about its sensor comes from the recording: the calibration of the
   // CameraInfo beside the images, the mounting of the frame its messages name from /tf_static.
@@ -63,9 +85,9 @@ class ChannelPlayer {
 
  private:
   ChannelPlayer(ros2::MessageType type, std::string topic, std::string stream,
-                std::optional<mcap::StreamShape> shape, std::uint64_t max_capacity)
+                std::optional<mcap::StreamShape> shape, std::uint64_t max_capacity, ShmBudget& budget)
       : type_(type), topic_(std::move(topic)), stream_(std::move(stream)), shape_(shape),
-        max_capacity_(max_capacity) {}
+        max_capacity_(max_capacity), budget_(&budget) {}
   std::optional<Error> ensure_writer(const mcap::StreamShape& wanted);
   std::optional<Error> commit(Loan&& loan, std::uint64_t size, std::int64_t stamp_ns);
   // Sets the stream's description when the frame id, calibration or mountings changed.
@@ -76,7 +98,9 @@ class ChannelPlayer {
   std::string stream_;
   std::optional<mcap::StreamShape> shape_;
   std::uint64_t max_capacity_;
+  ShmBudget* budget_;
   std::optional<Writer> writer_;
+  bool made_stream_ = false;
   std::uint64_t frames_ = 0;
 
   const Mountings* mountings_ = nullptr;

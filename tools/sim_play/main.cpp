@@ -4,11 +4,13 @@
 // tell it from the live sensors.
 //
 // The steps, each a function below: read the command line; open the file; make one player per
-// playable channel; create the streams; play the messages (paced, looped); report.
+// playable channel; bound the streams; create them; play the messages (paced, looped); report;
+// remove the streams it made.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -27,6 +29,7 @@ namespace {
 
 using sim::play::Players;
 using sim::play::SensorMetadata;
+using sim::play::ShmBudget;
 
 struct PlayOptions {
   std::string file;
@@ -38,6 +41,9 @@ struct PlayOptions {
   bool wait_readers = false;
   bool quiet = false;
   std::uint64_t max_capacity_mib = 256;
+  std::uint64_t max_streams = 64;
+  std::uint64_t max_shm_mib = 2048;
+  bool keep_streams = false;
 
   // The stream a channel plays into: --remap of its topic, else of the stream sim_record
   // recorded it from (sim.stream: images are on <stream>/image_raw), else that stream, else
@@ -78,6 +84,18 @@ std::optional<int> parse_command_line(sim::apps::CommandLine& cli, int argc, cha
       ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 20))
       ->capture_default_str()
       ->type_name("MIB");
+  app.add_option("--max-streams", o.max_streams,
+                 "streams a recording may make at most (a file naming more is refused)")
+      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{100000}))
+      ->capture_default_str()
+      ->type_name("N");
+  app.add_option("--max-shm", o.max_shm_mib,
+                 "MiB of shared memory all streams may take together (never more than /dev/shm has free)")
+      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 30))
+      ->capture_default_str()
+      ->type_name("MIB");
+  app.add_flag("--keep-streams", o.keep_streams,
+               "leave the streams in /dev/shm when playback ends (by default they are removed)");
   app.add_flag("--quiet", o.quiet, "no progress line and no summary");
   cli.add_config_file();
   if (auto code = cli.parse(argc, argv)) return code;
@@ -94,7 +112,7 @@ std::optional<int> parse_command_line(sim::apps::CommandLine& cli, int argc, cha
 // One player per playable channel; several channels of one topic (a stream whose layout
 // changed while recording) share its stream name.
 Players make_players(const sim::mcap::Reader& reader, const SensorMetadata& metadata, const PlayOptions& o,
-                     sim::apps::StatusLine& status) {
+                     ShmBudget& budget, sim::apps::StatusLine& status) {
   Players players;
   for (const auto& [id, channel] : reader.channels()) {
     if (metadata.handles(id)) continue;
@@ -105,7 +123,7 @@ Players make_players(const sim::mcap::Reader& reader, const SensorMetadata& meta
       continue;
     }
     auto player = sim::play::ChannelPlayer::for_channel(channel, reader.schema_of(channel), stream,
-                                                        o.max_capacity_mib << 20);
+                                                        o.max_capacity_mib << 20, budget);
     if (!player) {
       say(status, player.error().message);
       continue;
@@ -113,6 +131,16 @@ Players make_players(const sim::mcap::Reader& reader, const SensorMetadata& meta
     players.emplace(id, std::move(*player));
   }
   return players;
+}
+
+// Why the players would make more streams than --max-streams (a 45 KB file named 500), or empty.
+std::string too_many_streams(const Players& players, const PlayOptions& o) {
+  std::set<std::string> streams;
+  for (const auto& [id, player] : players) streams.insert(player.stream());
+  if (streams.size() <= o.max_streams) return {};
+  return sim::mcap::printable(o.file) + " would make " + std::to_string(streams.size()) +
+         " streams, more than --max-streams " + std::to_string(o.max_streams) +
+         "; raise it if you trust the recording";
 }
 
 // Creates every stream before playing: from the metadata, or from each topic's first message.
@@ -256,6 +284,19 @@ class Playback {
   unsigned passes_ = 0;
 };
 
+// Removes the streams the players made, once they closed them, unless --keep-streams: like a
+// player whose topics vanish when it stops, a playback leaves no region behind in /dev/shm (a
+// reader keeps the frames it holds; a stream another writer took meanwhile is left alone).
+void remove_streams(Players& players, bool keep) {
+  std::set<std::string> made;
+  for (const auto& [id, player] : players) {
+    if (player.made_stream()) made.insert(player.stream());
+  }
+  players.clear();  // closes the writers
+  if (keep) return;
+  for (const auto& name : made) (void)sim::destroy(name);
+}
+
 // The summary line and the sentences of what went wrong; the exit code.
 int report(const Playback& playback, const Players& players, const sim::mcap::Reader& reader,
            bool streams_failed, sim::apps::StatusLine& status) {
@@ -295,10 +336,14 @@ int main(int argc, char** argv) {
   if (!reader->problem().empty()) say(status, reader->problem());
 
   SensorMetadata metadata(*reader);
-  Players players = make_players(*reader, metadata, options, status);
+  ShmBudget budget(options.max_shm_mib << 20);
+  Players players = make_players(*reader, metadata, options, budget, status);
   if (players.empty()) {
     return cli.fail(sim::mcap::printable(options.file) +
                     " has no topic SIM can play (PointCloud2, Image or CompressedImage in CDR)");
+  }
+  if (const std::string refused = too_many_streams(players, options); !refused.empty()) {
+    return cli.fail(refused);
   }
   bool streams_failed = false;
   const auto streams = create_streams(*reader, players, status, streams_failed);
@@ -306,10 +351,15 @@ int main(int argc, char** argv) {
   std::printf("playing %s into %zu stream%s\n", sim::mcap::printable(options.file).c_str(), streams.size(),
               streams.size() == 1 ? "" : "s");
   std::fflush(stdout);
-  if (options.wait_readers && !wait_for_readers(streams, stop)) return sim::apps::kExitOk;
+  if (options.wait_readers && !wait_for_readers(streams, stop)) {
+    remove_streams(players, options.keep_streams);
+    return sim::apps::kExitOk;
+  }
 
   metadata.attach(players);
   Playback playback(*reader, players, metadata, options, stop, status);
   playback.run();
-  return report(playback, players, *reader, streams_failed, status);
+  const int code = report(playback, players, *reader, streams_failed, status);
+  remove_streams(players, options.keep_streams);
+  return code;
 }
