@@ -291,9 +291,11 @@ void FrameAssembler::complete(PushResult& result) noexcept {
 }
 
 void FrameAssembler::move_packet_tail_to_next() noexcept {
-  // nebula's rule: from the end, points less than 2 whole degrees past the cut.
+  // nebula's rule (reference note §1): from the end, the points within 90° after the cut. (A
+  // 2° limit left 95 points of the VLP-16 capture's wrap packet, 0.08°–2.28°, in the frame
+  // before nebula's.)
   std::size_t keep = packet_points_;
-  while (keep > 0 && packet_point_phase_[keep - 1] < 200) --keep;
+  while (keep > 0 && packet_point_phase_[keep - 1] < 9000) --keep;
   const std::size_t moved = packet_points_ - keep;
   if (moved == 0 || !output_attached_ || output_count_ < moved || moved > carry_.size()) return;
   const std::size_t first = output_count_ - moved;

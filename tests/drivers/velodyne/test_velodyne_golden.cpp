@@ -108,6 +108,19 @@ TEST(VelodyneGolden, Vlp16DualRevolutionEqualsNebulasReferenceCloud) {
   EXPECT_GE(share_within_1mm(d.frames.back(), reference), 0.999);
 }
 
+// nebula's scans are whole packets: cut that way, the VLP-16 revolution is the reference too.
+// The wrap packet's points within 90° past the cut begin the next scan (with a 2° limit, 95
+// points at 0.08°–2.28° stayed in the scan before).
+TEST(VelodyneGolden, Vlp16CutByPacketAlsoEqualsNebulasReferenceCloud) {
+  const auto reference = read_pcd_xyz(data("vlp16_dual.reference.pcd"));
+  AssemblerOptions o = nebula_settings(Model::vlp16);
+  o.cut_by = CutBy::packet;
+  const Decoded d = decode("vlp16_dual.pcap", "VLP16.yaml", o);
+  ASSERT_EQ(d.frames.size(), 3U);
+  ASSERT_EQ(d.frames.back().size(), reference.size());
+  EXPECT_GE(share_within_1mm(d.frames.back(), reference), 0.999);
+}
+
 TEST(VelodyneGolden, Vls128RevolutionEqualsNebulasReferenceCloud) {
   const auto reference = read_pcd_xyz(data("vls128_strongest.reference.pcd"));
   ASSERT_EQ(reference.size(), 208680U);

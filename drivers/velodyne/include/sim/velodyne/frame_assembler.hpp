@@ -45,7 +45,7 @@ enum class CutBy : std::uint8_t {
   // Each point by its own azimuth: a frame holds exactly the points in [cut, cut + 360°).
   point_azimuth,
   // As nebula cuts (its reference clouds): whole packets, the frame ends with the packet whose
-  // block azimuths wrap past the cut; only that packet's trailing points less than 2° past the
+  // block azimuths wrap past the cut; only that packet's trailing points within 90° past the
   // cut move to the next frame. Lasers with a large rot_correction (VLS-128: up to ±6°) then
   // spill across the cut. For comparing with nebula only.
   packet,
