@@ -2,6 +2,7 @@
 // sim_echo: prints the frames of a stream (one readable line each, or JSON with --json), or with
 // --stats their rate, interval spread, latency, delay, bandwidth and skips.
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -87,16 +88,7 @@ void print_stats(const Options& o, const char* label, const sim::echo::FrameStat
   std::fflush(stdout);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  Options o;
-  sim::apps::CommandLine cli(
-      "sim_echo",
-      "Print the frames of a SIM stream, one line each (seq, size, latency = publish to read, "
-      "delay = sensor stamp to read, layout), or with --stats its rate (with the spread of the "
-      "intervals), latency, delay, bandwidth and skipped frames. Frames published before "
-      "sim_echo started are not counted.");
+void add_options(sim::apps::CommandLine& cli, Options& o) {
   auto& app = cli.app();
   cli.add_stream("stream", o.stream, "stream name, like /lidar_top")->required();
   app.add_option("--count,-n", o.count, "exit after this many frames (0: until stopped)");
@@ -113,61 +105,90 @@ int main(int argc, char** argv) {
   app.add_flag("--poll", o.poll, "busy-poll instead of sleeping until each frame (uses a core)");
   cli.add_placement(o.placement);
   cli.add_trust(o.reader.trust);
-  if (auto code = cli.parse(argc, argv)) return *code;
-  if (auto code = cli.apply_placement(o.placement)) return *code;
+}
 
-  const auto& stop = sim::apps::StopSignal::install();
-  const std::int64_t start = sim::monotonic_ns();
-  const auto past = [&](double seconds) {
-    return seconds > 0 && static_cast<double>(sim::monotonic_ns() - start) / 1e9 >= seconds;
-  };
+// --duration, counted from the start of the program.
+struct RunTime {
+  std::int64_t start_ns = sim::monotonic_ns();
+  bool past(double seconds) const {
+    return seconds > 0 && static_cast<double>(sim::monotonic_ns() - start_ns) / 1e9 >= seconds;
+  }
+};
 
+// Opens the stream; with --wait-for-stream it tries again until the stream exists, a stop or the
+// end of --duration.
+sim::Expected<sim::Reader> open_reader(const Options& o, const sim::apps::StopSignal& stop,
+                                       const RunTime& run) {
   auto reader = sim::Reader::open(o.stream, o.reader);
   while (!reader && o.wait_for_stream && reader.error().code == sim::ErrorCode::not_found &&
-         !past(o.duration_s) && stop.sleep_for(std::chrono::milliseconds(100))) {
+         !run.past(o.duration_s) && stop.sleep_for(std::chrono::milliseconds(100))) {
     reader = sim::Reader::open(o.stream, o.reader);
   }
-  if (!reader) {
-    if (stop.requested() || past(o.duration_s)) return sim::apps::kExitOk;
-    return cli.fail(std::string_view(reader.error().message));
-  }
-  // Frames published before this moment are the past: not counted, not printed.
-  const std::int64_t opened_ns = sim::monotonic_ns();
+  return reader;
+}
 
-  std::vector<std::byte> buffer(reader->capacity());
+// What the loop keeps from frame to frame.
+struct Echo {
   sim::echo::FrameStats window;
   sim::echo::FrameStats total;
   std::int64_t window_start = sim::monotonic_ns();
   std::int64_t last_frame_at = window_start;
-  int exit_code = sim::apps::kExitOk;
   // Of the last description printed: a stream without one prints no sensor line at all.
   std::uint64_t sensor_generation = 0;
-  const auto slice = std::chrono::milliseconds(100);
+};
 
-  while (!stop.requested() && !past(o.duration_s)) {
+// Counts a new frame and prints it (with --stats: adds it to the window). True when --count
+// frames were taken.
+bool take_frame(const Options& o, const sim::Reader& reader, const sim::FrameInfo& info,
+                std::int64_t now, Echo& e) {
+  e.last_frame_at = now;
+  const sim::echo::Frame frame{info.seq, info.size, info.publish_ns, now, info.stamp_ns,
+                               sim::realtime_ns()};
+  e.total.add(frame);
+  if (o.stats) {
+    e.window.add(frame);
+  } else {
+    if (e.sensor_generation != info.sensor_generation) {
+      print_sensor(o, reader, info.sensor_generation);
+      e.sensor_generation = info.sensor_generation;
+    }
+    print_frame(o, info, frame.read_ns, frame.read_realtime_ns, e.total.skipped());
+  }
+  return o.count != 0 && e.total.frames() >= o.count;
+}
+
+// The sentence when --timeout passed without a frame.
+std::optional<std::string> timeout_problem(const Options& o, sim::Reader& reader,
+                                           std::int64_t now, const Echo& e) {
+  if (o.timeout_s <= 0 || static_cast<double>(now - e.last_frame_at) / 1e9 <= o.timeout_s) {
+    return std::nullopt;
+  }
+  char message[256];
+  std::snprintf(message, sizeof message, "no frame on %s for %.1f s (its writer is %s)",
+                o.stream.c_str(), o.timeout_s, reader.writer_alive() ? "alive" : "gone");
+  return message;
+}
+
+// Reads and prints frames until a stop, --duration, --count, --timeout or a damaged stream.
+int echo_frames(const sim::apps::CommandLine& cli, const Options& o, sim::Reader& reader,
+                const sim::apps::StopSignal& stop, const RunTime& run) {
+  // Frames published before this moment are the past: not counted, not printed.
+  const std::int64_t opened_ns = sim::monotonic_ns();
+  std::vector<std::byte> buffer(reader.capacity());
+  Echo e;
+  int exit_code = sim::apps::kExitOk;
+  const auto slice = std::chrono::milliseconds(100);
+  while (!stop.requested() && !run.past(o.duration_s)) {
     sim::FrameInfo info;
     const sim::ReadStatus status =
-        o.poll ? reader->read(buffer, info) : reader->read_next(buffer, info, slice);
+        o.poll ? reader.read(buffer, info) : reader.read_next(buffer, info, slice);
     if (status == sim::ReadStatus::buffer_too_small) {
-      buffer.resize(reader->capacity());  // the writer recreated the stream with a larger layout
+      buffer.resize(reader.capacity());  // the writer recreated the stream with a larger layout
       continue;
     }
     const std::int64_t now = sim::monotonic_ns();
     if (status == sim::ReadStatus::new_frame && info.publish_ns >= opened_ns) {
-      last_frame_at = now;
-      const sim::echo::Frame frame{info.seq, info.size, info.publish_ns, now, info.stamp_ns,
-                                   sim::realtime_ns()};
-      total.add(frame);
-      if (o.stats) {
-        window.add(frame);
-      } else {
-        if (sensor_generation != info.sensor_generation) {
-          print_sensor(o, *reader, info.sensor_generation);
-          sensor_generation = info.sensor_generation;
-        }
-        print_frame(o, info, frame.read_ns, frame.read_realtime_ns, total.skipped());
-      }
-      if (o.count != 0 && total.frames() >= o.count) break;
+      if (take_frame(o, reader, info, now, e)) break;
     } else if (status == sim::ReadStatus::region_invalid) {
       cli.fail("stream " + o.stream + " failed validation; restart its writer");
       exit_code = sim::apps::kExitFailure;
@@ -175,20 +196,41 @@ int main(int argc, char** argv) {
     } else if (o.poll && status != sim::ReadStatus::new_frame) {
       std::this_thread::yield();
     }
-    if (o.timeout_s > 0 && static_cast<double>(now - last_frame_at) / 1e9 > o.timeout_s) {
-      char message[256];
-      std::snprintf(message, sizeof message, "no frame on %s for %.1f s (its writer is %s)",
-                    o.stream.c_str(), o.timeout_s, reader->writer_alive() ? "alive" : "gone");
-      cli.fail(message);
+    if (auto problem = timeout_problem(o, reader, now, e)) {
+      cli.fail(*problem);
       exit_code = sim::apps::kExitFailure;
       break;
     }
-    if (o.stats && static_cast<double>(now - window_start) / 1e9 >= o.interval_s) {
-      print_stats(o, "stream", window);
-      window = sim::echo::FrameStats{};
-      window_start = now;
+    if (o.stats && static_cast<double>(now - e.window_start) / 1e9 >= o.interval_s) {
+      print_stats(o, "stream", e.window);
+      e.window = sim::echo::FrameStats{};
+      e.window_start = now;
     }
   }
-  if (o.stats) print_stats(o, "summary", total);
+  if (o.stats) print_stats(o, "summary", e.total);
   return exit_code;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  sim::apps::CommandLine cli(
+      "sim_echo",
+      "Print the frames of a SIM stream, one line each (seq, size, latency = publish to read, "
+      "delay = sensor stamp to read, layout), or with --stats its rate (with the spread of the "
+      "intervals), latency, delay, bandwidth and skipped frames. Frames published before "
+      "sim_echo started are not counted.");
+  add_options(cli, o);
+  if (auto code = cli.parse(argc, argv)) return *code;
+  if (auto code = cli.apply_placement(o.placement)) return *code;
+
+  const auto& stop = sim::apps::StopSignal::install();
+  const RunTime run;
+  auto reader = open_reader(o, stop, run);
+  if (!reader) {
+    if (stop.requested() || run.past(o.duration_s)) return sim::apps::kExitOk;
+    return cli.fail(std::string_view(reader.error().message));
+  }
+  return echo_frames(cli, o, *reader, stop, run);
 }
