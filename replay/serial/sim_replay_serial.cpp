@@ -46,9 +46,7 @@ class PacedSink final : public sim::unitree::ScanSink {
   std::int64_t scans_ = 0;
 };
 
-}  // namespace
-
-int main(int argc, char** argv) {
+struct Options {
   std::string path;
   std::string model_text;
   std::string stream;
@@ -59,53 +57,44 @@ int main(int argc, char** argv) {
   bool quiet = false;
   sim::ThreadPlacement placement;
   sim::apps::SensorOptions sensor;
-  sim::apps::CommandLine cli(
-      "sim_replay_serial",
-      "Replay a raw byte recording of a Unitree L1 or L2 (sim_lidar_unitree --record) into SIM, "
-      "through the same decoder as the live driver; scans are stamped when published.");
+};
+
+void add_options(sim::apps::CommandLine& cli, Options& o) {
   auto& app = cli.app();
-  app.add_option("file", path, "the recording")->required();
-  app.add_option("--model", model_text, "L1 or L2")->required()->check(
+  app.add_option("file", o.path, "the recording")->required();
+  app.add_option("--model", o.model_text, "L1 or L2")->required()->check(
       sim::apps::validator(sim::unitree::model_problem, "Unitree model"));
-  cli.add_stream("--stream", stream, "SIM point stream, e.g. /lidar_top")->required();
-  cli.add_stream("--imu-stream", imu_stream, "SIM IMU stream (empty: <stream>.imu)");
-  app.add_flag("--no-imu", no_imu, "do not publish IMU samples");
-  app.add_option("--scan-packets", scan_packets, "packets per published scan")
+  cli.add_stream("--stream", o.stream, "SIM point stream, e.g. /lidar_top")->required();
+  cli.add_stream("--imu-stream", o.imu_stream, "SIM IMU stream (empty: <stream>.imu)");
+  app.add_flag("--no-imu", o.no_imu, "do not publish IMU samples");
+  app.add_option("--scan-packets", o.scan_packets, "packets per published scan")
       ->check(CLI::Range(1U, 1000U));
-  app.add_option("--rate-hz", rate_hz, "scans per second to publish (0: as fast as possible)")
+  app.add_option("--rate-hz", o.rate_hz, "scans per second to publish (0: as fast as possible)")
       ->check(CLI::Range(0.0, 1000.0));
-  app.add_flag("-q,--quiet", quiet, "no progress line and no summary");
-  sim::apps::add_sensor_options(cli, sensor, sim::apps::SensorKind::lidar);
-  cli.add_placement(placement);
-  if (auto code = cli.parse(argc, argv)) return *code;
-  auto described = sim::apps::sensor_info_from(sensor, stream);
-  if (!described) return cli.fail(described.error());
-  const auto& stop = sim::apps::StopSignal::install();
-  if (auto code = cli.apply_placement(placement)) return *code;
+  app.add_flag("-q,--quiet", o.quiet, "no progress line and no summary");
+  sim::apps::add_sensor_options(cli, o.sensor, sim::apps::SensorKind::lidar);
+  cli.add_placement(o.placement);
+}
 
-  const auto model = *sim::unitree::parse_model(model_text);
-  std::ifstream in(path, std::ios::binary);
-  std::error_code size_ec;
-  const auto total = std::filesystem::file_size(path, size_ec);
-  if (!in || size_ec) return cli.fail("cannot read '" + path + "'; check the path");
+// The streams the decoder's scans and IMU samples go to, described as a replay.
+sim::unitree::SimSinkOptions sink_options(const Options& o, const sim::SensorInfo& described,
+                                          const sim::unitree::DecoderOptions& decoder) {
+  sim::unitree::SimSinkOptions sink;
+  sink.points_stream = o.stream;
+  sink.imu_stream = o.no_imu ? std::string()
+                             : (o.imu_stream.empty() ? sim::unitree::default_imu_stream(o.stream)
+                                                     : o.imu_stream);
+  sink.max_points = sim::unitree::Decoder::max_points_per_scan(decoder);
+  sink.sensor = sim::unitree::describe_sensor(described, decoder);
+  sink.sensor->time_sync = "replayed, stamped with this host's clock when published";
+  return sink;
+}
 
-  sim::unitree::DecoderOptions options;
-  options.model = model;
-  options.packets_per_scan = scan_packets;
-  sim::unitree::SimSinkOptions sink_options;
-  sink_options.points_stream = stream;
-  sink_options.imu_stream =
-      no_imu ? std::string()
-             : (imu_stream.empty() ? sim::unitree::default_imu_stream(stream) : imu_stream);
-  sink_options.max_points = sim::unitree::Decoder::max_points_per_scan(options);
-  sink_options.sensor = sim::unitree::describe_sensor(*described, options);
-  sink_options.sensor->time_sync = "replayed, stamped with this host's clock when published";
-  auto sink = sim::unitree::SimScanSink::create(sink_options);
-  if (!sink) return cli.fail(sink.error());
-  PacedSink paced(**sink, rate_hz, stop);
-  sim::unitree::Decoder decoder(options, paced);
-
-  auto status = sim::apps::StatusLine::for_stderr("sim_replay_serial", quiet);
+// Feeds the recording to the decoder in chunks until its end or a stop, with the share read on
+// the status line.
+void replay_bytes(std::ifstream& in, std::uintmax_t total, sim::unitree::Decoder& decoder,
+                  const sim::unitree::SimScanSink& sink, sim::apps::StatusLine& status,
+                  const sim::apps::StopSignal& stop) {
   std::vector<char> chunk(16384);
   std::uint64_t done = 0;
   while (in && !stop.requested()) {
@@ -117,14 +106,47 @@ int main(int argc, char** argv) {
     status.update(sim::apps::number(total ? 100.0 * static_cast<double>(done) /
                                                 static_cast<double>(total)
                                           : 100.0, 0) +
-                  "%  " + sim::unitree::format_status(decoder.counters(), (*sink)->counters()));
+                  "%  " + sim::unitree::format_status(decoder.counters(), sink.counters()));
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  sim::apps::CommandLine cli(
+      "sim_replay_serial",
+      "Replay a raw byte recording of a Unitree L1 or L2 (sim_lidar_unitree --record) into SIM, "
+      "through the same decoder as the live driver; scans are stamped when published.");
+  Options o;
+  add_options(cli, o);
+  if (auto code = cli.parse(argc, argv)) return *code;
+  auto described = sim::apps::sensor_info_from(o.sensor, o.stream);
+  if (!described) return cli.fail(described.error());
+  const auto& stop = sim::apps::StopSignal::install();
+  if (auto code = cli.apply_placement(o.placement)) return *code;
+
+  const auto model = *sim::unitree::parse_model(o.model_text);
+  std::ifstream in(o.path, std::ios::binary);
+  std::error_code size_ec;
+  const auto total = std::filesystem::file_size(o.path, size_ec);
+  if (!in || size_ec) return cli.fail("cannot read '" + o.path + "'; check the path");
+
+  sim::unitree::DecoderOptions options;
+  options.model = model;
+  options.packets_per_scan = o.scan_packets;
+  auto sink = sim::unitree::SimScanSink::create(sink_options(o, *described, options));
+  if (!sink) return cli.fail(sink.error());
+  PacedSink paced(**sink, o.rate_hz, stop);
+  sim::unitree::Decoder decoder(options, paced);
+
+  auto status = sim::apps::StatusLine::for_stderr("sim_replay_serial", o.quiet);
+  replay_bytes(in, total, decoder, **sink, status, stop);
   if (!stop.requested()) decoder.finish();
   const auto counters = decoder.counters();
   status.finish(sim::unitree::format_status(counters, (*sink)->counters()));
   if (counters.framing.packets == 0 && !stop.requested()) {
     return cli.fail("no Unitree " + std::string(sim::unitree::to_string(model)) +
-                    " packets with a good checksum in '" + path +
+                    " packets with a good checksum in '" + o.path +
                     "'; check it is a raw byte recording of that model");
   }
   return sim::apps::kExitOk;
