@@ -5,216 +5,26 @@
 // frames, garbage HTTP. Each gets an error status or a closed connection, and the server keeps
 // serving the next client. The server runs in this process (the library), fed by a real SIM
 // writer on a real shared-memory stream.
-#include <arpa/inet.h>
-#include <gtest/gtest.h>
-#include <netinet/in.h>
-#include <netinet/tcp.h>
 #include <fcntl.h>
-#include <poll.h>
+#include <gtest/gtest.h>
 #include <sys/resource.h>
-#include <sys/socket.h>
-#include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
-#include <chrono>
-#include <cstring>
 #include <optional>
+#include <span>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "raw_client.hpp"
 #include "sim/foxglove/server.hpp"
 #include "sim/sim.hpp"
 
 namespace {
 
-using namespace std::chrono_literals;
-
-// Against hangs only: a test that reaches this has failed.
-constexpr auto kPatience = 20s;
-
-std::string unique_stream(const char* base) {
-  static std::atomic<int> counter{0};
-  std::string name = "/";  // built in place: GCC 12 at -O3 misreads "/" + string (-Wrestrict)
-  name += base;
-  name += '_';
-  name += std::to_string(getpid());
-  name += '_';
-  name += std::to_string(counter++);
-  return name;
-}
-
-// "name:port", built in place (GCC 12 at -O3 misreads "literal" + std::string&& as -Wrestrict).
-std::string host_port(const char* name, std::uint16_t port) {
-  std::string text = name;
-  text += ':';
-  text += std::to_string(port);
-  return text;
-}
-
-struct Frame {
-  int opcode = -1;
-  std::string payload;
-};
-
-// A TCP connection to the server that speaks just enough WebSocket to misbehave on purpose.
-class RawClient {
- public:
-  explicit RawClient(std::uint16_t port, int receive_buffer = 0) {
-    fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-    if (receive_buffer > 0) {
-      ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &receive_buffer, sizeof receive_buffer);
-    }
-    sockaddr_in address{};
-    address.sin_family = AF_INET;
-    address.sin_port = htons(port);
-    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    connected_ = ::connect(fd_, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0;
-  }
-  ~RawClient() { ::close(fd_); }
-  RawClient(const RawClient&) = delete;
-  RawClient& operator=(const RawClient&) = delete;
-
-  bool connected() const { return connected_; }
-
-  // False once the peer has closed or reset the connection.
-  bool send_raw(const std::string& bytes) {
-    std::size_t done = 0;
-    while (done < bytes.size()) {
-      pollfd p{fd_, POLLOUT, 0};
-      if (::poll(&p, 1, 10'000) <= 0) return false;  // the server stopped reading us
-      const ssize_t n = ::send(fd_, bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL);
-      if (n <= 0) return false;
-      done += static_cast<std::size_t>(n);
-    }
-    return true;
-  }
-
-  // The HTTP response head (up to the blank line) or nullopt.
-  std::optional<std::string> read_head() {
-    std::string head;
-    while (head.find("\r\n\r\n") == std::string::npos) {
-      char c;
-      if (!read_exact(&c, 1)) return std::nullopt;
-      head += c;
-    }
-    return head;
-  }
-
-  // Sends the upgrade request; returns the response head.
-  std::optional<std::string> handshake(bool with_subprotocol = true) {
-    return handshake_with(with_subprotocol ? "Sec-WebSocket-Protocol: foxglove.websocket.v1\r\n"
-                                           : "");
-  }
-  // The upgrade request with these header lines (each ending in CRLF) and this Host.
-  std::optional<std::string> handshake_with(const std::string& headers,
-                                            const std::string& host = "127.0.0.1") {
-    const std::string request =
-        "GET / HTTP/1.1\r\nHost: " + host +
-        "\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
-        "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n" +
-        headers + "\r\n";
-    if (!send_raw(request)) return std::nullopt;
-    return read_head();
-  }
-  // A plain GET of `target` with this Host; returns the response head.
-  std::optional<std::string> get(const std::string& target, const std::string& host = "127.0.0.1") {
-    if (!send_raw("GET " + target + " HTTP/1.1\r\nHost: " + host + "\r\n\r\n")) return std::nullopt;
-    return read_head();
-  }
-
-  // A client frame (masked, as RFC 6455 requires of clients unless `masked` is false).
-  static std::string frame(int opcode, const std::string& payload, bool masked = true,
-                           bool fin = true, std::uint8_t extra_bits = 0) {
-    std::string out;
-    out += static_cast<char>((fin ? 0x80 : 0) | extra_bits | opcode);
-    const std::uint8_t mask_bit = masked ? 0x80 : 0;
-    if (payload.size() < 126) {
-      out += static_cast<char>(mask_bit | payload.size());
-    } else if (payload.size() < 65536) {
-      out += static_cast<char>(mask_bit | 126);
-      out += static_cast<char>(payload.size() >> 8);
-      out += static_cast<char>(payload.size() & 0xFF);
-    } else {
-      out += static_cast<char>(mask_bit | 127);
-      for (int i = 7; i >= 0; --i) out += static_cast<char>((payload.size() >> (8 * i)) & 0xFF);
-    }
-    const char key[4] = {0x12, 0x34, 0x56, 0x78};
-    if (masked) out.append(key, 4);
-    for (std::size_t i = 0; i < payload.size(); ++i) {
-      out += masked ? static_cast<char>(payload[i] ^ key[i % 4]) : payload[i];
-    }
-    return out;
-  }
-  bool send_text(const std::string& text) { return send_raw(frame(0x1, text)); }
-
-  // The next server frame, or nullopt when the connection ended (or the patience ran out).
-  std::optional<Frame> read_frame() {
-    unsigned char h[2];
-    if (!read_exact(h, 2)) return std::nullopt;
-    std::uint64_t length = h[1] & 0x7F;
-    if (length == 126) {
-      unsigned char e[2];
-      if (!read_exact(e, 2)) return std::nullopt;
-      length = (std::uint64_t{e[0]} << 8) | e[1];
-    } else if (length == 127) {
-      unsigned char e[8];
-      if (!read_exact(e, 8)) return std::nullopt;
-      length = 0;
-      for (unsigned char b : e) length = (length << 8) | b;
-    }
-    if (length > (64u << 20)) return std::nullopt;
-    Frame f;
-    f.opcode = h[0] & 0x0F;
-    f.payload.resize(length);
-    if (length > 0 && !read_exact(f.payload.data(), length)) return std::nullopt;
-    return f;
-  }
-
-  // Reads text frames until one contains `needle`.
-  std::optional<std::string> read_text_with(const std::string& needle) {
-    while (auto f = read_frame()) {
-      if (f->opcode == 0x1 && f->payload.find(needle) != std::string::npos) return f->payload;
-      if (f->opcode == 0x8) return std::nullopt;
-    }
-    return std::nullopt;
-  }
-
-  // True when the server ends the connection: EOF, reset or a close frame, reading everything
-  // it sent before.
-  bool closed_by_server() {
-    for (;;) {
-      auto f = read_frame();
-      if (!f) return !timed_out_;
-      if (f->opcode == 0x8) return true;
-    }
-  }
-
- private:
-  bool read_exact(void* out, std::size_t size) {
-    auto* p = static_cast<char*>(out);
-    const auto give_up = std::chrono::steady_clock::now() + kPatience;
-    while (size > 0) {
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
-          give_up - std::chrono::steady_clock::now());
-      pollfd pfd{fd_, POLLIN, 0};
-      if (left.count() <= 0 || ::poll(&pfd, 1, static_cast<int>(left.count())) <= 0) {
-        timed_out_ = true;
-        return false;
-      }
-      const ssize_t n = ::recv(fd_, p, size, 0);
-      if (n <= 0) return false;
-      p += n;
-      size -= static_cast<std::size_t>(n);
-    }
-    return true;
-  }
-
-  int fd_ = -1;
-  bool connected_ = false;
-  bool timed_out_ = false;
-};
+using namespace sim_test_foxglove;
 
 // A SIM camera stream with a writer thread publishing frames until the fixture ends.
 class FoxgloveBadInput : public ::testing::Test {
@@ -263,17 +73,14 @@ class FoxgloveBadInput : public ::testing::Test {
 
   // Subscribes the client to `channel` (subscription id 7).
   static void subscribe(RawClient& client, std::uint32_t channel) {
-    ASSERT_TRUE(client.send_text(R"({"op":"subscribe","subscriptions":[{"id":7,"channelId":)" +
-                                 std::to_string(channel) + "}]}"));
+    ASSERT_TRUE(client.send_text(subscribe_request(7, channel)));
   }
 
   // Reads until a message frame stamped after `after_ns` arrives: one published meanwhile.
   static bool receives_frame_after(RawClient& client, std::int64_t after_ns) {
     while (auto f = client.read_frame()) {
-      if (f->opcode != 0x2 || f->payload.size() < 13) continue;
-      std::uint64_t stamp = 0;
-      for (int i = 7; i >= 0; --i) stamp = (stamp << 8) | static_cast<unsigned char>(f->payload[5 + i]);
-      if (static_cast<std::int64_t>(stamp) > after_ns) return true;
+      const auto message = message_data(*f);
+      if (message && static_cast<std::int64_t>(message->timestamp_ns) > after_ns) return true;
     }
     return false;
   }
@@ -297,8 +104,7 @@ class FoxgloveBadInput : public ::testing::Test {
   void expect_server_still_serves() {
     RawClient client(port());
     const std::uint32_t channel = open_client(client);
-    ASSERT_TRUE(client.send_text(R"({"op":"subscribe","subscriptions":[{"id":7,"channelId":)" +
-                                 std::to_string(channel) + "}]}"));
+    ASSERT_TRUE(client.send_text(subscribe_request(7, channel)));
     for (;;) {
       auto f = client.read_frame();
       ASSERT_TRUE(f) << "no message frame arrived";
@@ -402,8 +208,7 @@ TEST_F(FoxgloveBadInput, BadRequestsGetAnErrorStatusAndTheConnectionStaysUsable)
   ASSERT_TRUE(client.send_raw(RawClient::frame(0x2, std::string("\x01\x00\x00\x00", 4))));
   EXPECT_TRUE(client.read_text_with("client publish"));
   // Subscribing twice to one channel, or reusing an id, is refused; the first still works.
-  const std::string subscribe = R"({"op":"subscribe","subscriptions":[{"id":5,"channelId":)" +
-                                std::to_string(channel) + "}]}";
+  const std::string subscribe = subscribe_request(5, channel);
   ASSERT_TRUE(client.send_text(subscribe));
   ASSERT_TRUE(client.send_text(subscribe));
   EXPECT_TRUE(client.read_text_with("already"));
@@ -460,8 +265,7 @@ TEST_F(FoxgloveBadInput, AFloodOfRequestsFromAClientThatDoesNotReadIsCutOff) {
   // Each pair makes a subscription and ends it; each bad op earns a status nobody reads. The
   // server must neither grow without bound nor stall: it closes this client.
   const std::string pair =
-      RawClient::frame(0x1, R"({"op":"subscribe","subscriptions":[{"id":1,"channelId":)" +
-                                std::to_string(channel) + "}]}") +
+      RawClient::frame(0x1, subscribe_request(1, channel)) +
       RawClient::frame(0x1, R"({"op":"unsubscribe","subscriptionIds":[1]})") +
       RawClient::frame(0x1, R"({"op":"nonsense"})");
   int sent = 0;
@@ -473,8 +277,7 @@ TEST_F(FoxgloveBadInput, AFloodOfRequestsFromAClientThatDoesNotReadIsCutOff) {
 TEST_F(FoxgloveBadInput, AClientThatNeverReadsIsClosedAndOthersKeepGettingFrames) {
   RawClient stuck(port(), /*receive_buffer=*/4096);
   const std::uint32_t channel = open_client(stuck);
-  ASSERT_TRUE(stuck.send_text(R"({"op":"subscribe","subscriptions":[{"id":3,"channelId":)" +
-                              std::to_string(channel) + "}]}"));
+  ASSERT_TRUE(stuck.send_text(subscribe_request(3, channel)));
   // Meanwhile another client is served, and the SIM writer keeps publishing.
   expect_server_still_serves();
   const std::uint64_t before = published_.load();
@@ -555,7 +358,7 @@ TEST_F(FoxgloveBadInput, ARequestNamingAnotherHostIsRefused) {
 
 TEST_F(FoxgloveBadInput, AnAllowedOriginOpensTheWebSocketAndItsHostReadsThePage) {
   sim::foxglove::ServerOptions options;
-  options.allowed_origins = {"http://viewer.example:9000"};
+  options.allowed_origins.push_back("http://viewer.example:9000");
   auto server = another_server(options);
   {
     RawClient client(server.port());
@@ -603,6 +406,61 @@ TEST_F(FoxgloveBadInput, ConnectionsBeyondTheLimitGetA503AndTheConnectedAreStill
   EXPECT_NE(last.find(" 200 "), std::string::npos) << last;
 }
 
+// This process's descriptor table, full: the limit lowered to just above the highest
+// descriptor in use, the rest taken by copies of stdin. release() (or the end) gives it back.
+class FullDescriptorTable {
+ public:
+  FullDescriptorTable() {
+    if (::getrlimit(RLIMIT_NOFILE, &saved_) != 0) return;
+    int highest = 0;
+    const int known = static_cast<int>(std::min<rlim_t>(saved_.rlim_cur, 65536));
+    for (int fd = 0; fd < known; ++fd) {
+      if (::fcntl(fd, F_GETFD) != -1) highest = fd;
+    }
+    rlimit low = saved_;
+    low.rlim_cur = static_cast<rlim_t>(highest) + 16;
+    if (::setrlimit(RLIMIT_NOFILE, &low) != 0) return;
+    lowered_ = true;
+    for (int fd; (fd = ::dup(0)) >= 0;) fillers_.push_back(fd);
+    full_ = errno == EMFILE;
+  }
+  ~FullDescriptorTable() { release(); }
+  FullDescriptorTable(const FullDescriptorTable&) = delete;
+  FullDescriptorTable& operator=(const FullDescriptorTable&) = delete;
+
+  bool full() const { return full_; }
+  void release() {
+    for (const int fd : fillers_) ::close(fd);
+    fillers_.clear();
+    if (lowered_) ::setrlimit(RLIMIT_NOFILE, &saved_);
+    lowered_ = false;
+  }
+
+ private:
+  rlimit saved_{};
+  bool lowered_ = false;
+  bool full_ = false;
+  std::vector<int> fillers_;
+};
+
+bool connect_to_loopback(int fd, std::uint16_t port) {
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(port);
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  return ::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0;
+}
+
+// The status line of the answer to a GET of /api/streams on a connected socket, or "".
+std::string status_line_of_get(int fd) {
+  const std::string get = "GET /api/streams HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n";
+  if (::send(fd, get.data(), get.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(get.size())) return "";
+  pollfd p{fd, POLLIN, 0};
+  char answer[16] = {};
+  if (::poll(&p, 1, 20'000) != 1 || ::recv(fd, answer, sizeof answer - 1, 0) <= 0) return "";
+  return std::string(answer).substr(0, 12);
+}
+
 // Review H1: out of file descriptors, accept() fails at once every time; the server must wait
 // between tries (at most one failure per 100 ms backoff) instead of spinning a core, keep
 // serving the connected client, and accept the waiting connection once descriptors are free.
@@ -617,48 +475,56 @@ TEST_F(FoxgloveBadInput, OutOfDescriptorsTheServerWaitsInsteadOfSpinningAndRecov
   // A client socket made now (it needs a descriptor), connected once the table is full.
   const int waiting = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
   ASSERT_GE(waiting, 0);
-  rlimit saved{};
-  ASSERT_EQ(::getrlimit(RLIMIT_NOFILE, &saved), 0);
-  int highest = waiting;
-  for (int fd = 0; fd < 65536 && fd < static_cast<int>(std::min<rlim_t>(saved.rlim_cur, 65536)); ++fd) {
-    if (::fcntl(fd, F_GETFD) != -1) highest = fd;
-  }
-  rlimit low = saved;
-  low.rlim_cur = static_cast<rlim_t>(highest) + 16;
-  ASSERT_EQ(::setrlimit(RLIMIT_NOFILE, &low), 0);
-  std::vector<int> fillers;
-  for (int fd; (fd = ::dup(0)) >= 0;) fillers.push_back(fd);
-  ASSERT_EQ(errno, EMFILE);
-
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_port = htons(server.port());
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  FullDescriptorTable table;
+  ASSERT_TRUE(table.full());
   const auto full_since = std::chrono::steady_clock::now();
   const std::int64_t full_since_ns = sim::realtime_ns();
-  ASSERT_EQ(::connect(waiting, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
+  ASSERT_TRUE(connect_to_loopback(waiting, server.port()));
   std::this_thread::sleep_for(1s);
   const std::uint64_t failures = server.accept_failures();
   const auto full_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
                            std::chrono::steady_clock::now() - full_since)
                            .count();
   const bool served_meanwhile = receives_frame_after(viewer, full_since_ns);
+  table.release();
 
-  for (const int fd : fillers) ::close(fd);
-  ASSERT_EQ(::setrlimit(RLIMIT_NOFILE, &saved), 0);
   EXPECT_GE(failures, 1u) << "the descriptor table was never full for the server";
   EXPECT_LE(failures, static_cast<std::uint64_t>(full_ms / 100 + 2))
       << "accept() failed " << failures << " times in " << full_ms << " ms: the loop spins";
   EXPECT_TRUE(served_meanwhile) << "the connected client got no frame while descriptors were out";
-
-  const std::string get = "GET /api/streams HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n";
-  ASSERT_EQ(::send(waiting, get.data(), get.size(), MSG_NOSIGNAL), static_cast<ssize_t>(get.size()));
-  pollfd p{waiting, POLLIN, 0};
-  char answer[16] = {};
-  ASSERT_EQ(::poll(&p, 1, 20'000), 1) << "the waiting connection was never accepted";
-  ASSERT_GT(::recv(waiting, answer, sizeof answer - 1, 0), 0);
-  EXPECT_EQ(std::string(answer).substr(0, 12), "HTTP/1.1 200");
+  EXPECT_EQ(status_line_of_get(waiting), "HTTP/1.1 200") << "the waiting connection was not served";
   ::close(waiting);
+}
+
+// Review L6: a broken MJPEG frame (here only the start of a JPEG) is not served as a picture the
+// browser shows as its broken-image icon; the page gets one sentence saying what is wrong.
+TEST_F(FoxgloveBadInput, ABrokenMjpegFrameGetsASentenceInsteadOfAPicture) {
+  const std::string camera = unique_stream("fox_mjpeg");
+  auto writer = sim::Writer::create(
+      {.name = camera,
+       .capacity = 4096,
+       .layout = sim::Layout::of(sim::ImageLayout{64, 48, 3, 0, sim::PixelFormat::mjpeg, 8})});
+  ASSERT_TRUE(writer) << writer.error().message;
+  const std::string start_of_a_jpeg = "\xFF\xD8\xFF\xE0 and then nothing a decoder can use";
+  const auto bytes = std::as_bytes(std::span(start_of_a_jpeg));
+  ASSERT_EQ(writer->write(bytes, sim::realtime_ns()), sim::WriteStatus::ok);
+  sim::foxglove::ServerOptions options;
+  options.port = 0;
+  options.streams = {camera};
+  auto server = sim::foxglove::Server::start(options);
+  ASSERT_TRUE(server) << server.error().message;
+
+  RawClient page(server->port());
+  std::string target = "/api/image?stream=%2F";
+  target += camera.substr(1);
+  const auto head = page.get(target);
+  ASSERT_TRUE(head);
+  EXPECT_NE(head->find(" 503 "), std::string::npos) << *head;
+  const auto sentence = page.read_body(*head);
+  ASSERT_TRUE(sentence);
+  EXPECT_NE(sentence->find("MJPEG frame cannot be shown"), std::string::npos) << *sentence;
+  server->stop();
+  (void)sim::destroy(camera, true);
 }
 
 // Review L1: a request naming many bad ids earns one status that lists them (not one status per

@@ -36,11 +36,24 @@ bool Hub::subscribe(const std::shared_ptr<Client>& client, std::uint32_t channel
   }
   auto& pump = pumps_[channel_id];
   if (!pump) {
-    pump = std::make_unique<Pump>(channel->second.stream, channel_id,
-                                  channel->second.layout, pump_options_);
+    pump = std::make_shared<Pump>(channel->second.stream, channel_id, channel->second.layout,
+                                  pump_options_);
+    place(pump);
   }
   pump->add(client);
   return true;
+}
+
+void Hub::place(const std::shared_ptr<Pump>& pump) {
+  for (const auto& runner : runners_) {
+    if (runner->add(pump)) return;
+  }
+  runners_.push_back(std::make_unique<PumpRunner>());
+  (void)runners_.back()->add(pump);
+}
+
+void Hub::retire(const Pump* pump) {
+  for (const auto& runner : runners_) runner->remove(pump);
 }
 
 void Hub::unsubscribe(const Client* client, std::uint32_t channel_id) {
@@ -49,23 +62,26 @@ void Hub::unsubscribe(const Client* client, std::uint32_t channel_id) {
 }
 
 void Hub::reap() {
-  std::vector<std::unique_ptr<Pump>> finished;
+  std::vector<std::unique_ptr<PumpRunner>> finished;
   std::lock_guard lock(mutex_);
   for (auto it = pumps_.begin(); it != pumps_.end();) {
     if (it->second->subscriber_count() == 0) {
-      finished.push_back(std::move(it->second));
+      retire(it->second.get());
       it = pumps_.erase(it);
     } else {
       ++it;
     }
   }
-  // `finished` is declared before the lock: the pumps join their threads after it is released.
+  for (auto& runner : runners_) {
+    if (runner->size() == 0) finished.push_back(std::move(runner));
+  }
+  std::erase(runners_, nullptr);
+  // `finished` is declared before the lock: the runners join their threads after it is released.
 }
 
 void Hub::update(const CatalogChanges& changes) {
   const auto& added = changes.added;
   const auto& removed = changes.removed;
-  std::vector<std::unique_ptr<Pump>> finished;
   std::lock_guard lock(mutex_);
   std::vector<std::shared_ptr<Client>> clients;
   for (const auto& w : clients_) {
@@ -75,7 +91,7 @@ void Hub::update(const CatalogChanges& changes) {
     for (const std::uint32_t id : removed) {
       channels_.erase(id);
       if (auto it = pumps_.find(id); it != pumps_.end()) {
-        finished.push_back(std::move(it->second));
+        retire(it->second.get());
         pumps_.erase(it);
       }
     }
@@ -104,11 +120,14 @@ void Hub::update(const CatalogChanges& changes) {
 }
 
 void Hub::stop() {
-  std::map<std::uint32_t, std::unique_ptr<Pump>> finished;
+  std::map<std::uint32_t, std::shared_ptr<Pump>> pumps;
+  std::vector<std::unique_ptr<PumpRunner>> runners;
   {
     std::lock_guard lock(mutex_);
-    finished.swap(pumps_);
+    pumps.swap(pumps_);
+    runners.swap(runners_);
   }
+  runners.clear();  // joins their threads; then no pump is in use
 }
 
 std::size_t Hub::pump_count() const {

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The server's shared state between the catalog, the clients and the pumps: which channels are
-// advertised, which clients are connected, and one pump per channel that anyone subscribes to.
+// advertised, which clients are connected, and one pump per channel that anyone subscribes to,
+// fed by as few runner threads as the WaitSet's limit allows (one per 128 subscribed channels).
 // It knows clients only through the Client interface, so it has no socket code.
 #pragma once
 
@@ -41,9 +42,9 @@ class Hub {
   bool subscribe(const std::shared_ptr<Client>& client, std::uint32_t channel_id);
   void unsubscribe(const Client* client, std::uint32_t channel_id);
 
-  // Ends the pumps nobody subscribes to any more. Called from the catalog's thread, not from a
-  // client's: a pump takes up to one wait slice to stop, and a flood of subscribe/unsubscribe
-  // then reuses the running pump instead of starting and joining threads.
+  // Ends the pumps nobody subscribes to any more, and the runners left without pumps. Called
+  // from the catalog's thread, not from a client's: a runner takes up to one wait slice to stop,
+  // and a flood of subscribe/unsubscribe then reuses the running pump.
   void reap();
 
   // From the catalog.
@@ -56,11 +57,16 @@ class Hub {
   std::size_t pump_count() const;
 
  private:
+  // Hands the pump to a runner with room, starting one if none has.
+  void place(const std::shared_ptr<Pump>& pump);
+  void retire(const Pump* pump);
+
   const PumpOptions pump_options_;
   mutable std::mutex mutex_;
   std::map<std::uint32_t, AdvertisedStream> channels_;
   std::vector<std::weak_ptr<Client>> clients_;
-  std::map<std::uint32_t, std::unique_ptr<Pump>> pumps_;
+  std::map<std::uint32_t, std::shared_ptr<Pump>> pumps_;
+  std::vector<std::unique_ptr<PumpRunner>> runners_;
 };
 
 }  // namespace sim::foxglove

@@ -25,6 +25,12 @@ std::optional<Error> ImageToJpeg::encode(const ImageLayout& layout,
                                          std::span<const std::byte> frame,
                                          std::vector<std::byte>& out) {
   if (layout.format == PixelFormat::mjpeg) {
+    // A broken camera frame would show as the browser's broken-image icon: say what is wrong.
+    if (auto size = imaging::read_jpeg_size(frame); !size) {
+      return Error{ErrorCode::invalid_argument,
+                   "the camera's newest MJPEG frame cannot be shown: " + size.error().message +
+                       "; the next frame may be whole."};
+    }
     out.assign(frame.begin(), frame.end());
     return std::nullopt;
   }

@@ -4,6 +4,13 @@
 #include <cstdio>
 
 namespace sim::foxglove {
+namespace {
+
+void test_hook() {
+  if (testing::before_picture != nullptr) testing::before_picture();
+}
+
+}  // namespace
 
 std::shared_ptr<PageFrames::Entry> PageFrames::entry(const std::string& stream) {
   std::lock_guard lock(mutex_);
@@ -56,6 +63,7 @@ std::optional<Error> PageFrames::newest(Entry& e, const std::string& stream,
 }
 
 Expected<Picture> PageFrames::image(const std::string& stream) {
+  test_hook();
   const auto e = entry(stream);
   std::lock_guard lock(e->mutex);
   if (auto error = newest(*e, stream, LayoutKind::image)) return *error;
@@ -77,6 +85,7 @@ Expected<Picture> PageFrames::image(const std::string& stream) {
 }
 
 Expected<Picture> PageFrames::top_down(const std::string& stream, const TopDownOptions& options) {
+  test_hook();
   const auto e = entry(stream);
   std::lock_guard lock(e->mutex);
   if (auto error = newest(*e, stream, LayoutKind::points)) return *error;
@@ -114,6 +123,7 @@ Expected<Picture> PageFrames::top_down(const std::string& stream, const TopDownO
 Expected<Picture> PageFrames::projection(const std::string& camera, const std::string& lidar,
                                          const Pose& lidar_to_camera,
                                          const CameraCalibration& calibration) {
+  test_hook();
   const auto c = entry(camera);
   const auto l = entry(lidar);
   std::scoped_lock lock(c->mutex, l->mutex);  // both, in an order that cannot deadlock

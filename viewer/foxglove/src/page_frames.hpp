@@ -29,6 +29,13 @@ struct Picture {
   std::string caption;
 };
 
+namespace testing {
+// Defined only by tests (a weak symbol: sim_foxglove itself has none, and nothing is called).
+// Called on the thread that makes a picture, before it makes it, so a test can hold the
+// renderer and show that nothing but the pictures waits for it.
+void before_picture() __attribute__((weak));
+}  // namespace testing
+
 class PageFrames {
  public:
   PageFrames(int jpeg_quality, Trust trust) : quality_(jpeg_quality), trust_(std::move(trust)) {}

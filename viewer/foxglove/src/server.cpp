@@ -22,6 +22,7 @@
 #include "hub.hpp"
 #include "page_api.hpp"
 #include "page_frames.hpp"
+#include "render_worker.hpp"
 #include "ws_session.hpp"
 
 namespace sim::foxglove {
@@ -129,6 +130,8 @@ struct Server::Impl {
   std::atomic<std::uint64_t> accept_failures{0};
   std::vector<std::thread> threads;
   bool stopped = false;
+  // Declared last: destroyed (joined) first, while everything its jobs use still exists.
+  RenderWorker renderer;
 };
 
 namespace {
@@ -207,7 +210,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
       return reply_error(http::status::method_not_allowed, "Only GET is served here.", version,
                          keep_alive);
     }
-    const auto target = parse_target(view(request.target()));
+    auto target = parse_target(view(request.target()));
     if (!target) {
       return reply_error(http::status::bad_request,
                          "The address is malformed; open / for the page.", version, keep_alive);
@@ -222,40 +225,57 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
                    keep_alive, request.method() == http::verb::head);
     }
     if (target->path == "/api/image" || target->path == "/api/topdown") {
-      const auto it = target->query.find("stream");
-      if (it == target->query.end() || !server_.catalog.find(it->second)) {
-        return reply_error(http::status::not_found,
-                           "No such stream here; /api/streams lists the streams.", version,
-                           keep_alive);
-      }
-      Expected<Picture> picture = Error{ErrorCode::invalid_argument, ""};
-      if (const auto lidar = target->query.find("lidar"); lidar != target->query.end()) {
-        picture = projection(it->second, lidar->second);
-      } else if (target->path == "/api/image") {
-        picture = server_.frames.image(it->second);
-      } else {
-        TopDownOptions options;
-        if (const auto c = target->query.find("color"); c != target->query.end()) {
-          options.color = c->second == "intensity" ? ColorBy::intensity : ColorBy::height;
-        }
-        if (const auto r = target->query.find("range"); r != target->query.end()) {
-          char* end = nullptr;
-          const float range = std::strtof(r->second.c_str(), &end);
-          if (end != r->second.c_str() && range >= 1.0f && range <= 1000.0f) {
-            options.range_m = range;
-          }
-        }
-        picture = server_.frames.top_down(it->second, options);
-      }
-      if (!picture) {
-        return reply_error(http::status::service_unavailable, picture.error().message, version,
-                           keep_alive);
-      }
-      return reply_bytes("image/jpeg", *picture, version, keep_alive,
-                         request.method() == http::verb::head);
+      return render(std::move(*target), version, keep_alive, request.method() == http::verb::head);
     }
     reply_error(http::status::not_found, "Nothing here; open / for the page.", version,
                 keep_alive);
+  }
+
+  // /api/image and /api/topdown: the picture is made on the render worker, never on this io
+  // thread (which also writes Foxglove clients' frames); the answer is written back on this
+  // connection's strand. A full queue is answered at once: 503, try again in a second.
+  void render(Target target, unsigned version, bool keep_alive, bool head) {
+    const auto stream = target.query.find("stream");
+    if (stream == target.query.end() || !server_.catalog.find(stream->second)) {
+      return reply_error(http::status::not_found,
+                         "No such stream here; /api/streams lists the streams.", version,
+                         keep_alive);
+    }
+    auto job = [self = shared_from_this(), target = std::move(target), version, keep_alive, head] {
+      Expected<Picture> picture = self->make_picture(target);
+      net::post(self->stream_.get_executor(),
+                [self, picture = std::move(picture), version, keep_alive, head]() mutable {
+                  if (!picture) {
+                    return self->reply_error(http::status::service_unavailable,
+                                             picture.error().message, version, keep_alive);
+                  }
+                  self->reply_bytes("image/jpeg", *picture, version, keep_alive, head);
+                });
+    };
+    if (!server_.renderer.try_post(std::move(job))) {
+      reply_error(http::status::service_unavailable,
+                  "The page's pictures are being made for other requests; retry in a second.",
+                  version, keep_alive, /*retry_after_s=*/1);
+    }
+  }
+
+  // On the render worker: the picture the target asks for (it names a stream that exists).
+  Expected<Picture> make_picture(const Target& target) {
+    const std::string& stream = target.query.at("stream");
+    if (const auto lidar = target.query.find("lidar"); lidar != target.query.end()) {
+      return projection(stream, lidar->second);
+    }
+    if (target.path == "/api/image") return server_.frames.image(stream);
+    TopDownOptions options;
+    if (const auto c = target.query.find("color"); c != target.query.end()) {
+      options.color = c->second == "intensity" ? ColorBy::intensity : ColorBy::height;
+    }
+    if (const auto r = target.query.find("range"); r != target.query.end()) {
+      char* end = nullptr;
+      const float range = std::strtof(r->second.c_str(), &end);
+      if (end != r->second.c_str() && range >= 1.0f && range <= 1000.0f) options.range_m = range;
+    }
+    return server_.frames.top_down(stream, options);
   }
 
   // /api/image?stream=CAMERA&lidar=LIDAR: the LiDAR's points drawn into the camera's image,
@@ -309,10 +329,12 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     send(response, keep_alive);
   }
 
-  void reply_error(http::status status, std::string sentence, unsigned version, bool keep_alive) {
+  void reply_error(http::status status, std::string sentence, unsigned version, bool keep_alive,
+                   unsigned retry_after_s = 0) {
     auto response = std::make_shared<http::response<http::string_body>>(status, version);
     response->set(http::field::server, "sim_foxglove");
     response->set(http::field::content_type, "text/plain; charset=utf-8");
+    if (retry_after_s > 0) response->set(http::field::retry_after, std::to_string(retry_after_s));
     response->keep_alive(keep_alive);
     response->body() = std::move(sentence) + "\n";
     response->prepare_payload();
@@ -392,6 +414,7 @@ void Server::Impl::stop() {
   ioc.stop();
   for (auto& t : threads) t.join();
   threads.clear();
+  renderer.stop();  // a picture being made is finished; its answer is never written
   hub.stop();  // pumps end before the sessions they hold are destroyed with the io_context
 }
 
