@@ -97,7 +97,23 @@ class FakeV4l2Device final : public V4l2Io {
   const FakeFormat* find(std::uint32_t fourcc) const;
   int fail(int error) const;
   void free_buffers();
+  // One handler per ioctl request (arg is that request's structure).
+  int query_capabilities(void* arg);
+  int enumerate_format(void* arg);
+  int enumerate_frame_size(void* arg);
+  int enumerate_frame_interval(void* arg);
+  int get_format(void* arg);
+  int try_or_set_format(void* arg, bool set);
+  int stream_parameters(void* arg, bool set);
+  int query_control(void* arg);
+  int query_menu(void* arg);
+  int get_or_set_control(void* arg, bool set);
+  int request_buffers(void* arg);
+  int query_buffer(void* arg);
+  int queue_buffer(void* arg);
   int dequeue(void* arg);
+  int stream_on();
+  int stream_off();
 
   std::string path_;
   std::vector<FakeFormat> formats_;
