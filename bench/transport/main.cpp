@@ -205,6 +205,81 @@ int run_writer(const RoleOptions& o, Transport t) {
 // ---------------------------------------------------------------------------------------------
 // Reader role
 
+// Idle cost: waits for frames that never come, as a program does between bursts, and prints
+// the CPU that took.
+int run_idle_reader(const RoleOptions& o, SubscriberBackend& subscriber) {
+  const Usage start = usage_now();
+  const std::int64_t end = sim::monotonic_ns() + static_cast<std::int64_t>(o.idle_s * 1e9);
+  std::uint64_t received = 0;
+  while (sim::monotonic_ns() < end) {
+    const Delivery d = subscriber.receive(100ms);
+    if (d.kind == Delivery::Kind::frame) {
+      ++received;
+      (void)subscriber.release();
+    }
+  }
+  const Usage used = usage_since(start);
+  std::printf("result received=%" PRIu64 " gaps=0 torn=0 invalidated=0 last=0 cpu_s=%.6f nvcsw=%ld "
+              "nivcsw=%ld\nlat\n",
+              received, used.cpu_s, used.voluntary_switches, used.involuntary_switches);
+  std::fflush(stdout);
+  return 0;
+}
+
+// What a measuring reader counts.
+struct ReaderTally {
+  std::vector<std::int64_t> latencies;
+  std::uint64_t last = 0, received = 0, gaps = 0, torn = 0, invalidated = 0;
+  std::int64_t last_frame_at = 0;
+};
+
+// Takes one delivered frame: checks that it is whole and new, counts the frames replaced before
+// it, and notes its latency when it is past the warm-up.
+// `zero_copy`: the subscriber's, asked once (a virtual call would add to every latency).
+void take_frame(const RoleOptions& o, SubscriberBackend& subscriber, bool zero_copy,
+                const Delivery& d, ReaderTally& t) {
+  if (zero_copy) checksum(d.bytes);
+  const std::int64_t stamp = sim::monotonic_ns();  // the reader holds the whole payload
+  FrameHeader header{};
+  std::uint64_t tail = ~0ull;
+  if (d.bytes.size() >= kMinPayload) {
+    std::memcpy(&header, d.bytes.data(), sizeof(header));
+    std::memcpy(&tail, d.bytes.data() + d.bytes.size() - sizeof(tail), sizeof(tail));
+  }
+  if (!subscriber.release()) {  // overwritten while we read it: not delivered
+    ++t.invalidated;
+    return;
+  }
+  if (header.size != d.bytes.size() || tail != header.seq || header.seq == 0) {
+    ++t.torn;
+    return;
+  }
+  if (header.seq <= t.last) return;  // an old frame again: not new, not counted
+  // Frames between the last delivered one and this one were replaced before we took them.
+  const std::uint64_t gap_from = std::max(t.last, o.warmup);
+  if (header.seq > gap_from + 1) t.gaps += header.seq - gap_from - 1;
+  if (header.seq > o.warmup) {
+    t.latencies.push_back(stamp - header.stamp_ns);
+    ++t.received;
+  }
+  t.last = header.seq;
+  t.last_frame_at = stamp;
+}
+
+void print_reader_result(const ReaderTally& t, const Usage& used,
+                         const SubscriberBackend& subscriber) {
+  std::printf("result received=%" PRIu64 " gaps=%" PRIu64 " torn=%" PRIu64 " invalidated=%" PRIu64
+              " last=%" PRIu64 " cpu_s=%.6f nvcsw=%ld nivcsw=%ld caught_spinning=%" PRIu64
+              " spin_s=%.6f\n",
+              t.received, t.gaps, t.torn, t.invalidated, t.last, used.cpu_s,
+              used.voluntary_switches, used.involuntary_switches,
+              subscriber.frames_caught_spinning(), subscriber.spin_s());
+  std::string lat = "lat";
+  for (const auto v : t.latencies) lat += " " + std::to_string(v);
+  std::printf("%s\n", lat.c_str());
+  std::fflush(stdout);
+}
+
 int run_reader(const RoleOptions& o, Transport t) {
   place_self(o.cpu, o.rt_priority);
   std::string error;
@@ -219,39 +294,17 @@ int run_reader(const RoleOptions& o, Transport t) {
   }
   std::printf("ready\n");
   std::fflush(stdout);
+  if (o.idle_s > 0) return run_idle_reader(o, *subscriber);
 
-  if (o.idle_s > 0) {
-    // Idle cost: wait for frames that never come, as a program does between bursts.
-    const Usage start = usage_now();
-    const std::int64_t end = sim::monotonic_ns() + static_cast<std::int64_t>(o.idle_s * 1e9);
-    std::uint64_t received = 0;
-    while (sim::monotonic_ns() < end) {
-      const Delivery d = subscriber->receive(100ms);
-      if (d.kind == Delivery::Kind::frame) {
-        ++received;
-        (void)subscriber->release();
-      }
-    }
-    const Usage used = usage_since(start);
-    std::printf("result received=%" PRIu64 " gaps=0 torn=0 invalidated=0 last=0 cpu_s=%.6f nvcsw=%ld "
-                "nivcsw=%ld\nlat\n",
-                received, used.cpu_s, used.voluntary_switches, used.involuntary_switches);
-    std::fflush(stdout);
-    return 0;
-  }
-
-  std::vector<std::int64_t> latencies;
-  latencies.reserve(o.frames);
-  std::uint64_t last = 0, received = 0, gaps = 0, torn = 0, invalidated = 0;
+  ReaderTally tally;
+  tally.latencies.reserve(o.frames);
   const std::int64_t period_ns = o.rate > 0 ? static_cast<std::int64_t>(1e9 / o.rate) : 0;
   const std::int64_t idle_limit_ns = std::max<std::int64_t>(3'000'000'000, 50 * period_ns) +
                                      static_cast<std::int64_t>(o.pause_s * 1e9);
   const std::int64_t first_deadline = sim::monotonic_ns() + 60'000'000'000;
-  std::int64_t last_frame_at = 0;
   const Usage start = usage_now();
   const bool zero_copy = subscriber->zero_copy();
-
-  while (last < o.frames) {
+  while (tally.last < o.frames) {
     const Delivery d = subscriber->receive(100ms);
     if (d.kind == Delivery::Kind::error) {
       std::printf("error=%s\n", d.error.c_str());
@@ -259,46 +312,12 @@ int run_reader(const RoleOptions& o, Transport t) {
     }
     if (d.kind == Delivery::Kind::none) {
       const std::int64_t now = sim::monotonic_ns();
-      if (last == 0 ? now > first_deadline : now - last_frame_at > idle_limit_ns) break;
+      if (tally.last == 0 ? now > first_deadline : now - tally.last_frame_at > idle_limit_ns) break;
       continue;
     }
-    if (zero_copy) checksum(d.bytes);
-    const std::int64_t stamp = sim::monotonic_ns();  // the reader holds the whole payload
-    FrameHeader header{};
-    std::uint64_t tail = ~0ull;
-    if (d.bytes.size() >= kMinPayload) {
-      std::memcpy(&header, d.bytes.data(), sizeof(header));
-      std::memcpy(&tail, d.bytes.data() + d.bytes.size() - sizeof(tail), sizeof(tail));
-    }
-    if (!subscriber->release()) {  // overwritten while we read it: not delivered
-      ++invalidated;
-      continue;
-    }
-    if (header.size != d.bytes.size() || tail != header.seq || header.seq == 0) {
-      ++torn;
-      continue;
-    }
-    if (header.seq <= last) continue;  // an old frame again: not new, not counted
-    // Frames between the last delivered one and this one were replaced before we took them.
-    const std::uint64_t gap_from = std::max(last, o.warmup);
-    if (header.seq > gap_from + 1) gaps += header.seq - gap_from - 1;
-    if (header.seq > o.warmup) {
-      latencies.push_back(stamp - header.stamp_ns);
-      ++received;
-    }
-    last = header.seq;
-    last_frame_at = stamp;
+    take_frame(o, *subscriber, zero_copy, d, tally);
   }
-  const Usage used = usage_since(start);
-  std::printf("result received=%" PRIu64 " gaps=%" PRIu64 " torn=%" PRIu64 " invalidated=%" PRIu64
-              " last=%" PRIu64 " cpu_s=%.6f nvcsw=%ld nivcsw=%ld caught_spinning=%" PRIu64
-              " spin_s=%.6f\n",
-              received, gaps, torn, invalidated, last, used.cpu_s, used.voluntary_switches,
-              used.involuntary_switches, subscriber->frames_caught_spinning(), subscriber->spin_s());
-  std::string lat = "lat";
-  for (const auto v : latencies) lat += " " + std::to_string(v);
-  std::printf("%s\n", lat.c_str());
-  std::fflush(stdout);
+  print_reader_result(tally, usage_since(start), *subscriber);
   return 0;
 }
 
@@ -948,22 +967,24 @@ std::vector<std::string> split_list(const std::string& s) {
   return out;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"sim_bench: SIM against iceoryx, Fast DDS, Cyclone DDS and the memcpy floor, one "
-               "writer and N reader processes per configuration (issue 5)."};
+// The command line as given: the options, the hidden role, and the lists still as text.
+struct Arguments {
   Options o;
   RoleOptions role;
   std::string transports = "sim-poll,sim-block,sim-zero,sim-adaptive,sim-zero-adaptive,iceoryx,fastdds,cyclone";
   std::string payloads = "25920,1382400,921600,6912000";
   std::string readers = "1,10";
   std::string cpus;
-  app.add_option("--transports", transports,
+  bool list = false;
+};
+
+void add_options(CLI::App& app, Arguments& a) {
+  Options& o = a.o;
+  app.add_option("--transports", a.transports,
                  "comma list of sim-poll,sim-block,sim-zero,iceoryx,fastdds,cyclone")
       ->capture_default_str();
-  app.add_option("--payloads", payloads, "comma list of payload sizes in bytes")->capture_default_str();
-  app.add_option("--readers", readers, "comma list of reader counts (one process each)")
+  app.add_option("--payloads", a.payloads, "comma list of payload sizes in bytes")->capture_default_str();
+  app.add_option("--readers", a.readers, "comma list of reader counts (one process each)")
       ->capture_default_str();
   app.add_option("--rate", o.rate, "frames per second the writer publishes (0: as fast as it can)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
@@ -992,15 +1013,15 @@ int main(int argc, char** argv) {
   app.add_option("--csv", o.csv, "write one row per transport x payload x readers x run here "
                                  "(and the extra columns next to it, as *_extra.csv)");
   app.add_flag("--quick", o.quick, "smoke test: 60 frames (10 warm-up), 1 run");
-  app.add_option("--cpu", cpus, "comma list of CPUs: the writer pins to the first, readers to the rest");
+  app.add_option("--cpu", a.cpus, "comma list of CPUs: the writer pins to the first, readers to the rest");
   app.add_option("--rt-priority", o.rt_priority, "run writer and readers under SCHED_FIFO at this "
                                                   "priority (1-99, needs root)")->check(CLI::Range(0, 99));
   app.add_flag("--no-floor", o.no_floor, "do not measure the memcpy floor");
-  bool list = false;
-  app.add_flag("--list-transports", list, "print the transports this build has, one a line, and exit");
+  app.add_flag("--list-transports", a.list, "print the transports this build has, one a line, and exit");
   app.add_flag("--skip-missing", o.skip_missing, "leave out transports this build does not have "
                                                   "instead of failing");
   // The roles sim_bench starts itself in; hidden from --help.
+  RoleOptions& role = a.role;
   app.add_option("--role", role.role)->group("")->check(CLI::IsMember({"writer", "reader"}));
   app.add_option("--role-transport", role.transport)->group("");
   app.add_option("--role-topic", role.topic)->group("");
@@ -1009,46 +1030,51 @@ int main(int argc, char** argv) {
   app.add_option("--role-index", role.index)->group("");
   app.add_option("--role-domain", role.domain)->group("");
   app.add_option("--role-cpu", role.cpu)->group("");
-  CLI11_PARSE(app, argc, argv);
+}
 
-  if (!role.role.empty()) {
-    Transport t;
-    if (!parse_transport(role.transport, t)) return 2;
-    role.frames = o.frames;
-    role.warmup = o.warmup;
-    role.rate = o.rate;
-    role.jitter = o.jitter;
-    role.pause_s = o.pause_s;
-    role.idle_s = o.idle_s;
-    role.rt_priority = o.rt_priority;
-    return role.role == "writer" ? run_writer(role, t) : run_reader(role, t);
-  }
+// This process as the writer or a reader of one run, with the run's settings.
+int run_role(RoleOptions role, const Options& o) {
+  Transport t;
+  if (!parse_transport(role.transport, t)) return 2;
+  role.frames = o.frames;
+  role.warmup = o.warmup;
+  role.rate = o.rate;
+  role.jitter = o.jitter;
+  role.pause_s = o.pause_s;
+  role.idle_s = o.idle_s;
+  role.rt_priority = o.rt_priority;
+  return role.role == "writer" ? run_writer(role, t) : run_reader(role, t);
+}
 
-  if (list) {
-    for (const auto t : {Transport::sim_poll, Transport::sim_block, Transport::sim_zero,
-                         Transport::sim_adaptive, Transport::sim_zero_adaptive,
-                         Transport::sim_poll_described, Transport::iceoryx, Transport::fastdds, Transport::cyclone}) {
-      if (available(t)) std::printf("%s\n", std::string(to_string(t)).c_str());
-    }
-    return 0;
+void list_transports() {
+  for (const auto t : {Transport::sim_poll, Transport::sim_block, Transport::sim_zero,
+                       Transport::sim_adaptive, Transport::sim_zero_adaptive,
+                       Transport::sim_poll_described, Transport::iceoryx, Transport::fastdds, Transport::cyclone}) {
+    if (available(t)) std::printf("%s\n", std::string(to_string(t)).c_str());
   }
-  o.transports = split_list(transports);
+}
+
+// The lists read into `a.o` and the options checked together; false (after one sentence on
+// stderr) when they are wrong.
+bool complete_options(Arguments& a) {
+  Options& o = a.o;
+  o.transports = split_list(a.transports);
   o.payloads.clear();
   o.readers.clear();
   try {
-    for (const auto& p : split_list(payloads)) o.payloads.push_back(std::stoull(p));
-    for (const auto& r : split_list(readers)) o.readers.push_back(std::stoi(r));
-    for (const auto& c : split_list(cpus)) o.cpus.push_back(std::stoi(c));
+    for (const auto& p : split_list(a.payloads)) o.payloads.push_back(std::stoull(p));
+    for (const auto& r : split_list(a.readers)) o.readers.push_back(std::stoi(r));
+    for (const auto& c : split_list(a.cpus)) o.cpus.push_back(std::stoi(c));
   } catch (const std::exception&) {
     std::fprintf(stderr, "sim_bench: --payloads, --readers and --cpu take comma lists of numbers, "
                          "e.g. --payloads 25920,921600.\n");
-    return 2;
+    return false;
   }
   if (o.transports.empty() || o.payloads.empty() || o.readers.empty() ||
       std::any_of(o.readers.begin(), o.readers.end(), [](int r) { return r < 1 || r > 64; })) {
     std::fprintf(stderr, "sim_bench: give at least one transport, payload and reader count "
                          "(1-64 readers).\n");
-    return 2;
+    return false;
   }
   if (o.quick) {
     o.frames = 60;
@@ -1058,12 +1084,29 @@ int main(int argc, char** argv) {
   if (o.rate <= 0) o.max_rate = true;
   if (o.warmup >= o.frames) {
     std::fprintf(stderr, "sim_bench: --warmup must be smaller than --frames.\n");
-    return 2;
+    return false;
   }
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"sim_bench: SIM against iceoryx, Fast DDS, Cyclone DDS and the memcpy floor, one "
+               "writer and N reader processes per configuration (issue 5)."};
+  Arguments arguments;
+  add_options(app, arguments);
+  CLI11_PARSE(app, argc, argv);
+  if (!arguments.role.role.empty()) return run_role(arguments.role, arguments.o);
+  if (arguments.list) {
+    list_transports();
+    return 0;
+  }
+  if (!complete_options(arguments)) return 2;
   struct sigaction sa{};
   sa.sa_handler = request_stop;
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
   ChildProcess::set_stop_flag(&stop_requested);
-  return Bench(std::move(o)).run_all();
+  return Bench(std::move(arguments.o)).run_all();
 }
