@@ -24,10 +24,12 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -90,40 +92,118 @@ struct Config {
   std::string json;
 };
 
-// The reader process: waits in `way` until every stream delivered its frame number `frames`.
-RunResult read_all(Way way, const std::vector<std::string>& names, unsigned frames, int ready_fd) {
-  RunResult result;
+std::optional<std::vector<sim::Reader>> open_readers(const std::vector<std::string>& names) {
   std::vector<sim::Reader> readers;
   for (const auto& name : names) {
     auto reader = sim::Reader::open(name);
     if (!reader) {
       std::fprintf(stderr, "bench_wait_set: %s\n", reader.error().message.c_str());
-      return result;
+      return std::nullopt;
     }
     readers.push_back(std::move(reader.value()));
   }
-  sim::WaitSetOptions options;
-  if (way == Way::round_robin) options.strategy = sim::WaitSetStrategy::round_robin;
-  if (way == Way::futex_waitv) options.strategy = sim::WaitSetStrategy::futex_waitv;
-  sim::WaitSet set(options);
-  std::optional<sim::StreamNotifier> notifier;
-  int epoll = -1;
-  if (way == Way::notifier) {
-    auto opened = sim::StreamNotifier::open(names);
-    if (!opened) {
-      std::fprintf(stderr, "bench_wait_set: %s\n", opened.error().message.c_str());
-      return result;
-    }
-    notifier.emplace(std::move(opened.value()));
-    epoll = epoll_create1(EPOLL_CLOEXEC);
-    epoll_event event{};
-    event.events = EPOLLIN;
-    epoll_ctl(epoll, EPOLL_CTL_ADD, notifier->fd(), &event);
-  } else if (way != Way::reader_wait) {
-    for (auto& reader : readers) {
-      if (!set.add(reader)) return result;
-    }
+  return readers;
+}
+
+// The reader process's way of waiting, set up for its streams.
+class Waiter {
+ public:
+  explicit Waiter(Way way) : way_(way), set_(options_of(way)) {}
+  ~Waiter() {
+    if (epoll_ >= 0) close(epoll_);
   }
+  Waiter(const Waiter&) = delete;
+  Waiter& operator=(const Waiter&) = delete;
+
+  // False when the way cannot be set up for these streams (after a sentence on stderr, or none
+  // when the WaitSet refuses a reader).
+  bool prepare(std::vector<sim::Reader>& readers, const std::vector<std::string>& names) {
+    if (way_ == Way::notifier) {
+      auto opened = sim::StreamNotifier::open(names);
+      if (!opened) {
+        std::fprintf(stderr, "bench_wait_set: %s\n", opened.error().message.c_str());
+        return false;
+      }
+      notifier_.emplace(std::move(opened.value()));
+      epoll_ = epoll_create1(EPOLL_CLOEXEC);
+      epoll_event event{};
+      event.events = EPOLLIN;
+      epoll_ctl(epoll_, EPOLL_CTL_ADD, notifier_->fd(), &event);
+    } else if (way_ != Way::reader_wait) {
+      for (auto& reader : readers) {
+        if (!set_.add(reader)) return false;
+      }
+    }
+    return true;
+  }
+
+  // Waits once and calls take(i) for every stream that may have a frame. Whether any take found
+  // one; nothing when no frame came for 3 s (a silent writer ends the run, never hangs it).
+  template <typename Take>
+  std::optional<bool> wait(std::vector<sim::Reader>& readers, Take&& take) {
+    constexpr auto kGiveUp = std::chrono::seconds(3);
+    bool got = false;
+    if (way_ == Way::reader_wait) {
+      if (readers[0].wait(kGiveUp) != sim::ReadStatus::new_frame) return std::nullopt;
+      got = take(0);
+    } else if (way_ == Way::notifier) {
+      epoll_event event{};
+      if (epoll_wait(epoll_, &event, 1, 3000) != 1) return std::nullopt;
+      const auto had = notifier_->drain();
+      for (std::size_t i = 0; i < had.size(); ++i) {
+        if (had[i]) got = take(i) || got;
+      }
+    } else {
+      const auto ready_index = set_.wait(kGiveUp);
+      if (!ready_index) return std::nullopt;
+      for (std::size_t i = 0; i < readers.size(); ++i) got = take(i) || got;
+    }
+    return got;
+  }
+
+  // The strategy that ran (a WaitSet may fall back to round robin).
+  const char* strategy_used() const {
+    if (way_ == Way::reader_wait || way_ == Way::notifier) return name_of(way_);
+    return set_.strategy() == sim::WaitSetStrategy::futex_waitv ? "futex_waitv" : "round_robin";
+  }
+
+ private:
+  static sim::WaitSetOptions options_of(Way way) {
+    sim::WaitSetOptions options;
+    if (way == Way::round_robin) options.strategy = sim::WaitSetStrategy::round_robin;
+    if (way == Way::futex_waitv) options.strategy = sim::WaitSetStrategy::futex_waitv;
+    return options;
+  }
+
+  Way way_;
+  sim::WaitSet set_;
+  std::optional<sim::StreamNotifier> notifier_;
+  int epoll_ = -1;
+};
+
+// The latency statistics of a run and its CPU per frame, into `result`.
+void summarize(std::vector<std::int64_t>& latencies, std::int64_t cpu_used, RunResult& result) {
+  result.frames = latencies.size();
+  std::sort(latencies.begin(), latencies.end());
+  double sum = 0;
+  for (const auto v : latencies) sum += static_cast<double>(v);
+  if (!latencies.empty()) {
+    result.mean_us = sum / static_cast<double>(latencies.size()) / 1e3;
+    result.p50_us = percentile(latencies, 50);
+    result.p99_us = percentile(latencies, 99);
+    result.max_us = static_cast<double>(latencies.back()) / 1e3;
+    result.cpu_us_per_frame = static_cast<double>(cpu_used) / 1e3 / static_cast<double>(latencies.size());
+  }
+}
+
+// The reader process: waits in `way` until every stream delivered its frame number `frames`.
+RunResult read_all(Way way, const std::vector<std::string>& names, unsigned frames, int ready_fd) {
+  RunResult result;
+  auto opened = open_readers(names);
+  if (!opened) return result;
+  std::vector<sim::Reader>& readers = *opened;
+  Waiter waiter(way);
+  if (!waiter.prepare(readers, names)) return result;
 
   std::vector<std::int64_t> latencies;
   latencies.reserve(static_cast<std::size_t>(frames) * names.size());
@@ -148,44 +228,15 @@ RunResult read_all(Way way, const std::vector<std::string>& names, unsigned fram
   const std::int64_t cpu_start = cpu_ns();
   const char ready = 'r';
   if (write(ready_fd, &ready, 1) != 1) return result;
-  constexpr auto kGiveUp = std::chrono::seconds(3);  // a silent writer ends the run, never hangs it
   while (finished < readers.size()) {
-    bool got = false;
-    if (way == Way::reader_wait) {
-      if (readers[0].wait(kGiveUp) != sim::ReadStatus::new_frame) break;
-      got = take(0);
-    } else if (way == Way::notifier) {
-      epoll_event event{};
-      if (epoll_wait(epoll, &event, 1, 3000) != 1) break;
-      const auto had = notifier->drain();
-      for (std::size_t i = 0; i < had.size(); ++i) {
-        if (had[i]) got = take(i) || got;
-      }
-    } else {
-      const auto ready_index = set.wait(kGiveUp);
-      if (!ready_index) break;
-      for (std::size_t i = 0; i < readers.size(); ++i) got = take(i) || got;
-    }
-    if (got) ++result.wakeups;
+    const auto got = waiter.wait(readers, take);
+    if (!got) break;
+    if (*got) ++result.wakeups;
   }
   const std::int64_t cpu_used = cpu_ns() - cpu_start;
-  if (epoll >= 0) close(epoll);
   result.complete = finished == readers.size() ? 1 : 0;
-  std::snprintf(result.strategy_used, sizeof result.strategy_used, "%s",
-                way == Way::reader_wait || way == Way::notifier ? name_of(way)
-                : set.strategy() == sim::WaitSetStrategy::futex_waitv ? "futex_waitv"
-                                                                     : "round_robin");
-  result.frames = latencies.size();
-  std::sort(latencies.begin(), latencies.end());
-  double sum = 0;
-  for (const auto v : latencies) sum += static_cast<double>(v);
-  if (!latencies.empty()) {
-    result.mean_us = sum / static_cast<double>(latencies.size()) / 1e3;
-    result.p50_us = percentile(latencies, 50);
-    result.p99_us = percentile(latencies, 99);
-    result.max_us = static_cast<double>(latencies.back()) / 1e3;
-    result.cpu_us_per_frame = static_cast<double>(cpu_used) / 1e3 / static_cast<double>(latencies.size());
-  }
+  std::snprintf(result.strategy_used, sizeof result.strategy_used, "%s", waiter.strategy_used());
+  summarize(latencies, cpu_used, result);
   return result;
 }
 
@@ -288,36 +339,21 @@ std::pair<double, double> ratio(const Estimate& a, const Estimate& b) {
   return {r, 1.96 * r * relative};
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  Config config;
-  CLI::App app{"bench_wait_set: the cost of waiting on several SIM streams at once (WaitSet with "
-               "futex_waitv, its round-robin fallback, StreamNotifier in epoll) against one "
-               "blocking Reader::wait with the same number of wake-ups.\nExit codes: 0 measured, "
-               "1 a run failed, 2 usage error.", "bench_wait_set"};
-  app.add_option("--streams", config.streams, "streams the reader waits on")->check(CLI::Range(2u, 128u))->capture_default_str();
-  app.add_option("--rate", config.rate_hz, "frames per second on each stream")->check(CLI::Range(1.0, 2000.0))->capture_default_str();
-  app.add_option("--frames", config.frames, "frames per stream and run")->check(CLI::Range(10u, 100000u))->capture_default_str();
-  app.add_option("--runs", config.runs, "runs (each runs every way once, in turn)")->check(CLI::Range(1u, 100u))->capture_default_str();
-  app.add_option("--ways", config.ways, "futex_waitv, round_robin, notifier, reader_wait [all]")->delimiter(',');
-  app.add_option("--json", config.json, "also write the results here as JSON")->type_name("FILE");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
+// The ways --ways names, in their fixed order; nothing when it names one that does not exist.
+std::optional<std::vector<Way>> chosen_ways(const std::vector<std::string>& names) {
   std::vector<Way> ways;
   for (const Way way : kAllWays) {
-    if (config.ways.empty() || std::find(config.ways.begin(), config.ways.end(), name_of(way)) != config.ways.end()) {
+    if (names.empty() || std::find(names.begin(), names.end(), name_of(way)) != names.end()) {
       ways.push_back(way);
     }
   }
-  if (ways.size() != (config.ways.empty() ? kAllWays.size() : config.ways.size())) {
-    std::fprintf(stderr, "bench_wait_set: --ways takes futex_waitv, round_robin, notifier and reader_wait.\n");
-    return 2;
-  }
+  if (ways.size() != (names.empty() ? kAllWays.size() : names.size())) return std::nullopt;
+  return ways;
+}
 
+// Every run of every way, a line each; nothing when a run failed or was incomplete.
+std::optional<std::vector<std::vector<RunResult>>> measure(const std::vector<Way>& ways,
+                                                           const Config& config) {
   std::printf("%u streams at %.0f Hz each (reader_wait: 1 stream at %.0f Hz), %u frames per stream, %u runs\n",
               config.streams, config.rate_hz, config.rate_hz * config.streams, config.frames, config.runs);
   std::printf("%-12s %3s %10s %9s %9s %9s %11s %8s %8s  %s\n", "way", "run", "frames", "mean_us",
@@ -326,18 +362,24 @@ int main(int argc, char** argv) {
   for (unsigned run = 1; run <= config.runs; ++run) {
     for (std::size_t w = 0; w < ways.size(); ++w) {
       const auto result = run_once(ways[w], config, run);
-      if (!result) return 1;
+      if (!result) return std::nullopt;
       std::printf("%-12s %3u %10llu %9.1f %9.1f %9.1f %11.2f %8llu %8llu  %s%s\n", name_of(ways[w]), run,
                   static_cast<unsigned long long>(result->frames), result->mean_us, result->p50_us,
                   result->p99_us, result->cpu_us_per_frame, static_cast<unsigned long long>(result->skipped),
                   static_cast<unsigned long long>(result->wakeups), result->strategy_used,
                   result->complete ? "" : "  INCOMPLETE");
       std::fflush(stdout);
-      if (!result->complete) return 1;
+      if (!result->complete) return std::nullopt;
       results[w].push_back(*result);
     }
   }
+  return results;
+}
 
+// Prints the mean over runs of each way with its interval and its ratios to reader_wait, and
+// returns the same as JSON.
+std::string summarize_ways(const std::vector<Way>& ways,
+                           const std::vector<std::vector<RunResult>>& results, const Config& config) {
   auto column = [&](std::size_t w, double RunResult::*field) {
     std::vector<double> values;
     for (const auto& r : results[w]) values.push_back(r.*field);
@@ -381,7 +423,36 @@ int main(int argc, char** argv) {
                   cpu.half, rm.first, rm.second, rc.first, rc.second);
     json += item;
   }
-  json += "]}\n";
+  return json + "]}\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Config config;
+  CLI::App app{"bench_wait_set: the cost of waiting on several SIM streams at once (WaitSet with "
+               "futex_waitv, its round-robin fallback, StreamNotifier in epoll) against one "
+               "blocking Reader::wait with the same number of wake-ups.\nExit codes: 0 measured, "
+               "1 a run failed, 2 usage error.", "bench_wait_set"};
+  app.add_option("--streams", config.streams, "streams the reader waits on")->check(CLI::Range(2u, 128u))->capture_default_str();
+  app.add_option("--rate", config.rate_hz, "frames per second on each stream")->check(CLI::Range(1.0, 2000.0))->capture_default_str();
+  app.add_option("--frames", config.frames, "frames per stream and run")->check(CLI::Range(10u, 100000u))->capture_default_str();
+  app.add_option("--runs", config.runs, "runs (each runs every way once, in turn)")->check(CLI::Range(1u, 100u))->capture_default_str();
+  app.add_option("--ways", config.ways, "futex_waitv, round_robin, notifier, reader_wait [all]")->delimiter(',');
+  app.add_option("--json", config.json, "also write the results here as JSON")->type_name("FILE");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  const auto ways = chosen_ways(config.ways);
+  if (!ways) {
+    std::fprintf(stderr, "bench_wait_set: --ways takes futex_waitv, round_robin, notifier and reader_wait.\n");
+    return 2;
+  }
+  const auto results = measure(*ways, config);
+  if (!results) return 1;
+  const std::string json = summarize_ways(*ways, *results, config);
   if (!config.json.empty()) {
     std::FILE* out = std::fopen(config.json.c_str(), "w");
     if (out == nullptr || std::fputs(json.c_str(), out) < 0 || std::fclose(out) != 0) {
