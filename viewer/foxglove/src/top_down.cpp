@@ -55,102 +55,130 @@ std::pair<float, float> colour_range(std::vector<float>& values) {
   return {low, high > low ? high : low + 1.0f};
 }
 
+// Where a frame's points are in memory: every `stride` bytes, `count` of them; `step` samples
+// about 4096 of them for the scale computations.
+struct PointSpan {
+  const PointLayout& layout;
+  std::span<const std::byte> frame;
+  std::uint32_t stride;
+  std::size_t count;
+  std::size_t step;
+
+  const std::byte* at(std::size_t i) const { return frame.data() + i * stride; }
+};
+
+// Automatic range: the 95th percentile of horizontal distance, rounded up to a nice number,
+// so an indoor scan and a highway scan both fill the view.
+float fitted_range(const PointSpan& points) {
+  std::vector<float> distances;
+  PointView v{};
+  for (std::size_t i = 0; i < points.count; i += points.step) {
+    if (read_point(points.layout, points.at(i), ColorBy::height, v)) distances.push_back(std::hypot(v.x, v.y));
+  }
+  float far = 50.0f;
+  if (!distances.empty()) {
+    const auto at = distances.begin() + static_cast<std::ptrdiff_t>(distances.size() * 95 / 100);
+    std::nth_element(distances.begin(), at, distances.end());
+    far = *at;
+  }
+  float range = 5.0f;
+  for (const float nice : {5.0f, 10.0f, 20.0f, 30.0f, 50.0f, 75.0f, 100.0f, 150.0f, 200.0f}) {
+    range = nice;
+    if (nice >= far) break;
+  }
+  return range;
+}
+
+// The raster being drawn, with the view's geometry: metres to pixels, the sensor in the middle.
+struct Canvas {
+  TopDownImage& out;
+  std::uint32_t size;
+  float scale;   // pixels per metre
+  float centre;  // the sensor's pixel row and column
+
+  void put(int px, int py, Rgb c) {
+    if (px < 0 || py < 0 || px >= static_cast<int>(size) || py >= static_cast<int>(size)) return;
+    std::uint8_t* p = &out.rgb[(std::size_t(py) * size + std::size_t(px)) * 3];
+    p[0] = c.r;
+    p[1] = c.g;
+    p[2] = c.b;
+  }
+};
+
+// A dark background, range rings and the sensor's forward axis in dark grey.
+void draw_background(Canvas& canvas, float range, float ring_step) {
+  std::fill(canvas.out.rgb.begin(), canvas.out.rgb.end(), std::uint8_t{17});
+  for (float ring = ring_step; ring <= range * 1.42f; ring += ring_step) {
+    const float radius = ring * canvas.scale;
+    const int steps = static_cast<int>(radius * 7.0f) + 16;
+    for (int k = 0; k < steps; ++k) {
+      const float a = 6.2831853f * static_cast<float>(k) / static_cast<float>(steps);
+      canvas.put(static_cast<int>(canvas.centre + radius * std::cos(a)),
+                 static_cast<int>(canvas.centre - radius * std::sin(a)), {60, 60, 60});
+    }
+  }
+  for (int py = 0; py < static_cast<int>(canvas.centre); ++py) {
+    canvas.put(static_cast<int>(canvas.centre), py, {45, 45, 45});
+  }
+}
+
+// Every point inside the view, coloured on the scale from `low` (blue) to `high` (red); on large
+// views as 2×2 squares so sparse scans stay visible. Returns how many were drawn.
+std::uint64_t draw_points(Canvas& canvas, const PointSpan& points, ColorBy color, float low,
+                          float high) {
+  const int dot = canvas.size >= 480 ? 2 : 1;
+  const auto size = static_cast<float>(canvas.size);
+  std::uint64_t drawn = 0;
+  PointView v{};
+  for (std::size_t i = 0; i < points.count; ++i) {
+    if (!read_point(points.layout, points.at(i), color, v)) continue;
+    const float fx = canvas.centre + v.x * canvas.scale;
+    const float fy = canvas.centre - v.y * canvas.scale;
+    if (!(fx >= 0 && fy >= 0 && fx < size && fy < size)) continue;
+    const Rgb colour = turbo((v.value - low) / (high - low));
+    for (int dy = 0; dy < dot; ++dy) {
+      for (int dx = 0; dx < dot; ++dx) canvas.put(static_cast<int>(fx) + dx, static_cast<int>(fy) + dy, colour);
+    }
+    ++drawn;
+  }
+  return drawn;
+}
+
 }  // namespace
 
 void render_top_down(const PointLayout& layout, std::span<const std::byte> frame,
                      const TopDownOptions& options, TopDownImage& out) {
   const std::uint32_t size = std::clamp<std::uint32_t>(options.size_px, 64, 2048);
   out.width = out.height = size;
-  out.rgb.assign(std::size_t{size} * size * 3, 0);
+  out.rgb.resize(std::size_t{size} * size * 3);
   out.points_drawn = 0;
-  for (std::size_t i = 0; i < out.rgb.size(); i += 3) {
-    out.rgb[i] = out.rgb[i + 1] = out.rgb[i + 2] = 17;
-  }
   const std::uint32_t stride = layout.point_size;
   const bool readable = stride >= 16 || (stride >= 12 && layout.type == PointType::xyz32);
   const std::size_t count = readable ? frame.size() / stride : 0;
-  const std::size_t step = std::max<std::size_t>(1, count / 4096);
-  PointView v{};
+  const PointSpan points{layout, frame, stride, count, std::max<std::size_t>(1, count / 4096)};
 
-  // Automatic range: the 95th percentile of horizontal distance, rounded up to a nice number,
-  // so an indoor scan and a highway scan both fill the view.
-  float range = options.range_m;
-  if (!(range >= 1.0f)) {
-    std::vector<float> distances;
-    for (std::size_t i = 0; i < count; i += step) {
-      if (read_point(layout, frame.data() + i * stride, ColorBy::height, v)) {
-        distances.push_back(std::hypot(v.x, v.y));
-      }
-    }
-    float far = 50.0f;
-    if (!distances.empty()) {
-      const auto at = distances.begin() + static_cast<std::ptrdiff_t>(distances.size() * 95 / 100);
-      std::nth_element(distances.begin(), at, distances.end());
-      far = *at;
-    }
-    range = 5.0f;
-    for (const float nice : {5.0f, 10.0f, 20.0f, 30.0f, 50.0f, 75.0f, 100.0f, 150.0f, 200.0f}) {
-      range = nice;
-      if (nice >= far) break;
-    }
-  }
-  const float ring_step = range <= 10.0f ? 2.0f : range <= 30.0f ? 5.0f : range <= 100.0f ? 10.0f : 50.0f;
+  const float range = options.range_m >= 1.0f ? options.range_m : fitted_range(points);
   out.range_m = range;
-  out.ring_step_m = ring_step;
-  const float scale = static_cast<float>(size) / (2.0f * range);  // pixels per metre
-  const float centre = static_cast<float>(size) / 2.0f;
-  // Points are drawn as 2×2 squares on large views so sparse scans stay visible.
-  const int dot = size >= 480 ? 2 : 1;
-
-  auto put = [&](int px, int py, Rgb c) {
-    if (px < 0 || py < 0 || px >= static_cast<int>(size) || py >= static_cast<int>(size)) return;
-    std::uint8_t* p = &out.rgb[(std::size_t(py) * size + std::size_t(px)) * 3];
-    p[0] = c.r;
-    p[1] = c.g;
-    p[2] = c.b;
-  };
-  // Range rings and the sensor's forward axis, in dark grey.
-  for (float ring = ring_step; ring <= range * 1.42f; ring += ring_step) {
-    const int steps = static_cast<int>(ring * scale * 7.0f) + 16;
-    for (int k = 0; k < steps; ++k) {
-      const float a = 6.2831853f * static_cast<float>(k) / static_cast<float>(steps);
-      put(static_cast<int>(centre + ring * scale * std::cos(a)),
-          static_cast<int>(centre - ring * scale * std::sin(a)), {60, 60, 60});
-    }
-  }
-  for (int py = 0; py < static_cast<int>(centre); ++py) {
-    put(static_cast<int>(centre), py, {45, 45, 45});
-  }
+  out.ring_step_m = range <= 10.0f ? 2.0f : range <= 30.0f ? 5.0f : range <= 100.0f ? 10.0f : 50.0f;
+  Canvas canvas{out, size, static_cast<float>(size) / (2.0f * range), static_cast<float>(size) / 2.0f};
+  draw_background(canvas, range, out.ring_step_m);
   if (count == 0) return;
 
   std::vector<float> values;
   values.reserve(std::min<std::size_t>(count, 4096));
-  for (std::size_t i = 0; i < count; i += step) {
-    if (read_point(layout, frame.data() + i * stride, options.color, v)) values.push_back(v.value);
+  PointView v{};
+  for (std::size_t i = 0; i < count; i += points.step) {
+    if (read_point(layout, points.at(i), options.color, v)) values.push_back(v.value);
   }
   const auto [low, high] = colour_range(values);
   out.colour_low = low;
   out.colour_high = high;
-
-  for (std::size_t i = 0; i < count; ++i) {
-    if (!read_point(layout, frame.data() + i * stride, options.color, v)) continue;
-    const float fx = centre + v.x * scale;
-    const float fy = centre - v.y * scale;
-    if (!(fx >= 0 && fy >= 0 && fx < static_cast<float>(size) && fy < static_cast<float>(size))) {
-      continue;
-    }
-    const Rgb colour = turbo((v.value - low) / (high - low));
-    for (int dy = 0; dy < dot; ++dy) {
-      for (int dx = 0; dx < dot; ++dx) {
-        put(static_cast<int>(fx) + dx, static_cast<int>(fy) + dy, colour);
-      }
-    }
-    ++out.points_drawn;
-  }
+  out.points_drawn = draw_points(canvas, points, options.color, low, high);
   // The sensor itself: a small white cross.
+  const int c = static_cast<int>(canvas.centre);
   for (int d = -4; d <= 4; ++d) {
-    put(static_cast<int>(centre) + d, static_cast<int>(centre), {255, 255, 255});
-    put(static_cast<int>(centre), static_cast<int>(centre) + d, {255, 255, 255});
+    canvas.put(c + d, c, {255, 255, 255});
+    canvas.put(c, c + d, {255, 255, 255});
   }
 }
 

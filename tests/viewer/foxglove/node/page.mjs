@@ -4,9 +4,10 @@
 // a calibrated camera with a mounted LiDAR (sensor_writer) run. It asserts the page lists the
 // streams with a live writer, shows a camera image and a LiDAR top-down view that are not blank,
 // draws the LiDAR's points into the calibrated camera's image where the mountings put them,
-// marks a dead writer's picture, replaces a view whose stream changed kind, says so when there
-// are no streams, and greys everything out with a banner when the server is gone. Screenshots
-// are kept as artifacts (the projection one is the picture in docs/foxglove.md).
+// shows a colour legend with the scale's numbers, marks a dead writer's picture, replaces a
+// view whose stream changed kind, says so when there are no streams, and greys everything out
+// with a banner when the server is gone. Screenshots are kept as artifacts (the projection one
+// is the picture in docs/foxglove.md).
 import assert from "node:assert/strict";
 import fs from "node:fs";
 import os from "node:os";
@@ -115,6 +116,18 @@ try {
     return view.querySelector("img").complete && /color=intensity/.test(view.querySelector("img").dataset.url || "") &&
       /colour: intensity .* \(blue\) to .* \(red\)/.test(view.querySelector(".caption").textContent);
   }, { timeout: 30_000 }, lidar);
+  // Beside the caption, a colour legend with the same numbers and the Turbo scale (review L6).
+  const legend = await page.$eval(`.view[data-stream="${lidar}"]`, (view) => ({
+    caption: view.querySelector(".caption").textContent,
+    hidden: view.querySelector(".legend").hidden,
+    text: view.querySelector(".legend").textContent,
+    bar: view.querySelector(".legend .bar").style.background,
+  }));
+  assert.equal(legend.hidden, false, "no colour legend under the LiDAR view");
+  const scale = /colour: intensity (\S+) \(blue\) to (\S+) \(red\)/.exec(legend.caption);
+  assert.ok(scale, legend.caption);
+  assert.equal(legend.text, `intensity:${scale[1]}${scale[2]}`, "the legend's numbers are not the caption's");
+  assert.match(legend.bar, /linear-gradient/);
 
   // The calibrated camera shows its LiDAR's points by default, where calibration and mountings
   // put them: the wall ahead lands in its rectangle, the wall behind nowhere. A wrong transform
