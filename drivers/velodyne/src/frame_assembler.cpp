@@ -141,11 +141,13 @@ void FrameAssembler::build_unit_geometry() noexcept {
     for (unsigned u = 0; u < units_per_block; ++u) {
       UnitGeometry& g = units_[bank * units_per_block + u];
       g.fraction = unit_fraction(options_.model, bank, u);
+      azimuth_terms_[bank].fraction[u] = g.fraction;
       // VLP-16 and Puck: two sequences of 16 lasers per block; the rest one laser per unit.
       const unsigned laser = two_sequences ? u % 16 : bank * 32 + u;
       if (laser >= calibration_.lasers()) continue;  // a bank this model does not send
       const LaserCorrection& c = calibration_[laser];
       g.rot_centi = c.rot_correction * 180.0 / pi * 100.0;
+      azimuth_terms_[bank].rot_centi[u] = g.rot_centi;
       g.cos_vert = static_cast<float>(std::cos(c.vert_correction));
       g.sin_vert = static_cast<float>(std::sin(c.vert_correction));
       g.dist_correction = static_cast<float>(c.dist_correction);
@@ -495,6 +497,7 @@ bool FrameAssembler::block_context(const Packet& packet, unsigned block, const B
   out.units = packet.units(block);
   out.partner = compare ? packet.units(packet.partner(block)) : no_returns.data();
   out.geometry = &units_[bank * units_per_block];
+  out.azimuth_terms = &azimuth_terms_[bank];
   out.trig = trig_table_;
   out.base = static_cast<float>(azimuth.base);
   out.step = azimuth.step;
@@ -523,12 +526,26 @@ bool FrameAssembler::fits_in_place(BlockContext& block, std::int64_t block_posit
          block.time_base <= std::int64_t{std::numeric_limits<std::uint32_t>::max()} - max_unit_time_ns_;
 }
 
-// Decodes unit `unit` into `out` (every field; the time as an offset from block.time_base) and
-// says whether it is a point: a return, within the range limits, and not the repeat of its
-// pair's other return. `azimuth_centi` gets its azimuth, 0…35,999.
+// The table index (azimuth in 0.01°, 0…35,999) of each unit of the block: the interpolated
+// azimuth minus the laser's rot_correction, rounded as nebula and ros-drivers do (see the top
+// of this file). No branch: the compiler computes the 32 with vector instructions.
+void FrameAssembler::azimuth_indices(const BlockContext& block, std::array<std::int32_t, units_per_block>& out) noexcept {
+  const BankAzimuthTerms& t = *block.azimuth_terms;
+  for (unsigned u = 0; u < units_per_block; ++u) {
+    const float interpolated = block.base + block.step * t.fraction[u];
+    float corrected = static_cast<float>(static_cast<double>(interpolated) - t.rot_centi[u]);
+    corrected += corrected < 0.0f ? static_cast<float>(full_turn) : 0.0f;
+    const auto rounded = static_cast<std::int32_t>(corrected + 0.5f);
+    out[u] = rounded >= full_turn ? rounded - full_turn : rounded;
+  }
+}
+
+// Decodes unit `unit` at table index `azimuth_centi` into `out` (every field; the time as an
+// offset from block.time_base) and says whether it is a point: a return, within the range
+// limits, and not the repeat of its pair's other return.
 template <bool Full, bool Intensity>
-bool FrameAssembler::decode_point(const BlockContext& block, unsigned unit, LidarPoint& out,
-                                  std::int32_t& azimuth_centi) noexcept {
+bool FrameAssembler::decode_point(const BlockContext& block, unsigned unit, std::int32_t azimuth_centi,
+                                  LidarPoint& out) noexcept {
   const std::uint8_t* bytes = block.units + unit * 3;
   const std::uint8_t* other = block.partner + unit * 3;
   const auto raw = static_cast<std::uint16_t>(bytes[0] | (bytes[1] << 8));
@@ -536,13 +553,6 @@ bool FrameAssembler::decode_point(const BlockContext& block, unsigned unit, Lida
   const UnitGeometry& g = block.geometry[unit];
   const float distance = static_cast<float>(raw) * block.unit_m + g.dist_correction;
   const bool keep = (raw != 0) & (raw != other_raw) & (distance > block.min_range_m) & (distance < block.max_range_m);
-
-  // Azimuth in 0.01°, rounded as nebula and ros-drivers do (see the top of this file).
-  const float interpolated = block.base + block.step * g.fraction;
-  float corrected = static_cast<float>(static_cast<double>(interpolated) - g.rot_centi);
-  corrected += corrected < 0.0f ? static_cast<float>(full_turn) : 0.0f;
-  const auto rounded = static_cast<std::int32_t>(corrected + 0.5f);
-  azimuth_centi = rounded >= full_turn ? rounded - full_turn : rounded;
   const CosSin a = block.trig[azimuth_centi];
 
   if constexpr (!Full) {
@@ -590,12 +600,13 @@ bool FrameAssembler::decode_point(const BlockContext& block, unsigned unit, Lida
 template <bool Full, bool Intensity>
 void FrameAssembler::decode_in_place(const BlockContext& block) noexcept {
   const BlockContext local = block;  // a copy the output writes cannot alias: kept in registers
+  std::array<std::int32_t, units_per_block> azimuths;
+  azimuth_indices(local, azimuths);
   LidarPoint* out = output_.data() + output_count_;
   std::size_t kept = 0;
   for (unsigned u = 0; u < units_per_block; ++u) {
     LidarPoint p;
-    std::int32_t azimuth = 0;
-    const bool keep = decode_point<Full, Intensity>(local, u, p, azimuth);
+    const bool keep = decode_point<Full, Intensity>(local, u, azimuths[u], p);
     out[kept] = p;
     kept += keep ? 1U : 0U;
   }
@@ -607,10 +618,12 @@ template <bool Full, bool Intensity>
 void FrameAssembler::decode_point_by_point(const BlockContext& block, std::int64_t block_position,
                                            std::int64_t host_ns) noexcept {
   const bool by_packet = options_.cut_by == CutBy::packet;
+  std::array<std::int32_t, units_per_block> azimuths;
+  azimuth_indices(block, azimuths);
   for (unsigned u = 0; u < units_per_block; ++u) {
     LidarPoint p;
-    std::int32_t azimuth = 0;
-    if (!decode_point<Full, Intensity>(block, u, p, azimuth)) continue;
+    const std::int32_t azimuth = azimuths[u];
+    if (!decode_point<Full, Intensity>(block, u, azimuth, p)) continue;
     if (windowed_ && !in_window(azimuth)) continue;
     // Where the point lies on the unwrapped azimuth axis (0.01° since the first revolution).
     std::int64_t position;

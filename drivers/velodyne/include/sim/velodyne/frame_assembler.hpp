@@ -184,12 +184,19 @@ class FrameAssembler {
     double min_intensity = 0;
     double max_intensity = 255;
   };
+  // The azimuth terms of a bank's 32 units side by side, so one loop computes a block's 32
+  // table indices with vector instructions before the per-point loop.
+  struct BankAzimuthTerms {
+    std::array<float, units_per_block> fraction{};
+    std::array<double, units_per_block> rot_centi{};
+  };
   // One block as the per-point decoding needs it, with the limits copied so the point loop
   // reads no member the output writes could alias.
   struct BlockContext {
     const std::uint8_t* units = nullptr;    // 32 × (distance, reflectivity)
     const std::uint8_t* partner = nullptr;  // the pair's other return to compare, or all zeros
     const UnitGeometry* geometry = nullptr; // the bank's 32 entries
+    const BankAzimuthTerms* azimuth_terms = nullptr;
     const CosSin* trig = nullptr;
     float base = 0;                         // azimuth the points start from and step, 0.01°
     float step = 0;
@@ -218,9 +225,10 @@ class FrameAssembler {
   void decode_in_place(const BlockContext& block) noexcept;
   template <bool Full, bool Intensity>
   void decode_point_by_point(const BlockContext& block, std::int64_t block_position, std::int64_t host_ns) noexcept;
+  static void azimuth_indices(const BlockContext& block, std::array<std::int32_t, units_per_block>& out) noexcept;
   template <bool Full, bool Intensity>
-  [[gnu::always_inline]] static inline bool decode_point(const BlockContext& block, unsigned unit, LidarPoint& out,
-                           std::int32_t& azimuth_centi) noexcept;
+  [[gnu::always_inline]] static inline bool decode_point(const BlockContext& block, unsigned unit,
+                                                         std::int32_t azimuth_centi, LidarPoint& out) noexcept;
   void emit(const LidarPoint& point, std::int64_t position, std::int64_t point_ns,
             std::int64_t host_ns) noexcept;
   void start(FrameState& frame, std::int64_t point_ns, std::int64_t host_ns, bool whole) noexcept;
@@ -245,6 +253,7 @@ class FrameAssembler {
   std::int32_t window_max_centi_ = 0;
   const CosSin* trig_table_ = nullptr;  // 36,000 entries: 0.00°…359.99° (shared by the process)
   std::array<UnitGeometry, banks * units_per_block> units_{};
+  std::array<BankAzimuthTerms, banks> azimuth_terms_{};
   bool full_model_ = false;        // some laser has HDL-64E offsets or a two-point correction
   bool intensity_model_ = false;   // some laser has the focal intensity model
   // Blocks whose points all land in the frame in progress are decoded straight into the output
