@@ -115,32 +115,30 @@ struct Report {
   }
 };
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  apps::CommandLine cli(
-      "sim_dds_bridge",
-      "Bridges SIM streams and ROS 2 topics over DDS (Fast DDS, UDP): --publish makes a local SIM "
-      "stream the ROS 2 topic of the same name (points as sensor_msgs/msg/PointCloud2, images as "
-      "sensor_msgs/msg/Image, mjpeg as CompressedImage), serialized only while a remote reader "
-      "listens; --subscribe writes a ROS 2 Image, CompressedImage or PointCloud2 topic into a "
-      "local SIM stream.");
-  CLI::App& app = cli.app();
+struct Options {
   RawOptions raw;
   int domain = 0;
   bool json = false;
   bool quiet = false;
   double status_period = 1.0;
+  Trust trust;
+  const CLI::Option* subscribe = nullptr;  // for pairing each plain --as with its --subscribe
+  const CLI::Option* as = nullptr;
+};
+
+void add_options(apps::CommandLine& cli, Options& o) {
+  CLI::App& app = cli.app();
+  RawOptions& raw = o.raw;
   app.add_option("--publish", raw.publish, "SIM stream to publish as the ROS 2 topic of the same name (repeatable)")
       ->type_name("STREAM");
-  auto* subscribe = app.add_option("--subscribe", raw.subscribe,
-                                   "ROS 2 topic to write into a SIM stream (repeatable)")
-                        ->type_name("TOPIC");
-  auto* as = app.add_option("--as", raw.as,
-                            "SIM stream for the --subscribe before it [the topic's name], or "
-                            "TOPIC=STREAM")
-                 ->type_name("STREAM");
-  app.add_option("--domain", domain, "DDS domain id (ROS_DOMAIN_ID)")->check(CLI::Range(0, 232));
+  o.subscribe = app.add_option("--subscribe", raw.subscribe,
+                               "ROS 2 topic to write into a SIM stream (repeatable)")
+                    ->type_name("TOPIC");
+  o.as = app.add_option("--as", raw.as,
+                        "SIM stream for the --subscribe before it [the topic's name], or "
+                        "TOPIC=STREAM")
+             ->type_name("STREAM");
+  app.add_option("--domain", o.domain, "DDS domain id (ROS_DOMAIN_ID)")->check(CLI::Range(0, 232));
   app.add_option("--frame-id", raw.frame_id, "header.frame_id of a published stream [its name without '/']")
       ->type_name("STREAM=ID");
   app.add_option("--max-rate", raw.max_rate, "send at most this many frames a second of a stream")
@@ -155,78 +153,113 @@ int main(int argc, char** argv) {
   app.add_flag("--reliable-subscribe", raw.reliable_subscribe,
                "subscribe with reliable QoS (then best-effort publishers, most drivers, do not "
                "match) [best effort: matches both]");
-  app.add_flag("--json", json, "print every topic's counters as one JSON line per status period on stdout");
-  app.add_option("--status-period", status_period, "seconds between status reports")
+  app.add_flag("--json", o.json, "print every topic's counters as one JSON line per status period on stdout");
+  app.add_option("--status-period", o.status_period, "seconds between status reports")
       ->check(CLI::Range(0.05, 3600.0));
-  app.add_flag("-q,--quiet", quiet, "no status line and no summary");
-  Trust trust;
-  cli.add_trust(trust);
+  app.add_flag("-q,--quiet", o.quiet, "no status line and no summary");
+  cli.add_trust(o.trust);
   cli.add_config_file();
-  if (auto code = cli.parse(argc, argv)) return *code;
+}
 
-  // Pair each plain --as with the --subscribe given before it.
+// Pairs each plain --as with the --subscribe given before it (RawOptions::as_after).
+void pair_as_with_subscribes(const CLI::App& app, Options& o) {
+  std::vector<std::size_t> after;
   std::size_t subscribes_seen = 0;
   for (const CLI::Option* option : app.parse_order()) {
-    if (option == subscribe) ++subscribes_seen;
-    if (option == as) raw.as_after.push_back(subscribes_seen);
+    if (option == o.subscribe) ++subscribes_seen;
+    if (option == o.as) after.push_back(subscribes_seen);
   }
-  {
-    // The parse order lists one entry per value; keep only those of plain --as values.
-    std::vector<std::size_t> plain;
-    std::size_t k = 0;
-    for (const std::string& item : raw.as) {
-      if (k < raw.as_after.size() && item.find('=') == std::string::npos) plain.push_back(raw.as_after[k]);
-      ++k;
+  // The parse order lists one entry per value; keep only those of plain --as values.
+  std::size_t k = 0;
+  for (const std::string& item : o.raw.as) {
+    if (k < after.size() && item.find('=') == std::string::npos) o.raw.as_after.push_back(after[k]);
+    ++k;
+  }
+}
+
+// Every topic's thread: one Outbound per --publish, one Inbound per --subscribe, and the
+// mountings each direction shares (/tf_static).
+struct Topics {
+  Topics(DdsSession& session, BridgePlan& plan, const Trust& trust) : transforms(session) {
+    if (!plan.inbound.empty()) remote_transforms.emplace(session);
+    for (auto& o : plan.outbound) {
+      o.trust = trust;
+      outbound.push_back(std::make_unique<Outbound>(session, transforms, o));
     }
-    raw.as_after = std::move(plain);
+    for (auto& i : plan.inbound) {
+      inbound.push_back(std::make_unique<Inbound>(session, *remote_transforms, i));
+    }
   }
-  auto plan = plan_bridge(raw);
-  if (!plan) return cli.fail(plan.error());
+  // Review L4: the threads stop before the last report, so it counts every message they handled.
+  void stop() {
+    for (auto& o : outbound) o->stop();
+    for (auto& i : inbound) i->stop();
+  }
+  ~Topics() {
+    outbound.clear();  // before the transforms they publish into
+    inbound.clear();
+  }
 
-  auto& stop = apps::StopSignal::install();
-  auto session = DdsSession::create(domain);
-  if (!session) return cli.fail(session.error());
-
-  StaticTransforms transforms(**session);
+  StaticTransforms transforms;
   std::optional<RemoteTransforms> remote_transforms;
-  if (!plan->inbound.empty()) remote_transforms.emplace(**session);
   std::vector<std::unique_ptr<Outbound>> outbound;
   std::vector<std::unique_ptr<Inbound>> inbound;
-  for (auto& o : plan->outbound) {
-    o.trust = trust;
-    outbound.push_back(std::make_unique<Outbound>(**session, transforms, o));
-  }
-  for (auto& i : plan->inbound) {
-    inbound.push_back(std::make_unique<Inbound>(**session, *remote_transforms, i));
-  }
-  const Report report{outbound, inbound, transforms};
+};
 
-  auto status = apps::StatusLine::for_stderr("sim_dds_bridge", quiet);
-  if (!quiet) {
-    for (const auto& o : outbound) {
-      status.note(o->options().stream + " → DDS rt" + o->options().topic + "[/image_raw] (domain " +
-                  std::to_string(domain) + ")");
-    }
-    for (const auto& i : inbound) {
-      status.note("DDS rt" + i->options().topic + " → " + i->options().stream);
-    }
+// One line per topic when the bridge starts: which way it goes.
+void announce(apps::StatusLine& status, const Topics& topics, int domain) {
+  for (const auto& o : topics.outbound) {
+    status.note(o->options().stream + " → DDS rt" + o->options().topic + "[/image_raw] (domain " +
+                std::to_string(domain) + ")");
   }
-  const auto period = std::chrono::nanoseconds(static_cast<std::int64_t>(status_period * 1e9));
+  for (const auto& i : topics.inbound) {
+    status.note("DDS rt" + i->options().topic + " → " + i->options().stream);
+  }
+}
+
+// Reports every --status-period until a stop: problems, the JSON line, the status line.
+void report_until_stopped(const Options& o, const Report& report, apps::StatusLine& status,
+                          const apps::StopSignal& stop) {
+  const auto period = std::chrono::nanoseconds(static_cast<std::int64_t>(o.status_period * 1e9));
   while (stop.sleep_for(period)) {
     report.problems(status);
-    if (json) {
+    if (o.json) {
       std::printf("%s\n", report.json().c_str());
       std::fflush(stdout);
     }
     status.update(report.text());
   }
-  // Review L4: the threads stop first, so the last report counts every message they handled.
-  for (auto& o : outbound) o->stop();
-  for (auto& i : inbound) i->stop();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  apps::CommandLine cli(
+      "sim_dds_bridge",
+      "Bridges SIM streams and ROS 2 topics over DDS (Fast DDS, UDP): --publish makes a local SIM "
+      "stream the ROS 2 topic of the same name (points as sensor_msgs/msg/PointCloud2, images as "
+      "sensor_msgs/msg/Image, mjpeg as CompressedImage), serialized only while a remote reader "
+      "listens; --subscribe writes a ROS 2 Image, CompressedImage or PointCloud2 topic into a "
+      "local SIM stream.");
+  Options options;
+  add_options(cli, options);
+  if (auto code = cli.parse(argc, argv)) return *code;
+  pair_as_with_subscribes(cli.app(), options);
+  auto plan = plan_bridge(options.raw);
+  if (!plan) return cli.fail(plan.error());
+
+  auto& stop = apps::StopSignal::install();
+  auto session = DdsSession::create(options.domain);
+  if (!session) return cli.fail(session.error());
+  Topics topics(**session, *plan, options.trust);
+  const Report report{topics.outbound, topics.inbound, topics.transforms};
+
+  auto status = apps::StatusLine::for_stderr("sim_dds_bridge", options.quiet);
+  if (!options.quiet) announce(status, topics, options.domain);
+  report_until_stopped(options, report, status, stop);
+  topics.stop();
   report.problems(status);
-  if (json) std::printf("%s\n", report.json().c_str());
+  if (options.json) std::printf("%s\n", report.json().c_str());
   status.finish(report.text());
-  outbound.clear();
-  inbound.clear();
   return apps::kExitOk;
 }
