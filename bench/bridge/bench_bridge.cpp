@@ -318,84 +318,79 @@ std::string mean_interval(const std::vector<double>& v, int digits) {
   return text;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"SIM → sim_dds_bridge → Cyclone DDS against a plain Fast DDS publisher, same run.",
-               "bench_bridge"};
+struct Settings {
   double seconds = 5;
   int runs = 1;
   bool reliable = false;
-  std::string only;
-  std::string plain_name;
-  app.add_option("--seconds", seconds, "seconds per case and path")->check(CLI::PositiveNumber);
-  app.add_option("--runs", runs, "repeat every case this many times; with 2 or more, a summary "
-                                 "gives the bridge/plain CPU ratio with its 95 % interval")
-      ->check(CLI::Range(1, 100));
-  app.add_flag("--reliable", reliable, "reliable QoS instead of best effort");
-  app.add_option("--case", only, "run only this case");
-  app.add_option("--plain-publisher", plain_name, "(internal) be the plain publisher of this topic");
-  CLI11_PARSE(app, argc, argv);
+  std::string only;        // --case: run only this case
+  std::string plain_name;  // --plain-publisher: this process is the plain publisher
+};
 
-  for (const Case& c : paper_cases()) {
-    if (!plain_name.empty() && c.name == only) return plain_publisher(plain_name, c, seconds, reliable);
-  }
-  if (!plain_name.empty()) return 2;
-  if (auto why = sim::testing::enter_private_network(sim::testing::Multicast::on)) {
-    std::fprintf(stderr, "bench_bridge: %s: running on this machine's interfaces\n", why->c_str());
-  }
-  const std::string self = "/proc/self/exe";
+// The file of this program, so it can start itself as the plain publisher.
+std::string self_path() {
   char path[4096] = {};
   const ssize_t n = readlink("/proc/self/exe", path, sizeof path - 1);
-  const std::string me = n > 0 ? std::string(path, static_cast<std::size_t>(n)) : self;
+  return n > 0 ? std::string(path, static_cast<std::size_t>(n)) : "/proc/self/exe";
+}
 
-  const std::string load_before = load_average();
-  const auto machine_before = machine_cpu();
+// One case over one path, printed as a row of the table.
+Result run_path(const Case& c, const std::string& me, bool via_bridge, int run, const Settings& s) {
+  const Result r = c.layout.kind == sim::LayoutKind::points
+                       ? run_case<sensor_msgs_msg_dds__PointCloud2_>(
+                             c, &sensor_msgs_msg_dds__PointCloud2__desc, me, SIM_DDS_BRIDGE,
+                             via_bridge, s.seconds, s.reliable)
+                       : run_case<sensor_msgs_msg_dds__Image_>(
+                             c, &sensor_msgs_msg_dds__Image__desc, me, SIM_DDS_BRIDGE,
+                             via_bridge, s.seconds, s.reliable);
+  std::printf("| %d | %s | %s | %s | %llu/%llu | %.2f | %.2f | %.1f | %.2f |\n", run,
+              c.name.c_str(), via_bridge ? "SIM → bridge" : "plain Fast DDS",
+              s.reliable ? "reliable" : "best effort",
+              static_cast<unsigned long long>(r.received), static_cast<unsigned long long>(r.sent),
+              r.mean_ms, r.p99_ms, r.mb_per_s, r.cpu_percent);
+  std::fflush(stdout);
+  return r;
+}
+
+// What the runs of one case gave, for the summary.
+struct Samples {
+  std::vector<double> plain, bridge, ratio, difference;
+  std::uint64_t plain_received = 0, bridge_received = 0, sent = 0;
+
+  void add(const Result& plain_result, const Result& bridge_result) {
+    plain.push_back(plain_result.cpu_percent);
+    bridge.push_back(bridge_result.cpu_percent);
+    ratio.push_back(bridge_result.cpu_percent / plain_result.cpu_percent);
+    difference.push_back(bridge_result.cpu_percent - plain_result.cpu_percent);
+    plain_received += plain_result.received;
+    bridge_received += bridge_result.received;
+    sent += bridge_result.sent;
+  }
+};
+
+// Every run of every case over both paths, a table row each; the samples by case.
+std::map<std::string, Samples> run_all(const Settings& s, const std::string& me) {
   std::printf("| run | case | path | QoS | received/sent | mean ms | p99 ms | MB/s | publisher CPU %% |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|\n");
-  struct Samples {
-    std::vector<double> plain, bridge, ratio, difference;
-    std::uint64_t plain_received = 0, bridge_received = 0, sent = 0;
-  };
   std::map<std::string, Samples> samples;
-  for (int run = 1; run <= runs; ++run) {
+  for (int run = 1; run <= s.runs; ++run) {
     for (const Case& c : paper_cases()) {
-      if (!only.empty() && c.name != only) continue;
+      if (!s.only.empty() && c.name != s.only) continue;
       Result results[2];  // plain, bridge
       // Alternating which path goes first cancels a trend in the machine's load.
       const bool bridge_first = run % 2 == 0;
       for (bool via_bridge : {bridge_first, !bridge_first}) {
-        const Result r = c.layout.kind == sim::LayoutKind::points
-                             ? run_case<sensor_msgs_msg_dds__PointCloud2_>(
-                                   c, &sensor_msgs_msg_dds__PointCloud2__desc, me, SIM_DDS_BRIDGE,
-                                   via_bridge, seconds, reliable)
-                             : run_case<sensor_msgs_msg_dds__Image_>(
-                                   c, &sensor_msgs_msg_dds__Image__desc, me, SIM_DDS_BRIDGE,
-                                   via_bridge, seconds, reliable);
-        results[via_bridge ? 1 : 0] = r;
-        std::printf("| %d | %s | %s | %s | %llu/%llu | %.2f | %.2f | %.1f | %.2f |\n", run,
-                    c.name.c_str(), via_bridge ? "SIM → bridge" : "plain Fast DDS",
-                    reliable ? "reliable" : "best effort",
-                    static_cast<unsigned long long>(r.received), static_cast<unsigned long long>(r.sent),
-                    r.mean_ms, r.p99_ms, r.mb_per_s, r.cpu_percent);
-        std::fflush(stdout);
+        results[via_bridge ? 1 : 0] = run_path(c, me, via_bridge, run, s);
       }
-      Samples& s = samples[c.name];
-      s.plain.push_back(results[0].cpu_percent);
-      s.bridge.push_back(results[1].cpu_percent);
-      s.ratio.push_back(results[1].cpu_percent / results[0].cpu_percent);
-      s.difference.push_back(results[1].cpu_percent - results[0].cpu_percent);
-      s.plain_received += results[0].received;
-      s.bridge_received += results[1].received;
-      s.sent += results[1].sent;
+      samples[c.name].add(results[0], results[1]);
     }
   }
-  const auto machine_after = machine_cpu();
-  const double busy = 100.0 * (machine_after.first - machine_before.first) /
-                      (machine_after.second - machine_before.second);
+  return samples;
+}
+
+void print_summary(const std::map<std::string, Samples>& samples, const Settings& settings) {
   std::printf("\nCPU of the publishing process, %% of one core, mean [95 %% interval] over %d run%s "
               "of %.0f s per case and path:\n\n",
-              runs, runs == 1 ? "" : "s", seconds);
+              settings.runs, settings.runs == 1 ? "" : "s", settings.seconds);
   std::printf("| case | plain Fast DDS | SIM → bridge | bridge / plain | bridge − plain | received plain / bridge / sent |\n");
   std::printf("|---|---|---|---|---|---|\n");
   for (const Case& c : paper_cases()) {
@@ -409,6 +404,41 @@ int main(int argc, char** argv) {
                 static_cast<unsigned long long>(s.bridge_received),
                 static_cast<unsigned long long>(s.sent));
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"SIM → sim_dds_bridge → Cyclone DDS against a plain Fast DDS publisher, same run.",
+               "bench_bridge"};
+  Settings settings;
+  app.add_option("--seconds", settings.seconds, "seconds per case and path")->check(CLI::PositiveNumber);
+  app.add_option("--runs", settings.runs, "repeat every case this many times; with 2 or more, a summary "
+                                          "gives the bridge/plain CPU ratio with its 95 % interval")
+      ->check(CLI::Range(1, 100));
+  app.add_flag("--reliable", settings.reliable, "reliable QoS instead of best effort");
+  app.add_option("--case", settings.only, "run only this case");
+  app.add_option("--plain-publisher", settings.plain_name, "(internal) be the plain publisher of this topic");
+  CLI11_PARSE(app, argc, argv);
+
+  if (!settings.plain_name.empty()) {
+    for (const Case& c : paper_cases()) {
+      if (c.name == settings.only) {
+        return plain_publisher(settings.plain_name, c, settings.seconds, settings.reliable);
+      }
+    }
+    return 2;
+  }
+  if (auto why = sim::testing::enter_private_network(sim::testing::Multicast::on)) {
+    std::fprintf(stderr, "bench_bridge: %s: running on this machine's interfaces\n", why->c_str());
+  }
+  const std::string load_before = load_average();
+  const auto machine_before = machine_cpu();
+  const auto samples = run_all(settings, self_path());
+  const auto machine_after = machine_cpu();
+  const double busy = 100.0 * (machine_after.first - machine_before.first) /
+                      (machine_after.second - machine_before.second);
+  print_summary(samples, settings);
   std::printf("\nMachine: %ld cores, busy %.0f %% of them during the runs (this bench included); "
               "load average %s before, %s after.\n",
               sysconf(_SC_NPROCESSORS_ONLN), busy, load_before.c_str(), load_average().c_str());
