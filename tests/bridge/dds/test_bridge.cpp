@@ -35,10 +35,7 @@ namespace {
 namespace fs = std::filesystem;
 using namespace bridge_test;
 using namespace std::chrono_literals;
-using sim::testing::CycloneParticipant;
 using sim::testing::CycloneReader;
-using sim::testing::CycloneWriter;
-using sim::testing::Process;
 using Cloud = sensor_msgs_msg_dds__PointCloud2_;
 using Image = sensor_msgs_msg_dds__Image_;
 using Compressed = sensor_msgs_msg_dds__CompressedImage_;
@@ -46,9 +43,6 @@ using Compressed = sensor_msgs_msg_dds__CompressedImage_;
 const std::string replay_pcap = SIM_REPLAY_PCAP;
 const std::string replay_video = SIM_REPLAY_VIDEO;
 const fs::path hesai_data = SIM_HESAI_TEST_DATA;
-
-
-using sim::testing::StreamGuard;
 
 
 struct TempDir {
@@ -297,24 +291,15 @@ TEST(Bridge, PublishesCameraFramesAsImagesAndJpegCompressedImages) {
 
 TEST(Bridge, WritesRemoteImagesIntoASimStreamThatAnotherProcessReads) {
   SKIP_WITHOUT_NETWORK();
-  const std::string topic = unique_name("remote_cam");
-  StreamGuard local(unique_name("local_cam"));
-  Process bridge = start_bridge({"--subscribe", topic, "--as", local.name});
-  CycloneParticipant participant;
-  CycloneWriter writer(participant, &sensor_msgs_msg_dds__Image__desc, "rt" + topic);
+  Subscription s("remote_cam", &sensor_msgs_msg_dds__Image__desc);
+  auto& [topic, local, bridge, participant, writer] = s;
   ASSERT_TRUE(writer.wait_matched()) << bridge.err();
 
-  std::vector<std::uint8_t> pixels(64 * 48 * 3);
+  ImageMessage message(64, 48, "rgb8", 64 * 3, 0, "remote_cam");
+  std::vector<std::uint8_t>& pixels = message.pixels;
   for (std::size_t i = 0; i < pixels.size(); ++i) pixels[i] = static_cast<std::uint8_t>(i * 7);
-  Image image{};
+  Image& image = message.image;
   image.header.stamp = {1'700'000'000, 250'000'000};
-  image.header.frame_id = const_cast<char*>("remote_cam");
-  image.height = 48;
-  image.width = 64;
-  image.encoding = const_cast<char*>("rgb8");
-  image.step = 64 * 3;
-  image.data._buffer = pixels.data();
-  image.data._length = image.data._maximum = static_cast<std::uint32_t>(pixels.size());
   writer.write(&image);  // the bridge creates the stream with the first message it gets
 
   auto reader = open_when_created(local.name);
@@ -348,11 +333,9 @@ TEST(Bridge, WritesRemoteImagesIntoASimStreamThatAnotherProcessReads) {
 
 TEST(Bridge, WritesRemotePointCloudsIntoASimStream) {
   SKIP_WITHOUT_NETWORK();
-  const std::string topic = unique_name("remote_lidar");
-  StreamGuard local(unique_name("local_lidar"));
-  Process bridge = start_bridge({"--subscribe", topic, "--as", topic + "=" + local.name});
-  CycloneParticipant participant;
-  CycloneWriter writer(participant, &sensor_msgs_msg_dds__PointCloud2__desc, "rt" + topic);
+  Subscription s("remote_lidar", &sensor_msgs_msg_dds__PointCloud2__desc,
+                 {.bridge_options = {}, .writer_qos = {}, .as_topic_equals_stream = true});
+  auto& [topic, local, bridge, participant, writer] = s;
   ASSERT_TRUE(writer.wait_matched()) << bridge.err();
 
   // PCL's PointXYZI as ROS drivers publish it: x y z intensity with padding, 32-byte points.
@@ -402,11 +385,8 @@ TEST(Bridge, WritesRemotePointCloudsIntoASimStream) {
 
 TEST(Bridge, WritesRemoteJpegCompressedImagesIntoAnMjpegStream) {
   SKIP_WITHOUT_NETWORK();
-  const std::string topic = unique_name("remote_jpeg");
-  StreamGuard local(unique_name("local_jpeg"));
-  Process bridge = start_bridge({"--subscribe", topic, "--as", local.name});
-  CycloneParticipant participant;
-  CycloneWriter writer(participant, &sensor_msgs_msg_dds__CompressedImage__desc, "rt" + topic);
+  Subscription s("remote_jpeg", &sensor_msgs_msg_dds__CompressedImage__desc);
+  auto& [topic, local, bridge, participant, writer] = s;
   ASSERT_TRUE(writer.wait_matched()) << bridge.err();
 
   // A JPEG made by OpenCV (not by the project), as image_transport's compressed plugin sends it.
@@ -489,8 +469,4 @@ TEST(Bridge, ReadsItsTopicsFromTheExampleYamlConfig) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  bridge_test::g_skip_reason = sim::testing::enter_private_network(sim::testing::Multicast::on);
-  ::testing::InitGoogleTest(&argc, argv);
-  return RUN_ALL_TESTS();
-}
+int main(int argc, char** argv) { return bridge_test::run_tests(argc, argv); }

@@ -7,6 +7,7 @@
 // and /tf_static from ROS 2 become the SIM stream's sensor description.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstring>
 #include <map>
 #include <optional>
@@ -26,11 +27,7 @@
 namespace {
 
 using namespace bridge_test;
-using sim::testing::CycloneParticipant;
 using sim::testing::CycloneReader;
-using sim::testing::CycloneWriter;
-using sim::testing::EndpointQos;
-using sim::testing::StreamGuard;
 using Image = sensor_msgs_msg_dds__Image_;
 using CameraInfo = sensor_msgs_msg_dds__CameraInfo_;
 using TfMessage = tf2_msgs_msg_dds__TFMessage_;
@@ -129,6 +126,86 @@ bool is_rihs01_user_data(const std::string& text) {
          text.find_first_not_of("0123456789abcdef", prefix.size()) == prefix.size() + 64;
 }
 
+// The mountings of the next /tf_static message: child frame → (parent frame, z); nothing when no
+// message came.
+std::optional<std::map<std::string, std::pair<std::string, double>>> take_mountings(
+    CycloneReader<TfMessage>& tf) {
+  std::map<std::string, std::pair<std::string, double>> mounted;
+  const bool taken = tf.take([&](const TfMessage& m) {
+    for (std::uint32_t i = 0; i < m.transforms._length; ++i) {
+      const auto& t = m.transforms._buffer[i];
+      mounted[t.child_frame_id] = {t.header.frame_id, t.transform.translation.z};
+    }
+  });
+  if (!taken) return std::nullopt;
+  return mounted;
+}
+
+// Takes ros_discovery_info messages until one says the participant `participant` has the node
+// /sim_dds_bridge owning the writer `writer`; false when 50 messages did not (or none came).
+bool names_bridge_node(CycloneReader<Graph>& graph, const Gid& participant, const Gid& writer) {
+  bool found = false;
+  for (int i = 0; i < 50 && !found; ++i) {
+    if (!graph.take([&](const Graph& g) {
+          if (gid_of(reinterpret_cast<const dds_guid_t&>(g.gid.data)) != participant) return;
+          for (std::uint32_t n = 0; n < g.node_entities_info_seq._length; ++n) {
+            const auto& node_info = g.node_entities_info_seq._buffer[n];
+            if (std::string(node_info.node_name) != "sim_dds_bridge") continue;
+            EXPECT_STREQ(node_info.node_namespace, "/");
+            for (std::uint32_t w = 0; w < node_info.writer_gid_seq._length; ++w) {
+              Gid gid;
+              std::memcpy(gid.data(), node_info.writer_gid_seq._buffer[w].data, 16);
+              if (gid == writer) found = true;
+            }
+          }
+        })) {
+      break;
+    }
+  }
+  return found;
+}
+
+// A ROS 2 camera's CameraInfo for `image`: its frame and size, plumb_bob, an identity
+// rectification and the camera matrix `k` (the projection too when `p` is given).
+struct CameraInfoMessage {
+  std::vector<double> d;
+  CameraInfo info{};
+  CameraInfoMessage(const Image& image, const std::array<double, 9>& k, std::vector<double> distortion,
+                    const std::optional<std::array<double, 12>>& p = std::nullopt)
+      : d(std::move(distortion)) {
+    info.header.frame_id = image.header.frame_id;
+    info.width = image.width;
+    info.height = image.height;
+    info.distortion_model = const_cast<char*>("plumb_bob");
+    info.d._buffer = d.data();
+    info.d._length = info.d._maximum = static_cast<std::uint32_t>(d.size());
+    std::memcpy(info.k, k.data(), sizeof info.k);
+    const double r[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    std::memcpy(info.r, r, sizeof r);
+    if (p) std::memcpy(info.p, p->data(), sizeof info.p);
+  }
+  CameraInfoMessage(const CameraInfoMessage&) = delete;  // the message points into its own d
+  CameraInfoMessage& operator=(const CameraInfoMessage&) = delete;
+};
+
+// Publishes the image and its CameraInfo with rising stamps, 20 a second, until the SIM stream
+// `stream`'s description satisfies `enough`; that description, or the last one seen (or none)
+// after 600 pairs (a hang guard, not a timing check).
+template <typename Enough>
+std::optional<sim::SensorInfo> publish_until_described(CycloneWriter& images, Image& image,
+                                                       CycloneWriter& infos, CameraInfo& info,
+                                                       const std::string& stream, Enough enough) {
+  std::optional<sim::SensorInfo> described;
+  for (int n = 0; n < 600 && !(described && enough(*described)); ++n) {
+    image.header.stamp = info.header.stamp = {1'700'000'000 + n, 0};
+    images.write(&image);
+    infos.write(&info);
+    std::this_thread::sleep_for(50ms);
+    if (auto status = sim::inspect(stream); status && status->sensor) described = status->sensor;
+  }
+  return described;
+}
+
 TEST(BridgeGraph, ALateRos2NodeGetsCalibrationMountingsUserDataAndTheBridgeAsANode) {
   SKIP_WITHOUT_NETWORK();
   StreamGuard camera(unique_name("cam"));
@@ -183,15 +260,10 @@ TEST(BridgeGraph, ALateRos2NodeGetsCalibrationMountingsUserDataAndTheBridgeAsANo
   EXPECT_GT(paired, 0) << "no CameraInfo had the stamp of an image";
 
   // /tf_static: one message with both mountings, though the node joined later.
-  std::map<std::string, std::pair<std::string, double>> mounted;  // child → parent, z
-  ASSERT_TRUE(tf.take([&](const TfMessage& m) {
-    for (std::uint32_t i = 0; i < m.transforms._length; ++i) {
-      const auto& t = m.transforms._buffer[i];
-      mounted[t.child_frame_id] = {t.header.frame_id, t.transform.translation.z};
-    }
-  })) << bridge.err();
-  EXPECT_EQ(mounted["camera_front_optical"], std::make_pair(std::string("base_link"), 1.5));
-  EXPECT_EQ(mounted["lidar_top"], std::make_pair(std::string("base_link"), 1.75));
+  auto mounted = take_mountings(tf);
+  ASSERT_TRUE(mounted) << bridge.err();
+  EXPECT_EQ((*mounted)["camera_front_optical"], std::make_pair(std::string("base_link"), 1.5));
+  EXPECT_EQ((*mounted)["lidar_top"], std::make_pair(std::string("base_link"), 1.75));
 
   // USER_DATA: the participant is in the ROS 2 graph, each endpoint names its type hash.
   const auto info_writer = find_publication(node, "rt" + camera.name + "/camera_info");
@@ -205,25 +277,8 @@ TEST(BridgeGraph, ALateRos2NodeGetsCalibrationMountingsUserDataAndTheBridgeAsANo
   EXPECT_NE(participant_user_data(node, info_writer->participant).find("enclave=/;"), std::string::npos);
 
   // ros_discovery_info: the node sim_dds_bridge of that participant, owning the camera_info writer.
-  bool found_node = false;
-  for (int i = 0; i < 50 && !found_node; ++i) {
-    if (!graph.take([&](const Graph& g) {
-          if (gid_of(reinterpret_cast<const dds_guid_t&>(g.gid.data)) != info_writer->participant) return;
-          for (std::uint32_t n = 0; n < g.node_entities_info_seq._length; ++n) {
-            const auto& node_info = g.node_entities_info_seq._buffer[n];
-            if (std::string(node_info.node_name) != "sim_dds_bridge") continue;
-            EXPECT_STREQ(node_info.node_namespace, "/");
-            for (std::uint32_t w = 0; w < node_info.writer_gid_seq._length; ++w) {
-              Gid gid;
-              std::memcpy(gid.data(), node_info.writer_gid_seq._buffer[w].data, 16);
-              if (gid == info_writer->gid) found_node = true;
-            }
-          }
-        })) {
-      break;
-    }
-  }
-  EXPECT_TRUE(found_node) << "no ros_discovery_info names sim_dds_bridge with the camera_info writer";
+  EXPECT_TRUE(names_bridge_node(graph, info_writer->participant, info_writer->gid))
+      << "no ros_discovery_info names sim_dds_bridge with the camera_info writer";
   bridge.signal(SIGTERM);
   EXPECT_EQ(bridge.wait(), 0) << bridge.err();
 }
@@ -248,38 +303,12 @@ TEST(BridgeGraph, CameraInfoAndTfStaticFromRos2BecomeTheStreamsSensorDescription
   tf_message.transforms._length = tf_message.transforms._maximum = 1;
   tf.write(&tf_message);  // latched: the bridge gets it whenever it matches
 
-  std::vector<std::uint8_t> pixels(8 * 6, 9);
-  Image image{};
-  image.header.frame_id = const_cast<char*>("remote_cam_optical");
-  image.width = 8;
-  image.height = 6;
-  image.encoding = const_cast<char*>("mono8");
-  image.step = 8;
-  image.data._buffer = pixels.data();
-  image.data._length = image.data._maximum = static_cast<std::uint32_t>(pixels.size());
-  double d[5] = {0.1, -0.05, 0, 0, 0};
-  CameraInfo info{};
-  info.header.frame_id = image.header.frame_id;
-  info.width = 8;
-  info.height = 6;
-  info.distortion_model = const_cast<char*>("plumb_bob");
-  info.d._buffer = d;
-  info.d._length = info.d._maximum = 5;
-  const double k[9] = {40.5, 0, 4, 0, 41.5, 3, 0, 0, 1};
-  std::memcpy(info.k, k, sizeof k);
-  const double r[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  std::memcpy(info.r, r, sizeof r);
-  const double p[12] = {40.5, 0, 4, 0, 0, 41.5, 3, 0, 0, 0, 1, 0};
-  std::memcpy(info.p, p, sizeof p);
-
-  std::optional<sim::SensorInfo> described;
-  for (int n = 0; n < 600 && !(described && described->calibration && described->mounting); ++n) {
-    image.header.stamp = info.header.stamp = {1'700'000'000 + n, 0};
-    images.write(&image);
-    infos.write(&info);
-    std::this_thread::sleep_for(50ms);
-    if (auto status = sim::inspect(local.name); status && status->sensor) described = status->sensor;
-  }
+  ImageMessage image(8, 6, "mono8", 8, 9, "remote_cam_optical");
+  CameraInfoMessage info(image.image, {40.5, 0, 4, 0, 41.5, 3, 0, 0, 1}, {0.1, -0.05, 0, 0, 0},
+                         std::array<double, 12>{40.5, 0, 4, 0, 0, 41.5, 3, 0, 0, 0, 1, 0});
+  const auto described = publish_until_described(
+      images, image.image, infos, info.info, local.name,
+      [](const sim::SensorInfo& s) { return s.calibration && s.mounting; });
   ASSERT_TRUE(described && described->calibration && described->mounting) << bridge.err();
   EXPECT_EQ(described->frame_id, "remote_cam_optical");
   EXPECT_EQ(described->parent_frame, "base_link");
@@ -308,32 +337,12 @@ TEST(BridgeGraph, TheBridgeNeverReadsItsOwnTfStaticBack) {
   CycloneParticipant node;
   CycloneWriter images(node, &sensor_msgs_msg_dds__Image__desc, "rt" + ns + "/image_raw");
   CycloneWriter infos(node, &sensor_msgs_msg_dds__CameraInfo__desc, "rt" + ns + "/camera_info");
-  std::vector<std::uint8_t> pixels(4 * 2, 1);
-  Image image{};
-  image.header.frame_id = const_cast<char*>("lidar_top");  // the frame the bridge itself mounts
-  image.width = 4;
-  image.height = 2;
-  image.encoding = const_cast<char*>("mono8");
-  image.step = 4;
-  image.data._buffer = pixels.data();
-  image.data._length = image.data._maximum = static_cast<std::uint32_t>(pixels.size());
-  CameraInfo info{};
-  info.header.frame_id = image.header.frame_id;
-  info.width = 4;
-  info.height = 2;
-  info.distortion_model = const_cast<char*>("plumb_bob");
-  const double k[9] = {4, 0, 2, 0, 4, 1, 0, 0, 1};
-  std::memcpy(info.k, k, sizeof k);
-  const double r[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  std::memcpy(info.r, r, sizeof r);
-  std::optional<sim::SensorInfo> described;
-  for (int n = 0; n < 600 && !(described && described->calibration); ++n) {
-    image.header.stamp = info.header.stamp = {1'700'000'000 + n, 0};
-    images.write(&image);
-    infos.write(&info);
-    std::this_thread::sleep_for(50ms);
-    if (auto status = sim::inspect(local.name); status && status->sensor) described = status->sensor;
-  }
+  // The frame the bridge itself mounts.
+  ImageMessage image(4, 2, "mono8", 4, 1, "lidar_top");
+  CameraInfoMessage info(image.image, {4, 0, 2, 0, 4, 1, 0, 0, 1}, {});
+  const auto described =
+      publish_until_described(images, image.image, infos, info.info, local.name,
+                              [](const sim::SensorInfo& s) { return s.calibration.has_value(); });
   ASSERT_TRUE(described && described->calibration) << bridge.err();
   EXPECT_FALSE(described->mounting.has_value()) << "the bridge read its own /tf_static back";
   bridge.signal(SIGTERM);
@@ -342,8 +351,4 @@ TEST(BridgeGraph, TheBridgeNeverReadsItsOwnTfStaticBack) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  bridge_test::g_skip_reason = sim::testing::enter_private_network(sim::testing::Multicast::on);
-  ::testing::InitGoogleTest(&argc, argv);
-  return RUN_ALL_TESTS();
-}
+int main(int argc, char** argv) { return bridge_test::run_tests(argc, argv); }

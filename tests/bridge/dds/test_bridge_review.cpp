@@ -20,11 +20,7 @@
 namespace {
 
 using namespace bridge_test;
-using sim::testing::CycloneParticipant;
 using sim::testing::CycloneReader;
-using sim::testing::CycloneWriter;
-using sim::testing::EndpointQos;
-using sim::testing::StreamGuard;
 using Cloud = sensor_msgs_msg_dds__PointCloud2_;
 using Image = sensor_msgs_msg_dds__Image_;
 using Compressed = sensor_msgs_msg_dds__CompressedImage_;
@@ -83,11 +79,8 @@ sensor_msgs_msg_dds__PointField_ field(const char* name, std::uint32_t offset, s
 // M2: the malformed cloud used to replace the region (a new layout, no frames) before it was dropped.
 TEST(BridgeReview, AMalformedCloudLeavesTheStreamAndItsLastFrameAsTheyWere) {
   SKIP_WITHOUT_NETWORK();
-  const std::string topic = unique_name("m2");
-  StreamGuard local(unique_name("m2_local"));
-  Process bridge = start_bridge({"--subscribe", topic, "--as", local.name});
-  CycloneParticipant participant;
-  CycloneWriter writer(participant, &sensor_msgs_msg_dds__PointCloud2__desc, "rt" + topic);
+  Subscription s("m2", &sensor_msgs_msg_dds__PointCloud2__desc);
+  auto& [topic, local, bridge, participant, writer] = s;
   ASSERT_TRUE(writer.wait_matched()) << bridge.err();
 
   CloudMessage good(10, 12, {field("x", 0, 7), field("y", 4, 7), field("z", 8, 7)});
@@ -121,11 +114,9 @@ TEST(BridgeReview, AMalformedCloudLeavesTheStreamAndItsLastFrameAsTheyWere) {
 // M3: 1-byte points whose x, y and z are one INT8 became 24-byte SIM points (a 96× region).
 TEST(BridgeReview, ACloudThatWouldGrowManyTimesIsRefusedBeforeAnyRegionIsMade) {
   SKIP_WITHOUT_NETWORK();
-  const std::string topic = unique_name("m3");
-  StreamGuard local(unique_name("m3_local"));
-  Process bridge = start_bridge({"--reliable-subscribe", "--subscribe", topic, "--as", local.name});
-  CycloneParticipant participant;
-  CycloneWriter writer(participant, &sensor_msgs_msg_dds__PointCloud2__desc, "rt" + topic, true);
+  Subscription s("m3", &sensor_msgs_msg_dds__PointCloud2__desc,
+                 {.bridge_options = {"--reliable-subscribe"}, .writer_qos = {.reliable = true}});
+  auto& [topic, local, bridge, participant, writer] = s;
   ASSERT_TRUE(writer.wait_matched()) << bridge.err();
   CloudMessage amplifier(200'000, 1, {field("x", 0, 1), field("y", 0, 1), field("z", 0, 1)});
   writer.write(&amplifier.cloud);
@@ -136,31 +127,13 @@ TEST(BridgeReview, ACloudThatWouldGrowManyTimesIsRefusedBeforeAnyRegionIsMade) {
   EXPECT_NE(bridge.err().find("times the message"), std::string::npos) << bridge.err();
 }
 
-struct ImageMessage {
-  std::vector<std::uint8_t> pixels;
-  Image image{};
-  ImageMessage(std::uint32_t width, std::uint32_t height, const char* encoding, std::uint32_t step)
-      : pixels(std::size_t{step} * height, 7) {
-    image.header.stamp = {1'700'000'000, 0};
-    image.header.frame_id = const_cast<char*>("cam");
-    image.width = width;
-    image.height = height;
-    image.encoding = const_cast<char*>(encoding);
-    image.step = step;
-    image.data._buffer = pixels.data();
-    image.data._length = image.data._maximum = static_cast<std::uint32_t>(pixels.size());
-  }
-};
-
 // M4: --reliable (for publishing) also made every subscription reliable, which never matched a
 // best-effort (SensorDataQoS) publisher.
 TEST(BridgeReview, PublishingReliablyStillReadsBestEffortPublishers) {
   SKIP_WITHOUT_NETWORK();
-  const std::string topic = unique_name("m4_be");
-  StreamGuard local(unique_name("m4_be_local"));
-  Process bridge = start_bridge({"--reliable", "--subscribe", topic, "--as", local.name});
-  CycloneParticipant participant;
-  CycloneWriter writer(participant, &sensor_msgs_msg_dds__Image__desc, "rt" + topic);  // best effort
+  // The writer is best effort, as SensorDataQoS publishers are.
+  Subscription s("m4_be", &sensor_msgs_msg_dds__Image__desc, {.bridge_options = {"--reliable"}});
+  auto& [topic, local, bridge, participant, writer] = s;
   ASSERT_TRUE(writer.wait_matched()) << bridge.err();
   ImageMessage m(4, 2, "mono8", 4);
   writer.write(&m.image);
@@ -184,14 +157,7 @@ TEST(BridgeReview, AReliableSubscriptionSaysWhyBestEffortAndXcdr2WritersDoNotMat
   CycloneWriter w1(participant, &sensor_msgs_msg_dds__Image__desc, "rt" + best_effort);
   CycloneWriter w2(participant, &sensor_msgs_msg_dds__Image__desc, "rt" + xcdr2,
                    EndpointQos{.reliable = true, .xcdr2 = true});
-  const std::string told_qos = "does not match --reliable-subscribe";
-  const std::string told_xcdr2 = "sends only XCDR2";
-  // The sentences come with the status reports; a hang guard, not a timing check.
-  for (int i = 0; i < 300 && (bridge.err().find(told_qos) == std::string::npos ||
-                              bridge.err().find(told_xcdr2) == std::string::npos);
-       ++i) {
-    (void)bridge.wait_for_line("\"topics\"");
-  }
+  (void)wait_until_told(bridge, {"does not match --reliable-subscribe", "sends only XCDR2"});
   bridge.signal(SIGTERM);
   EXPECT_EQ(bridge.wait(), 0);
   EXPECT_NE(bridge.err().find(best_effort + ": a writer publishes best effort"), std::string::npos)
@@ -203,12 +169,10 @@ TEST(BridgeReview, AReliableSubscriptionSaysWhyBestEffortAndXcdr2WritersDoNotMat
 // image and a negative stamp used to become SIM frames.
 TEST(BridgeReview, EveryDistinctProblemOfOnePeriodIsTold) {
   SKIP_WITHOUT_NETWORK();
-  const std::string topic = unique_name("l3");
-  StreamGuard local(unique_name("l3_local"));
   // Reliable both ways: the three messages arrive back to back, and are taken within one period.
-  Process bridge = start_bridge({"--reliable-subscribe", "--subscribe", topic, "--as", local.name});
-  CycloneParticipant participant;
-  CycloneWriter writer(participant, &sensor_msgs_msg_dds__Image__desc, "rt" + topic, true);
+  Subscription s("l3", &sensor_msgs_msg_dds__Image__desc,
+                 {.bridge_options = {"--reliable-subscribe"}, .writer_qos = {.reliable = true}});
+  auto& [topic, local, bridge, participant, writer] = s;
   ASSERT_TRUE(writer.wait_matched()) << bridge.err();
   ImageMessage odd(3, 1, "yuv422", 6);
   ImageMessage negative(4, 2, "mono8", 4);
@@ -229,18 +193,13 @@ TEST(BridgeReview, EveryDistinctProblemOfOnePeriodIsTold) {
 // L8: a later writer of another type on a subscribed topic was never bridged and never told.
 TEST(BridgeReview, AWriterOfAnotherTypeOnASubscribedTopicIsTold) {
   SKIP_WITHOUT_NETWORK();
-  const std::string topic = unique_name("l8");
-  StreamGuard local(unique_name("l8_local"));
-  Process bridge = start_bridge({"--subscribe", topic, "--as", local.name});
-  CycloneParticipant participant;
-  CycloneWriter images(participant, &sensor_msgs_msg_dds__Image__desc, "rt" + topic);
+  Subscription s("l8", &sensor_msgs_msg_dds__Image__desc);
+  auto& [topic, local, bridge, participant, images] = s;
   ASSERT_TRUE(images.wait_matched()) << bridge.err();
   CycloneParticipant other;
   CycloneWriter clouds(other, &sensor_msgs_msg_dds__PointCloud2__desc, "rt" + topic);
   const std::string told = "a writer publishes sensor_msgs::msg::dds_::PointCloud2_";
-  for (int i = 0; i < 300 && bridge.err().find(told) == std::string::npos; ++i) {
-    (void)bridge.wait_for_line("\"topics\"");
-  }
+  (void)wait_until_told(bridge, {told});
   bridge.signal(SIGTERM);
   EXPECT_EQ(bridge.wait(), 0);
   EXPECT_NE(bridge.err().find(told), std::string::npos) << bridge.err();
@@ -251,10 +210,8 @@ TEST(BridgeReview, AWriterOfAnotherTypeOnASubscribedTopicIsTold) {
 TEST(BridgeReview, TheCompressedTopicAndTheFinalReportCountWhatWasSent) {
   SKIP_WITHOUT_NETWORK();
   StreamGuard stream(unique_name("l4"));
-  sim::StreamSpec spec;
-  spec.name = stream.name;
-  spec.layout = sim::Layout::of(sim::ImageLayout::packed(32, 24, sim::PixelFormat::bgr8));
-  FramePump pump(spec);
+  FramePump pump({.name = stream.name,
+                  .layout = sim::Layout::of(sim::ImageLayout::packed(32, 24, sim::PixelFormat::bgr8))});
   ASSERT_TRUE(pump.ok()) << pump.error();
   Process bridge = start_bridge({"--publish", stream.name, "--compress", stream.name + "=jpeg"});
   CycloneParticipant participant;
@@ -311,10 +268,8 @@ struct GraphMessage {
 TEST(BridgeReview, AReaderItsRos2NodeDroppedIsNoLongerServed) {
   SKIP_WITHOUT_NETWORK();
   StreamGuard stream(unique_name("m1"));
-  sim::StreamSpec spec;
-  spec.name = stream.name;
-  spec.layout = sim::Layout::of(sim::ImageLayout::packed(16, 12, sim::PixelFormat::mono8));
-  FramePump pump(spec);
+  FramePump pump({.name = stream.name,
+                  .layout = sim::Layout::of(sim::ImageLayout::packed(16, 12, sim::PixelFormat::mono8))});
   ASSERT_TRUE(pump.ok()) << pump.error();
   Process bridge = start_bridge({"--publish", stream.name});
   const std::string topic = stream.name + "/image_raw";
@@ -350,8 +305,4 @@ TEST(BridgeReview, AReaderItsRos2NodeDroppedIsNoLongerServed) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  bridge_test::g_skip_reason = sim::testing::enter_private_network(sim::testing::Multicast::on);
-  ::testing::InitGoogleTest(&argc, argv);
-  return RUN_ALL_TESTS();
-}
+int main(int argc, char** argv) { return bridge_test::run_tests(argc, argv); }
