@@ -189,6 +189,17 @@ TEST(Bridge, SerializesNothingUntilAReaderJoins) {
   ASSERT_FALSE(idle.empty()) << bridge.err();
   EXPECT_EQ(json_counter(idle, stream.name, "serialized"), 0) << idle;
   EXPECT_EQ(json_counter(idle, stream.name, "matched"), 0) << idle;
+  // Nor does it sleep on the stream (review L9): a bridge that waited for every frame with nobody
+  // listening was asleep in the stream's wait page almost all the time, and the writer paid a
+  // wake-up per frame. Idle, it only looks five times a second, so no sample may see it asleep.
+  int samples_asleep = 0;
+  for (int i = 0; i < 200; ++i) {
+    auto status = sim::inspect(stream.name);
+    ASSERT_TRUE(status) << status.error().message;
+    samples_asleep += status->sleeping_readers > 0 ? 1 : 0;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  EXPECT_EQ(samples_asleep, 0) << "the bridge slept on a stream nobody listens to";
 
   CycloneParticipant participant;
   CycloneReader<Cloud> reader(participant, &sensor_msgs_msg_dds__PointCloud2__desc, "rt" + stream.name);
