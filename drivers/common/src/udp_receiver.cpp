@@ -2,6 +2,7 @@
 #include "sim/lidar/udp_receiver.hpp"
 
 #include <arpa/inet.h>
+#include <net/if.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <unistd.h>
@@ -31,12 +32,29 @@ struct IpAddress {
   int family = AF_INET;
   in_addr v4{};
   in6_addr v6{};
+  std::uint32_t scope_id = 0;  // the interface of a link-local IPv6 address ("fe80::1%eth0")
 };
+
+// The interface index of an IPv6 zone ("eth0" or "2"); nullopt for an interface this host lacks.
+std::optional<std::uint32_t> scope_of(const std::string& zone) {
+  if (const unsigned index = ::if_nametoindex(zone.c_str()); index != 0) return index;
+  if (!zone.empty() && zone.find_first_not_of("0123456789") == std::string::npos && zone.size() < 10) {
+    return static_cast<std::uint32_t>(std::stoul(zone));
+  }
+  return std::nullopt;
+}
 
 std::optional<IpAddress> parse_address(const std::string& text, IpVersions versions) {
   IpAddress address;
   if (::inet_pton(AF_INET, text.c_str(), &address.v4) == 1) return address;
-  if (versions == IpVersions::v4_and_v6 && ::inet_pton(AF_INET6, text.c_str(), &address.v6) == 1) {
+  if (versions != IpVersions::v4_and_v6) return std::nullopt;
+  const std::size_t percent = text.find('%');
+  if (percent != std::string::npos) {  // a link-local address with its zone, as asio took it
+    const auto scope = scope_of(text.substr(percent + 1));
+    if (!scope) return std::nullopt;
+    address.scope_id = *scope;
+  }
+  if (::inet_pton(AF_INET6, text.substr(0, percent).c_str(), &address.v6) == 1) {
     address.family = AF_INET6;
     if (IN6_IS_ADDR_V4MAPPED(&address.v6)) {  // ::ffff:a.b.c.d is the IPv4 sender a.b.c.d
       address.family = AF_INET;
@@ -80,6 +98,7 @@ socklen_t socket_address(const IpAddress& ip, std::uint16_t port, sockaddr_stora
   a.sin6_family = AF_INET6;
   a.sin6_port = htons(port);
   a.sin6_addr = ip.v6;
+  a.sin6_scope_id = ip.scope_id;
   return sizeof a;
 }
 

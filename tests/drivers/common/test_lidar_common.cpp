@@ -153,6 +153,13 @@ TEST(UdpReceiver, APortInUseIsOneSentenceNamingTheOptionThatChoosesIt) {
                                         "driver?); stop it or choose another --imu-port.");
 }
 
+TEST(UdpReceiver, ALinkLocalIpv6AddressWithItsZoneIsAnAddressWhereIpv6IsAccepted) {
+  EXPECT_EQ(sim::lidar::address_problem("fe80::1%lo", IpVersions::v4_and_v6), "");
+  EXPECT_EQ(sim::lidar::address_problem("fe80::1%1", IpVersions::v4_and_v6), "");
+  EXPECT_NE(sim::lidar::address_problem("fe80::1%no_such_interface", IpVersions::v4_and_v6), "");
+  EXPECT_NE(sim::lidar::address_problem("fe80::1%lo", IpVersions::v4), "");
+}
+
 TEST(UdpReceiver, AnAddressThatIsNotOneIsRefusedBeforeAnySocketIsOpened) {
   UdpListen listen = loopback();
   listen.source = "192.168.1";
