@@ -761,7 +761,9 @@ class Bench {
     return failures == 0 ? 0 : 1;
   }
 
-  int run_all() {
+  // The transports and payloads asked for, checked: nullopt (after one sentence) when one is
+  // unknown, missing from this build, or a payload is too small.
+  std::optional<std::vector<Transport>> checked_transports() {
     std::vector<Transport> transports;
     for (const auto& name : o_.transports) {
       Transport t;
@@ -769,7 +771,7 @@ class Bench {
         std::fprintf(stderr, "sim_bench: unknown transport '%s': use sim-poll, sim-block, sim-zero, "
                              "sim-adaptive, sim-zero-adaptive, sim-poll-described, iceoryx, fastdds or "
                              "cyclone.\n", name.c_str());
-        return 2;
+        return std::nullopt;
       }
       if (!available(t)) {
         if (o_.skip_missing) {
@@ -779,7 +781,7 @@ class Bench {
         std::fprintf(stderr, "sim_bench: %s is not in this build: install its Debian package "
                              "(scripts/deps/bench.txt), reconfigure, or pass --skip-missing.\n",
                      name.c_str());
-        return 2;
+        return std::nullopt;
       }
       transports.push_back(t);
     }
@@ -787,9 +789,16 @@ class Bench {
       if (p < kMinPayload) {
         std::fprintf(stderr, "sim_bench: payload %zu B is below the %zu B frame header; use a larger one.\n",
                      p, kMinPayload);
-        return 2;
+        return std::nullopt;
       }
     }
+    return transports;
+  }
+
+  int run_all() {
+    const auto checked = checked_transports();
+    if (!checked) return 2;
+    const std::vector<Transport>& transports = *checked;
     domain_ = static_cast<int>(getpid() % 200) + 1;
 
     std::unique_ptr<ChildProcess> roudi;
