@@ -428,6 +428,160 @@ bool await_ready(ChildProcess& child, const std::string& who, std::string& error
   }
 }
 
+// A SIM transport leaves a region behind when its writer had to be killed.
+bool is_sim_transport(const std::string& transport) { return transport.rfind("sim-", 0) == 0; }
+
+// Removes the SIM regions of a run when it ends. Declared before the run's processes, so it runs
+// after they are gone: a SIM writer that had to be killed cannot remove its region itself.
+struct RegionSweep {
+  std::vector<std::string> names;
+  ~RegionSweep() {
+    for (const auto& name : names) (void)sim::destroy(name, /*force=*/true);
+  }
+};
+
+// The writer and reader processes of one run. The readers go first when it is destroyed.
+struct RoleProcesses {
+  std::vector<std::unique_ptr<ChildProcess>> writers;
+  std::vector<std::unique_ptr<ChildProcess>> readers;
+
+  // Tells the writers to leave, then waits for everyone; a process that stays is killed.
+  void stop() {
+    for (auto& w : writers) w->send("stop");
+    for (auto& w : writers) {
+      if (w->wait(30s) < 0) w->signal(SIGKILL);
+    }
+    for (auto& r : readers) {
+      if (r->wait(10s) < 0) r->signal(SIGKILL);
+    }
+  }
+};
+
+// What a writer prints when it has published everything ("result published=… cpu_s=… …").
+struct WriterReport {
+  std::uint64_t published = 0;
+  double cpu_s = 0;
+  long nvcsw = 0, nivcsw = 0;
+  std::string path;
+};
+
+// Waits up to `budget` for each line of the writer's report; other lines (library chatter) go to
+// stderr as `who`'s. nullopt, with `error`, when the writer reports an error, dies or is late.
+std::optional<WriterReport> read_writer_report(ChildProcess& writer, const std::string& who,
+                                               std::chrono::milliseconds budget, std::string& error) {
+  for (;;) {
+    auto l = writer.line(budget);
+    if (!l) {
+      error = writer.timed_out() ? "the writer did not finish in time" : "the writer died";
+      return std::nullopt;
+    }
+    if (l->rfind("error=", 0) == 0) {
+      error = "writer: " + l->substr(6);
+      return std::nullopt;
+    }
+    if (l->rfind("result ", 0) == 0) {
+      auto f = fields(*l);
+      return WriterReport{std::stoull(f["published"]), std::stod(f["cpu_s"]), std::stol(f["nvcsw"]),
+                          std::stol(f["nivcsw"]), f["path"]};
+    }
+    std::fprintf(stderr, "  [%s] %s\n", who.c_str(), l->c_str());
+  }
+}
+
+// What a reader prints when it stops: its "result" line and its "lat" line of latencies.
+struct ReaderReport {
+  std::uint64_t received = 0, gaps = 0, torn = 0;
+  double cpu_s = 0;
+  long nvcsw = 0, nivcsw = 0;
+  std::uint64_t caught_spinning = 0;  // adaptive readers only
+  double spin_s = 0;                  // likewise
+  std::vector<std::int64_t> latencies;
+};
+
+ReaderReport parse_reader_result(const std::string& line) {
+  auto f = fields(line);
+  ReaderReport report;
+  report.received = std::stoull(f["received"]);
+  report.gaps = std::stoull(f["gaps"]);
+  report.torn = std::stoull(f["torn"]);
+  report.cpu_s = std::stod(f["cpu_s"]);
+  report.nvcsw = std::stol(f["nvcsw"]);
+  report.nivcsw = std::stol(f["nivcsw"]);
+  if (f.count("caught_spinning") != 0) report.caught_spinning = std::stoull(f["caught_spinning"]);
+  if (f.count("spin_s") != 0) report.spin_s = std::stod(f["spin_s"]);
+  return report;
+}
+
+// Reads a reader's report (it stops at the last frame or after an idle timeout); other lines go
+// to stderr as `who`'s. nullopt, with `error`, when it reports an error or gives no result.
+std::optional<ReaderReport> read_reader_report(ChildProcess& reader, const std::string& who,
+                                               std::string& error) {
+  std::optional<ReaderReport> report;
+  std::vector<std::int64_t> latencies;
+  bool got_lat = false;
+  while (!(report && got_lat)) {
+    auto l = reader.line(120s);
+    if (!l) break;
+    if (l->rfind("error=", 0) == 0) {
+      error = "reader: " + l->substr(6);
+      return std::nullopt;
+    }
+    if (l->rfind("result ", 0) == 0) {
+      report = parse_reader_result(*l);
+    } else if (l->rfind("lat", 0) == 0) {
+      std::istringstream in(l->substr(3));
+      std::int64_t v;
+      while (in >> v) latencies.push_back(v);
+      got_lat = true;
+    } else {
+      std::fprintf(stderr, "  [%s] %s\n", who.c_str(), l->c_str());
+    }
+  }
+  if (!report) {
+    error = who + " gave no result";
+    return std::nullopt;
+  }
+  report->latencies = std::move(latencies);
+  return report;
+}
+
+// Adds one reader's report to the row of its run; `expected`: the frames past the warm-up.
+void add_reader_report(const ReaderReport& report, std::uint64_t expected, Row& row) {
+  row.received += report.received;
+  // Gaps are frames a newer one replaced (by design). Torn frames show up as gaps too but count
+  // as lost, like frames after the last one delivered, which never arrived.
+  const std::uint64_t skipped = report.gaps - std::min(report.gaps, report.torn);
+  row.skipped += skipped;
+  row.lost += expected - std::min(expected, report.received + skipped);
+  row.torn += report.torn;
+  row.reader_cpu_s += report.cpu_s;
+  row.reader_nvcsw += report.nvcsw;
+  row.reader_nivcsw += report.nivcsw;
+  row.caught_spinning += report.caught_spinning;
+  row.spin_s += report.spin_s;
+}
+
+// One stream of the vehicle workload, with a writer and a reader of its own.
+struct VehicleStream {
+  const char* what;
+  std::size_t payload;
+  double rate;
+};
+
+// The vehicle of the SIM paper: 7 cameras of 1920x1200x3 B at 30 Hz and a LiDAR at 10 Hz.
+std::vector<VehicleStream> vehicle_streams() {
+  std::vector<VehicleStream> streams(7, VehicleStream{"camera", 1920 * 1200 * 3, 30.0});
+  streams.push_back({"lidar", 1382400, 10.0});
+  return streams;
+}
+
+// Gives `flag` the value `value` in a role's argument list.
+void set_argument(std::vector<std::string>& args, const std::string& flag, const std::string& value) {
+  for (std::size_t a = 0; a + 1 < args.size(); ++a) {
+    if (args[a] == flag) args[a + 1] = value;
+  }
+}
+
 class Bench {
  public:
   explicit Bench(Options o) : o_(std::move(o)), exe_(self_exe()) {}
@@ -466,24 +620,54 @@ class Bench {
     return o_.cpus[1 + static_cast<std::size_t>(reader_index) % others];
   }
 
+  // A topic no other run of this or another sim_bench uses.
+  std::string next_topic() { return "simbench_" + std::to_string(getpid()) + "_" + std::to_string(counter_++); }
+
+  // Starts the writer and waits until it is ready, then starts `readers` readers and waits for
+  // each. false, with `error`, when one does not start or get ready.
+  bool start_roles(const std::string& transport, const std::string& topic, std::size_t payload,
+                   int readers, RoleProcesses& processes, std::string& error) {
+    auto& writer = *processes.writers.emplace_back(
+        std::make_unique<ChildProcess>(role_args("writer", transport, topic, payload, readers, 0)));
+    if (!writer.started()) {
+      error = "cannot start the writer process";
+      return false;
+    }
+    if (!await_ready(writer, "writer", error)) return false;
+    for (int i = 0; i < readers; ++i) {
+      processes.readers.push_back(std::make_unique<ChildProcess>(
+          role_args("reader", transport, topic, payload, readers, i)));
+      if (!processes.readers.back()->started()) {
+        error = "cannot start a reader process";
+        return false;
+      }
+    }
+    for (int i = 0; i < readers; ++i) {
+      if (!await_ready(*processes.readers[static_cast<std::size_t>(i)], "reader " + std::to_string(i), error)) {
+        return false;
+      }
+    }
+    return true;
+  }
+
+  // How long the writer of a run may take to publish everything: twice its schedule, plus 2 min.
+  std::chrono::milliseconds run_budget() const {
+    const double period_s = o_.max_rate ? 0.0 : 1.0 / o_.rate;
+    return std::chrono::milliseconds(
+        static_cast<long long>((static_cast<double>(o_.frames) * period_s + o_.pause_s) * 1000.0 * 2) + 120'000);
+  }
+
+  // One configuration, one run: a writer and `readers` reader processes; the pooled row.
   Row run_one(const std::string& transport, std::size_t payload, int readers, int run) {
     Row row;
     row.transport = transport;
     row.payload = payload;
     row.readers = readers;
     row.run = run;
-    const std::string topic =
-        "simbench_" + std::to_string(getpid()) + "_" + std::to_string(counter_++);
+    const std::string topic = next_topic();
     const long long udp_before = udp_datagrams();
-    std::string error;
-    // Declared before the processes, so it runs after they are gone: a SIM writer that had to be
-    // killed cannot remove its region, so it is removed here.
-    struct RegionSweep {
-      std::string name;
-      ~RegionSweep() {
-        if (!name.empty()) (void)sim::destroy(name, /*force=*/true);
-      }
-    } sweep{transport.rfind("sim-", 0) == 0 ? "/" + topic : std::string()};
+    RegionSweep sweep;
+    if (is_sim_transport(transport)) sweep.names.push_back("/" + topic);
     auto fail = [&](const std::string& why) {
       row.status = "failed";
       if (stop_requested) return row;
@@ -492,85 +676,27 @@ class Bench {
       return row;
     };
 
-    ChildProcess writer(role_args("writer", transport, topic, payload, readers, 0));
-    if (!writer.started()) return fail("cannot start the writer process");
-    if (!await_ready(writer, "writer", error)) return fail(error);
-    std::vector<std::unique_ptr<ChildProcess>> reader_procs;
-    for (int i = 0; i < readers; ++i) {
-      reader_procs.push_back(std::make_unique<ChildProcess>(
-          role_args("reader", transport, topic, payload, readers, i)));
-      if (!reader_procs.back()->started()) return fail("cannot start a reader process");
-    }
-    for (int i = 0; i < readers; ++i) {
-      if (!await_ready(*reader_procs[static_cast<std::size_t>(i)], "reader " + std::to_string(i), error)) {
-        return fail(error);
-      }
-    }
+    RoleProcesses processes;
+    std::string error;
+    if (!start_roles(transport, topic, payload, readers, processes, error)) return fail(error);
+    ChildProcess& writer = *processes.writers.front();
     writer.send("go");
-
-    const double period_s = o_.max_rate ? 0.0 : 1.0 / o_.rate;
-    const auto run_budget = std::chrono::milliseconds(
-        static_cast<long long>((static_cast<double>(o_.frames) * period_s + o_.pause_s) * 1000.0 * 2) + 120'000);
-    // The writer reports when it has published everything.
-    for (;;) {
-      auto l = writer.line(run_budget);
-      if (!l) return fail(writer.timed_out() ? "the writer did not finish in time" : "the writer died");
-      if (l->rfind("error=", 0) == 0) return fail("writer: " + l->substr(6));
-      if (l->rfind("result ", 0) == 0) {
-        auto f = fields(*l);
-        row.published = std::stoull(f["published"]);
-        row.writer_cpu_s = std::stod(f["cpu_s"]);
-        row.writer_nvcsw = std::stol(f["nvcsw"]);
-        row.writer_nivcsw = std::stol(f["nivcsw"]);
-        row.path = f["path"];
-        break;
-      }
-      std::fprintf(stderr, "  [writer] %s\n", l->c_str());
-    }
-    // Each reader stops at the last frame or after an idle timeout, then reports.
+    const auto written = read_writer_report(writer, "writer", run_budget(), error);
+    if (!written) return fail(error);
+    row.published = written->published;
+    row.writer_cpu_s = written->cpu_s;
+    row.writer_nvcsw = written->nvcsw;
+    row.writer_nivcsw = written->nivcsw;
+    row.path = written->path;
     std::vector<std::int64_t> pooled;
-    const std::uint64_t expected = o_.frames - o_.warmup;
     for (int i = 0; i < readers; ++i) {
-      auto& r = *reader_procs[static_cast<std::size_t>(i)];
-      bool got_result = false, got_lat = false;
-      while (!(got_result && got_lat)) {
-        auto l = r.line(120s);
-        if (!l) break;
-        if (l->rfind("error=", 0) == 0) return fail("reader: " + l->substr(6));
-        if (l->rfind("result ", 0) == 0) {
-          auto f = fields(*l);
-          const std::uint64_t received = std::stoull(f["received"]);
-          const std::uint64_t gaps = std::stoull(f["gaps"]);
-          const std::uint64_t torn = std::stoull(f["torn"]);
-          row.received += received;
-          // Gaps are frames a newer one replaced (by design). Torn frames show up as gaps too
-          // but count as lost, like frames after the last one delivered, which never arrived.
-          const std::uint64_t skipped = gaps - std::min(gaps, torn);
-          row.skipped += skipped;
-          row.lost += expected - std::min(expected, received + skipped);
-          row.torn += torn;
-          row.reader_cpu_s += std::stod(f["cpu_s"]);
-          row.reader_nvcsw += std::stol(f["nvcsw"]);
-          row.reader_nivcsw += std::stol(f["nivcsw"]);
-          if (f.count("caught_spinning") != 0) row.caught_spinning += std::stoull(f["caught_spinning"]);
-          if (f.count("spin_s") != 0) row.spin_s += std::stod(f["spin_s"]);
-          got_result = true;
-        } else if (l->rfind("lat", 0) == 0) {
-          std::istringstream in(l->substr(3));
-          std::int64_t v;
-          while (in >> v) pooled.push_back(v);
-          got_lat = true;
-        } else {
-          std::fprintf(stderr, "  [reader %d] %s\n", i, l->c_str());
-        }
-      }
-      if (!got_result) return fail("reader " + std::to_string(i) + " gave no result");
+      auto read = read_reader_report(*processes.readers[static_cast<std::size_t>(i)],
+                                     "reader " + std::to_string(i), error);
+      if (!read) return fail(error);
+      add_reader_report(*read, o_.frames - o_.warmup, row);
+      pooled.insert(pooled.end(), read->latencies.begin(), read->latencies.end());
     }
-    writer.send("stop");
-    if (writer.wait(30s) < 0) writer.signal(SIGKILL);
-    for (auto& r : reader_procs) {
-      if (r->wait(10s) < 0) r->signal(SIGKILL);
-    }
+    processes.stop();
     const long long udp_after = udp_datagrams();
     if (udp_before >= 0 && udp_after >= 0) row.udp_datagrams = udp_after - udp_before;
     row.lat = summarize(std::move(pooled));
@@ -639,105 +765,90 @@ class Bench {
 
   // The vehicle of the SIM paper: every stream at its own rate at once, a reader each.
   int vehicle(const std::vector<Transport>& transports) {
-    struct Spec {
-      const char* what;
-      std::size_t payload;
-      double rate;
-    };
-    std::vector<Spec> specs(7, Spec{"camera", 1920 * 1200 * 3, 30.0});
-    specs.push_back({"lidar", 1382400, 10.0});
+    const std::vector<VehicleStream> streams = vehicle_streams();
     std::printf("%-18s %3s %-7s %9s %6s %10s %10s %8s %5s\n", "transport", "run", "stream", "payload",
                 "Hz", "mean_us", "p99_us", "received", "lost");
     int failures = 0;
     for (const Transport t : transports) {
       for (int run = 1; run <= o_.runs && !stop_requested; ++run) {
-        const std::string name(to_string(t));
-        std::vector<std::string> topics;
-        struct Sweep {
-          std::vector<std::string> names;
-          ~Sweep() {
-            for (const auto& n : names) (void)sim::destroy(n, /*force=*/true);
-          }
-        } sweep;
-        std::vector<std::unique_ptr<ChildProcess>> writers, readers;
-        std::string error;
-        bool ok = true;
-        for (std::size_t i = 0; i < specs.size() && ok; ++i) {
-          topics.push_back("simbench_" + std::to_string(getpid()) + "_" + std::to_string(counter_++));
-          if (name.rfind("sim-", 0) == 0) sweep.names.push_back("/" + topics.back());
-          const auto frames = static_cast<std::uint64_t>(o_.vehicle_s * specs[i].rate);
-          auto args = role_args("writer", name, topics.back(), specs[i].payload, 1, 0);
-          for (std::size_t a = 0; a + 1 < args.size(); ++a) {
-            if (args[a] == "--rate") args[a + 1] = std::to_string(specs[i].rate);
-            if (args[a] == "--frames") args[a + 1] = std::to_string(frames);
-            if (args[a] == "--warmup") args[a + 1] = std::to_string(static_cast<std::uint64_t>(specs[i].rate));
-          }
-          writers.push_back(std::make_unique<ChildProcess>(args));
-          ok = writers.back()->started() && await_ready(*writers.back(), "writer " + topics.back(), error);
-          if (!ok) break;
-          for (std::size_t a = 0; a + 1 < args.size(); ++a) {
-            if (args[a] == "--role") args[a + 1] = "reader";
-          }
-          readers.push_back(std::make_unique<ChildProcess>(args));
-        }
-        for (std::size_t i = 0; ok && i < readers.size(); ++i) {
-          ok = readers[i]->started() && await_ready(*readers[i], "reader " + topics[i], error);
-        }
-        if (!ok) {
-          std::fprintf(stderr, "sim_bench: vehicle %s run %d failed: %s\n", name.c_str(), run, error.c_str());
-          ++failures;
-          continue;
-        }
-        for (auto& w : writers) w->send("go");
-        double cpu_s = 0;
-        const auto budget = std::chrono::milliseconds(static_cast<long long>(o_.vehicle_s * 2000) + 120'000);
-        for (auto& w : writers) {
-          while (auto l = w->line(budget)) {
-            if (l->rfind("result ", 0) == 0) {
-              cpu_s += std::stod(fields(*l)["cpu_s"]);
-              break;
-            }
-          }
-        }
-        for (std::size_t i = 0; i < readers.size(); ++i) {
-          std::vector<std::int64_t> lat;
-          std::uint64_t received = 0, gaps = 0;
-          bool got_lat = false;
-          while (!got_lat) {
-            auto l = readers[i]->line(120s);
-            if (!l) break;
-            if (l->rfind("result ", 0) == 0) {
-              auto f = fields(*l);
-              received = std::stoull(f["received"]);
-              gaps = std::stoull(f["gaps"]);
-              cpu_s += std::stod(f["cpu_s"]);
-            } else if (l->rfind("lat", 0) == 0) {
-              std::istringstream in(l->substr(3));
-              std::int64_t v;
-              while (in >> v) lat.push_back(v);
-              got_lat = true;
-            }
-          }
-          const auto expected = static_cast<std::uint64_t>(o_.vehicle_s * specs[i].rate) -
-                                static_cast<std::uint64_t>(specs[i].rate);
-          const LatencySummary sum = summarize(std::move(lat));
-          std::printf("%-18s %3d %-7s %9zu %6.0f %10.1f %10.1f %8" PRIu64 " %5" PRIu64 "\n", name.c_str(),
-                      run, specs[i].what, specs[i].payload, specs[i].rate, sum.mean_us, sum.p99_us,
-                      received, expected - std::min(expected, received + gaps));
-        }
-        for (auto& w : writers) w->send("stop");
-        for (auto& w : writers) {
-          if (w->wait(30s) < 0) w->signal(SIGKILL);
-        }
-        for (auto& r : readers) {
-          if (r->wait(10s) < 0) r->signal(SIGKILL);
-        }
-        std::printf("%-18s %3d total CPU of 8 writers + 8 readers: %.2f s over %.0f s = %.1f %% of one core\n",
-                    name.c_str(), run, cpu_s, o_.vehicle_s, 100.0 * cpu_s / o_.vehicle_s);
-        std::fflush(stdout);
+        if (!vehicle_run(std::string(to_string(t)), run, streams)) ++failures;
       }
     }
     return failures == 0 ? 0 : 1;
+  }
+
+  // The writer's arguments for one vehicle stream: its own rate, and --vehicle seconds of frames
+  // of which the first second is the warm-up.
+  std::vector<std::string> vehicle_writer_args(const std::string& transport, const std::string& topic,
+                                               const VehicleStream& stream) const {
+    auto args = role_args("writer", transport, topic, stream.payload, 1, 0);
+    set_argument(args, "--rate", std::to_string(stream.rate));
+    set_argument(args, "--frames", std::to_string(static_cast<std::uint64_t>(o_.vehicle_s * stream.rate)));
+    set_argument(args, "--warmup", std::to_string(static_cast<std::uint64_t>(stream.rate)));
+    return args;
+  }
+
+  // Starts each stream's writer, waiting until it is ready before the next, and its reader; then
+  // waits for the readers. false, with `error` when there is one, when a process does not start.
+  bool start_vehicle(const std::string& transport, const std::vector<VehicleStream>& streams,
+                     std::vector<std::string>& topics, RegionSweep& sweep, RoleProcesses& processes,
+                     std::string& error) {
+    for (const auto& stream : streams) {
+      topics.push_back(next_topic());
+      if (is_sim_transport(transport)) sweep.names.push_back("/" + topics.back());
+      auto args = vehicle_writer_args(transport, topics.back(), stream);
+      auto& writer = *processes.writers.emplace_back(std::make_unique<ChildProcess>(args));
+      if (!writer.started() || !await_ready(writer, "writer " + topics.back(), error)) return false;
+      set_argument(args, "--role", "reader");  // the same settings, the writer's CPU included
+      processes.readers.push_back(std::make_unique<ChildProcess>(args));
+    }
+    for (std::size_t i = 0; i < processes.readers.size(); ++i) {
+      ChildProcess& reader = *processes.readers[i];
+      if (!reader.started() || !await_ready(reader, "reader " + topics[i], error)) return false;
+    }
+    return true;
+  }
+
+  // One vehicle run on one transport: a line per stream, then the CPU of all its processes.
+  // false when its processes did not start.
+  bool vehicle_run(const std::string& transport, int run, const std::vector<VehicleStream>& streams) {
+    std::vector<std::string> topics;
+    RegionSweep sweep;
+    RoleProcesses processes;
+    std::string error;
+    if (!start_vehicle(transport, streams, topics, sweep, processes, error)) {
+      std::fprintf(stderr, "sim_bench: vehicle %s run %d failed: %s\n", transport.c_str(), run, error.c_str());
+      return false;
+    }
+    for (auto& w : processes.writers) w->send("go");
+    double cpu_s = 0;
+    const auto budget = std::chrono::milliseconds(static_cast<long long>(o_.vehicle_s * 2000) + 120'000);
+    for (std::size_t i = 0; i < processes.writers.size(); ++i) {
+      // A writer that fails adds no CPU; its reader's line shows what it missed.
+      const auto written = read_writer_report(*processes.writers[i], "writer " + topics[i], budget, error);
+      if (written) cpu_s += written->cpu_s;
+    }
+    for (std::size_t i = 0; i < processes.readers.size(); ++i) {
+      const ReaderReport read =
+          read_reader_report(*processes.readers[i], "reader " + topics[i], error).value_or(ReaderReport{});
+      cpu_s += read.cpu_s;
+      print_vehicle_stream(transport, run, streams[i], read);
+    }
+    processes.stop();
+    std::printf("%-18s %3d total CPU of 8 writers + 8 readers: %.2f s over %.0f s = %.1f %% of one core\n",
+                transport.c_str(), run, cpu_s, o_.vehicle_s, 100.0 * cpu_s / o_.vehicle_s);
+    std::fflush(stdout);
+    return true;
+  }
+
+  void print_vehicle_stream(const std::string& transport, int run, const VehicleStream& stream,
+                            const ReaderReport& read) const {
+    const auto expected = static_cast<std::uint64_t>(o_.vehicle_s * stream.rate) -
+                          static_cast<std::uint64_t>(stream.rate);
+    const LatencySummary sum = summarize(read.latencies);
+    std::printf("%-18s %3d %-7s %9zu %6.0f %10.1f %10.1f %8" PRIu64 " %5" PRIu64 "\n", transport.c_str(),
+                run, stream.what, stream.payload, stream.rate, sum.mean_us, sum.p99_us, read.received,
+                expected - std::min(expected, read.received + read.gaps));
   }
 
   // The idle cost: per transport, the CPU its readers use while no frame comes.
