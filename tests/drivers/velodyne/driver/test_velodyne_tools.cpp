@@ -129,12 +129,45 @@ void send_capture(const char* from, const char* to, int port, const std::vector<
   ::close(fd);
 }
 
-int data_port(Process& driver) {
-  const auto line = driver.wait_for_line("listening on");
-  if (!line) return -1;
-  // "sim_lidar_velodyne: listening on ADDR:PORT (position packets on port N)"
-  return std::stoi(line->substr(line->rfind(':') + 1));
-}
+// sim_lidar_velodyne publishing to a stream of its own with the test calibration, plus the
+// `options` of a test (address, ports, filters), and a reader of that stream once start() says
+// both are up.
+struct LiveDriver {
+  StreamGuard stream;
+  Process driver;
+  int port = -1;           // where it takes data packets
+  int position_port = -1;  // and position packets (0 with --no-position)
+  std::optional<sim::Reader> reader;
+
+  explicit LiveDriver(const std::vector<std::string>& options) : driver(arguments(stream.name, options)) {}
+
+  static std::vector<std::string> arguments(const std::string& stream, const std::vector<std::string>& options) {
+    std::vector<std::string> argv{SIM_LIDAR_VELODYNE, "--model",       "VLP-16",   "--stream",
+                                  stream,             "--calibration", calibration, "--summary"};
+    argv.insert(argv.end(), options.begin(), options.end());
+    return argv;
+  }
+
+  // Waits until the driver listens and its stream can be read: "" then, otherwise what failed.
+  std::string start() {
+    const auto line = driver.wait_for_line("listening on");
+    if (!line) return "sim_lidar_velodyne did not listen: " + driver.err();
+    // "sim_lidar_velodyne: listening on ADDR:PORT (position packets on port N)"
+    port = std::stoi(line->substr(line->rfind(':') + 1));
+    position_port = std::stoi(line->substr(line->rfind("port ") + 5));
+    if (port <= 0) return "sim_lidar_velodyne listens on no port: " + *line;
+    auto opened = open_when_created(stream.name);
+    if (!opened) return "cannot read the driver's stream: " + opened.error().message;
+    reader.emplace(std::move(*opened));
+    return {};
+  }
+
+  // Stops it as Ctrl-C does; its exit code.
+  int stop() {
+    driver.signal(SIGTERM);
+    return driver.wait();
+  }
+};
 
 bool equals_one_of(const std::vector<std::vector<sim::LidarPoint>>& expected, const std::vector<sim::LidarPoint>& frame) {
   for (const auto& e : expected) {
@@ -147,62 +180,49 @@ TEST(VelodyneTools, TheLiveDriverJoinsAMulticastGroupAndPublishesWhatIsSentToIt)
   if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
   const auto payloads = hesai_test::read_udp_payloads(capture);
   const auto expected = decode_directly(payloads);
-  StreamGuard stream;
   // Bound to every address: only the group membership brings the group's datagrams in.
-  Process driver({SIM_LIDAR_VELODYNE, "--model", "VLP-16", "--port", "0", "--no-position", "--multicast",
-                  "239.201.201.203", "--stream", stream.name, "--calibration", calibration, "--status-interval",
-                  "0", "--summary"});
-  const int port = data_port(driver);
-  ASSERT_GT(port, 0) << driver.err();
-  auto reader = open_when_created(stream.name);
-  ASSERT_TRUE(reader) << reader.error().message;
-  std::thread feed([&] { send_capture("127.0.0.1", "239.201.201.203", port, payloads); });
-  const auto frames = receive(*reader, 1);
+  LiveDriver live({"--port", "0", "--no-position", "--multicast", "239.201.201.203", "--status-interval", "0"});
+  ASSERT_EQ(live.start(), "");
+  std::thread feed([&] { send_capture("127.0.0.1", "239.201.201.203", live.port, payloads); });
+  const auto frames = receive(*live.reader, 1);
   feed.join();
-  driver.signal(SIGTERM);
-  ASSERT_EQ(driver.wait(), 0) << driver.err();
-  ASSERT_EQ(frames.size(), 1U) << driver.out() << driver.err();
+  ASSERT_EQ(live.stop(), 0) << live.driver.err();
+  ASSERT_EQ(frames.size(), 1U) << live.driver.out() << live.driver.err();
   EXPECT_TRUE(equals_one_of(expected, frames[0]));
-  EXPECT_EQ(summary_value(driver.out(), "malformed"), 0);
-  EXPECT_EQ(summary_value(driver.out(), "other_source"), 0);
+  EXPECT_EQ(summary_value(live.driver.out(), "malformed"), 0);
+  EXPECT_EQ(summary_value(live.driver.out(), "other_source"), 0);
 }
 
 TEST(VelodyneTools, TheSourceFilterDropsPacketsOfAnotherSenderAndKeepsTheSensors) {
   if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
   const auto payloads = hesai_test::read_udp_payloads(capture);
   const auto expected = decode_directly(payloads);
-  StreamGuard stream;
-  Process driver({SIM_LIDAR_VELODYNE, "--model", "VLP-16", "--bind", "127.0.0.1", "--port", "0", "--no-position",
-                  "--source", "127.0.0.2", "--stream", stream.name, "--calibration", calibration,
-                  "--status-interval", "0.05", "--summary"});
-  const int port = data_port(driver);
-  ASSERT_GT(port, 0) << driver.err();
-  auto reader = open_when_created(stream.name);
-  ASSERT_TRUE(reader) << reader.error().message;
+  LiveDriver live({"--bind", "127.0.0.1", "--port", "0", "--no-position", "--source", "127.0.0.2",
+                   "--status-interval", "0.05"});
+  ASSERT_EQ(live.start(), "");
 
   // Another sender (127.0.0.1): every datagram counted, none decoded. The status lines (one per
   // tick, in a log) say when the driver has taken them all.
-  send_capture("127.0.0.1", "127.0.0.1", port, payloads);
+  send_capture("127.0.0.1", "127.0.0.1", live.port, payloads);
   const std::string all_other = "other-source " + std::to_string(payloads.size());
   const auto deadline = std::chrono::steady_clock::now() + 30s;  // a hang guard
-  while (driver.err().find(all_other) == std::string::npos && std::chrono::steady_clock::now() < deadline) {
-    (void)driver.next_line(50ms);
+  while (live.driver.err().find(all_other) == std::string::npos && std::chrono::steady_clock::now() < deadline) {
+    (void)live.driver.next_line(50ms);
   }
-  EXPECT_NE(driver.err().find(all_other), std::string::npos) << driver.err();
-  std::vector<std::byte> buffer(reader->capacity());
+  EXPECT_NE(live.driver.err().find(all_other), std::string::npos) << live.driver.err();
+  std::vector<std::byte> buffer(live.reader->capacity());
   sim::FrameInfo info;
-  EXPECT_NE(reader->read_next(buffer, info, 0ms), sim::ReadStatus::new_frame);
+  EXPECT_NE(live.reader->read_next(buffer, info, 0ms), sim::ReadStatus::new_frame);
 
   // The sensor (127.0.0.2): decoded as the decoder decodes the capture.
-  std::thread feed([&] { send_capture("127.0.0.2", "127.0.0.1", port, payloads); });
-  const auto frames = receive(*reader, 1);
+  std::thread feed([&] { send_capture("127.0.0.2", "127.0.0.1", live.port, payloads); });
+  const auto frames = receive(*live.reader, 1);
   feed.join();
-  driver.signal(SIGTERM);
-  ASSERT_EQ(driver.wait(), 0) << driver.err();
-  ASSERT_EQ(frames.size(), 1U) << driver.out() << driver.err();
+  ASSERT_EQ(live.stop(), 0) << live.driver.err();
+  ASSERT_EQ(frames.size(), 1U) << live.driver.out() << live.driver.err();
   EXPECT_TRUE(equals_one_of(expected, frames[0]));
-  EXPECT_EQ(summary_value(driver.out(), "other_source"), static_cast<long long>(payloads.size()));
-  EXPECT_EQ(summary_value(driver.out(), "malformed"), 0);
+  EXPECT_EQ(summary_value(live.driver.out(), "other_source"), static_cast<long long>(payloads.size()));
+  EXPECT_EQ(summary_value(live.driver.out(), "malformed"), 0);
 }
 
 TEST(VelodyneTools, ReplayPublishesExactlyTheDecodersFrames) {
@@ -224,42 +244,33 @@ TEST(VelodyneTools, LiveDriverCountsBadDatagramsAndReportsThePositionPacketsTime
   if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
   const auto payloads = hesai_test::read_udp_payloads(capture);
   const auto expected = decode_directly(payloads);
-  StreamGuard stream;
-  Process driver({SIM_LIDAR_VELODYNE, "--model", "VLP-16", "--port", "0", "--position-port", "0", "--bind",
-                  "127.0.0.1", "--stream", stream.name, "--calibration", calibration, "--status-interval", "0",
-                  "--summary", "--frame-id", "velodyne_top"});
-  const auto line = driver.wait_for_line("listening on");
-  ASSERT_TRUE(line) << driver.err();
-  const int port = std::stoi(line->substr(line->rfind(':') + 1));
-  const int position_port = std::stoi(line->substr(line->rfind("port ") + 5));
-  auto reader = open_when_created(stream.name);
-  ASSERT_TRUE(reader) << reader.error().message;
+  LiveDriver live({"--port", "0", "--position-port", "0", "--bind", "127.0.0.1", "--status-interval", "0",
+                   "--frame-id", "velodyne_top"});
+  ASSERT_EQ(live.start(), "");
 
-  send_to(position_port, velodyne_test::position_packet(
-                             0, 2, velodyne_test::nmea("GPRMC,123519,A,4807.038,N,01131.000,E,022.4,084.4,230326,003.1,W")));
-  send_to(port, std::vector<std::uint8_t>(payloads[0].bytes.begin(), payloads[0].bytes.begin() + 700));  // cut short
-  send_to(port, std::vector<std::uint8_t>(1080, 0xEE));  // another vendor's datagram
+  send_to(live.position_port,
+          velodyne_test::position_packet(
+              0, 2, velodyne_test::nmea("GPRMC,123519,A,4807.038,N,01131.000,E,022.4,084.4,230326,003.1,W")));
+  send_to(live.port, std::vector<std::uint8_t>(payloads[0].bytes.begin(), payloads[0].bytes.begin() + 700));  // cut short
+  send_to(live.port, std::vector<std::uint8_t>(1080, 0xEE));  // another vendor's datagram
   std::thread feed([&] {
     for (const auto& p : payloads) {
-      send_to(port, p.bytes);
+      send_to(live.port, p.bytes);
       std::this_thread::sleep_for(200us);
     }
   });
-  const auto frames = receive(*reader, 2);
+  const auto frames = receive(*live.reader, 2);
   feed.join();
   std::this_thread::sleep_for(200ms);
-  auto info = reader->sensor_info();
-  driver.signal(SIGTERM);
-  ASSERT_EQ(driver.wait(), 0) << driver.err();
+  auto info = live.reader->sensor_info();
+  ASSERT_EQ(live.stop(), 0) << live.driver.err();
   // The live stamps' hour comes from the host clock, so the points are compared (their times
   // are offsets from the frame stamp): the live driver's frames are the decoder's.
   ASSERT_GE(frames.size(), 1U);
-  bool matched = false;
-  for (const auto& e : expected) matched = matched || same(e, frames.back());
-  EXPECT_TRUE(matched);
-  EXPECT_EQ(summary_value(driver.out(), "malformed"), 2);
-  EXPECT_EQ(summary_value(driver.out(), "position_packets"), 1);
-  EXPECT_EQ(summary_text(driver.out(), "time_sync"), "PPS_locked__GPRMC_valid");
+  EXPECT_TRUE(equals_one_of(expected, frames.back()));
+  EXPECT_EQ(summary_value(live.driver.out(), "malformed"), 2);
+  EXPECT_EQ(summary_value(live.driver.out(), "position_packets"), 1);
+  EXPECT_EQ(summary_text(live.driver.out(), "time_sync"), "PPS_locked__GPRMC_valid");
   ASSERT_TRUE(info) << info.error().message;
   ASSERT_TRUE(info->has_value());
   EXPECT_EQ((*info)->frame_id, "velodyne_top");
