@@ -10,11 +10,19 @@
 #include "sim/velodyne/frame_assembler.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstddef>
+#include <cstring>
 #include <limits>
 
 namespace sim::velodyne {
 namespace {
+
+// The in-place store writes a point's time offset, ring and return index as one word.
+static_assert(std::endian::native == std::endian::little, "LidarPoint tail written as a little-endian word");
+static_assert(offsetof(LidarPoint, ring) == 20 && offsetof(LidarPoint, return_index) == 22 &&
+              offsetof(LidarPoint, reserved) == 23 && sizeof(LidarPoint) == 24);
 
 constexpr std::int64_t hour_ns = 3'600'000'000'000;
 constexpr std::int32_t full_turn = 36000;  // 0.01°
@@ -138,39 +146,39 @@ FrameAssembler::FrameAssembler(Calibration calibration, AssemblerOptions options
 void FrameAssembler::build_unit_geometry() noexcept {
   const bool two_sequences = info_->sequences_per_block == 2;
   for (unsigned bank = 0; bank < banks; ++bank) {
+    BankGeometry& g = banks_[bank];
+    g.cos_vert.fill(1.0f);
+    g.max_intensity.fill(255.0);
     for (unsigned u = 0; u < units_per_block; ++u) {
-      UnitGeometry& g = units_[bank * units_per_block + u];
-      g.fraction = unit_fraction(options_.model, bank, u);
-      azimuth_terms_[bank].fraction[u] = g.fraction;
+      g.fraction[u] = unit_fraction(options_.model, bank, u);
       // VLP-16 and Puck: two sequences of 16 lasers per block; the rest one laser per unit.
       const unsigned laser = two_sequences ? u % 16 : bank * 32 + u;
       if (laser >= calibration_.lasers()) continue;  // a bank this model does not send
       const LaserCorrection& c = calibration_[laser];
-      g.rot_centi = c.rot_correction * 180.0 / pi * 100.0;
-      azimuth_terms_[bank].rot_centi[u] = g.rot_centi;
-      g.cos_vert = static_cast<float>(std::cos(c.vert_correction));
-      g.sin_vert = static_cast<float>(std::sin(c.vert_correction));
-      g.dist_correction = static_cast<float>(c.dist_correction);
-      g.time_ns = laser_firing_ns(options_.model, laser) + (two_sequences ? (u / 16) * info_->sequence_ns : 0);
-      g.ring = calibration_.ring(laser);
-      max_unit_time_ns_ = std::max(max_unit_time_ns_, g.time_ns);
+      g.rot_centi[u] = c.rot_correction * 180.0 / pi * 100.0;
+      g.cos_vert[u] = static_cast<float>(std::cos(c.vert_correction));
+      g.sin_vert[u] = static_cast<float>(std::sin(c.vert_correction));
+      g.dist_correction[u] = static_cast<float>(c.dist_correction);
+      g.time_ns[u] = laser_firing_ns(options_.model, laser) + (two_sequences ? (u / 16) * info_->sequence_ns : 0);
+      g.ring[u] = calibration_.ring(laser);
+      max_unit_time_ns_ = std::max(max_unit_time_ns_, g.time_ns[u]);
       if (c.needs_full_model()) {
         full_model_ = true;
-        g.vert_offset = static_cast<float>(c.vert_offset_correction);
-        g.horiz_offset = static_cast<float>(c.horiz_offset_correction);
+        g.vert_offset[u] = static_cast<float>(c.vert_offset_correction);
+        g.horiz_offset[u] = static_cast<float>(c.horiz_offset_correction);
         if (c.two_point()) {
-          g.two_point_dc = static_cast<float>(c.dist_correction);
-          g.two_point_dx = static_cast<float>(c.dist_correction_x);
-          g.two_point_dy = static_cast<float>(c.dist_correction_y);
+          g.two_point_dc[u] = static_cast<float>(c.dist_correction);
+          g.two_point_dx[u] = static_cast<float>(c.dist_correction_x);
+          g.two_point_dy[u] = static_cast<float>(c.dist_correction_y);
         }
       }
       if (c.corrects_intensity()) {
         intensity_model_ = true;
         const double focal = 1.0 - c.focal_distance / 13100.0;
-        g.focal_term = 256.0 * focal * focal;
-        g.focal_slope = c.focal_slope;
-        g.min_intensity = c.min_intensity;
-        g.max_intensity = c.max_intensity;
+        g.focal_term[u] = 256.0 * focal * focal;
+        g.focal_slope[u] = c.focal_slope;
+        g.min_intensity[u] = c.min_intensity;
+        g.max_intensity[u] = c.max_intensity;
       }
     }
   }
@@ -496,8 +504,7 @@ bool FrameAssembler::block_context(const Packet& packet, unsigned block, const B
   const unsigned per_slot = info_->blocks_per_sequence * (dual ? 2U : 1U);
   out.units = packet.units(block);
   out.partner = compare ? packet.units(packet.partner(block)) : no_returns.data();
-  out.geometry = &units_[bank * units_per_block];
-  out.azimuth_terms = &azimuth_terms_[bank];
+  out.geometry = &banks_[bank];
   out.trig = trig_table_;
   out.base = static_cast<float>(azimuth.base);
   out.step = azimuth.step;
@@ -529,86 +536,123 @@ bool FrameAssembler::fits_in_place(BlockContext& block, std::int64_t block_posit
 // The table index (azimuth in 0.01°, 0…35,999) of each unit of the block: the interpolated
 // azimuth minus the laser's rot_correction, rounded as nebula and ros-drivers do (see the top
 // of this file). No branch: the compiler computes the 32 with vector instructions.
-void FrameAssembler::azimuth_indices(const BlockContext& block, std::array<std::int32_t, units_per_block>& out) noexcept {
-  const BankAzimuthTerms& t = *block.azimuth_terms;
+void FrameAssembler::azimuth_indices(const BlockContext& block, PerUnit<std::int32_t>& out) noexcept {
+  const BankGeometry& g = *block.geometry;
   for (unsigned u = 0; u < units_per_block; ++u) {
-    const float interpolated = block.base + block.step * t.fraction[u];
-    float corrected = static_cast<float>(static_cast<double>(interpolated) - t.rot_centi[u]);
+    const float interpolated = block.base + block.step * g.fraction[u];
+    float corrected = static_cast<float>(static_cast<double>(interpolated) - g.rot_centi[u]);
     corrected += corrected < 0.0f ? static_cast<float>(full_turn) : 0.0f;
     const auto rounded = static_cast<std::int32_t>(corrected + 0.5f);
     out[u] = rounded >= full_turn ? rounded - full_turn : rounded;
   }
 }
 
-// Decodes unit `unit` at table index `azimuth_centi` into `out` (every field; the time as an
-// offset from block.time_base) and says whether it is a point: a return, within the range
-// limits, and not the repeat of its pair's other return.
+// Decodes the block's 32 units into `out` (every field but the time) and flags the points: a
+// return, within the range limits, and not the repeat of its pair's other return. The loads
+// (packet bytes, sin/cos table) are one loop; the arithmetic reads only arrays and is one loop
+// per formula, so the compiler computes four units per vector instruction and every point
+// gets exactly the operations of the scalar formula (same results to the bit).
 template <bool Full, bool Intensity>
-bool FrameAssembler::decode_point(const BlockContext& block, unsigned unit, std::int32_t azimuth_centi,
-                                  LidarPoint& out) noexcept {
-  const std::uint8_t* bytes = block.units + unit * 3;
-  const std::uint8_t* other = block.partner + unit * 3;
-  const auto raw = static_cast<std::uint16_t>(bytes[0] | (bytes[1] << 8));
-  const auto other_raw = static_cast<std::uint16_t>(other[0] | (other[1] << 8));
-  const UnitGeometry& g = block.geometry[unit];
-  const float distance = static_cast<float>(raw) * block.unit_m + g.dist_correction;
-  const bool keep = (raw != 0) & (raw != other_raw) & (distance > block.min_range_m) & (distance < block.max_range_m);
-  const CosSin a = block.trig[azimuth_centi];
-
-  if constexpr (!Full) {
-    const float xy = distance * g.cos_vert;
-    out.x = xy * a.cos;
-    out.y = -(xy * a.sin);
-    out.z = distance * g.sin_vert;
+void FrameAssembler::decode_units(const BlockContext& block, BlockPoints& out) noexcept {
+  const BankGeometry& g = *block.geometry;
+  const float unit_m = block.unit_m;
+  const float min_range_m = block.min_range_m;
+  const float max_range_m = block.max_range_m;
+  azimuth_indices(block, out.azimuth);
+  PerUnit<std::int32_t> raw;
+  PerUnit<std::int32_t> other_raw;
+  PerUnit<std::int32_t> reflectivity;
+  PerUnit<CosSin> trig;
+  for (unsigned u = 0; u < units_per_block; ++u) {
+    const std::uint8_t* bytes = block.units + u * 3;
+    const std::uint8_t* other = block.partner + u * 3;
+    raw[u] = bytes[0] | (bytes[1] << 8);
+    other_raw[u] = other[0] | (other[1] << 8);
+    reflectivity[u] = bytes[2];
+    trig[u] = block.trig[out.azimuth[u]];
+  }
+  PerUnit<float> distance;
+  PerUnit<float> cos_a;
+  PerUnit<float> sin_a;
+  for (unsigned u = 0; u < units_per_block; ++u) {
+    distance[u] = static_cast<float>(raw[u]) * unit_m + g.dist_correction[u];
+    out.keep[u] = (raw[u] != 0) & (raw[u] != other_raw[u]) & (distance[u] > min_range_m) & (distance[u] < max_range_m);
+    out.intensity[u] = static_cast<float>(reflectivity[u]);
+    cos_a[u] = trig[u].cos;
+    sin_a[u] = trig[u].sin;
+  }
+  if constexpr (Full) {
+    full_model_points(g, distance, cos_a, sin_a, out);
   } else {
-    // The HDL-64E model (ros-drivers/velodyne rawdata.cc): optical-centre offsets and the
-    // two-point distance correction, in the sensor's frame (x right, y forward), then ROS.
-    const float vo = g.vert_offset;
-    const float ho = g.horiz_offset;
-    float xy = distance * g.cos_vert - vo * g.sin_vert;
-    const float xx = std::abs(xy * a.sin - ho * a.cos);
-    const float yy = std::abs(xy * a.cos + ho * a.sin);
+    for (unsigned u = 0; u < units_per_block; ++u) {
+      const float xy = distance[u] * g.cos_vert[u];
+      out.x[u] = xy * cos_a[u];
+      out.y[u] = -(xy * sin_a[u]);
+      out.z[u] = distance[u] * g.sin_vert[u];
+    }
+  }
+  if constexpr (Intensity) {
+    // The HDL-64E's focal intensity model (ros-drivers/velodyne rawdata.cc), in double as there.
+    for (unsigned u = 0; u < units_per_block; ++u) {
+      const double scaled = 1.0 - static_cast<double>(raw[u]) * (1.0 / 65535.0);
+      const double value = out.intensity[u] + g.focal_slope[u] * std::abs(g.focal_term[u] - 256.0 * scaled * scaled);
+      out.intensity[u] = static_cast<float>(std::clamp(value, g.min_intensity[u], g.max_intensity[u]));
+    }
+  }
+}
+
+// The HDL-64E model (ros-drivers/velodyne rawdata.cc): optical-centre offsets and the
+// two-point distance correction, in the sensor's frame (x right, y forward), then ROS.
+void FrameAssembler::full_model_points(const BankGeometry& g, const PerUnit<float>& distance,
+                                       const PerUnit<float>& cos_a, const PerUnit<float>& sin_a,
+                                       BlockPoints& out) noexcept {
+  for (unsigned u = 0; u < units_per_block; ++u) {
+    const float d = distance[u];
+    const float vo = g.vert_offset[u];
+    const float ho = g.horiz_offset[u];
+    const float cos_vert = g.cos_vert[u];
+    const float sin_vert = g.sin_vert[u];
+    float xy = d * cos_vert - vo * sin_vert;
+    const float xx = std::abs(xy * sin_a[u] - ho * cos_a[u]);
+    const float yy = std::abs(xy * cos_a[u] + ho * sin_a[u]);
     // Linear between the two calibration distances (2.4 m / 1.93 m and 25.04 m); a product with
     // the constant reciprocal instead of a division per point.
-    const float dc = g.two_point_dc;
-    const float corr_x = (dc - g.two_point_dx) * (xx - 2.4f) * (1.0f / (25.04f - 2.4f)) + g.two_point_dx - dc;
-    const float corr_y = (dc - g.two_point_dy) * (yy - 1.93f) * (1.0f / (25.04f - 1.93f)) + g.two_point_dy - dc;
-    xy = (distance + corr_x) * g.cos_vert - vo * g.sin_vert;
-    const float vx = xy * a.sin - ho * a.cos;
-    xy = (distance + corr_y) * g.cos_vert - vo * g.sin_vert;
-    const float vy = xy * a.cos + ho * a.sin;
-    out.x = vy;
-    out.y = -vx;
-    out.z = (distance + corr_y) * g.sin_vert + vo * g.cos_vert;
+    const float dc = g.two_point_dc[u];
+    const float corr_x = (dc - g.two_point_dx[u]) * (xx - 2.4f) * (1.0f / (25.04f - 2.4f)) + g.two_point_dx[u] - dc;
+    const float corr_y = (dc - g.two_point_dy[u]) * (yy - 1.93f) * (1.0f / (25.04f - 1.93f)) + g.two_point_dy[u] - dc;
+    xy = (d + corr_x) * cos_vert - vo * sin_vert;
+    const float vx = xy * sin_a[u] - ho * cos_a[u];
+    xy = (d + corr_y) * cos_vert - vo * sin_vert;
+    const float vy = xy * cos_a[u] + ho * sin_a[u];
+    out.x[u] = vy;
+    out.y[u] = -vx;
+    out.z[u] = (d + corr_y) * sin_vert + vo * cos_vert;
   }
-  float intensity = bytes[2];
-  if constexpr (Intensity) {
-    const double scaled = 1.0 - static_cast<double>(raw) * (1.0 / 65535.0);
-    const double value = intensity + g.focal_slope * std::abs(g.focal_term - 256.0 * scaled * scaled);
-    intensity = static_cast<float>(std::clamp(value, g.min_intensity, g.max_intensity));
-  }
-  out.intensity = intensity;
-  out.time_offset_ns = static_cast<std::uint32_t>(block.time_base + g.time_ns);
-  out.ring = g.ring;
-  out.return_index = block.return_index;
-  out.reserved = 0;
-  return keep;
 }
 
 // Every point of the block goes to the output; a slot is written for every unit and kept only
-// for a return, so the loop has no branch that depends on the data.
+// for a point, so the loop has no branch that depends on the data.
 template <bool Full, bool Intensity>
 void FrameAssembler::decode_in_place(const BlockContext& block) noexcept {
-  const BlockContext local = block;  // a copy the output writes cannot alias: kept in registers
-  std::array<std::int32_t, units_per_block> azimuths;
-  azimuth_indices(local, azimuths);
-  LidarPoint* out = output_.data() + output_count_;
+  BlockPoints points;
+  decode_units<Full, Intensity>(block, points);
+  const BankGeometry& g = *block.geometry;
+  // Bytes 16–23 of each point (time offset, ring, return index, reserved) as one little-endian
+  // word, computed with vector instructions; the store loop then copies 16 + 8 bytes a point.
+  PerUnit<std::uint64_t> tail;
+  const auto time_base = static_cast<std::uint32_t>(block.time_base);  // fits_in_place: no wrap
+  const std::uint64_t return_index = std::uint64_t{block.return_index} << 48;
+  for (unsigned u = 0; u < units_per_block; ++u) {
+    tail[u] = std::uint64_t{time_base + g.time_ns[u]} | (std::uint64_t{g.ring[u]} << 32) | return_index;
+  }
+  auto* out = reinterpret_cast<unsigned char*>(output_.data() + output_count_);
   std::size_t kept = 0;
   for (unsigned u = 0; u < units_per_block; ++u) {
-    LidarPoint p;
-    const bool keep = decode_point<Full, Intensity>(local, u, azimuths[u], p);
-    out[kept] = p;
-    kept += keep ? 1U : 0U;
+    const float xyzi[4] = {points.x[u], points.y[u], points.z[u], points.intensity[u]};
+    unsigned char* point = out + kept * sizeof(LidarPoint);
+    std::memcpy(point, xyzi, sizeof xyzi);
+    std::memcpy(point + offsetof(LidarPoint, time_offset_ns), &tail[u], sizeof(std::uint64_t));
+    kept += points.keep[u];
   }
   output_count_ += kept;
 }
@@ -618,12 +662,12 @@ template <bool Full, bool Intensity>
 void FrameAssembler::decode_point_by_point(const BlockContext& block, std::int64_t block_position,
                                            std::int64_t host_ns) noexcept {
   const bool by_packet = options_.cut_by == CutBy::packet;
-  std::array<std::int32_t, units_per_block> azimuths;
-  azimuth_indices(block, azimuths);
+  BlockPoints points;
+  decode_units<Full, Intensity>(block, points);
+  const BankGeometry& g = *block.geometry;
   for (unsigned u = 0; u < units_per_block; ++u) {
-    LidarPoint p;
-    const std::int32_t azimuth = azimuths[u];
-    if (!decode_point<Full, Intensity>(block, u, azimuth, p)) continue;
+    const std::int32_t azimuth = points.azimuth[u];
+    if (points.keep[u] == 0) continue;
     if (windowed_ && !in_window(azimuth)) continue;
     // Where the point lies on the unwrapped azimuth axis (0.01° since the first revolution).
     std::int64_t position;
@@ -635,8 +679,9 @@ void FrameAssembler::decode_point_by_point(const BlockContext& block, std::int64
       if (offset < -full_turn / 2) offset += full_turn;
       position = block_position + offset;
     }
+    const LidarPoint p{points.x[u], points.y[u], points.z[u], points.intensity[u], 0, g.ring[u], block.return_index, 0};
     const std::size_t before = output_count_;
-    emit(p, position, block.ns + block.geometry[u].time_ns, host_ns);
+    emit(p, position, block.ns + g.time_ns[u], host_ns);
     if (by_packet && output_attached_ && output_count_ == before + 1 &&
         packet_points_ < packet_point_phase_.size()) {
       packet_point_phase_[packet_points_++] =

@@ -163,40 +163,47 @@ class FrameAssembler {
     float cos;
     float sin;
   };
-  // Everything about the laser that unit u of a block of bank b (block flag) fires that does not
-  // change per point, computed once. The HDL-64E's terms are zero, and its intensity model the
-  // identity, for lasers without them: the full formulas then give exactly the plain result.
-  struct UnitGeometry {
-    double rot_centi = 0;        // rot_correction in 0.01° (double: the rounding matches nebula)
-    float fraction = 0;          // of the azimuth step between sequences at which it fires
-    float cos_vert = 1;
-    float sin_vert = 0;
-    float dist_correction = 0;
-    std::uint32_t time_ns = 0;   // after the block's sequence start (VLP-16: its second one too)
-    std::uint16_t ring = 0;
-    float vert_offset = 0;       // HDL-64E model: optical-centre offsets, two-point correction
-    float horiz_offset = 0;
-    float two_point_dc = 0;
-    float two_point_dx = 0;
-    float two_point_dy = 0;
-    double focal_term = 0;       // intensity model: 256·(1 − focal_distance/13100)²
-    double focal_slope = 0;
-    double min_intensity = 0;
-    double max_intensity = 255;
+  // Everything about the lasers the 32 units of a block of bank b (block flag) fire that does
+  // not change per point, computed once, as one array per term (structure of arrays) so the
+  // loops over a block's 32 units compile to vector instructions. The HDL-64E's terms are zero,
+  // and its intensity model the identity, for lasers without them: the full formulas then give
+  // exactly the plain result.
+  template <typename T>
+  using PerUnit = std::array<T, units_per_block>;
+  struct BankGeometry {
+    PerUnit<float> fraction{};          // of the azimuth step between sequences at which it fires
+    PerUnit<double> rot_centi{};        // rot_correction in 0.01° (double: the rounding matches nebula)
+    PerUnit<float> cos_vert{};
+    PerUnit<float> sin_vert{};
+    PerUnit<float> dist_correction{};
+    PerUnit<std::uint32_t> time_ns{};   // after the block's sequence start (VLP-16: its second one too)
+    PerUnit<std::uint16_t> ring{};
+    PerUnit<float> vert_offset{};       // HDL-64E model: optical-centre offsets, two-point correction
+    PerUnit<float> horiz_offset{};
+    PerUnit<float> two_point_dc{};
+    PerUnit<float> two_point_dx{};
+    PerUnit<float> two_point_dy{};
+    PerUnit<double> focal_term{};       // intensity model: 256·(1 − focal_distance/13100)²
+    PerUnit<double> focal_slope{};
+    PerUnit<double> min_intensity{};
+    PerUnit<double> max_intensity{};
   };
-  // The azimuth terms of a bank's 32 units side by side, so one loop computes a block's 32
-  // table indices with vector instructions before the per-point loop.
-  struct BankAzimuthTerms {
-    std::array<float, units_per_block> fraction{};
-    std::array<double, units_per_block> rot_centi{};
+  // A block's 32 decoded units before they are stored, one array per field, so computing them
+  // (vector instructions) and storing the kept ones (one 24-byte point each) are separate loops.
+  struct BlockPoints {
+    PerUnit<std::int32_t> azimuth;      // sin/cos table index, 0.01°
+    PerUnit<float> x;
+    PerUnit<float> y;
+    PerUnit<float> z;
+    PerUnit<float> intensity;
+    PerUnit<std::uint32_t> keep;        // 1: a return within the range limits, not a repeat
   };
   // One block as the per-point decoding needs it, with the limits copied so the point loop
   // reads no member the output writes could alias.
   struct BlockContext {
     const std::uint8_t* units = nullptr;    // 32 × (distance, reflectivity)
     const std::uint8_t* partner = nullptr;  // the pair's other return to compare, or all zeros
-    const UnitGeometry* geometry = nullptr; // the bank's 32 entries
-    const BankAzimuthTerms* azimuth_terms = nullptr;
+    const BankGeometry* geometry = nullptr; // the block's bank
     const CosSin* trig = nullptr;
     float base = 0;                         // azimuth the points start from and step, 0.01°
     float step = 0;
@@ -225,10 +232,11 @@ class FrameAssembler {
   void decode_in_place(const BlockContext& block) noexcept;
   template <bool Full, bool Intensity>
   void decode_point_by_point(const BlockContext& block, std::int64_t block_position, std::int64_t host_ns) noexcept;
-  static void azimuth_indices(const BlockContext& block, std::array<std::int32_t, units_per_block>& out) noexcept;
+  static void azimuth_indices(const BlockContext& block, PerUnit<std::int32_t>& out) noexcept;
   template <bool Full, bool Intensity>
-  [[gnu::always_inline]] static inline bool decode_point(const BlockContext& block, unsigned unit,
-                                                         std::int32_t azimuth_centi, LidarPoint& out) noexcept;
+  static void decode_units(const BlockContext& block, BlockPoints& out) noexcept;
+  static void full_model_points(const BankGeometry& g, const PerUnit<float>& distance, const PerUnit<float>& cos_a,
+                                const PerUnit<float>& sin_a, BlockPoints& out) noexcept;
   void emit(const LidarPoint& point, std::int64_t position, std::int64_t point_ns,
             std::int64_t host_ns) noexcept;
   void start(FrameState& frame, std::int64_t point_ns, std::int64_t host_ns, bool whole) noexcept;
@@ -252,8 +260,7 @@ class FrameAssembler {
   std::int32_t window_min_centi_ = 0;
   std::int32_t window_max_centi_ = 0;
   const CosSin* trig_table_ = nullptr;  // 36,000 entries: 0.00°…359.99° (shared by the process)
-  std::array<UnitGeometry, banks * units_per_block> units_{};
-  std::array<BankAzimuthTerms, banks> azimuth_terms_{};
+  std::array<BankGeometry, banks> banks_{};
   bool full_model_ = false;        // some laser has HDL-64E offsets or a two-point correction
   bool intensity_model_ = false;   // some laser has the focal intensity model
   // Blocks whose points all land in the frame in progress are decoded straight into the output
