@@ -86,7 +86,7 @@ sim::unitree::SimSinkOptions sink_options(const Options& o, const sim::SensorInf
                                                      : o.imu_stream);
   sink.max_points = sim::unitree::Decoder::max_points_per_scan(decoder);
   sink.sensor = sim::unitree::describe_sensor(described, decoder);
-  sink.sensor->time_sync = "replayed, stamped with this host's clock when published";
+  sim::apps::describe_stamped_on_publish(*sink.sensor);
   return sink;
 }
 

@@ -57,8 +57,7 @@ void add_options(apps::CommandLine& cli, Options& o) {
 Expected<SensorInfo> replayed_sensor(const Options& o) {
   auto described = apps::sensor_info_from(o.sensor, o.stream);
   if (!described) return described;
-  described->time_base = TimeBase::host;
-  described->time_sync = "replayed, stamped with this host's clock when published";
+  apps::describe_stamped_on_publish(*described);
   return described;
 }
 

@@ -124,4 +124,9 @@ Expected<void> check_sensor_info(const SensorInfo& info) {
   return usage(problem);
 }
 
+void describe_stamped_on_publish(SensorInfo& info) {
+  info.time_base = TimeBase::host;
+  info.time_sync = "replayed, stamped with this host's clock when published";
+}
+
 }  // namespace sim::apps

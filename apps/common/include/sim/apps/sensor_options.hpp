@@ -68,4 +68,8 @@ Expected<void> check_calibration_size(const SensorInfo& info, std::uint32_t widt
 // time base) just before it creates the stream.
 Expected<void> check_sensor_info(const SensorInfo& info);
 
+// For a replay that stamps each frame with this host's clock as it publishes it (sim_replay_video,
+// sim_replay_serial): the host time base, and the one time_sync sentence that says so.
+void describe_stamped_on_publish(SensorInfo& info);
+
 }  // namespace sim::apps
