@@ -19,10 +19,14 @@
 namespace sim::velodyne {
 namespace {
 
-// The in-place store writes a point's time offset, ring and return index as one word.
+// The in-place store writes a point's time offset, ring, return index and reserved byte as one
+// little-endian word, and its x, y, z, intensity as one Xyzi.
 static_assert(std::endian::native == std::endian::little, "LidarPoint tail written as a little-endian word");
 static_assert(offsetof(LidarPoint, ring) == 20 && offsetof(LidarPoint, return_index) == 22 &&
               offsetof(LidarPoint, reserved) == 23 && sizeof(LidarPoint) == 24);
+// A unit is read as a 4-byte word: the last unit of the last block reads one byte past its
+// block, which must still be inside the (exactly packet_size) packet.
+static_assert(blocks_per_packet * block_size + 1 <= packet_size);
 
 constexpr std::int64_t hour_ns = 3'600'000'000'000;
 constexpr std::int32_t full_turn = 36000;  // 0.01°
@@ -55,9 +59,6 @@ float unit_fraction(Model model, unsigned bank, unsigned unit) noexcept {
   }
   return 0.0f;
 }
-
-// A block's units as read when a block has no pair to compare with: no distance equals a return.
-constexpr std::array<std::uint8_t, units_per_block * 3> no_returns{};
 
 std::uint32_t clamp_offset(std::int64_t ns) noexcept {
   if (ns < 0) return 0;
@@ -161,6 +162,7 @@ void FrameAssembler::build_unit_geometry() noexcept {
       g.dist_correction[u] = static_cast<float>(c.dist_correction);
       g.time_ns[u] = laser_firing_ns(options_.model, laser) + (two_sequences ? (u / 16) * info_->sequence_ns : 0);
       g.ring[u] = calibration_.ring(laser);
+      g.tail[u] = g.time_ns[u] | (std::uint64_t{g.ring[u]} << 32);
       max_unit_time_ns_ = std::max(max_unit_time_ns_, g.time_ns[u]);
       if (c.needs_full_model()) {
         full_model_ = true;
@@ -503,7 +505,7 @@ bool FrameAssembler::block_context(const Packet& packet, unsigned block, const B
   const unsigned bank = packet.laser(block, 0) / 32 % banks;
   const unsigned per_slot = info_->blocks_per_sequence * (dual ? 2U : 1U);
   out.units = packet.units(block);
-  out.partner = compare ? packet.units(packet.partner(block)) : no_returns.data();
+  out.partner = compare ? packet.units(packet.partner(block)) : nullptr;
   out.geometry = &banks_[bank];
   out.trig = trig_table_;
   out.base = static_cast<float>(azimuth.base);
@@ -559,44 +561,43 @@ void FrameAssembler::decode_units(const BlockContext& block, BlockPoints& out) n
   const float min_range_m = block.min_range_m;
   const float max_range_m = block.max_range_m;
   azimuth_indices(block, out.azimuth);
-  PerUnit<std::int32_t> raw;
-  PerUnit<std::int32_t> other_raw;
-  PerUnit<std::int32_t> reflectivity;
+  // Each unit's 3 bytes (distance, reflectivity) read as one little-endian 4-byte word; the
+  // last unit's word ends on the next block's first byte or the timestamp, inside the packet.
+  PerUnit<std::uint32_t> word;
   PerUnit<CosSin> trig;
   for (unsigned u = 0; u < units_per_block; ++u) {
-    const std::uint8_t* bytes = block.units + u * 3;
-    const std::uint8_t* other = block.partner + u * 3;
-    raw[u] = bytes[0] | (bytes[1] << 8);
-    other_raw[u] = other[0] | (other[1] << 8);
-    reflectivity[u] = bytes[2];
+    std::memcpy(&word[u], block.units + u * 3, sizeof(std::uint32_t));
     trig[u] = block.trig[out.azimuth[u]];
   }
+  PerUnit<std::int32_t> raw;
   PerUnit<float> distance;
-  PerUnit<float> cos_a;
-  PerUnit<float> sin_a;
+  PerUnit<float> intensity;
   for (unsigned u = 0; u < units_per_block; ++u) {
+    raw[u] = static_cast<std::int32_t>(word[u] & 0xFFFF);
     distance[u] = static_cast<float>(raw[u]) * unit_m + g.dist_correction[u];
-    out.keep[u] = (raw[u] != 0) & (raw[u] != other_raw[u]) & (distance[u] > min_range_m) & (distance[u] < max_range_m);
-    out.intensity[u] = static_cast<float>(reflectivity[u]);
-    cos_a[u] = trig[u].cos;
-    sin_a[u] = trig[u].sin;
+    out.keep[u] = (raw[u] != 0) & (distance[u] > min_range_m) & (distance[u] < max_range_m);
+    intensity[u] = static_cast<float>((word[u] >> 16) & 0xFF);
   }
-  if constexpr (Full) {
-    full_model_points(g, distance, cos_a, sin_a, out);
-  } else {
+  if (block.partner != nullptr) {  // not the repeat of its pair's other return
     for (unsigned u = 0; u < units_per_block; ++u) {
-      const float xy = distance[u] * g.cos_vert[u];
-      out.x[u] = xy * cos_a[u];
-      out.y[u] = -(xy * sin_a[u]);
-      out.z[u] = distance[u] * g.sin_vert[u];
+      std::memcpy(&word[u], block.partner + u * 3, sizeof(std::uint32_t));
     }
+    for (unsigned u = 0; u < units_per_block; ++u) out.keep[u] &= raw[u] != static_cast<std::int32_t>(word[u] & 0xFFFF);
   }
   if constexpr (Intensity) {
     // The HDL-64E's focal intensity model (ros-drivers/velodyne rawdata.cc), in double as there.
     for (unsigned u = 0; u < units_per_block; ++u) {
       const double scaled = 1.0 - static_cast<double>(raw[u]) * (1.0 / 65535.0);
-      const double value = out.intensity[u] + g.focal_slope[u] * std::abs(g.focal_term[u] - 256.0 * scaled * scaled);
-      out.intensity[u] = static_cast<float>(std::clamp(value, g.min_intensity[u], g.max_intensity[u]));
+      const double value = intensity[u] + g.focal_slope[u] * std::abs(g.focal_term[u] - 256.0 * scaled * scaled);
+      intensity[u] = static_cast<float>(std::clamp(value, g.min_intensity[u], g.max_intensity[u]));
+    }
+  }
+  if constexpr (Full) {
+    full_model_points(g, distance, intensity, trig, out);
+  } else {
+    for (unsigned u = 0; u < units_per_block; ++u) {
+      const float xy = distance[u] * g.cos_vert[u];
+      out.xyzi[u] = {xy * trig[u].cos, -(xy * trig[u].sin), distance[u] * g.sin_vert[u], intensity[u]};
     }
   }
 }
@@ -604,54 +605,49 @@ void FrameAssembler::decode_units(const BlockContext& block, BlockPoints& out) n
 // The HDL-64E model (ros-drivers/velodyne rawdata.cc): optical-centre offsets and the
 // two-point distance correction, in the sensor's frame (x right, y forward), then ROS.
 void FrameAssembler::full_model_points(const BankGeometry& g, const PerUnit<float>& distance,
-                                       const PerUnit<float>& cos_a, const PerUnit<float>& sin_a,
+                                       const PerUnit<float>& intensity, const PerUnit<CosSin>& trig,
                                        BlockPoints& out) noexcept {
   for (unsigned u = 0; u < units_per_block; ++u) {
     const float d = distance[u];
+    const float cos_a = trig[u].cos;
+    const float sin_a = trig[u].sin;
     const float vo = g.vert_offset[u];
     const float ho = g.horiz_offset[u];
     const float cos_vert = g.cos_vert[u];
     const float sin_vert = g.sin_vert[u];
     float xy = d * cos_vert - vo * sin_vert;
-    const float xx = std::abs(xy * sin_a[u] - ho * cos_a[u]);
-    const float yy = std::abs(xy * cos_a[u] + ho * sin_a[u]);
+    const float xx = std::abs(xy * sin_a - ho * cos_a);
+    const float yy = std::abs(xy * cos_a + ho * sin_a);
     // Linear between the two calibration distances (2.4 m / 1.93 m and 25.04 m); a product with
     // the constant reciprocal instead of a division per point.
     const float dc = g.two_point_dc[u];
     const float corr_x = (dc - g.two_point_dx[u]) * (xx - 2.4f) * (1.0f / (25.04f - 2.4f)) + g.two_point_dx[u] - dc;
     const float corr_y = (dc - g.two_point_dy[u]) * (yy - 1.93f) * (1.0f / (25.04f - 1.93f)) + g.two_point_dy[u] - dc;
     xy = (d + corr_x) * cos_vert - vo * sin_vert;
-    const float vx = xy * sin_a[u] - ho * cos_a[u];
+    const float vx = xy * sin_a - ho * cos_a;
     xy = (d + corr_y) * cos_vert - vo * sin_vert;
-    const float vy = xy * cos_a[u] + ho * sin_a[u];
-    out.x[u] = vy;
-    out.y[u] = -vx;
-    out.z[u] = (d + corr_y) * sin_vert + vo * cos_vert;
+    const float vy = xy * cos_a + ho * sin_a;
+    out.xyzi[u] = {vy, -vx, (d + corr_y) * sin_vert + vo * cos_vert, intensity[u]};
   }
 }
 
 // Every point of the block goes to the output; a slot is written for every unit and kept only
-// for a point, so the loop has no branch that depends on the data.
+// for a point, so the loop has no branch that depends on the data. A point is two copies: its
+// x, y, z, intensity (16 bytes) and its last 8 bytes, the bank's time, ring word plus this
+// block's time base and return index (no carry: fits_in_place keeps the time below 2^32).
 template <bool Full, bool Intensity>
 void FrameAssembler::decode_in_place(const BlockContext& block) noexcept {
   BlockPoints points;
   decode_units<Full, Intensity>(block, points);
-  const BankGeometry& g = *block.geometry;
-  // Bytes 16–23 of each point (time offset, ring, return index, reserved) as one little-endian
-  // word, computed with vector instructions; the store loop then copies 16 + 8 bytes a point.
-  PerUnit<std::uint64_t> tail;
-  const auto time_base = static_cast<std::uint32_t>(block.time_base);  // fits_in_place: no wrap
-  const std::uint64_t return_index = std::uint64_t{block.return_index} << 48;
-  for (unsigned u = 0; u < units_per_block; ++u) {
-    tail[u] = std::uint64_t{time_base + g.time_ns[u]} | (std::uint64_t{g.ring[u]} << 32) | return_index;
-  }
+  const PerUnit<std::uint64_t>& tail = block.geometry->tail;
+  const std::uint64_t block_tail = static_cast<std::uint64_t>(block.time_base) | (std::uint64_t{block.return_index} << 48);
   auto* out = reinterpret_cast<unsigned char*>(output_.data() + output_count_);
   std::size_t kept = 0;
   for (unsigned u = 0; u < units_per_block; ++u) {
-    const float xyzi[4] = {points.x[u], points.y[u], points.z[u], points.intensity[u]};
     unsigned char* point = out + kept * sizeof(LidarPoint);
-    std::memcpy(point, xyzi, sizeof xyzi);
-    std::memcpy(point + offsetof(LidarPoint, time_offset_ns), &tail[u], sizeof(std::uint64_t));
+    const std::uint64_t last_bytes = tail[u] + block_tail;
+    std::memcpy(point, &points.xyzi[u], sizeof(Xyzi));
+    std::memcpy(point + offsetof(LidarPoint, time_offset_ns), &last_bytes, sizeof last_bytes);
     kept += points.keep[u];
   }
   output_count_ += kept;
@@ -679,7 +675,8 @@ void FrameAssembler::decode_point_by_point(const BlockContext& block, std::int64
       if (offset < -full_turn / 2) offset += full_turn;
       position = block_position + offset;
     }
-    const LidarPoint p{points.x[u], points.y[u], points.z[u], points.intensity[u], 0, g.ring[u], block.return_index, 0};
+    const Xyzi& v = points.xyzi[u];
+    const LidarPoint p{v.x, v.y, v.z, v.intensity, 0, g.ring[u], block.return_index, 0};
     const std::size_t before = output_count_;
     emit(p, position, block.ns + g.time_ns[u], host_ns);
     if (by_packet && output_attached_ && output_count_ == before + 1 &&

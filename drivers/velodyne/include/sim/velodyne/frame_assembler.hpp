@@ -178,6 +178,7 @@ class FrameAssembler {
     PerUnit<float> dist_correction{};
     PerUnit<std::uint32_t> time_ns{};   // after the block's sequence start (VLP-16: its second one too)
     PerUnit<std::uint16_t> ring{};
+    PerUnit<std::uint64_t> tail{};      // a point's bytes 16–23 for a time base of 0: time_ns, ring
     PerUnit<float> vert_offset{};       // HDL-64E model: optical-centre offsets, two-point correction
     PerUnit<float> horiz_offset{};
     PerUnit<float> two_point_dc{};
@@ -188,21 +189,25 @@ class FrameAssembler {
     PerUnit<double> min_intensity{};
     PerUnit<double> max_intensity{};
   };
-  // A block's 32 decoded units before they are stored, one array per field, so computing them
-  // (vector instructions) and storing the kept ones (one 24-byte point each) are separate loops.
+  // A point's first 16 bytes, as LidarPoint has them.
+  struct Xyzi {
+    float x;
+    float y;
+    float z;
+    float intensity;
+  };
+  // A block's 32 decoded units before they are stored, so computing them (vector instructions)
+  // and storing the kept ones (two copies a point) are separate loops.
   struct BlockPoints {
     PerUnit<std::int32_t> azimuth;      // sin/cos table index, 0.01°
-    PerUnit<float> x;
-    PerUnit<float> y;
-    PerUnit<float> z;
-    PerUnit<float> intensity;
+    PerUnit<Xyzi> xyzi;
     PerUnit<std::uint32_t> keep;        // 1: a return within the range limits, not a repeat
   };
   // One block as the per-point decoding needs it, with the limits copied so the point loop
   // reads no member the output writes could alias.
   struct BlockContext {
     const std::uint8_t* units = nullptr;    // 32 × (distance, reflectivity)
-    const std::uint8_t* partner = nullptr;  // the pair's other return to compare, or all zeros
+    const std::uint8_t* partner = nullptr;  // the pair's other return to compare, or none
     const BankGeometry* geometry = nullptr; // the block's bank
     const CosSin* trig = nullptr;
     float base = 0;                         // azimuth the points start from and step, 0.01°
@@ -235,8 +240,8 @@ class FrameAssembler {
   static void azimuth_indices(const BlockContext& block, PerUnit<std::int32_t>& out) noexcept;
   template <bool Full, bool Intensity>
   static void decode_units(const BlockContext& block, BlockPoints& out) noexcept;
-  static void full_model_points(const BankGeometry& g, const PerUnit<float>& distance, const PerUnit<float>& cos_a,
-                                const PerUnit<float>& sin_a, BlockPoints& out) noexcept;
+  static void full_model_points(const BankGeometry& g, const PerUnit<float>& distance, const PerUnit<float>& intensity,
+                                const PerUnit<CosSin>& trig, BlockPoints& out) noexcept;
   void emit(const LidarPoint& point, std::int64_t position, std::int64_t point_ns,
             std::int64_t host_ns) noexcept;
   void start(FrameState& frame, std::int64_t point_ns, std::int64_t host_ns, bool whole) noexcept;
