@@ -67,97 +67,142 @@ struct FrameEnds {
   }
 };
 
+// The part of the capture replayed (--start, --duration), in ns since its first datagram.
+struct Window {
+  std::int64_t start_ns;
+  std::int64_t end_ns;
+
+  explicit Window(const ReplayArgs& r)
+      : start_ns(static_cast<std::int64_t>(r.start_s * 1e9)),
+        end_ns(r.duration_s > 0 ? start_ns + static_cast<std::int64_t>(r.duration_s * 1e9) : INT64_MAX) {}
+};
+
+// What one pass through the capture saw.
+struct Pass {
+  NextStatus next = NextStatus::end;       // why it stopped reading (datagram: it left early)
+  std::optional<std::int64_t> first_ts;    // the capture's first datagram
+  std::int64_t last_seen_ts = 0;           // the last one read
+  std::int64_t window_first_ts = 0;        // the first and last one replayed
+  std::int64_t last_ts = 0;
+  std::uint64_t in_window = 0;             // datagrams in the window
+};
+
+// Every pass publishes exactly the frames of the first, and nothing else. A later pass starts
+// from a fresh decoder at the window's start, as the first did (the datagrams before the first
+// boundary only lead into the first frame: a partial revolution is never published), and
+// stops at the datagram that completed the first pass's last frame (the frame cut short by
+// the end of the capture is left out). Splicing the capture's end onto its start instead would
+// publish revolutions that never existed: the points of one pass's last packets in the next
+// pass's first revolution.
+class Replayer {
+ public:
+  Replayer(const ReplayArgs& r, ReplayTarget& target, const apps::StopSignal& stop, const std::string& tool)
+      : r_(r),
+        target_(target),
+        stop_(stop),
+        window_(r),
+        pacer_(r.max_rate ? 0.0 : r.rate),
+        status_(apps::StatusLine::for_stderr(tool, r.quiet)) {}
+
+  ReplayResult run() {
+    for (;;) {
+      ++result_.passes;
+      auto reader = CaptureReader::open(r_.file, r_.capture_options());
+      if (!reader) {
+        result_.read_error = reader.error().message;
+        break;
+      }
+      const bool later_pass = result_.passes > 1 && ends_.frames > 0;
+      const std::uint64_t packets_before = target_.decoded_packets();
+      const Pass pass = play_pass(*reader, later_pass);
+      result_.datagrams += reader->stats().datagrams;
+      result_.skipped += reader->stats().skipped();
+      if (pass.next == NextStatus::error) {
+        result_.read_error = reader->error().message;
+        break;
+      }
+      if (result_.passes == 1 && pass.in_window == 0 && pass.first_ts &&
+          (window_.start_ns > 0 || r_.duration_s > 0)) {
+        result_.empty_window = true;
+        result_.capture_span_s = static_cast<double>(pass.last_seen_ts - *pass.first_ts) / 1e9;
+        break;
+      }
+      const bool decoded_any = target_.decoded_packets() > packets_before;
+      if (!r_.loop || stop_.requested() || !decoded_any || !pass.first_ts) break;
+      const std::int64_t shift = next_pass_shift(pass, later_pass);
+      target_.restart();
+      pacer_.shift(shift);
+      target_.shift_stamps(shift);
+    }
+    target_.finish();
+    status_.finish(target_.status());
+    return result_;
+  }
+
+ private:
+  // The window's datagrams, paced, into the target; the first pass learns where frames end, a
+  // later one stops where the first pass's last frame ended.
+  Pass play_pass(CaptureReader& reader, bool later_pass) {
+    Pass pass;
+    Datagram datagram;
+    while ((pass.next = reader.next(datagram)) == NextStatus::datagram) {
+      if (!pass.first_ts) pass.first_ts = datagram.timestamp_ns;
+      pass.last_seen_ts = datagram.timestamp_ns;
+      const std::int64_t since_first = datagram.timestamp_ns - *pass.first_ts;
+      if (since_first < window_.start_ns) continue;
+      if (since_first > window_.end_ns) break;
+      const std::uint64_t index = pass.in_window++;
+      if (later_pass && index > ends_.last_index) break;
+      if (index == 0) pass.window_first_ts = datagram.timestamp_ns;
+      pass.last_ts = datagram.timestamp_ns;
+      if (!pacer_.wait(datagram.timestamp_ns, stop_)) break;
+      const bool completed = target_.push(datagram.payload, datagram.timestamp_ns);
+      if (completed && result_.passes == 1) ends_.add(index, datagram.timestamp_ns);
+      show_progress(reader, since_first);
+    }
+    return pass;
+  }
+
+  void show_progress(const CaptureReader& reader, std::int64_t since_first) {
+    const double fraction = r_.duration_s > 0 ? static_cast<double>(since_first - window_.start_ns) /
+                                                    static_cast<double>(window_.end_ns - window_.start_ns)
+                                              : reader.progress();
+    status_.update(apps::fields({{"pass", std::to_string(result_.passes)},
+                                 {"done", apps::number(std::min(fraction, 1.0) * 100, 0) + "%"}}) +
+                   "  " + target_.status());
+  }
+
+  // How far the next pass is moved on, on the schedule and in the stamps.
+  std::int64_t next_pass_shift(const Pass& pass, bool later_pass) const {
+    if (ends_.frames > 1) {
+      // A pass of n frames lasts n frame periods: the next pass's first frame comes one period
+      // after this pass's last, so a 10 Hz sensor replays at 10 Hz. The datagrams that only lead
+      // into that frame fall due about when this pass ended and go out at once.
+      return ends_.period_ns() * static_cast<std::int64_t>(ends_.frames);
+    }
+    // One frame or none: the next pass follows this one as recorded, one datagram interval
+    // after its last.
+    const std::int64_t span = pass.last_ts - pass.window_first_ts;
+    const std::uint64_t replayed = later_pass ? ends_.last_index + 1 : pass.in_window;
+    const std::int64_t gap = replayed > 1 ? span / static_cast<std::int64_t>(replayed - 1) : 0;
+    return std::max<std::int64_t>(span + gap, 0);
+  }
+
+  const ReplayArgs& r_;
+  ReplayTarget& target_;
+  const apps::StopSignal& stop_;
+  const Window window_;
+  apps::Pacer pacer_;
+  apps::StatusLine status_;
+  FrameEnds ends_;
+  ReplayResult result_;
+};
+
 }  // namespace
 
 ReplayResult replay(const ReplayArgs& r, ReplayTarget& target, const apps::StopSignal& stop,
                     const std::string& tool) {
-  ReplayResult result;
-  apps::Pacer pacer(r.max_rate ? 0.0 : r.rate);
-  auto status = apps::StatusLine::for_stderr(tool, r.quiet);
-  const auto start_ns = static_cast<std::int64_t>(r.start_s * 1e9);
-  const auto end_ns = r.duration_s > 0 ? start_ns + static_cast<std::int64_t>(r.duration_s * 1e9)
-                                       : INT64_MAX;
-  // Every pass publishes exactly the frames of the first, and nothing else. A later pass starts
-  // from a fresh decoder at the window's start, as the first did (the datagrams before the first
-  // boundary only lead into the first frame: a partial revolution is never published), and
-  // stops at the datagram that completed the first pass's last frame (the frame cut short by
-  // the end of the capture is left out). Splicing the capture's end onto its start instead would
-  // publish revolutions that never existed: the points of one pass's last packets in the next
-  // pass's first revolution.
-  FrameEnds ends;
-  for (;;) {
-    ++result.passes;
-    auto reader = CaptureReader::open(r.file, r.capture_options());
-    if (!reader) {
-      result.read_error = reader.error().message;
-      break;
-    }
-    const bool later_pass = result.passes > 1 && ends.frames > 0;
-    const std::uint64_t packets_before = target.decoded_packets();
-    std::optional<std::int64_t> first_ts;
-    std::int64_t window_first_ts = 0;
-    std::int64_t last_ts = 0;
-    std::int64_t last_seen_ts = 0;
-    std::uint64_t in_window = 0;
-    Datagram datagram;
-    NextStatus next;
-    while ((next = reader->next(datagram)) == NextStatus::datagram) {
-      if (!first_ts) first_ts = datagram.timestamp_ns;
-      last_seen_ts = datagram.timestamp_ns;
-      const std::int64_t since_first = datagram.timestamp_ns - *first_ts;
-      if (since_first < start_ns) continue;
-      if (since_first > end_ns) break;
-      const std::uint64_t index = in_window++;
-      if (later_pass && index > ends.last_index) break;
-      if (index == 0) window_first_ts = datagram.timestamp_ns;
-      last_ts = datagram.timestamp_ns;
-      if (!pacer.wait(datagram.timestamp_ns, stop)) break;
-      const bool completed = target.push(datagram.payload, datagram.timestamp_ns);
-      if (completed && result.passes == 1) ends.add(index, datagram.timestamp_ns);
-      const double fraction =
-          r.duration_s > 0 ? static_cast<double>(since_first - start_ns) /
-                                 static_cast<double>(end_ns - start_ns)
-                           : reader->progress();
-      status.update(apps::fields({{"pass", std::to_string(result.passes)},
-                                  {"done", apps::number(std::min(fraction, 1.0) * 100, 0) + "%"}}) +
-                    "  " + target.status());
-    }
-    result.datagrams += reader->stats().datagrams;
-    result.skipped += reader->stats().skipped();
-    if (next == NextStatus::error) {
-      result.read_error = reader->error().message;
-      break;
-    }
-    if (result.passes == 1 && in_window == 0 && first_ts && (start_ns > 0 || r.duration_s > 0)) {
-      result.empty_window = true;
-      result.capture_span_s = static_cast<double>(last_seen_ts - *first_ts) / 1e9;
-      break;
-    }
-    const bool decoded_any = target.decoded_packets() > packets_before;
-    if (!r.loop || stop.requested() || !decoded_any || !first_ts) break;
-    // How far the next pass is moved on, on the schedule and in the stamps.
-    std::int64_t shift = 0;
-    if (ends.frames > 1) {
-      // A pass of n frames lasts n frame periods: the next pass's first frame comes one period
-      // after this pass's last, so a 10 Hz sensor replays at 10 Hz. The datagrams that only lead
-      // into that frame fall due about when this pass ended and go out at once.
-      shift = ends.period_ns() * static_cast<std::int64_t>(ends.frames);
-    } else {
-      // One frame or none: the next pass follows this one as recorded, one datagram interval
-      // after its last.
-      const std::int64_t span = last_ts - window_first_ts;
-      const std::uint64_t replayed = later_pass ? ends.last_index + 1 : in_window;
-      const std::int64_t gap =
-          replayed > 1 ? span / static_cast<std::int64_t>(replayed - 1) : 0;
-      shift = std::max<std::int64_t>(span + gap, 0);
-    }
-    target.restart();
-    pacer.shift(shift);
-    target.shift_stamps(shift);
-  }
-  target.finish();
-  status.finish(target.status());
-  return result;
+  return Replayer(r, target, stop, tool).run();
 }
 
 }  // namespace sim::pcap
