@@ -210,20 +210,36 @@ void FrameAssembler::decode(const LidarPacket& packet) noexcept {
 
 // The hot path. A packet is decoded beam by beam over its columns: an organised frame is
 // row-major, so one beam's pixels in neighbouring columns are neighbouring points, and writing
-// them together fills whole cache lines at once (rows lie W × 24 bytes apart, a multiple of 4 KiB
-// that maps every row to the same cache set). Each beam goes through three short loops over the
-// packet's columns: gather the pixels (load_beam), compute the points in small arrays
-// (locate_beam: branch-free arithmetic the compiler vectorises) and write them out as whole
-// 24-byte points (store_organized, store_dense). Everything that does not change within a packet
-// (which columns count, their times and geometry, the range limits, the intensity channel, the
-// room in the output span) is decided once per packet or per beam, never per point.
+// them together fills whole cache lines at once. Four columns at a time go through registers
+// only: gather their pixels, locate the points with four-lane vector arithmetic (GCC and Clang
+// vector extensions: SSE on x86-64, NEON on ARM, one source), and write each point as one
+// 16-byte (x, y, z, intensity) and one 8-byte (time, ring, return) store. Everything that does
+// not change within a packet (which columns count, their times and geometry, the range limits,
+// the intensity channel, the room in the output span) is decided once per packet or per beam,
+// never per point.
 
-// The columns of one packet that this frame takes, as arrays over the column (so the per-beam
-// loops over them vectorise).
-struct FrameAssembler::PacketColumns {
-  static constexpr unsigned capacity = max_columns_per_packet;
-  unsigned count = 0;
+namespace {
+
+constexpr unsigned lanes = 4;
+using Floats = float __attribute__((vector_size(4 * lanes)));
+using Ints = std::int32_t __attribute__((vector_size(4 * lanes)));
+
+Floats load_floats(const float* from) noexcept {
+  Floats v;
+  std::memcpy(&v, from, sizeof v);
+  return v;
+}
+
+}  // namespace
+
+// The columns of one packet that this frame takes, as arrays over the column, padded to whole
+// groups of lanes: a padding lane reads the first column's pixels and is never stored.
+struct detail::PacketColumns {
+  static constexpr unsigned capacity = FrameAssembler::max_columns_per_packet;
+  static_assert(capacity % lanes == 0, "padding must stay inside the arrays");
+  unsigned count = 0;  // accepted columns, without the padding
   std::size_t pixel_bytes = 0;
+  std::size_t beam_bytes = 0;  // a column's pixels: beams × pixel_bytes
   const std::uint8_t* first_pixel[capacity];
   std::uint32_t measurement_id[capacity];
   std::uint32_t time_offset[capacity];
@@ -236,21 +252,27 @@ struct FrameAssembler::PacketColumns {
   alignas(16) float ox[capacity];
   alignas(16) float oy[capacity];
   alignas(16) float oz[capacity];
-};
 
-// One beam's pixels across a packet's columns: raw range and intensity, then each return's
-// x, y, z and intensity as arrays (what the loop vectoriser handles best).
-struct FrameAssembler::BeamPixels {
-  static constexpr unsigned capacity = max_columns_per_packet;
-  alignas(16) std::int32_t range[capacity];
-  alignas(16) std::int32_t range2[capacity];
-  alignas(16) std::int32_t intensity[capacity];
-  alignas(16) std::int32_t intensity2[capacity];
-  alignas(16) float x[capacity], y[capacity], z[capacity], value[capacity];
-  alignas(16) float x2[capacity], y2[capacity], z2[capacity], value2[capacity];
+  void put(unsigned k, const std::uint8_t* pixels, std::uint32_t m, std::uint32_t time,
+           const ColumnGeometry& g) noexcept {
+    first_pixel[k] = pixels;
+    measurement_id[k] = m;
+    time_offset[k] = time;
+    ex[k] = g.ex;
+    ey[k] = g.ey;
+    ez[k] = g.ez;
+    fx[k] = g.fx;
+    fy[k] = g.fy;
+    fz[k] = g.fz;
+    ox[k] = g.ox;
+    oy[k] = g.oy;
+    oz[k] = g.oz;
+  }
 };
 
 namespace {
+
+using detail::PacketColumns;
 
 // The pixel's channel that goes into LidarPoint::intensity, for the first or second return.
 template <bool Second>
@@ -264,8 +286,220 @@ std::int32_t channel(const Pixel& p, IntensityField field) noexcept {
   return p.near_ir;
 }
 
-// One whole point.
-inline void store_point(LidarPoint& p, float x, float y, float z, float intensity, std::uint32_t time_offset,
+// One beam's raw ranges (mm) and intensities in four neighbouring columns, both returns.
+struct FourPixels {
+  Ints range, intensity, range2, intensity2;
+};
+
+template <Profile P, bool Dual, IntensityField F>
+[[gnu::always_inline]] inline FourPixels gather_four(const PacketColumns& columns, unsigned k, std::size_t offset) noexcept {
+  FourPixels out{};
+  for (unsigned j = 0; j < lanes; ++j) {
+    const Pixel p = decode_pixel_as<P>(columns.first_pixel[k + j] + offset);
+    out.range[j] = static_cast<std::int32_t>(p.range_mm);
+    out.intensity[j] = channel<false>(p, F);
+    if constexpr (Dual) {
+      out.range2[j] = static_cast<std::int32_t>(p.range2_mm);
+      out.intensity2[j] = channel<true>(p, F);
+    }
+  }
+  return out;
+}
+
+// The direction d = a·E + b·F + g of one beam in four neighbouring columns, metres per
+// millimetre of range (see build_geometry()); both returns share it.
+struct FourDirections {
+  Floats x, y, z;
+};
+
+[[gnu::always_inline]] inline FourDirections directions(const PacketColumns& c, unsigned k, const detail::BeamGeometry& g) noexcept {
+  return {g.a * load_floats(c.ex + k) + g.b * load_floats(c.fx + k) + g.gx,
+          g.a * load_floats(c.ey + k) + g.b * load_floats(c.fy + k) + g.gy,
+          g.a * load_floats(c.ez + k) + g.b * load_floats(c.fz + k) + g.gz};
+}
+
+// The range limits and the beam origin offset n, as the arithmetic needs them.
+struct RangeTerms {
+  std::int32_t lo, hi;
+  float n;
+};
+
+// One return of one beam in four neighbouring columns, located: (r − n)·d + O, or the origin
+// (+0.0) where the range is outside [lo, hi] (0, no return, always is). No branch.
+struct FourPoints {
+  Floats x, y, z, value;
+  Ints keep;  // all ones for a point, else 0
+};
+
+[[gnu::always_inline]] inline FourPoints locate(const FourDirections& d, const PacketColumns& c, unsigned k, Ints range, Ints intensity,
+                  const RangeTerms& t) noexcept {
+  const Ints keep = (range >= t.lo) & (range <= t.hi);
+  const Floats r = __builtin_convertvector(range, Floats) - t.n;
+  auto masked = [&keep](Floats v) { return std::bit_cast<Floats>(std::bit_cast<Ints>(v) & keep); };
+  return {masked(r * d.x + load_floats(c.ox + k)), masked(r * d.y + load_floats(c.oy + k)),
+          masked(r * d.z + load_floats(c.oz + k)), __builtin_convertvector(intensity, Floats), keep};
+}
+
+// A point's last 8 bytes (time, ring, return) as one integer, so that each point is two stores:
+// the bytes of the time or-ed with those of the ring and return, which are made once per beam.
+struct PointTail {
+  std::uint32_t time_offset_ns;
+  std::uint16_t ring;
+  std::uint8_t return_index;
+  std::uint8_t reserved;
+};
+static_assert(sizeof(PointTail) == 8 && offsetof(LidarPoint, time_offset_ns) == 16 && sizeof(LidarPoint) == 24,
+              "a point is 16 bytes of floats and this tail");
+
+[[gnu::always_inline]] inline std::uint64_t tail_bits(const PointTail& tail) noexcept {
+  std::uint64_t bits;
+  std::memcpy(&bits, &tail, sizeof bits);
+  return bits;
+}
+
+// The four points of one return as one (x, y, z, intensity) vector each: a 4 × 4 transpose in
+// eight shuffles.
+[[gnu::always_inline]] inline std::array<Floats, lanes> point_vectors(const FourPoints& p) noexcept {
+#if defined(__has_builtin)
+#if __has_builtin(__builtin_shufflevector)
+#define SIM_OUSTER_SHUFFLE 1
+#endif
+#endif
+#ifdef SIM_OUSTER_SHUFFLE
+  const Floats xy_low = __builtin_shufflevector(p.x, p.y, 0, 4, 1, 5);  // x0 y0 x1 y1
+  const Floats zi_low = __builtin_shufflevector(p.z, p.value, 0, 4, 1, 5);
+  const Floats xy_high = __builtin_shufflevector(p.x, p.y, 2, 6, 3, 7);  // x2 y2 x3 y3
+  const Floats zi_high = __builtin_shufflevector(p.z, p.value, 2, 6, 3, 7);
+  return {__builtin_shufflevector(xy_low, zi_low, 0, 1, 4, 5), __builtin_shufflevector(xy_low, zi_low, 2, 3, 6, 7),
+          __builtin_shufflevector(xy_high, zi_high, 0, 1, 4, 5), __builtin_shufflevector(xy_high, zi_high, 2, 3, 6, 7)};
+#else  // GCC before 12: the compiler finds its own shuffles
+  std::array<Floats, lanes> out;
+  for (unsigned j = 0; j < lanes; ++j) out[j] = Floats{p.x[j], p.y[j], p.z[j], p.value[j]};
+  return out;
+#endif
+}
+
+[[gnu::always_inline]] inline void store_point(LidarPoint& to, Floats xyzi, std::uint64_t tail) noexcept {
+  std::memcpy(static_cast<void*>(&to), &xyzi, sizeof xyzi);
+  std::memcpy(reinterpret_cast<unsigned char*>(&to) + sizeof xyzi, &tail, sizeof tail);
+}
+
+// Where one beam's points go: copies of the assembler's state in locals, which the stores into
+// the output cannot alias (so nothing is reloaded after each point).
+struct BeamOutput {
+  LidarPoint* points;
+  std::size_t limit;   // points the span holds
+  std::size_t row;     // organised: the beam's first point in the first return's image
+  std::size_t image;   // organised: points in one return's image (H × W)
+  unsigned shift;      // organised: destaggering, column m goes to (m + shift) mod width
+  unsigned width;
+  std::uint64_t ring_bits[2];  // tail_bits of the ring and return 0, 1
+  std::size_t next;    // dense: the next free place
+  std::uint64_t dropped = 0;
+};
+
+// Organised: pixel (u, m) goes to row u, destaggered column (m + shift) mod W; the second
+// return's image follows the first's. Checked: the span may be missing or short; points beyond
+// it are counted as dropped.
+template <bool Dual, bool Checked>
+[[gnu::always_inline]] inline void store_organized(BeamOutput& o, const PacketColumns& c, unsigned k, unsigned n,
+                                                   const FourPoints& first, const FourPoints& second) noexcept {
+  const std::array<Floats, lanes> a = point_vectors(first);
+  std::array<Floats, lanes> b{};
+  if constexpr (Dual) b = point_vectors(second);
+  auto put = [&o](std::size_t at, Floats xyzi, std::uint64_t tail) {
+    if (!Checked || at < o.limit) {
+      store_point(o.points[at], xyzi, tail);
+    } else {
+      ++o.dropped;
+    }
+  };
+  for (unsigned j = 0; j < n; ++j) {
+    unsigned column = c.measurement_id[k + j] + o.shift;
+    column = column >= o.width ? column - o.width : column;  // no % (a division): both < W
+    const std::size_t at = o.row + column;
+    const std::uint64_t time = tail_bits({c.time_offset[k + j], 0, 0, 0});
+    put(at, a[j], time | o.ring_bits[0]);
+    if constexpr (Dual) put(at + o.image, b[j], time | o.ring_bits[1]);
+  }
+}
+
+// Dense: only returns inside the range limits, in packet order (column by column, first then
+// second return). Every pixel is written at the next free place, which advances only for a
+// point: no branch on the data (a scene is half returns, a branch on them mispredicts half the
+// time).
+template <bool Dual>
+[[gnu::always_inline]] inline void store_dense(BeamOutput& o, const PacketColumns& c, unsigned k, unsigned n,
+                                               const FourPoints& first, const FourPoints& second) noexcept {
+  const std::array<Floats, lanes> a = point_vectors(first);
+  std::array<Floats, lanes> b{};
+  if constexpr (Dual) b = point_vectors(second);
+  auto put = [&o](bool hit, Floats xyzi, std::uint64_t tail) {
+    if (o.next < o.limit) {
+      store_point(o.points[o.next], xyzi, tail);
+    } else {
+      o.dropped += hit;
+    }
+    o.next += hit;
+  };
+  for (unsigned j = 0; j < n; ++j) {
+    const std::uint64_t time = tail_bits({c.time_offset[k + j], 0, 0, 0});
+    put(first.keep[j] != 0, a[j], time | o.ring_bits[0]);
+    if constexpr (Dual) put(second.keep[j] != 0, b[j], time | o.ring_bits[1]);
+  }
+}
+
+// The sensor sends columns in order: the next packet's columns of this row follow these. Ask
+// for their cache lines now; when that packet comes (a whole packet's rows of work later) the
+// stores find them in cache instead of each waiting for its line from memory. A point every 48
+// bytes touches every 64-byte line; the index wraps within the row like the columns do.
+void prefetch_next_columns(const BeamOutput& o, const PacketColumns& c, unsigned returns) noexcept {
+  unsigned next = c.measurement_id[c.count - 1] + 1 + o.shift;  // < 2W
+  next = next >= o.width ? next - o.width : next;
+  for (unsigned j = 0; j < c.count; j += 2) {
+    const unsigned column = next + j;  // no % (a division): next < W and j < W
+    const std::size_t at = o.row + (column >= o.width ? column - o.width : column);
+    for (unsigned r = 0; r < returns; ++r) __builtin_prefetch(&o.points[at + r * o.image], 1);
+  }
+}
+
+enum class Store { organized, organized_checked, dense };
+
+// One beam of a packet: four columns at a time, gathered, located and stored.
+template <Profile P, bool Dual, IntensityField F, Store S>
+void decode_beam(const PacketColumns& columns, const detail::BeamGeometry& g, const RangeTerms& terms,
+                 unsigned beam, BeamOutput& out) noexcept {
+  const std::size_t offset = std::size_t{beam} * columns.pixel_bytes;
+  if constexpr (S == Store::organized) prefetch_next_columns(out, columns, Dual ? 2 : 1);
+  // The pixels a few beams further down each column, so they are in L1 when their beam comes
+  // (16 columns 0.4–2 kB apart are more streams than the hardware prefetcher follows).
+  constexpr unsigned ahead_bytes = 256;
+  if (offset + ahead_bytes < columns.beam_bytes) {
+    for (unsigned k = 0; k < columns.count; ++k) __builtin_prefetch(columns.first_pixel[k] + offset + ahead_bytes);
+  }
+  for (unsigned k = 0; k < columns.count; k += lanes) {
+    const FourPixels px = gather_four<P, Dual, F>(columns, k, offset);
+    const FourDirections d = directions(columns, k, g);
+    const FourPoints first = locate(d, columns, k, px.range, px.intensity, terms);
+    const FourPoints second = Dual ? locate(d, columns, k, px.range2, px.intensity2, terms) : first;
+    auto store = [&](unsigned n) {
+      if constexpr (S == Store::dense) {
+        store_dense<Dual>(out, columns, k, n, first, second);
+      } else {
+        store_organized<Dual, S == Store::organized_checked>(out, columns, k, n, first, second);
+      }
+    };
+    const unsigned n = std::min(lanes, columns.count - k);
+    if (n == lanes) {
+      store(lanes);  // a whole group: the lane loop unrolls
+    } else {
+      store(n);
+    }
+  }
+}
+
+// One whole point from scalars (columns that never came).
+inline void store_scalars(LidarPoint& p, float x, float y, float z, float intensity, std::uint32_t time_offset,
                         std::uint16_t ring, std::uint8_t return_index) noexcept {
   p.x = x;
   p.y = y;
@@ -286,7 +520,7 @@ void FrameAssembler::decode_columns(const LidarPacket& packet) noexcept {
   if (columns.count == 0) return;
   constexpr bool dual = P == Profile::rng19_rfl8_sig16_nir16_dual || P == Profile::fusa_rng15_rfl8_nir8_dual;
   if (dual && returns_ > 1) {
-    decode_beams<P, true>(columns);
+    decode_beams<P, dual>(columns);
   } else {
     decode_beams<P, false>(columns);
   }
@@ -297,6 +531,7 @@ void FrameAssembler::decode_columns(const LidarPacket& packet) noexcept {
 void FrameAssembler::accept_columns(const LidarPacket& packet, PacketColumns& out) noexcept {
   out.count = 0;
   out.pixel_bytes = pixel_bytes(metadata_.format.profile);
+  out.beam_bytes = out.pixel_bytes * beams_;
   for (unsigned c = 0; c < packet.columns() && c < PacketColumns::capacity; ++c) {
     const Column column = packet.column(c);
     if (!column.valid) {
@@ -317,189 +552,47 @@ void FrameAssembler::accept_columns(const LidarPacket& packet, PacketColumns& ou
     }
     const std::int64_t offset =
         std::clamp<std::int64_t>(timestamp - stamp_ns_, 0, std::numeric_limits<std::uint32_t>::max());
-    const unsigned k = out.count++;
-    const ColumnGeometry& g = column_geometry_[m];
-    out.first_pixel[k] = packet.pixel_bytes(c, 0);
-    out.measurement_id[k] = m;
-    out.time_offset[k] = static_cast<std::uint32_t>(offset);
-    out.ex[k] = g.ex;
-    out.ey[k] = g.ey;
-    out.ez[k] = g.ez;
-    out.fx[k] = g.fx;
-    out.fy[k] = g.fy;
-    out.fz[k] = g.fz;
-    out.ox[k] = g.ox;
-    out.oy[k] = g.oy;
-    out.oz[k] = g.oz;
+    out.put(out.count++, packet.pixel_bytes(c, 0), m, static_cast<std::uint32_t>(offset), column_geometry_[m]);
   }
+  for (unsigned k = out.count; k % lanes != 0; ++k) out.put(k, out.first_pixel[0], 0, 0, {});
 }
 
+// One instance of the beam loop per intensity channel and per kind of store, so no pixel asks
+// which one it wants.
 template <Profile P, bool Dual>
 void FrameAssembler::decode_beams(const PacketColumns& columns) noexcept {
-  BeamPixels px;
-  if (options_.layout == CloudLayout::dense) {
-    for (unsigned u = 0; u < beams_; ++u) {
-      load_beam<P, Dual>(columns, u, px);
-      locate_beam<Dual>(columns, u, px);
-      store_dense<Dual>(columns, u, px);
-    }
-    return;
-  }
-  // A span with room for the whole frame (always, from a SIM loan) needs no check per point.
-  if (attached_ && output_.size() >= max_points()) {
-    for (unsigned u = 0; u < beams_; ++u) {
-      load_beam<P, Dual>(columns, u, px);
-      locate_beam<Dual>(columns, u, px);
-      store_organized<Dual, false>(columns, u, px);
-    }
-  } else {
-    for (unsigned u = 0; u < beams_; ++u) {
-      load_beam<P, Dual>(columns, u, px);
-      locate_beam<Dual>(columns, u, px);
-      store_organized<Dual, true>(columns, u, px);
-    }
-  }
-}
-
-template <Profile P, bool Dual>
-void FrameAssembler::load_beam(const PacketColumns& columns, unsigned beam, BeamPixels& out) const noexcept {
-  const std::size_t offset = std::size_t{beam} * columns.pixel_bytes;
-  const IntensityField field = intensity_;
-  const unsigned count = columns.count;
-  // The pixels a few beams further down each column, so they are in L1 when their beam comes
-  // (16 columns 0.4–2 kB apart are more streams than the hardware prefetcher follows).
-  constexpr unsigned ahead_bytes = 256;
-  if (offset + ahead_bytes < std::size_t{beams_} * columns.pixel_bytes) {
-    for (unsigned k = 0; k < count; ++k) __builtin_prefetch(columns.first_pixel[k] + offset + ahead_bytes);
-  }
-  // One loop per intensity channel, so the choice is not made again for every pixel.
-  auto gather = [&](auto channel_constant) {
-    constexpr IntensityField f = decltype(channel_constant)::value;
-    for (unsigned k = 0; k < count; ++k) {
-      const Pixel p = decode_pixel_as<P>(columns.first_pixel[k] + offset);
-      out.range[k] = static_cast<std::int32_t>(p.range_mm);
-      out.intensity[k] = channel<false>(p, f);
-      if constexpr (Dual) {
-        out.range2[k] = static_cast<std::int32_t>(p.range2_mm);
-        out.intensity2[k] = channel<true>(p, f);
-      }
-    }
-  };
   using F = IntensityField;
-  switch (field) {
-    case F::signal: gather(std::integral_constant<F, F::signal>{}); break;
-    case F::reflectivity: gather(std::integral_constant<F, F::reflectivity>{}); break;
+  switch (intensity_) {
+    case F::signal: decode_beams_as<P, Dual, F::signal>(columns); break;
+    case F::reflectivity: decode_beams_as<P, Dual, F::reflectivity>(columns); break;
     case F::near_ir:
-    case F::automatic: gather(std::integral_constant<F, F::near_ir>{}); break;  // automatic is resolved at construction
+    case F::automatic: decode_beams_as<P, Dual, F::near_ir>(columns); break;  // automatic is resolved at construction
   }
 }
 
-// x, y, z of each return: (r − n)·d + O, or the origin when the range is outside [lo, hi] (0, no
-// return, always is). Branch-free arithmetic on arrays: the compiler vectorises the loops.
-template <bool Dual>
-void FrameAssembler::locate_beam(const PacketColumns& columns, unsigned beam, BeamPixels& px) const noexcept {
-  const BeamGeometry g = beam_geometry_[beam];
-  const std::int32_t lo = min_range_mm_;
-  const std::int32_t hi = max_range_mm_;
-  const float n = beam_origin_mm_;
-  const unsigned count = columns.count;
-  auto place = [&](const std::int32_t* range, const std::int32_t* intensity, float* x, float* y, float* z,
-                   float* value) {
-    for (unsigned k = 0; k < count; ++k) {
-      const float dx = g.a * columns.ex[k] + g.b * columns.fx[k] + g.gx;
-      const float dy = g.a * columns.ey[k] + g.b * columns.fy[k] + g.gy;
-      const float dz = g.a * columns.ez[k] + g.b * columns.fz[k] + g.gz;
-      // All ones for a return inside the limits, else 0 (+0.0 once applied to a float's bits).
-      const std::uint32_t keep = 0u - static_cast<std::uint32_t>((range[k] >= lo) & (range[k] <= hi));
-      const float r = static_cast<float>(range[k]) - n;
-      x[k] = std::bit_cast<float>(std::bit_cast<std::uint32_t>(r * dx + columns.ox[k]) & keep);
-      y[k] = std::bit_cast<float>(std::bit_cast<std::uint32_t>(r * dy + columns.oy[k]) & keep);
-      z[k] = std::bit_cast<float>(std::bit_cast<std::uint32_t>(r * dz + columns.oz[k]) & keep);
-      value[k] = static_cast<float>(intensity[k]);
-    }
-  };
-  place(px.range, px.intensity, px.x, px.y, px.z, px.value);
-  if constexpr (Dual) place(px.range2, px.intensity2, px.x2, px.y2, px.z2, px.value2);
-}
-
-// Organised: pixel (u, m) goes to row u, destaggered column (m + shift_u) mod W; the second
-// return's image follows the first's. Checked: the span may be missing or short; points beyond
-// it are counted as dropped.
-template <bool Dual, bool Checked>
-void FrameAssembler::store_organized(const PacketColumns& columns, unsigned beam, const BeamPixels& px) noexcept {
-  LidarPoint* out = output_.data();
-  const std::size_t limit = attached_ ? output_.size() : 0;
-  const std::size_t row = std::size_t{beam} * columns_;
-  const std::size_t image = image_points_;
-  const unsigned shift = row_shift_[beam];
-  const unsigned w = columns_;
-  const auto ring = static_cast<std::uint16_t>(beam);
-  const unsigned count = columns.count;
-  if constexpr (!Checked) {
-    // The sensor sends columns in order: the next packet's columns of this row follow these.
-    // Ask for their cache lines now; when that packet comes (127 rows of work later) the stores
-    // find them in cache instead of each waiting for its line from memory. A point every 48
-    // bytes touches every 64-byte line; the index wraps within the row like the columns do.
-    unsigned next = columns.measurement_id[count - 1] + 1 + shift;  // < 2W
-    next = next >= w ? next - w : next;
-    for (unsigned j = 0; j < count; j += 2) {
-      const unsigned c = next + j;  // no % (a division): next < W and j < W
-      const std::size_t at = row + (c >= w ? c - w : c);
-      __builtin_prefetch(&out[at], 1);
-      if constexpr (Dual) __builtin_prefetch(&out[at + image], 1);
+template <Profile P, bool Dual, IntensityField F>
+void FrameAssembler::decode_beams_as(const PacketColumns& columns) noexcept {
+  const RangeTerms terms{min_range_mm_, max_range_mm_, beam_origin_mm_};
+  BeamOutput out{output_.data(), attached_ ? output_.size() : 0, 0, image_points_, 0, columns_, {}, dense_count_};
+  // A span with room for the whole frame (always, from a SIM loan) needs no check per point.
+  const Store store = options_.layout == CloudLayout::dense   ? Store::dense
+                      : out.limit >= max_points()             ? Store::organized
+                                                              : Store::organized_checked;
+  for (unsigned u = 0; u < beams_; ++u) {
+    out.row = std::size_t{u} * columns_;
+    out.shift = row_shift_[u];
+    const auto ring = static_cast<std::uint16_t>(u);
+    out.ring_bits[0] = tail_bits({0, ring, 0, 0});
+    out.ring_bits[1] = tail_bits({0, ring, 1, 0});
+    const detail::BeamGeometry& g = beam_geometry_[u];
+    switch (store) {
+      case Store::organized: decode_beam<P, Dual, F, Store::organized>(columns, g, terms, u, out); break;
+      case Store::organized_checked: decode_beam<P, Dual, F, Store::organized_checked>(columns, g, terms, u, out); break;
+      case Store::dense: decode_beam<P, Dual, F, Store::dense>(columns, g, terms, u, out); break;
     }
   }
-  std::uint64_t dropped = 0;
-  for (unsigned k = 0; k < count; ++k) {
-    unsigned c = columns.measurement_id[k] + shift;
-    c = c >= w ? c - w : c;
-    const std::size_t at = row + c;
-    if (!Checked || at < limit) {
-      store_point(out[at], px.x[k], px.y[k], px.z[k], px.value[k], columns.time_offset[k], ring, 0);
-    } else {
-      ++dropped;
-    }
-    if constexpr (Dual) {
-      if (!Checked || at + image < limit) {
-        store_point(out[at + image], px.x2[k], px.y2[k], px.z2[k], px.value2[k], columns.time_offset[k], ring, 1);
-      } else {
-        ++dropped;
-      }
-    }
-  }
-  counters_.dropped_points += dropped;
-}
-
-// Dense: only returns inside the range limits, in packet order (beam by beam, column by column,
-// first then second return).
-template <bool Dual>
-void FrameAssembler::store_dense(const PacketColumns& columns, unsigned beam, const BeamPixels& px) noexcept {
-  LidarPoint* out = output_.data();
-  const std::size_t limit = attached_ ? output_.size() : 0;
-  const std::int32_t lo = min_range_mm_;
-  const std::int32_t hi = max_range_mm_;
-  const auto ring = static_cast<std::uint16_t>(beam);
-  const unsigned count = columns.count;
-  std::size_t next = dense_count_;
-  std::uint64_t dropped = 0;
-  // Every pixel is written at the next free place, which advances only for a return: no
-  // branch on the data (a scene is half returns, a branch on them mispredicts half the time).
-  auto keep = [&](std::int32_t range, float x, float y, float z, float value, std::uint32_t time_offset,
-                  std::uint8_t return_index) {
-    const bool hit = (range >= lo) & (range <= hi);
-    if (next < limit) {
-      store_point(out[next], x, y, z, value, time_offset, ring, return_index);
-    } else {
-      dropped += hit;
-    }
-    next += hit;
-  };
-  for (unsigned k = 0; k < count; ++k) {
-    keep(px.range[k], px.x[k], px.y[k], px.z[k], px.value[k], columns.time_offset[k], 0);
-    if constexpr (Dual) keep(px.range2[k], px.x2[k], px.y2[k], px.z2[k], px.value2[k], columns.time_offset[k], 1);
-  }
-  dense_count_ = next;
-  counters_.dropped_points += dropped;
+  dense_count_ = out.next;
+  counters_.dropped_points += out.dropped;
 }
 
 // Organised frames: columns that never came (lost packets, invalid status) hold no return.
@@ -511,7 +604,7 @@ void FrameAssembler::fill_missing_columns() noexcept {
       for (unsigned r = 0; r < returns_; ++r) {
         const std::size_t at = organized_index(u, m) + r * image_points_;
         if (at < limit) {
-          store_point(output_[at], 0, 0, 0, 0, 0, static_cast<std::uint16_t>(u), static_cast<std::uint8_t>(r));
+          store_scalars(output_[at], 0, 0, 0, 0, 0, static_cast<std::uint16_t>(u), static_cast<std::uint8_t>(r));
         } else {
           ++counters_.dropped_points;
         }

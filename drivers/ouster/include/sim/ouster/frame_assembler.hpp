@@ -90,6 +90,28 @@ struct AssemblerCounters {
   std::size_t last_rejected_size = 0;  // payload size of the last wrong_size packet
 };
 
+namespace detail {
+
+// The geometry, precomputed in double and kept in float (see build_geometry()). The direction
+// of pixel (u, m) in the sensor frame, in metres per millimetre of range, is
+//   d = a_u·E_m + b_u·F_m + g_u
+// (angle addition: the beam's azimuth offset and altitude, the column's encoder angle), and the
+// pixel of range r lies at (r − n)·d + O_m. Per beam and per column, not per pixel: a few
+// kilobytes that stay in L1 instead of a 12-byte-a-pixel table read once a frame (3 MB at 128×2048).
+struct BeamGeometry {
+  float a, b;        // cos φ·cos θa, cos φ·sin θa
+  float gx, gy, gz;  // sin φ · R·(0, 0, 1) / 1000
+};
+struct ColumnGeometry {
+  float ex, ey, ez;  // R·(cos θe, sin θe, 0) / 1000
+  float fx, fy, fz;  // R·(−sin θe, cos θe, 0) / 1000
+  float ox, oy, oz;  // (R·(T03·cos θe, T03·sin θe, T23) + t) / 1000: the beams' origin, metres
+};
+
+struct PacketColumns;  // one packet's accepted columns (frame_assembler.cpp)
+
+}  // namespace detail
+
 class FrameAssembler {
  public:
   // Fails (one sentence) for inverted, negative or non-finite range limits, beam tables of the
@@ -116,23 +138,9 @@ class FrameAssembler {
   unsigned returns() const noexcept { return returns_; }
 
  private:
-  // The geometry, precomputed in double and kept in float (see build_geometry()). The direction
-  // of pixel (u, m) in the sensor frame, in metres per millimetre of range, is
-  //   d = a_u·E_m + b_u·F_m + g_u
-  // (angle addition: the beam's azimuth offset and altitude, the column's encoder angle), and the
-  // pixel of range r lies at (r − n)·d + O_m. Per beam and per column, not per pixel: a few
-  // kilobytes that stay in L1 instead of a 12-byte-a-pixel table read once a frame (3 MB at 128×2048).
-  struct BeamGeometry {
-    float a, b;        // cos φ·cos θa, cos φ·sin θa
-    float gx, gy, gz;  // sin φ · R·(0, 0, 1) / 1000
-  };
-  struct ColumnGeometry {
-    float ex, ey, ez;  // R·(cos θe, sin θe, 0) / 1000
-    float fx, fy, fz;  // R·(−sin θe, cos θe, 0) / 1000
-    float ox, oy, oz;  // (R·(T03·cos θe, T03·sin θe, T23) + t) / 1000: the beams' origin, metres
-  };
-  struct PacketColumns;  // one packet's accepted columns (frame_assembler.cpp)
-  struct BeamPixels;     // one beam's pixels across them
+  using BeamGeometry = detail::BeamGeometry;
+  using ColumnGeometry = detail::ColumnGeometry;
+  using PacketColumns = detail::PacketColumns;
 
   FrameAssembler(const Metadata& metadata, AssemblerOptions options);
   void build_geometry();
@@ -140,17 +148,11 @@ class FrameAssembler {
   void decode(const LidarPacket& packet) noexcept;
   template <Profile P>
   void decode_columns(const LidarPacket& packet) noexcept;
-  template <Profile P, bool Dual>
-  void decode_beams(const PacketColumns& columns) noexcept;
   void accept_columns(const LidarPacket& packet, PacketColumns& out) noexcept;
   template <Profile P, bool Dual>
-  void load_beam(const PacketColumns& columns, unsigned beam, BeamPixels& out) const noexcept;
-  template <bool Dual>
-  void locate_beam(const PacketColumns& columns, unsigned beam, BeamPixels& px) const noexcept;
-  template <bool Dual, bool Checked>
-  void store_organized(const PacketColumns& columns, unsigned beam, const BeamPixels& px) noexcept;
-  template <bool Dual>
-  void store_dense(const PacketColumns& columns, unsigned beam, const BeamPixels& px) noexcept;
+  void decode_beams(const PacketColumns& columns) noexcept;
+  template <Profile P, bool Dual, IntensityField F>
+  void decode_beams_as(const PacketColumns& columns) noexcept;
   std::optional<CompletedFrame> close() noexcept;
   void fill_missing_columns() noexcept;
 
