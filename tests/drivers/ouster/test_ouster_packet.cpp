@@ -386,6 +386,70 @@ TEST(OusterFrames, ASpanSmallerThanAFrameGetsItsFirstPointsAndTheRestAreCountedA
   }
 }
 
+// The decoder works on four columns at a time; a packet of two columns (or one with invalid
+// columns) leaves a group part-filled. Every pixel must still land at its own destaggered place
+// with its own values, in both layouts, and nothing else may be written.
+TEST(OusterFrames, PacketsOfTwoColumnsPutEveryPixelAtItsPlaceInBothLayouts) {
+  const unsigned beams = 32, columns = 1024;
+  Metadata m = metadata_for(Layout::rng19_dual, beams, columns, 2);
+  for (unsigned u = 0; u < beams; ++u) m.pixel_shift_by_row[u] = static_cast<int>(u % 3) * 5;  // wraps at the row's end
+  const auto packets = rotation(Layout::rng19_dual, beams, 4, columns, 2);
+  auto expect_point = [&](const sim::LidarPoint& p, unsigned u, unsigned v, unsigned ret) {
+    const EncodedPixel want = pixel_value(Layout::rng19_dual, v, u);
+    const std::uint32_t range = ret == 0 ? want.range_mm : want.range2_mm;
+    EXPECT_NEAR(std::sqrt(p.x * p.x + p.y * p.y + p.z * p.z), range / 1000.0, 2e-3 + range * 1e-6)
+        << "beam " << u << " column " << v << " return " << ret;
+    EXPECT_EQ(p.intensity, ret == 0 ? want.reflectivity : want.reflectivity2);
+    EXPECT_EQ(p.ring, u);
+    EXPECT_EQ(p.return_index, ret);
+    EXPECT_EQ(p.time_offset_ns, v * 97'656u);
+  };
+  for (CloudLayout layout : {CloudLayout::organized, CloudLayout::dense}) {
+    AssemblerOptions options;
+    options.layout = layout;
+    options.intensity = IntensityField::reflectivity;
+    auto assembler = FrameAssembler::create(m, options).value();
+    // One point more than a frame, marked: whatever the decoder does not write keeps the mark.
+    sim::LidarPoint mark{};
+    mark.x = 12345.0f;
+    std::vector<sim::LidarPoint> points(assembler.max_points() + 1, mark);
+    assembler.set_output(points);
+    std::optional<CompletedFrame> frame;
+    for (const auto& payload : packets) {
+      if (auto r = assembler.push(payload, 0); r.frame) frame = r.frame;
+    }
+    ASSERT_TRUE(frame);
+    if (layout == CloudLayout::organized) {
+      ASSERT_EQ(frame->point_count, std::size_t{beams} * columns * 2);
+      EXPECT_EQ(points.back().x, mark.x) << "a point was written beyond the frame";
+      for (unsigned ret = 0; ret < 2; ++ret) {
+        for (unsigned u = 0; u < beams; ++u) {
+          for (unsigned v = 0; v < columns; ++v) {
+            const unsigned destaggered = (v + m.pixel_shift_by_row[u]) % columns;
+            expect_point(points[(ret * beams + u) * columns + destaggered], u, v, ret);
+          }
+        }
+      }
+    } else {
+      // Packet order: packet by packet, beam by beam, column by column, first then second return.
+      std::size_t at = 0;
+      for (unsigned first = 0; first < columns; first += 2) {
+        for (unsigned u = 0; u < beams; ++u) {
+          for (unsigned v = first; v < first + 2; ++v) {
+            const EncodedPixel want = pixel_value(Layout::rng19_dual, v, u);
+            for (unsigned ret = 0; ret < 2; ++ret) {
+              if ((ret == 0 ? want.range_mm : want.range2_mm) == 0) continue;
+              ASSERT_LT(at, frame->point_count);
+              expect_point(points[at++], u, v, ret);
+            }
+          }
+        }
+      }
+      EXPECT_EQ(frame->point_count, at);
+    }
+  }
+}
+
 TEST(OusterFrames, TheFusaHeaderCarriesA32BitFrameId) {
   const Metadata m = metadata_for(Layout::fusa_dual, 32);
   PacketSpec s;
