@@ -549,41 +549,55 @@ void FrameAssembler::azimuth_indices(const BlockContext& block, PerUnit<std::int
   }
 }
 
-// Decodes the block's 32 units into `out` (every field but the time) and flags the points: a
-// return, within the range limits, and not the repeat of its pair's other return. The loads
-// (packet bytes, sin/cos table) are one loop; the arithmetic reads only arrays and is one loop
-// per formula, so the compiler computes four units per vector instruction and every point
-// gets exactly the operations of the scalar formula (same results to the bit).
-template <bool Full, bool Intensity>
-void FrameAssembler::decode_units(const BlockContext& block, BlockPoints& out) noexcept {
+// Reads the block's 32 units and flags the points: a return, within the range limits, and not
+// the repeat of its pair's other return. False when none is (sky, or a dual-return block that
+// repeats its pair): the block then needs no trigonometry at all.
+bool FrameAssembler::flag_points(const BlockContext& block, PerUnit<std::int32_t>& raw, PerUnit<float>& distance,
+                                 PerUnit<float>& intensity, PerUnit<std::uint32_t>& keep) noexcept {
   const BankGeometry& g = *block.geometry;
   const float unit_m = block.unit_m;
   const float min_range_m = block.min_range_m;
   const float max_range_m = block.max_range_m;
-  azimuth_indices(block, out.azimuth);
   // Each unit's 3 bytes (distance, reflectivity) read as one little-endian 4-byte word; the
   // last unit's word ends on the next block's first byte or the timestamp, inside the packet.
+  // (The scalar load loops are unrolled: a load and a store a unit, no loop counter.)
   PerUnit<std::uint32_t> word;
-  PerUnit<CosSin> trig;
+#pragma GCC unroll 32
+  for (unsigned u = 0; u < units_per_block; ++u) std::memcpy(&word[u], block.units + u * 3, sizeof(std::uint32_t));
   for (unsigned u = 0; u < units_per_block; ++u) {
-    std::memcpy(&word[u], block.units + u * 3, sizeof(std::uint32_t));
-    trig[u] = block.trig[out.azimuth[u]];
+    const auto r = static_cast<std::int32_t>(word[u] & 0xFFFF);
+    const float d = static_cast<float>(r) * unit_m + g.dist_correction[u];
+    raw[u] = r;
+    distance[u] = d;
+    keep[u] = (r != 0) & (d > min_range_m) & (d < max_range_m);
+    intensity[u] = static_cast<float>((word[u] >> 16) & 0xFF);
   }
+  if (block.partner != nullptr) {
+#pragma GCC unroll 32
+    for (unsigned u = 0; u < units_per_block; ++u) std::memcpy(&word[u], block.partner + u * 3, sizeof(std::uint32_t));
+    for (unsigned u = 0; u < units_per_block; ++u) keep[u] &= raw[u] != static_cast<std::int32_t>(word[u] & 0xFFFF);
+  }
+  std::uint32_t any = 0;
+  for (unsigned u = 0; u < units_per_block; ++u) any |= keep[u];
+  return any != 0;
+}
+
+// Decodes the block's 32 units into `out` (every field but the time); false when none is a
+// point. The loads (packet bytes, sin/cos table) are loops of their own; the arithmetic reads
+// only arrays and is one loop per formula, so the compiler computes four units per vector
+// instruction and every point gets exactly the operations of the scalar formula (same results
+// to the bit).
+template <bool Full, bool Intensity>
+bool FrameAssembler::decode_units(const BlockContext& block, BlockPoints& out) noexcept {
   PerUnit<std::int32_t> raw;
   PerUnit<float> distance;
   PerUnit<float> intensity;
-  for (unsigned u = 0; u < units_per_block; ++u) {
-    raw[u] = static_cast<std::int32_t>(word[u] & 0xFFFF);
-    distance[u] = static_cast<float>(raw[u]) * unit_m + g.dist_correction[u];
-    out.keep[u] = (raw[u] != 0) & (distance[u] > min_range_m) & (distance[u] < max_range_m);
-    intensity[u] = static_cast<float>((word[u] >> 16) & 0xFF);
-  }
-  if (block.partner != nullptr) {  // not the repeat of its pair's other return
-    for (unsigned u = 0; u < units_per_block; ++u) {
-      std::memcpy(&word[u], block.partner + u * 3, sizeof(std::uint32_t));
-    }
-    for (unsigned u = 0; u < units_per_block; ++u) out.keep[u] &= raw[u] != static_cast<std::int32_t>(word[u] & 0xFFFF);
-  }
+  if (!flag_points(block, raw, distance, intensity, out.keep)) return false;
+  azimuth_indices(block, out.azimuth);
+  PerUnit<CosSin> trig;
+#pragma GCC unroll 32
+  for (unsigned u = 0; u < units_per_block; ++u) trig[u] = block.trig[out.azimuth[u]];
+  const BankGeometry& g = *block.geometry;
   if constexpr (Intensity) {
     // The HDL-64E's focal intensity model (ros-drivers/velodyne rawdata.cc), in double as there.
     for (unsigned u = 0; u < units_per_block; ++u) {
@@ -600,6 +614,7 @@ void FrameAssembler::decode_units(const BlockContext& block, BlockPoints& out) n
       out.xyzi[u] = {xy * trig[u].cos, -(xy * trig[u].sin), distance[u] * g.sin_vert[u], intensity[u]};
     }
   }
+  return true;
 }
 
 // The HDL-64E model (ros-drivers/velodyne rawdata.cc): optical-centre offsets and the
@@ -638,7 +653,7 @@ void FrameAssembler::full_model_points(const BankGeometry& g, const PerUnit<floa
 template <bool Full, bool Intensity>
 void FrameAssembler::decode_in_place(const BlockContext& block) noexcept {
   BlockPoints points;
-  decode_units<Full, Intensity>(block, points);
+  if (!decode_units<Full, Intensity>(block, points)) return;
   const PerUnit<std::uint64_t>& tail = block.geometry->tail;
   const std::uint64_t block_tail = static_cast<std::uint64_t>(block.time_base) | (std::uint64_t{block.return_index} << 48);
   auto* out = reinterpret_cast<unsigned char*>(output_.data() + output_count_);
@@ -659,7 +674,7 @@ void FrameAssembler::decode_point_by_point(const BlockContext& block, std::int64
                                            std::int64_t host_ns) noexcept {
   const bool by_packet = options_.cut_by == CutBy::packet;
   BlockPoints points;
-  decode_units<Full, Intensity>(block, points);
+  if (!decode_units<Full, Intensity>(block, points)) return;
   const BankGeometry& g = *block.geometry;
   for (unsigned u = 0; u < units_per_block; ++u) {
     const std::int32_t azimuth = points.azimuth[u];

@@ -238,8 +238,10 @@ class FrameAssembler {
   template <bool Full, bool Intensity>
   void decode_point_by_point(const BlockContext& block, std::int64_t block_position, std::int64_t host_ns) noexcept;
   static void azimuth_indices(const BlockContext& block, PerUnit<std::int32_t>& out) noexcept;
+  [[gnu::always_inline]] static inline bool flag_points(const BlockContext& block, PerUnit<std::int32_t>& raw, PerUnit<float>& distance,
+                                                        PerUnit<float>& intensity, PerUnit<std::uint32_t>& keep) noexcept;
   template <bool Full, bool Intensity>
-  static void decode_units(const BlockContext& block, BlockPoints& out) noexcept;
+  static bool decode_units(const BlockContext& block, BlockPoints& out) noexcept;
   static void full_model_points(const BankGeometry& g, const PerUnit<float>& distance, const PerUnit<float>& intensity,
                                 const PerUnit<CosSin>& trig, BlockPoints& out) noexcept;
   void emit(const LidarPoint& point, std::int64_t position, std::int64_t point_ns,
