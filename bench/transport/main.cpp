@@ -582,6 +582,80 @@ void set_argument(std::vector<std::string>& args, const std::string& flag, const
   }
 }
 
+// The grid's table on stdout: a header, then a line per row.
+void print_row_header() {
+  std::printf("%-10s %9s %3s %3s %10s %10s %10s %10s %10s %8s %7s %5s\n", "transport", "payload",
+              "R", "run", "min_us", "mean_us", "p99_us", "p999_us", "max_us", "received",
+              "skipped", "lost");
+}
+
+void print_row(const Row& r) {
+  std::printf("%-10s %9zu %3d %3d %10.1f %10.1f %10.1f %10.1f %10.1f %8" PRIu64 " %7" PRIu64
+              " %5" PRIu64 "%s\n",
+              r.transport.c_str(), r.payload, r.readers, r.run, r.lat.min_us, r.lat.mean_us,
+              r.lat.p99_us, r.lat.p999_us, r.lat.max_us, r.received, r.skipped, r.lost,
+              r.status == "ok" ? "" : ("  " + r.status).c_str());
+  std::fflush(stdout);
+}
+
+// --csv: one row per transport x payload x readers x run in the file given, and the further
+// columns of the same row in *_extra.csv next to it. Each row is flushed: a run stopped early
+// keeps the rows so far.
+class CsvFiles {
+ public:
+  CsvFiles() = default;
+  CsvFiles(const CsvFiles&) = delete;
+  CsvFiles& operator=(const CsvFiles&) = delete;
+  ~CsvFiles() {
+    if (csv_ != nullptr) std::fclose(csv_);
+    if (extra_ != nullptr) std::fclose(extra_);
+  }
+
+  // Creates both files with their header lines; false when one cannot be written.
+  bool open(const std::string& path) {
+    csv_ = std::fopen(path.c_str(), "w");
+    std::string extra_path = path;
+    if (extra_path.size() > 4 && extra_path.ends_with(".csv")) extra_path.resize(extra_path.size() - 4);
+    extra_path += "_extra.csv";
+    extra_ = std::fopen(extra_path.c_str(), "w");
+    if (csv_ == nullptr || extra_ == nullptr) return false;
+    std::fprintf(csv_, "transport,payload_bytes,readers,run,min_us,mean_us,p50_us,p95_us,p99_us,"
+                       "p999_us,max_us,std_us,received,skipped,lost,writer_cpu_s,reader_cpu_s\n");
+    std::fprintf(extra_, "transport,payload_bytes,readers,run,published,torn,writer_nvcsw,"
+                         "writer_nivcsw,reader_nvcsw,reader_nivcsw,udp_datagrams,path,status,"
+                         "rate_hz,frames,warmup,cpus,rt_priority,jitter,pause_s,caught_spinning,spin_s\n");
+    return true;
+  }
+
+  // One row in each file (nothing when no files are open); `o`: the run's settings.
+  void write(const Row& r, const Options& o) {
+    if (csv_ == nullptr) return;
+    std::fprintf(csv_, "%s,%zu,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%" PRIu64 ",%" PRIu64
+                       ",%" PRIu64 ",%.6f,%.6f\n",
+                 r.transport.c_str(), r.payload, r.readers, r.run, r.lat.min_us, r.lat.mean_us,
+                 r.lat.p50_us, r.lat.p95_us, r.lat.p99_us, r.lat.p999_us, r.lat.max_us, r.lat.std_us,
+                 r.received, r.skipped, r.lost, r.writer_cpu_s, r.reader_cpu_s);
+    std::string cpus;
+    for (const int c : o.cpus) {
+      if (!cpus.empty()) cpus += ' ';
+      cpus += std::to_string(c);
+    }
+    std::fprintf(extra_, "%s,%zu,%d,%d,%" PRIu64 ",%" PRIu64 ",%ld,%ld,%ld,%ld,%lld,%s,%s,%g,%" PRIu64
+                         ",%" PRIu64 ",%s,%d,%g,%g,%" PRIu64 ",%.6f\n",
+                 r.transport.c_str(), r.payload, r.readers, r.run, r.published, r.torn,
+                 r.writer_nvcsw, r.writer_nivcsw, r.reader_nvcsw, r.reader_nivcsw, r.udp_datagrams,
+                 r.path.empty() ? "-" : r.path.c_str(), r.status.c_str(), o.max_rate ? 0.0 : o.rate,
+                 o.frames, o.warmup, cpus.empty() ? "-" : cpus.c_str(), o.rt_priority, o.jitter, o.pause_s,
+                 r.caught_spinning, r.spin_s);
+    std::fflush(csv_);
+    std::fflush(extra_);
+  }
+
+ private:
+  std::FILE* csv_ = nullptr;
+  std::FILE* extra_ = nullptr;
+};
+
 class Bench {
  public:
   explicit Bench(Options o) : o_(std::move(o)), exe_(self_exe()) {}
@@ -932,59 +1006,29 @@ class Bench {
 
     if (o_.idle_s > 0) return idle_cost(transports);
     if (o_.vehicle_s > 0) return vehicle(transports);
+    return grid(transports);
+  }
 
-    std::FILE* csv = nullptr;
-    std::FILE* extra = nullptr;
-    if (!o_.csv.empty()) {
-      csv = std::fopen(o_.csv.c_str(), "w");
-      std::string extra_path = o_.csv;
-      if (extra_path.size() > 4 && extra_path.ends_with(".csv")) extra_path.resize(extra_path.size() - 4);
-      extra_path += "_extra.csv";
-      extra = std::fopen(extra_path.c_str(), "w");
-      if (csv == nullptr || extra == nullptr) {
-        std::fprintf(stderr, "sim_bench: cannot write %s: check the folder exists and is writable.\n",
-                     o_.csv.c_str());
-        return 1;
-      }
-      std::fprintf(csv, "transport,payload_bytes,readers,run,min_us,mean_us,p50_us,p95_us,p99_us,"
-                        "p999_us,max_us,std_us,received,skipped,lost,writer_cpu_s,reader_cpu_s\n");
-      std::fprintf(extra, "transport,payload_bytes,readers,run,published,torn,writer_nvcsw,"
-                          "writer_nivcsw,reader_nvcsw,reader_nivcsw,udp_datagrams,path,status,"
-                          "rate_hz,frames,warmup,cpus,rt_priority,jitter,pause_s,caught_spinning,spin_s\n");
+  // The latency grid: every transport x payload x readers, run after run, after the memcpy floor;
+  // a line per row on stdout, and a row in the CSV files when asked for.
+  int grid(const std::vector<Transport>& transports) {
+    CsvFiles files;
+    if (!o_.csv.empty() && !files.open(o_.csv)) {
+      std::fprintf(stderr, "sim_bench: cannot write %s: check the folder exists and is writable.\n",
+                   o_.csv.c_str());
+      return 1;
     }
     const std::size_t total = o_.payloads.size() * o_.readers.size() * static_cast<std::size_t>(o_.runs) *
                               (transports.size() + (o_.no_floor ? 0 : 1));
     std::size_t done = 0;
     int failures = 0;
-    std::printf("%-10s %9s %3s %3s %10s %10s %10s %10s %10s %8s %7s %5s\n", "transport", "payload",
-                "R", "run", "min_us", "mean_us", "p99_us", "p999_us", "max_us", "received",
-                "skipped", "lost");
+    print_row_header();
     auto emit = [&](const Row& r) {
       ++done;
-      std::printf("%-10s %9zu %3d %3d %10.1f %10.1f %10.1f %10.1f %10.1f %8" PRIu64 " %7" PRIu64
-                  " %5" PRIu64 "%s\n",
-                  r.transport.c_str(), r.payload, r.readers, r.run, r.lat.min_us, r.lat.mean_us,
-                  r.lat.p99_us, r.lat.p999_us, r.lat.max_us, r.received, r.skipped, r.lost,
-                  r.status == "ok" ? "" : ("  " + r.status).c_str());
-      std::fflush(stdout);
+      print_row(r);
       if (isatty(STDERR_FILENO)) std::fprintf(stderr, "\r[%zu/%zu]   ", done, total);
       if (r.status == "failed") ++failures;
-      if (csv == nullptr) return;
-      std::fprintf(csv, "%s,%zu,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%" PRIu64 ",%" PRIu64
-                        ",%" PRIu64 ",%.6f,%.6f\n",
-                   r.transport.c_str(), r.payload, r.readers, r.run, r.lat.min_us, r.lat.mean_us,
-                   r.lat.p50_us, r.lat.p95_us, r.lat.p99_us, r.lat.p999_us, r.lat.max_us, r.lat.std_us,
-                   r.received, r.skipped, r.lost, r.writer_cpu_s, r.reader_cpu_s);
-      std::string cpus;
-      for (const int c : o_.cpus) cpus += (cpus.empty() ? "" : " ") + std::to_string(c);
-      std::fprintf(extra, "%s,%zu,%d,%d,%" PRIu64 ",%" PRIu64 ",%ld,%ld,%ld,%ld,%lld,%s,%s,%g,%" PRIu64
-                          ",%" PRIu64 ",%s,%d,%g,%g,%" PRIu64 ",%.6f\n",
-                   r.transport.c_str(), r.payload, r.readers, r.run, r.published, r.torn,
-                   r.writer_nvcsw, r.writer_nivcsw, r.reader_nvcsw, r.reader_nivcsw, r.udp_datagrams,
-                   r.path.empty() ? "-" : r.path.c_str(), r.status.c_str(), o_.max_rate ? 0.0 : o_.rate,
-                   o_.frames, o_.warmup, cpus.empty() ? "-" : cpus.c_str(), o_.rt_priority, o_.jitter, o_.pause_s, r.caught_spinning, r.spin_s);
-      std::fflush(csv);
-      std::fflush(extra);
+      files.write(r, o_);
     };
 
     // Runs are the outer loop so slow drift of the machine touches every transport alike.
@@ -1003,8 +1047,6 @@ class Bench {
     }
     if (stop_requested) std::fprintf(stderr, "sim_bench: stopped by a signal; the CSV holds the rows so far.\n");
     if (isatty(STDERR_FILENO)) std::fprintf(stderr, "\n");
-    if (csv != nullptr) std::fclose(csv);
-    if (extra != nullptr) std::fclose(extra);
     return failures == 0 && !stop_requested ? 0 : 1;
   }
 
