@@ -656,16 +656,19 @@ void FrameAssembler::decode_in_place(const BlockContext& block) noexcept {
   if (!decode_units<Full, Intensity>(block, points)) return;
   const PerUnit<std::uint64_t>& tail = block.geometry->tail;
   const std::uint64_t block_tail = static_cast<std::uint64_t>(block.time_base) | (std::uint64_t{block.return_index} << 48);
-  auto* out = reinterpret_cast<unsigned char*>(output_.data() + output_count_);
-  std::size_t kept = 0;
+  // How far the write position moves after each unit: a point's size, or 0 for a unit dropped.
+  PerUnit<std::uint32_t> advance;
+  for (unsigned u = 0; u < units_per_block; ++u) advance[u] = points.keep[u] * std::uint32_t{sizeof(LidarPoint)};
+  auto* const first = reinterpret_cast<unsigned char*>(output_.data() + output_count_);
+  unsigned char* point = first;
+#pragma GCC unroll 32
   for (unsigned u = 0; u < units_per_block; ++u) {
-    unsigned char* point = out + kept * sizeof(LidarPoint);
     const std::uint64_t last_bytes = tail[u] + block_tail;
     std::memcpy(point, &points.xyzi[u], sizeof(Xyzi));
     std::memcpy(point + offsetof(LidarPoint, time_offset_ns), &last_bytes, sizeof last_bytes);
-    kept += points.keep[u];
+    point += advance[u];
   }
-  output_count_ += kept;
+  output_count_ += static_cast<std::size_t>(point - first) / sizeof(LidarPoint);
 }
 
 // Near a cut, in the nebula modes, or with an azimuth window: each point finds its frame.
