@@ -341,6 +341,56 @@ TEST(VelodyneSynthetic, Vlp32cDualKeepsTheSecondReturnOnlyWhereItDiffers) {
   }
 }
 
+// The decoder skips the arithmetic of a block none of whose units is a point (a strongest-return
+// block that repeats its pair in every unit, a block of sky): such blocks must add nothing, and
+// the blocks after them must still decode, in every packet of the revolution.
+TEST(VelodyneSynthetic, Vlp32cDualBlocksRepeatingTheirPairAddNoPointsAndTheNextBlocksStillDecode) {
+  const Calibration cal = shipped("VLP32.yaml");
+  constexpr unsigned step = 20;
+  constexpr unsigned differing_laser = 5;
+  std::vector<std::vector<std::uint8_t>> packets;
+  for (unsigned k = 0; k < 700; ++k) {
+    DataPacket p;
+    p.product_id = 0x28;
+    p.return_mode = 0x39;
+    p.timestamp_us = static_cast<std::uint32_t>(std::llround(3'000'000 + k * 331.776));
+    for (unsigned pair = 0; pair < 6; ++pair) {
+      const unsigned seq = k * 6 + pair;
+      // Even pairs: the strongest block repeats the last one exactly; odd pairs: one laser
+      // differs. The last pair of every packet is sky (no return at all) in its strongest block.
+      for (unsigned half = 0; half < 2; ++half) {
+        auto& block = p.blocks[pair * 2 + half];
+        block.azimuth = static_cast<std::uint16_t>((seq * step) % 36000);
+        for (unsigned l = 0; l < 32; ++l) {
+          const std::uint16_t last = raw_distance(seq, l);
+          const bool differs = half == 1 && pair % 2 == 1 && l == differing_laser;
+          const bool sky = half == 1 && pair == 5;
+          block.units[l] = {sky ? std::uint16_t{0} : differs ? static_cast<std::uint16_t>(last / 2) : last, 7};
+        }
+      }
+    }
+    packets.push_back(p.bytes());
+  }
+  AssemblerOptions o;
+  o.model = Model::vlp32c;
+  o.min_range_m = 0.1f;
+  auto assembler = FrameAssembler::create(cal, o);
+  ASSERT_TRUE(assembler);
+  const Decoded r = run(*assembler, packets);
+  ASSERT_GE(r.frames.size(), 1U);
+  std::size_t firsts = 0, seconds = 0;
+  for (const auto& p : r.frames[0]) {
+    if (p.return_index == 0) {
+      ++firsts;
+      continue;
+    }
+    ++seconds;
+    EXPECT_EQ(p.ring, cal.ring(differing_laser));
+  }
+  EXPECT_EQ(firsts, 1800U * 32U);  // 360° / 0.2°, every laser's last return
+  EXPECT_EQ(seconds, 2U * (1800U / 6U));  // pairs 1 and 3 of each of a revolution's 300 packets
+}
+
 TEST(VelodyneSynthetic, TheCutAzimuthStartsEachFrameThere) {
   const Calibration cal = shipped("VLP16.yaml");
   std::vector<std::vector<std::uint8_t>> packets;
