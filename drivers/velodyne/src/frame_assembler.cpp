@@ -507,6 +507,7 @@ bool FrameAssembler::block_context(const Packet& packet, unsigned block, const B
   out.units = packet.units(block);
   out.partner = compare ? packet.units(packet.partner(block)) : nullptr;
   out.geometry = &banks_[bank];
+  out.bank = bank;
   out.trig = trig_table_;
   out.base = static_cast<float>(azimuth.base);
   out.step = azimuth.step;
@@ -588,15 +589,19 @@ bool FrameAssembler::flag_points(const BlockContext& block, PerUnit<std::int32_t
 // instruction and every point gets exactly the operations of the scalar formula (same results
 // to the bit).
 template <bool Full, bool Intensity>
-bool FrameAssembler::decode_units(const BlockContext& block, BlockPoints& out) noexcept {
+bool FrameAssembler::decode_units(const BlockContext& block, BlockTrig& trig, BlockPoints& out) noexcept {
   PerUnit<std::int32_t> raw;
   PerUnit<float> distance;
   PerUnit<float> intensity;
   if (!flag_points(block, raw, distance, intensity, out.keep)) return false;
-  azimuth_indices(block, out.azimuth);
-  PerUnit<CosSin> trig;
+  if (trig.bank != block.bank || trig.base != block.base || trig.step != block.step) {
+    azimuth_indices(block, trig.azimuth);
 #pragma GCC unroll 32
-  for (unsigned u = 0; u < units_per_block; ++u) trig[u] = block.trig[out.azimuth[u]];
+    for (unsigned u = 0; u < units_per_block; ++u) trig.trig[u] = block.trig[trig.azimuth[u]];
+    trig.bank = block.bank;
+    trig.base = block.base;
+    trig.step = block.step;
+  }
   const BankGeometry& g = *block.geometry;
   if constexpr (Intensity) {
     // The HDL-64E's focal intensity model (ros-drivers/velodyne rawdata.cc), in double as there.
@@ -607,11 +612,11 @@ bool FrameAssembler::decode_units(const BlockContext& block, BlockPoints& out) n
     }
   }
   if constexpr (Full) {
-    full_model_points(g, distance, intensity, trig, out);
+    full_model_points(g, distance, intensity, trig.trig, out);
   } else {
     for (unsigned u = 0; u < units_per_block; ++u) {
       const float xy = distance[u] * g.cos_vert[u];
-      out.xyzi[u] = {xy * trig[u].cos, -(xy * trig[u].sin), distance[u] * g.sin_vert[u], intensity[u]};
+      out.xyzi[u] = {xy * trig.trig[u].cos, -(xy * trig.trig[u].sin), distance[u] * g.sin_vert[u], intensity[u]};
     }
   }
   return true;
@@ -653,7 +658,7 @@ void FrameAssembler::full_model_points(const BankGeometry& g, const PerUnit<floa
 template <bool Full, bool Intensity>
 void FrameAssembler::decode_in_place(const BlockContext& block) noexcept {
   BlockPoints points;
-  if (!decode_units<Full, Intensity>(block, points)) return;
+  if (!decode_units<Full, Intensity>(block, block_trig_, points)) return;
   const PerUnit<std::uint64_t>& tail = block.geometry->tail;
   const std::uint64_t block_tail = static_cast<std::uint64_t>(block.time_base) | (std::uint64_t{block.return_index} << 48);
   // How far the write position moves after each unit: a point's size, or 0 for a unit dropped.
@@ -677,10 +682,10 @@ void FrameAssembler::decode_point_by_point(const BlockContext& block, std::int64
                                            std::int64_t host_ns) noexcept {
   const bool by_packet = options_.cut_by == CutBy::packet;
   BlockPoints points;
-  if (!decode_units<Full, Intensity>(block, points)) return;
+  if (!decode_units<Full, Intensity>(block, block_trig_, points)) return;
   const BankGeometry& g = *block.geometry;
   for (unsigned u = 0; u < units_per_block; ++u) {
-    const std::int32_t azimuth = points.azimuth[u];
+    const std::int32_t azimuth = block_trig_.azimuth[u];
     if (points.keep[u] == 0) continue;
     if (windowed_ && !in_window(azimuth)) continue;
     // Where the point lies on the unwrapped azimuth axis (0.01° since the first revolution).

@@ -198,8 +198,17 @@ class FrameAssembler {
   };
   // A block's 32 decoded units before they are stored, so computing them (vector instructions)
   // and storing the kept ones (two copies a point) are separate loops.
+  // The sin/cos table index (0.01°) and entry of each unit of the block last decoded, and what
+  // they follow from: the next block with the same bank and azimuths (the other block of a
+  // dual-return pair) reuses them instead of computing them again.
+  struct BlockTrig {
+    unsigned bank = banks;              // none yet
+    float base = 0;
+    float step = 0;
+    PerUnit<std::int32_t> azimuth{};
+    PerUnit<CosSin> trig{};
+  };
   struct BlockPoints {
-    PerUnit<std::int32_t> azimuth;      // sin/cos table index, 0.01°
     PerUnit<Xyzi> xyzi;
     PerUnit<std::uint32_t> keep;        // 1: a return within the range limits, not a repeat
   };
@@ -209,6 +218,7 @@ class FrameAssembler {
     const std::uint8_t* units = nullptr;    // 32 × (distance, reflectivity)
     const std::uint8_t* partner = nullptr;  // the pair's other return to compare, or none
     const BankGeometry* geometry = nullptr; // the block's bank
+    unsigned bank = 0;
     const CosSin* trig = nullptr;
     float base = 0;                         // azimuth the points start from and step, 0.01°
     float step = 0;
@@ -241,7 +251,7 @@ class FrameAssembler {
   [[gnu::always_inline]] static inline bool flag_points(const BlockContext& block, PerUnit<std::int32_t>& raw, PerUnit<float>& distance,
                                                         PerUnit<float>& intensity, PerUnit<std::uint32_t>& keep) noexcept;
   template <bool Full, bool Intensity>
-  static bool decode_units(const BlockContext& block, BlockPoints& out) noexcept;
+  static bool decode_units(const BlockContext& block, BlockTrig& trig, BlockPoints& out) noexcept;
   static void full_model_points(const BankGeometry& g, const PerUnit<float>& distance, const PerUnit<float>& intensity,
                                 const PerUnit<CosSin>& trig, BlockPoints& out) noexcept;
   void emit(const LidarPoint& point, std::int64_t position, std::int64_t point_ns,
@@ -268,6 +278,7 @@ class FrameAssembler {
   std::int32_t window_max_centi_ = 0;
   const CosSin* trig_table_ = nullptr;  // 36,000 entries: 0.00°…359.99° (shared by the process)
   std::array<BankGeometry, banks> banks_{};
+  BlockTrig block_trig_;
   bool full_model_ = false;        // some laser has HDL-64E offsets or a two-point correction
   bool intensity_model_ = false;   // some laser has the focal intensity model
   // Blocks whose points all land in the frame in progress are decoded straight into the output
