@@ -7,6 +7,12 @@
 // with the HDL-64E's offsets and two-point correction where the calibration has them. The
 // 0.01° rounding is what nebula and ros-drivers/velodyne do (36,000-entry sin/cos tables): a
 // point moves by at most 0.005° against exact trigonometry.
+//
+// The hot path works a block (32 units) at a time, in separate loops: read the units and flag
+// the points (a block without any stops there), the 32 table indices and entries (reused by the
+// other block of a dual-return pair), the formulas over arrays (vector instructions; the same
+// operations in the same order as one point at a time, so the same bits), then the store of
+// the kept points. The per-laser terms are kept per bank as arrays (BankGeometry) for this.
 #include "sim/velodyne/frame_assembler.hpp"
 
 #include <algorithm>
@@ -517,6 +523,7 @@ bool FrameAssembler::block_context(const Packet& packet, unsigned block, const B
   out.real_azimuth = packet.azimuth(block - block % per_slot);
   out.ns = packet_ns + std::int64_t{packet.sequence(block, 0)} * info_->sequence_ns;
   out.return_index = static_cast<std::uint8_t>(return_index);
+  out.time_base = 0;  // fits_in_place sets it for the in-place path
   return true;
 }
 

@@ -213,22 +213,23 @@ class FrameAssembler {
     PerUnit<std::uint32_t> keep;        // 1: a return within the range limits, not a repeat
   };
   // One block as the per-point decoding needs it, with the limits copied so the point loop
-  // reads no member the output writes could alias.
+  // reads no member the output writes could alias. block_context sets every field (no
+  // initialisers: zeroing it first, a "rep stos" per block, cost about 4 % of the decode).
   struct BlockContext {
-    const std::uint8_t* units = nullptr;    // 32 × (distance, reflectivity)
-    const std::uint8_t* partner = nullptr;  // the pair's other return to compare, or none
-    const BankGeometry* geometry = nullptr; // the block's bank
-    unsigned bank = 0;
-    const CosSin* trig = nullptr;
-    float base = 0;                         // azimuth the points start from and step, 0.01°
-    float step = 0;
-    float unit_m = 0;
-    float min_range_m = 0;
-    float max_range_m = 0;
-    std::int32_t real_azimuth = 0;          // the sequence's own azimuth
-    std::int64_t ns = 0;                    // the sequence's start, ns since the epoch
-    std::int64_t time_base = 0;             // in place: ns after the frame's stamp
-    std::uint8_t return_index = 0;
+    const std::uint8_t* units;            // 32 × (distance, reflectivity)
+    const std::uint8_t* partner;          // the pair's other return to compare, or none
+    const BankGeometry* geometry;         // the block's bank
+    unsigned bank;
+    const CosSin* trig;
+    float base;                           // azimuth the points start from and step, 0.01°
+    float step;
+    float unit_m;
+    float min_range_m;
+    float max_range_m;
+    std::int32_t real_azimuth;            // the sequence's own azimuth
+    std::int64_t ns;                      // the sequence's start, ns since the epoch
+    std::int64_t time_base;               // in place: ns after the frame's stamp
+    std::uint8_t return_index;
   };
 
   static const CosSin* shared_trig_table();
