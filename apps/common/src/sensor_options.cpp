@@ -129,4 +129,28 @@ void describe_stamped_on_publish(SensorInfo& info) {
   info.time_sync = "replayed, stamped with this host's clock when published";
 }
 
+void describe_replayed_stamps(SensorInfo& info, bool restamped, RecordedClock recorded) {
+  if (restamped) {
+    info.time_base = TimeBase::host;
+    info.time_sync = "replayed, restamped to this host's clock";
+    return;
+  }
+  switch (recorded) {
+    case RecordedClock::sensor:
+      info.time_base = TimeBase::unknown;
+      info.time_sync = "replayed with the recorded stamps (the sensor's clock; the recording does "
+                       "not say whether it was synchronised)";
+      return;
+    case RecordedClock::sensor_with_position:
+      info.time_base = TimeBase::unknown;
+      info.time_sync = "replayed with the recorded stamps (the sensor's clock)";
+      return;
+    case RecordedClock::capturing_host:
+      info.time_base = TimeBase::host;
+      info.time_sync = "replayed with the recorded stamps (the recording host's clock when it "
+                       "captured each packet)";
+      return;
+  }
+}
+
 }  // namespace sim::apps

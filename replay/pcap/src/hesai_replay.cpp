@@ -10,6 +10,7 @@
 #include "replay_loop.hpp"
 #include "replays.hpp"
 #include "sim/apps/hesai_options.hpp"
+#include "sim/apps/sensor_options.hpp"
 #include "sim/clock.hpp"
 #include "sim/hesai/lidar_stream.hpp"
 
@@ -131,10 +132,8 @@ int run_hesai_replay(int argc, char** argv) {
   auto configured = apps::hesai_stream_config(s);
   if (!configured) return cli.fail(configured.error());
   hesai::LidarStreamConfig config = std::move(configured.value());
-  // A recording's stamps are the recorded sensor clock, or this host's clock with --restamp.
-  config.sensor->time_base = r.restamp ? TimeBase::host : TimeBase::unknown;
-  config.sensor->time_sync = r.restamp ? "replayed, restamped to this host's clock"
-                                       : "replayed with the recorded sensor stamps";
+  // The packets' times are the sensor's clock; a Hesai capture does not show its synchronisation.
+  apps::describe_replayed_stamps(*config.sensor, r.restamp, apps::RecordedClock::sensor);
   config.heartbeat_period = std::chrono::milliseconds(500);
   // Before the stream exists: a reader may see it and stop us at once.
   const auto& stop = apps::StopSignal::install();

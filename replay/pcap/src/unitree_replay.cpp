@@ -80,8 +80,8 @@ int run_unitree_replay(int argc, char** argv) {
   auto described = apps::sensor_info_from(sensor, o.points_stream);
   if (!described) return cli.fail(described.error());
   o.sensor = std::move(described.value());
-  o.sensor->time_sync = r.restamp ? "replayed, restamped to this host's clock"
-                                  : "replayed with the capture's times (the recording host's clock)";
+  // Scans are stamped with the capture's times (see UnitreeTarget::push).
+  apps::describe_replayed_stamps(*o.sensor, r.restamp, apps::RecordedClock::capturing_host);
   const auto& stop = apps::StopSignal::install();
   if (auto code = cli.apply_placement(placement)) return *code;
   o.decoder.model = *unitree::parse_model(model_text);

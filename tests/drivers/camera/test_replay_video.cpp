@@ -289,6 +289,7 @@ TEST_F(ReplayVideo, TheStreamCarriesTheCalibrationFileAndMountingGiven) {
   EXPECT_EQ(s.calibration->d[0], -0.1);
   EXPECT_EQ(s.calibration_source, "file://" + yaml);
   EXPECT_EQ(s.time_base, sim::TimeBase::host);
+  EXPECT_EQ(s.time_sync, "replayed, stamped with this host's clock when published");
   kill(pid, SIGTERM);
   EXPECT_EQ(wait_exit(), 0) << output();
 }

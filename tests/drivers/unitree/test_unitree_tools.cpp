@@ -398,6 +398,10 @@ TEST(UnitreeReplaySerial, ReplaysARecordingThroughTheSameDecoder) {
   auto points = open_reader(stream);
   ASSERT_TRUE(points);
   expect_frame(*points, expected[1], 2);  // the newest frame is the second scan
+  auto described = points->sensor_info();
+  ASSERT_TRUE(described && *described);
+  EXPECT_EQ((*described)->time_base, sim::TimeBase::host);
+  EXPECT_EQ((*described)->time_sync, "replayed, stamped with this host's clock when published");
   auto imu_status = sim::inspect(stream + ".imu");
   ASSERT_TRUE(imu_status.has_value());
   EXPECT_EQ(imu_status->frames_published, 1U);
@@ -520,6 +524,43 @@ TEST(UnitreeReplayPcap, ALoopingReplayKeepsWholeScansAndIncreasingStamps) {
   }
   replay.signal(SIGINT);
   EXPECT_EQ(replay.wait(kTimeout), 0) << replay.err();
+  std::filesystem::remove(file);
+}
+
+// Which clock the replayed stamps are, on the point and the IMU stream: this host's with
+// --restamp, otherwise the capture's times, the recording host's clock.
+TEST(UnitreeReplayPcap, TheStreamsSayWhichClockTheirStampsAreWithAndWithoutRestamp) {
+  const std::string file = temp_path("clock") + ".pcap";
+  std::vector<Bytes> payloads;
+  for (std::uint32_t i = 0; i < 3; ++i) payloads.push_back(l2_point_packet(l2_packet_spec(i)));
+  payloads.push_back(l2_imu_packet(imu_spec()));
+  write_udp_capture(file, payloads);
+  struct Case {
+    bool restamp;
+    std::string time_sync;
+  };
+  const std::vector<Case> cases = {
+      {true, "replayed, restamped to this host's clock"},
+      {false, "replayed with the recorded stamps (the recording host's clock when it captured each packet)"},
+  };
+  for (const Case& expected : cases) {
+    StreamGuard guard;
+    const std::string stream = unique_name("pcapclock");
+    guard.names = {stream, stream + ".imu"};
+    std::vector<std::string> argv{SIM_REPLAY_PCAP_PATH, file, "--model", "unitree-l2", "--stream", stream,
+                                  "--scan-packets", "3", "--max-rate", "-q"};
+    if (expected.restamp) argv.push_back("--restamp");
+    Process replay(argv);
+    ASSERT_EQ(replay.wait(kTimeout), 0) << replay.err();
+    for (const std::string& name : guard.names) {
+      auto reader = open_reader(name);
+      ASSERT_TRUE(reader) << name;
+      auto described = reader->sensor_info();
+      ASSERT_TRUE(described && *described) << name;
+      EXPECT_EQ((*described)->time_base, sim::TimeBase::host) << name;
+      EXPECT_EQ((*described)->time_sync, expected.time_sync) << name << ", restamp " << expected.restamp;
+    }
+  }
   std::filesystem::remove(file);
 }
 

@@ -883,6 +883,36 @@ TEST(ReplayTool, TheStreamCarriesTheFrameMountingAndCalibrationSourceGiven) {
   EXPECT_EQ(replay.wait(), 0) << replay.err();
 }
 
+// Which clock the replayed stamps are: this host's with --restamp, otherwise the sensor's as
+// recorded, whose synchronisation a Hesai capture does not show.
+TEST(ReplayTool, TheStreamSaysWhichClockItsStampsAreWithAndWithoutRestamp) {
+  struct Case {
+    bool restamp;
+    sim::TimeBase time_base;
+    std::string time_sync;
+  };
+  const std::vector<Case> cases = {
+      {true, sim::TimeBase::host, "replayed, restamped to this host's clock"},
+      {false, sim::TimeBase::unknown,
+       "replayed with the recorded stamps (the sensor's clock; the recording does not say whether it was "
+       "synchronised)"},
+  };
+  for (const Case& expected : cases) {
+    StreamGuard stream;
+    std::vector<std::string> argv{replay_tool, p64_capture, "--stream", stream.name, "--calibration",
+                                  p64_calibration, "--max-rate"};
+    if (expected.restamp) argv.push_back("--restamp");
+    const auto r = run(argv);
+    ASSERT_EQ(r.code, 0) << r.err;
+    auto reader = sim::Reader::open(stream.name);
+    ASSERT_TRUE(reader) << reader.error().message;
+    const auto info = sensor_info_of(*reader);
+    ASSERT_TRUE(info.has_value()) << "the stream carries no description";
+    EXPECT_EQ(info->time_base, expected.time_base) << "restamp " << expected.restamp;
+    EXPECT_EQ(info->time_sync, expected.time_sync) << "restamp " << expected.restamp;
+  }
+}
+
 TEST(ReplayTool, ABadFrameNameOrMountingIsRefusedWithOneSentenceAndNoStream) {
   StreamGuard stream;
   const std::vector<std::vector<std::string>> bad = {

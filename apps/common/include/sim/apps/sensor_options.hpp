@@ -72,4 +72,21 @@ Expected<void> check_sensor_info(const SensorInfo& info);
 // sim_replay_serial): the host time base, and the one time_sync sentence that says so.
 void describe_stamped_on_publish(SensorInfo& info);
 
+// The clock a recording's stamps are in, for a replay that keeps them (sim_replay_pcap without
+// --restamp).
+enum class RecordedClock {
+  sensor,                // the sensor's, from its packets; the recording does not show whether it
+                         // was synchronised (Hesai, Ouster): time base unknown
+  sensor_with_position,  // the sensor's, and the recording's own packets show its synchronisation
+                         // (Velodyne position packets): time base unknown until the stream reads
+                         // them (velodyne::StampClock::sensor_recorded)
+  capturing_host,        // the recording host's, when it captured each packet (Unitree): host
+};
+
+// For a replay of a recording (sim_replay_pcap), one sentence per situation for every family.
+// Restamped (--restamp): the stamps are this host's clock as the frames are replayed
+// (TimeBase::host, "replayed, restamped to this host's clock"). Otherwise they are the recorded
+// stamps, in the `recorded` clock: "replayed with the recorded stamps (the sensor's clock; …)".
+void describe_replayed_stamps(SensorInfo& info, bool restamped, RecordedClock recorded);
+
 }  // namespace sim::apps
