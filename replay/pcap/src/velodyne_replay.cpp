@@ -11,6 +11,7 @@
 
 #include "replay_loop.hpp"
 #include "replays.hpp"
+#include "sim/apps/sensor_options.hpp"
 #include "sim/apps/velodyne_options.hpp"
 #include "sim/clock.hpp"
 #include "sim/velodyne/lidar_stream.hpp"
@@ -139,6 +140,10 @@ int run_velodyne_replay(int argc, char** argv) {
   }
   auto config = apps::velodyne_stream_config(s);
   if (!config) return cli.fail(config.error());
+  // The packets' times are the sensor's clock, whose synchronisation the recorded position
+  // packets show; with --restamp they are this host's, which those packets must not change.
+  apps::describe_replayed_stamps(*config->sensor, r.restamp, apps::RecordedClock::sensor_with_position);
+  config->stamp_clock = r.restamp ? velodyne::StampClock::restamped : velodyne::StampClock::sensor_recorded;
   config->heartbeat_period = std::chrono::milliseconds(500);
   const auto& stop = apps::StopSignal::install();
 

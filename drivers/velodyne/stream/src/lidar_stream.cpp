@@ -20,10 +20,34 @@ TimeSync time_sync_of(const PositionReport& report) {
   return sync;
 }
 
+namespace {
+
+// What the position packets' state `sync` makes of the description's clock, as `clock` says;
+// `caller_time_sync` is the time_sync the stream was created with.
+void describe_time_sync(SensorInfo& info, const TimeSync& sync, StampClock clock,
+                        const std::string& caller_time_sync) {
+  switch (clock) {
+    case StampClock::sensor_live:
+      info.time_base = sync.base;
+      info.time_sync = sync.text;
+      return;
+    case StampClock::sensor_recorded:
+      info.time_base = sync.base;
+      info.time_sync = (caller_time_sync + "; as recorded: " + sync.text).substr(0, SensorInfo::kMaxSource);
+      return;
+    case StampClock::restamped:
+      return;  // the stamps are not the sensor's clock: the caller's words stand
+  }
+}
+
+}  // namespace
+
 struct LidarStream::Impl : lidar::PointPipeline<FrameAssembler, PublishCounters> {
   using PointPipeline::PointPipeline;
   std::optional<SensorInfo> sensor;  // the description, re-set when the time sync changes
   TimeSync sync;
+  StampClock stamp_clock = StampClock::sensor_live;
+  std::string caller_time_sync;  // LidarStreamConfig::sensor's, which sensor_recorded extends
 };
 
 Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config) {
@@ -45,8 +69,7 @@ Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config) {
     sensor->identity.model = std::string(to_string(model));
     sensor->calibration_source = lidar::file_source(config.calibration);
     sensor->point_time = PointTime::after_frame_stamp;
-    sensor->time_base = TimeBase::unknown;
-    sensor->time_sync = TimeSync{}.text;
+    describe_time_sync(*sensor, TimeSync{}, config.stamp_clock, config.sensor->time_sync);
     spec.sensor = sensor;
   }
   auto writer = Writer::create(spec);
@@ -54,6 +77,8 @@ Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config) {
 
   auto impl = std::make_unique<Impl>(std::move(writer.value()), std::move(assembler.value()));
   impl->sensor = sensor;
+  impl->stamp_clock = config.stamp_clock;
+  if (config.sensor) impl->caller_time_sync = config.sensor->time_sync;
   return LidarStream(std::move(impl));
 }
 
@@ -77,10 +102,9 @@ bool LidarStream::push_position(std::span<const std::uint8_t> payload) noexcept 
   TimeSync sync = time_sync_of(*report);
   if (sync.text == impl_->sync.text && sync.base == impl_->sync.base) return true;
   impl_->sync = std::move(sync);
-  if (impl_->sensor) {
+  if (impl_->sensor && impl_->stamp_clock != StampClock::restamped) {
     // Position packets come about once a second; the description changes only with the state.
-    impl_->sensor->time_base = impl_->sync.base;
-    impl_->sensor->time_sync = impl_->sync.text;
+    describe_time_sync(*impl_->sensor, impl_->sync, impl_->stamp_clock, impl_->caller_time_sync);
     (void)impl_->frames.writer().set_sensor_info(*impl_->sensor);
   }
   return true;

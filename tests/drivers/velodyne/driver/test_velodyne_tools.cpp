@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // sim_replay_pcap and sim_lidar_velodyne as real processes: the replay publishes exactly the
 // decoder's frames; the live driver over UDP publishes the same frames, counts bad datagrams,
-// and turns a position packet into the stream's time-sync description; it joins a multicast
+// and turns a position packet into the stream's time-sync description, which a replay keeps
+// for the recorded stamps and leaves alone with --restamp (this host's clock); it joins a multicast
 // group and its source filter drops another sender's packets; a calibration of another laser
 // count is one sentence.
 #include <arpa/inet.h>
@@ -12,12 +13,14 @@
 
 #include <chrono>
 #include <cstring>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "../packet_builder.hpp"
+#include "frames.hpp"  // tests/drivers/hesai/driver: hand-built frames and capture files
 #include "pcap_payloads.hpp"
 #include "sim/sim.hpp"
 #include "sim/velodyne/velodyne.hpp"
@@ -176,6 +179,41 @@ bool equals_one_of(const std::vector<std::vector<sim::LidarPoint>>& expected, co
   return false;
 }
 
+// The bundled VLP-16 capture (which holds data packets only) with a position packet in front
+// (PPS locked, GPRMC valid), as a sensor's two ports record it; a temporary file.
+struct CaptureWithPositionPacket {
+  std::string path =
+      (std::filesystem::temp_directory_path() / ("velodyne_position_" + std::to_string(::getpid()) + ".pcap")).string();
+  CaptureWithPositionPacket() {
+    namespace pt = sim::pcap::testing;
+    const auto frame = [](std::uint16_t port, const pt::Bytes& payload) {
+      return pt::ethernet(0x0800, pt::ipv4({192, 168, 1, 201}, {255, 255, 255, 255}, pt::udp(port, port, payload)));
+    };
+    const auto payloads = hesai_test::read_udp_payloads(capture);
+    const auto gprmc = velodyne_test::nmea("GPRMC,123519,A,4807.038,N,01131.000,E,022.4,084.4,230326,003.1,W");
+    std::vector<pt::Record> records{{frame(8308, velodyne_test::position_packet(0, 2, gprmc)),
+                                     payloads.front().capture_ns - 1'000'000}};
+    for (const auto& p : payloads) records.push_back({frame(2368, p.bytes), p.capture_ns});
+    pt::write_capture(path, DLT_EN10MB, records);
+  }
+  ~CaptureWithPositionPacket() { std::filesystem::remove(path); }
+};
+
+// What a replay left in its stream after it ended (the test fails when there is none).
+std::optional<sim::SensorInfo> description_of(const std::string& stream) {
+  auto reader = sim::Reader::open(stream);
+  if (!reader) {
+    ADD_FAILURE() << reader.error().message;
+    return std::nullopt;
+  }
+  auto info = reader->sensor_info();
+  if (!info) {
+    ADD_FAILURE() << info.error().message;
+    return std::nullopt;
+  }
+  return *info;
+}
+
 TEST(VelodyneTools, TheLiveDriverJoinsAMulticastGroupAndPublishesWhatIsSentToIt) {
   if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
   const auto payloads = hesai_test::read_udp_payloads(capture);
@@ -278,6 +316,52 @@ TEST(VelodyneTools, LiveDriverCountsBadDatagramsAndReportsThePositionPacketsTime
   EXPECT_EQ((*info)->time_base, sim::TimeBase::sensor_synchronized);
   EXPECT_EQ((*info)->identity.model, "VLP-16");
   EXPECT_EQ((*info)->point_time, sim::PointTime::after_frame_stamp);
+}
+
+// --restamp stamps the frames with this host's clock: the recorded position packets are still
+// counted, but the stream does not claim the sensor's synchronised clock for them.
+TEST(VelodyneTools, ARestampedReplaySaysItsStampsAreThisHostsClockWhateverThePositionPacketsSay) {
+  const CaptureWithPositionPacket recorded;
+  StreamGuard stream;
+  const auto r = sim::testing::run({SIM_REPLAY_PCAP, recorded.path, "--stream", stream.name, "--calibration",
+                                    calibration, "--max-rate", "--restamp", "--summary"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(summary_value(r.out, "position_packets"), 1);
+  EXPECT_EQ(summary_text(r.out, "time_sync"), "PPS_locked__GPRMC_valid");  // the status line still shows it
+  const auto info = description_of(stream.name);
+  ASSERT_TRUE(info.has_value()) << "the stream carries no description";
+  EXPECT_EQ(info->time_base, sim::TimeBase::host);
+  EXPECT_EQ(info->time_sync, "replayed, restamped to this host's clock");
+}
+
+// Without --restamp the stamps are the sensor's clock as recorded: the recorded PPS state tells
+// whether it was synchronised, and the description says it is a replay.
+TEST(VelodyneTools, AReplayWithTheRecordedStampsSaysSoWithTheRecordedPpsState) {
+  const CaptureWithPositionPacket recorded;
+  StreamGuard stream;
+  const auto r = sim::testing::run({SIM_REPLAY_PCAP, recorded.path, "--stream", stream.name, "--calibration",
+                                    calibration, "--max-rate", "--summary"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(summary_value(r.out, "position_packets"), 1);
+  const auto info = description_of(stream.name);
+  ASSERT_TRUE(info.has_value()) << "the stream carries no description";
+  EXPECT_EQ(info->time_base, sim::TimeBase::sensor_synchronized);
+  EXPECT_EQ(info->time_sync,
+            "replayed with the recorded stamps (the sensor's clock); as recorded: PPS locked, GPRMC valid");
+}
+
+// The bundled capture holds no position packet: nothing says whether the sensor was synchronised.
+TEST(VelodyneTools, AReplayOfACaptureWithoutPositionPacketsLeavesTheTimeBaseUnknown) {
+  StreamGuard stream;
+  const auto r = sim::testing::run(
+      {SIM_REPLAY_PCAP, capture, "--stream", stream.name, "--calibration", calibration, "--max-rate", "--summary"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(summary_value(r.out, "position_packets"), 0);
+  const auto info = description_of(stream.name);
+  ASSERT_TRUE(info.has_value()) << "the stream carries no description";
+  EXPECT_EQ(info->time_base, sim::TimeBase::unknown);
+  EXPECT_EQ(info->time_sync,
+            "replayed with the recorded stamps (the sensor's clock); as recorded: no position packet yet");
 }
 
 TEST(VelodyneTools, ACalibrationOfAnotherLaserCountIsOneSentenceAndExitOne) {

@@ -22,6 +22,17 @@
 
 namespace sim::velodyne {
 
+// Which clock the stamps are, and so what position packets (GPRMC, PPS) do to the description.
+enum class StampClock {
+  sensor_live,      // the sensor's, live: the reported state is the time base and time_sync
+  sensor_recorded,  // the sensor's as recorded (a replay with the recorded stamps): the recorded
+                    // state gives the time base and follows the caller's time_sync
+                    // ("<sensor->time_sync>; as recorded: PPS locked, GPRMC valid")
+  restamped,        // not the sensor's (a replay restamped to this host's clock): the caller's
+                    // time base and time_sync stand; position packets only reach the counters
+                    // and status lines
+};
+
 struct LidarStreamConfig {
   std::string stream = "/lidar_top";
   std::filesystem::path calibration;  // YAML or db.xml (required)
@@ -29,8 +40,10 @@ struct LidarStreamConfig {
   unsigned returns = 2;               // capacity: returns × packets of a revolution at min_rpm
   unsigned min_rpm = 300;
   // The stream's description (frame, mounting; apps/common sensor_options.hpp); the stream adds
-  // the identity, the calibration source, the point time and the time sync. nullopt: none.
+  // the identity, the calibration source, the point time and the time sync (as stamp_clock says).
+  // nullopt: none.
   std::optional<SensorInfo> sensor;
+  StampClock stamp_clock = StampClock::sensor_live;
   bool checksum = false;
   bool lock_memory = false;
   std::chrono::milliseconds heartbeat_period{0};
@@ -67,7 +80,8 @@ class LidarStream {
   PushResult push(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns,
                   std::int64_t time_reference_ns = 0) noexcept;
   // One position packet (port 8308): updates the time sync, and the stream's description when
-  // it changed. False when the payload is no position packet (counted).
+  // it changed (as LidarStreamConfig::stamp_clock says). False when the payload is no position
+  // packet (counted).
   bool push_position(std::span<const std::uint8_t> payload) noexcept;
   std::optional<CompletedFrame> finish() noexcept;
   void reset() noexcept;
