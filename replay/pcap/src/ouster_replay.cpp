@@ -9,6 +9,7 @@
 #include "replay_loop.hpp"
 #include "replays.hpp"
 #include "sim/apps/ouster_options.hpp"
+#include "sim/apps/sensor_options.hpp"
 #include "sim/clock.hpp"
 #include "sim/hesai/model.hpp"
 #include "sim/ouster/lidar_stream.hpp"
@@ -113,6 +114,8 @@ int run_ouster_replay(int argc, char** argv) {
   auto metadata = ouster::Metadata::load(s.calibration);
   if (!metadata) return cli.fail(std::string_view(metadata.error().message));
   config->metadata_source = "file://" + std::filesystem::absolute(s.calibration).string();
+  // The packets' times are the sensor's clock; an Ouster capture does not show its synchronisation.
+  apps::describe_replayed_stamps(*config->sensor, r.restamp, apps::RecordedClock::sensor);
   config->heartbeat_period = std::chrono::milliseconds(500);
   const auto& stop = apps::StopSignal::install();
   auto stream = ouster::LidarStream::create(*config, *metadata);

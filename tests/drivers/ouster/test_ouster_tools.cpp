@@ -68,6 +68,38 @@ TEST(OusterReplay, TheDualReturnCapturePublishesItsFrameAndImuSamples) {
   EXPECT_NE(r.out.find("frames=1 packets=64 lost=0 malformed=0 imu=10 points=65536"), std::string::npos) << r.out;
 }
 
+// Which clock the replayed stamps are: this host's with --restamp, otherwise the sensor's as
+// recorded, whose synchronisation an Ouster capture does not show.
+TEST(OusterReplay, TheStreamSaysWhichClockItsStampsAreWithAndWithoutRestamp) {
+  struct Case {
+    bool restamp;
+    sim::TimeBase time_base;
+    std::string time_sync;
+  };
+  const std::vector<Case> cases = {
+      {true, sim::TimeBase::host, "replayed, restamped to this host's clock"},
+      {false, sim::TimeBase::unknown,
+       "replayed with the recorded stamps (the sensor's clock; the recording does not say whether it was "
+       "synchronised)"},
+  };
+  for (const Case& expected : cases) {
+    const std::string stream = unique_name("ouster_clock");
+    StreamGuard guard(stream);
+    guard.names.push_back(stream + ".imu");
+    std::vector<std::string> argv{replay_tool, data(dual + ".pcap"), "--calibration", data(dual + ".json"),
+                                  "--stream",  stream,             "--max-rate",    "-q"};
+    if (expected.restamp) argv.push_back("--restamp");
+    const auto r = sim::testing::run(argv);
+    ASSERT_EQ(r.code, 0) << r.err;
+    auto reader = sim::Reader::open(stream);
+    ASSERT_TRUE(reader) << reader.error().message;
+    auto described = reader->sensor_info();
+    ASSERT_TRUE(described && *described) << "restamp " << expected.restamp;
+    EXPECT_EQ((*described)->time_base, expected.time_base) << "restamp " << expected.restamp;
+    EXPECT_EQ((*described)->time_sync, expected.time_sync) << "restamp " << expected.restamp;
+  }
+}
+
 TEST(OusterReplay, ACaptureWithoutItsMetadataIsRecognisedAndTheUserToldToGiveIt) {
   const auto r = sim::testing::run({replay_tool, data(legacy + ".pcap"), "--stream", unique_name("ouster_nometa")});
   EXPECT_EQ(r.code, 2);
