@@ -40,7 +40,7 @@ void add_replay_options(apps::CommandLine& cli, ReplayArgs& r) {
       ->type_name("D");
   app.add_flag("--restamp", r.restamp,
                "publish stamps of the present (sensor time shifted to the replay's start) "
-               "instead of the capture's");
+               "instead of the capture's; the stream then says its time base is this host's clock");
   app.add_flag("--summary", r.summary,
                "print one line of counters at the end: summary frames=... packets=... lost=...");
   app.add_flag("-q,--quiet", r.quiet, "no progress line");
