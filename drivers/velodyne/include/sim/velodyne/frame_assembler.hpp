@@ -196,8 +196,6 @@ class FrameAssembler {
     float z;
     float intensity;
   };
-  // A block's 32 decoded units before they are stored, so computing them (vector instructions)
-  // and storing the kept ones (two copies a point) are separate loops.
   // The sin/cos table index (0.01°) and entry of each unit of the block last decoded, and what
   // they follow from: the next block with the same bank and azimuths (the other block of a
   // dual-return pair) reuses them instead of computing them again.
@@ -208,6 +206,8 @@ class FrameAssembler {
     PerUnit<std::int32_t> azimuth{};
     PerUnit<CosSin> trig{};
   };
+  // A block's 32 decoded units before they are stored, so computing them (vector instructions)
+  // and storing the kept ones (two copies a point) are separate loops.
   struct BlockPoints {
     PerUnit<Xyzi> xyzi;
     PerUnit<std::uint32_t> keep;        // 1: a return within the range limits, not a repeat
