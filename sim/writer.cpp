@@ -197,6 +197,27 @@ void adopt_region(WriterState& w, RegionFile&& file) {
   w.last_seq = w.header->publication.latest_seq.load(std::memory_order_acquire);
 }
 
+// Says who writes the region now and starts this writer's own liveness figures afresh. A new
+// region gets all of it before it gets its name, so a reader that opens the stream at once
+// already finds the writer and its sensor description.
+void announce_writer(RegionHeader& h, const StreamSpec& spec, bool wakes_every_publish) {
+  h.writer.pid.store(getpid(), std::memory_order_relaxed);
+  h.writer.attach_count.fetch_add(1, std::memory_order_relaxed);
+  h.writer.start_realtime_ns.store(realtime_ns(), std::memory_order_relaxed);
+  store_writer_names(h.writer, h.program);
+  h.publication.wakes_every_publish.store(wakes_every_publish ? 1 : 0, std::memory_order_relaxed);
+  h.liveness.heartbeat_ns.store(monotonic_ns(), std::memory_order_relaxed);
+  h.liveness.max_publish_interval_ns.store(0, std::memory_order_relaxed);
+  h.liveness.period_ns.store(0, std::memory_order_relaxed);
+  h.liveness.jitter_ns.store(0, std::memory_order_relaxed);
+  h.liveness.frames_this_writer.store(0, std::memory_order_relaxed);
+  // This writer's description replaces whatever the region held (a previous writer's, maybe of
+  // another sensor); a region that never had one is left untouched.
+  if (spec.sensor || h.sensor.word.load(std::memory_order_relaxed) != 0) {
+    write_sensor_block(h.sensor, spec.sensor);
+  }
+}
+
 // What claim_existing() did with the region the name holds.
 enum class Claim {
   taken_over,  // it is this writer's now
@@ -227,6 +248,7 @@ Expected<Claim> claim_existing(WriterState& w, const StreamSpec& spec, std::uint
     if (auto mapped = file.map_read_write(); !mapped) return mapped.error();
     adopt_region(w, std::move(file));
     fchmod(w.file->fd(), spec.mode & 0777);
+    announce_writer(*w.header, spec, w.wakes_every_publish);
     return Claim::taken_over;
   }
   // Layout or capacity changed, or the region is corrupt or linked twice.
@@ -246,6 +268,7 @@ Expected<bool> create_region(WriterState& w, const StreamSpec& spec, std::uint64
     return Error{ErrorCode::system_error, "cannot lock the new region of " + spec.name};
   }
   initialise_header(*created->header(), capacity, spec, old.header());
+  announce_writer(*created->header(), spec, w.wakes_every_publish);
   created->reload_identity();
   if (auto published = created->publish_as(spec.name, replace); !published) {
     if (published.error().code == ErrorCode::writer_exists) return false;
@@ -284,25 +307,6 @@ Expected<void> attach_region(WriterState& w, const StreamSpec& spec, std::uint64
                "stream " + spec.name + " is being created or removed by another process; try again"};
 }
 
-// Says who writes the region now and starts this writer's own liveness figures afresh.
-void announce_writer(RegionHeader& h, const StreamSpec& spec, bool wakes_every_publish) {
-  h.writer.pid.store(getpid(), std::memory_order_relaxed);
-  h.writer.attach_count.fetch_add(1, std::memory_order_relaxed);
-  h.writer.start_realtime_ns.store(realtime_ns(), std::memory_order_relaxed);
-  store_writer_names(h.writer, h.program);
-  h.publication.wakes_every_publish.store(wakes_every_publish ? 1 : 0, std::memory_order_relaxed);
-  h.liveness.heartbeat_ns.store(monotonic_ns(), std::memory_order_relaxed);
-  h.liveness.max_publish_interval_ns.store(0, std::memory_order_relaxed);
-  h.liveness.period_ns.store(0, std::memory_order_relaxed);
-  h.liveness.jitter_ns.store(0, std::memory_order_relaxed);
-  h.liveness.frames_this_writer.store(0, std::memory_order_relaxed);
-  // This writer's description replaces whatever the region held (a previous writer's, maybe of
-  // another sensor); a region that never had one is left untouched.
-  if (spec.sensor || h.sensor.word.load(std::memory_order_relaxed) != 0) {
-    write_sensor_block(h.sensor, spec.sensor);
-  }
-}
-
 }  // namespace
 
 Expected<Writer> Writer::create(const StreamSpec& spec) {
@@ -316,7 +320,6 @@ Expected<Writer> Writer::create(const StreamSpec& spec) {
   impl->checksum = spec.checksum;
   impl->wakes_every_publish = (spec.mode & 0044u) != 0;
   if (auto attached = attach_region(*impl, spec, capacity); !attached) return attached.error();
-  announce_writer(*impl->header, spec, impl->wakes_every_publish);
 
   if (spec.lock_memory && mlock(impl->file->base(), impl->file->file_size()) != 0) {
     return errno_error(ErrorCode::system_error,

@@ -16,6 +16,9 @@
 //   recalibrate NAME                                            frame 1 described as camera_a; once
 //                                                               a reader sleeps, describe camera_b
 //                                                               and publish frame 2
+//   open-at-once PREFIX COUNT                                   open PREFIX_0 … PREFIX_<COUNT-1> the
+//                                                               moment each appears; count those
+//                                                               without writer or description yet
 #include <sched.h>
 #if defined(__has_feature)
 #if __has_feature(address_sanitizer) && !defined(__SANITIZE_ADDRESS__)
@@ -354,6 +357,33 @@ int run_recalibrate(const std::string& name) {
   return 0;
 }
 
+// Opens each stream the moment its name appears (spinning on open) and asks at once for its
+// writer and description: a new stream must have both from the start.
+int run_open_at_once(const std::string& prefix, unsigned count) {
+  std::printf("ready\n");
+  std::fflush(stdout);
+  unsigned without_description = 0;
+  unsigned without_writer = 0;
+  const std::int64_t deadline = monotonic_ns() + 120'000'000'000;  // never hang a test run
+  for (unsigned i = 0; i < count; ++i) {
+    const std::string name = prefix + "_" + std::to_string(i);
+    Expected<Reader> reader = Reader::open(name);
+    while (!reader) {
+      if (monotonic_ns() > deadline) {
+        std::printf("error=%s never appeared\n", name.c_str());
+        return 1;
+      }
+      reader = Reader::open(name);
+    }
+    auto described = reader->sensor_info();
+    if (!described || !described->has_value()) ++without_description;
+    if (auto status = inspect(name); status && status->writer_pid == 0) ++without_writer;
+  }
+  std::printf("without_description=%u without_writer=%u\n", without_description, without_writer);
+  std::fflush(stdout);
+  return without_description == 0 && without_writer == 0 ? 0 : 1;
+}
+
 int main(int argc, char** argv) {
   const std::vector<std::string> args(argv + 1, argv + argc);
   if (args.size() == 7 && args[0] == "writer") {
@@ -371,6 +401,7 @@ int main(int argc, char** argv) {
   if (args.size() == 2 && args[0] == "stall-in-copy") return run_stall_in_copy(args[1]);
   if (args.size() == 2 && args[0] == "hold-borrow") return run_hold_borrow(args[1]);
   if (args.size() == 2 && args[0] == "recalibrate") return run_recalibrate(args[1]);
+  if (args.size() == 3 && args[0] == "open-at-once") return run_open_at_once(args[1], static_cast<unsigned>(std::stoul(args[2])));
   std::fprintf(stderr, "usage: see the comment at the top of tests/sim/peer.cpp\n");
   return 2;
 }

@@ -415,6 +415,22 @@ TEST(SensorInfoConcurrency, ConcurrentUpdatesNeverTearTheDescription) {
 
 // The writer in another process recalibrates while this reader reads: the next frame carries a
 // new generation and sensor_info() then gives the new calibration, without reopening.
+// The description (and the writer's pid) go into a new region before its name does: a reader in
+// another process that opens the stream the moment it appears finds them. Before, a reader could
+// open a new stream between the name and the description and see none.
+TEST(SensorInfoProcesses, AReaderThatOpensANewStreamTheMomentItAppearsFindsItsDescription) {
+  constexpr unsigned count = 300;
+  const std::string prefix = unique_name("open_at_once");
+  StreamGuard g;
+  for (unsigned i = 0; i < count; ++i) g.names.push_back(prefix + "_" + std::to_string(i));
+  Process peer({SIM_TEST_PEER, "open-at-once", prefix, std::to_string(count)});
+  ASSERT_TRUE(peer.wait_for_line("ready")) << peer.err();
+  std::vector<Writer> writers;
+  writers.reserve(count);
+  for (const std::string& name : g.names) writers.push_back(make_writer(name, camera_info()));
+  EXPECT_EQ(peer.wait(), 0) << peer.out() << peer.err();
+}
+
 TEST(SensorInfoProcesses, AReaderSeesAnotherProcessRecalibrateWithoutReopening) {
   StreamGuard g{unique_name("sensor_peer")};
   Process peer({SIM_TEST_PEER, "recalibrate", g.name});
