@@ -14,7 +14,9 @@
 #include <atomic>
 #include <csignal>
 #include <cstdio>
+#include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -98,6 +100,68 @@ TEST(OusterReplay, TheStreamSaysWhichClockItsStampsAreWithAndWithoutRestamp) {
     EXPECT_EQ((*described)->time_base, expected.time_base) << "restamp " << expected.restamp;
     EXPECT_EQ((*described)->time_sync, expected.time_sync) << "restamp " << expected.restamp;
   }
+}
+
+// The IMU's samples are in the IMU's frame: its stream says so, mounted on the points' frame by
+// the metadata's imu_to_sensor_transform (the OS-0-32's: identity rotation, (6.253, −11.775,
+// 7.645) mm), so ROS 2 and Foxglove get the transform ouster-ros publishes as os_sensor → os_imu.
+TEST(OusterReplay, TheImuStreamIsDescribedInItsOwnFrameMountedByTheMetadatasImuTransform) {
+  const std::string stream = unique_name("ouster_imu_frame");
+  StreamGuard guard(stream);
+  guard.names.push_back(stream + ".imu");
+  const auto r = sim::testing::run({replay_tool, data(dual + ".pcap"), "--calibration", data(dual + ".json"),
+                                    "--stream", stream, "--frame-id", "os_top", "--max-rate", "-q"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto points = sim::Reader::open(stream);
+  auto imu = sim::Reader::open(stream + ".imu");
+  ASSERT_TRUE(points && imu);
+  auto points_info = points->sensor_info();
+  auto imu_info = imu->sensor_info();
+  ASSERT_TRUE(points_info && *points_info && imu_info && *imu_info);
+  const sim::SensorInfo& p = **points_info;
+  const sim::SensorInfo& i = **imu_info;
+  EXPECT_EQ(p.frame_id, "os_top");
+  EXPECT_EQ(i.frame_id, "os_top_imu");
+  EXPECT_EQ(i.parent_frame, "os_top");
+  ASSERT_TRUE(i.mounting);
+  EXPECT_NEAR(i.mounting->translation[0], 0.006253, 1e-9);
+  EXPECT_NEAR(i.mounting->translation[1], -0.011775, 1e-9);
+  EXPECT_NEAR(i.mounting->translation[2], 0.007645, 1e-9);
+  EXPECT_NEAR(i.mounting->rotation[3], 1.0, 1e-12);  // identity: w = 1
+  EXPECT_EQ(i.point_time, sim::PointTime::none);
+  EXPECT_EQ(i.identity.serial, p.identity.serial);
+  EXPECT_EQ(i.time_base, p.time_base);
+}
+
+// A rotated IMU (a half turn about z here, as the lidar of the same unit is mounted) gives its
+// rotation as a unit quaternion: (0, 0, ±1, 0).
+TEST(OusterReplay, ARotatedImuTransformBecomesItsMountingsQuaternion) {
+  TempDir dir;
+  std::string json = ouster_test::read_text(data(dual + ".json"));
+  const std::string identity = "\"imu_to_sensor_transform\": [1, 0, 0, 6.253, 0, 1, 0, -11.775, 0, 0, 1, 7.645, 0, 0, 0, 1]";
+  const std::size_t at = json.find(identity);
+  ASSERT_NE(at, std::string::npos);
+  json.replace(at, identity.size(), "\"imu_to_sensor_transform\": [-1, 0, 0, 10, 0, -1, 0, 20, 0, 0, 1, 30, 0, 0, 0, 1]");
+  const fs::path metadata = dir.path / "rotated_imu.json";
+  std::ofstream(metadata) << json;
+  const std::string stream = unique_name("ouster_imu_rotated");
+  StreamGuard guard(stream);
+  guard.names.push_back(stream + ".imu");
+  const auto r = sim::testing::run({replay_tool, data(dual + ".pcap"), "--calibration", metadata.string(), "--stream",
+                                    stream, "--max-rate", "-q"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto imu = sim::Reader::open(stream + ".imu");
+  ASSERT_TRUE(imu);
+  auto described = imu->sensor_info();
+  ASSERT_TRUE(described && *described && (*described)->mounting);
+  const sim::Mounting& m = *(*described)->mounting;
+  EXPECT_NEAR(m.translation[0], 0.010, 1e-12);
+  EXPECT_NEAR(m.translation[1], 0.020, 1e-12);
+  EXPECT_NEAR(m.translation[2], 0.030, 1e-12);
+  EXPECT_NEAR(m.rotation[0], 0.0, 1e-12);
+  EXPECT_NEAR(m.rotation[1], 0.0, 1e-12);
+  EXPECT_NEAR(std::abs(m.rotation[2]), 1.0, 1e-12);
+  EXPECT_NEAR(m.rotation[3], 0.0, 1e-12);
 }
 
 TEST(OusterReplay, ACaptureWithoutItsMetadataIsRecognisedAndTheUserToldToGiveIt) {

@@ -1,7 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/ouster/lidar_stream.hpp"
 
+#include <array>
+#include <cmath>
 #include <numbers>
+#include <string_view>
 #include <sstream>
 #include <utility>
 
@@ -42,6 +45,47 @@ SensorInfo describe_sensor(const LidarStreamConfig& config, const Metadata& m) {
   return info;
 }
 
+// The rotation and translation of a 4 × 4 row-major transform in millimetres, as a mounting
+// (metres, unit quaternion x, y, z, w). The quaternion comes from the matrix's largest diagonal
+// term (Shepperd's method: no division by a small number) and is normalised, so a metadata
+// matrix a little off orthonormal still gives a unit rotation.
+Mounting mounting_of(const std::array<double, 16>& t) {
+  auto r = [&t](unsigned row, unsigned col) { return t[4 * row + col]; };
+  const double trace = r(0, 0) + r(1, 1) + r(2, 2);
+  std::array<double, 4> q;  // x, y, z, w
+  if (trace >= r(0, 0) && trace >= r(1, 1) && trace >= r(2, 2)) {
+    const double s = 2 * std::sqrt(1 + trace);
+    q = {(r(2, 1) - r(1, 2)) / s, (r(0, 2) - r(2, 0)) / s, (r(1, 0) - r(0, 1)) / s, s / 4};
+  } else if (r(0, 0) >= r(1, 1) && r(0, 0) >= r(2, 2)) {
+    const double s = 2 * std::sqrt(1 + r(0, 0) - r(1, 1) - r(2, 2));
+    q = {s / 4, (r(0, 1) + r(1, 0)) / s, (r(0, 2) + r(2, 0)) / s, (r(2, 1) - r(1, 2)) / s};
+  } else if (r(1, 1) >= r(2, 2)) {
+    const double s = 2 * std::sqrt(1 + r(1, 1) - r(0, 0) - r(2, 2));
+    q = {(r(0, 1) + r(1, 0)) / s, s / 4, (r(1, 2) + r(2, 1)) / s, (r(0, 2) - r(2, 0)) / s};
+  } else {
+    const double s = 2 * std::sqrt(1 + r(2, 2) - r(0, 0) - r(1, 1));
+    q = {(r(0, 2) + r(2, 0)) / s, (r(1, 2) + r(2, 1)) / s, s / 4, (r(1, 0) - r(0, 1)) / s};
+  }
+  const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  Mounting m;
+  m.translation = {t[3] / 1000.0, t[7] / 1000.0, t[11] / 1000.0};
+  m.rotation = {q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm};
+  return m;
+}
+
+// The IMU's samples are in the IMU's own frame, which the metadata's imu_to_sensor_transform
+// places in the sensor frame the points are in (ouster-ros: os_imu under os_sensor). So the IMU
+// stream is "<points' frame>_imu", mounted on the points' frame by that transform.
+SensorInfo describe_imu(const SensorInfo& points, const Metadata& m) {
+  constexpr std::string_view suffix = "_imu";
+  SensorInfo info = points;
+  info.parent_frame = points.frame_id;
+  info.frame_id = points.frame_id.substr(0, SensorInfo::kMaxName - suffix.size()) + std::string(suffix);
+  info.mounting = mounting_of(m.imu_to_sensor);
+  info.point_time = PointTime::none;
+  return info;
+}
+
 }  // namespace
 
 Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config, const Metadata& metadata) {
@@ -61,6 +105,7 @@ Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config, const
     imu_spec.layout = Layout::raw();
     imu_spec.checksum = config.checksum;
     imu_spec.heartbeat_period = config.heartbeat_period;
+    if (spec.sensor) imu_spec.sensor = describe_imu(*spec.sensor, metadata);
     auto imu_writer = Writer::create(imu_spec);
     if (!imu_writer) return imu_writer.error();
     imu.emplace(std::move(imu_writer.value()));
