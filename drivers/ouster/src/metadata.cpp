@@ -204,6 +204,7 @@ void read_identity(const Json& root, Metadata& m) {
   m.serial = text_of(root, info_section, "prod_sn");
   m.firmware = text_of(root, info_section, "build_rev");
   m.lidar_mode = text_of(root, config_section, "lidar_mode");
+  m.timestamp_mode = text_of(root, config_section, "timestamp_mode");
   if (const Json* id = find(root, info_section, "initialization_id");
       id != nullptr && id->is_number_unsigned() && id->get<std::uint64_t>() < (1u << 24)) {
     m.init_id = static_cast<std::uint32_t>(id->get<std::uint64_t>());

@@ -96,6 +96,7 @@ int run(const sim::apps::CommandLine& cli, Options& o) {
   if (!config) return cli.fail(config.error());
   std::optional<sim::ouster::Metadata> metadata;
   if (auto code = load_metadata(cli, o, status.line(), metadata, config->metadata_source)) return *code;
+  if (config->sensor) sim::ouster::describe_live_clock(*config->sensor, *metadata);
 
   sim::ouster::NetworkConfig network;
   sim::apps::set_listen(network.listen, o.receive);

@@ -346,6 +346,45 @@ TEST(OusterLive, MetadataComesFromTheSensorsHttpApiIsCachedAndTheFramesAndImuAre
   EXPECT_TRUE(one_sentence(none.err)) << none.err;
 }
 
+// The stream says which clock the sensor stamps with: the metadata's timestamp_mode (PTP here;
+// the captures' metadata give none, and then the time base is unknown and the sentence says why).
+TEST(OusterLive, TheStreamSaysWhichClockTheSensorStampsWithFromItsTimestampMode) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  TempDir dir;
+  std::string json = ouster_test::read_text(data(legacy + ".json"));
+  const std::size_t open = json.find('{');
+  ASSERT_NE(open, std::string::npos);
+  json.insert(open + 1, "\"config_params\": {\"timestamp_mode\": \"TIME_FROM_PTP_1588\"}, ");
+  const fs::path ptp = dir.path / "ptp.json";
+  std::ofstream(ptp) << json;
+  struct Case {
+    std::string metadata;
+    sim::TimeBase time_base;
+    std::string time_sync;
+  };
+  const std::vector<Case> cases = {
+      {ptp.string(), sim::TimeBase::sensor_synchronized,
+       "PTP (timestamp_mode TIME_FROM_PTP_1588; whether it is locked is not read)"},
+      {data(legacy + ".json"), sim::TimeBase::unknown,
+       "the sensor's clock; the metadata does not give its timestamp_mode"},
+  };
+  for (const Case& expected : cases) {
+    const std::string stream = unique_name("ouster_live_clock");
+    StreamGuard guard(stream);
+    Process driver({live_tool, "--calibration", expected.metadata, "--lidar-port", "0", "--imu-port", "0", "--no-imu",
+                    "--stream", stream, "--status-interval", "0"});
+    ASSERT_TRUE(listening(driver)) << driver.err();
+    auto reader = sim::testing::wait_for_stream(stream);
+    ASSERT_TRUE(reader);
+    auto described = reader->sensor_info();
+    ASSERT_TRUE(described && *described);
+    EXPECT_EQ((*described)->time_base, expected.time_base);
+    EXPECT_EQ((*described)->time_sync, expected.time_sync);
+    ::kill(driver.pid(), SIGTERM);
+    EXPECT_EQ(driver.wait(), 0) << driver.err();
+  }
+}
+
 TEST(OusterLive, PacketsThatDoNotFitTheMetadataAreCountedAndToldOnceNeverPublished) {
   if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
   const auto capture = ouster_test::load_capture(dual);

@@ -25,6 +25,22 @@ ImuSample to_sample(const ImuPacket& packet) noexcept {
 
 std::string default_imu_stream(const std::string& points_stream) { return points_stream + ".imu"; }
 
+void describe_live_clock(SensorInfo& info, const Metadata& metadata) {
+  const std::string& mode = metadata.timestamp_mode;
+  if (mode == "TIME_FROM_INTERNAL_OSC") {
+    info.time_base = TimeBase::sensor_free_running;
+    info.time_sync = "the sensor's own clock from power-on (timestamp_mode TIME_FROM_INTERNAL_OSC)";
+  } else if (mode == "TIME_FROM_PTP_1588" || mode == "TIME_FROM_SYNC_PULSE_IN") {
+    info.time_base = TimeBase::sensor_synchronized;
+    info.time_sync = (mode == "TIME_FROM_PTP_1588" ? "PTP" : "the sync pulse input") +
+                     std::string(" (timestamp_mode ") + mode + "; whether it is locked is not read)";
+  } else {
+    info.time_base = TimeBase::unknown;
+    info.time_sync = mode.empty() ? "the sensor's clock; the metadata does not give its timestamp_mode"
+                                  : "the sensor's clock, timestamp_mode " + mode.substr(0, 64) + " (not known to this driver)";
+  }
+}
+
 struct LidarStream::Impl : lidar::PointPipeline<FrameAssembler, PublishCounters> {
   Impl(Writer w, std::optional<Writer> i, FrameAssembler a)
       : PointPipeline(std::move(w), std::move(a)), imu(std::move(i)) {}

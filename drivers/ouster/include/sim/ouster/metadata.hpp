@@ -24,6 +24,7 @@ struct Metadata {
   std::string serial;       // prod_sn
   std::string firmware;     // build_rev, "v2.1.1"
   std::string lidar_mode;   // "1024x10"
+  std::string timestamp_mode;  // config_params: "TIME_FROM_PTP_1588", …; empty when not given
   std::uint32_t init_id = 0;  // initialization_id; 0 when the metadata has none
   // The packets.
   PacketFormat format;

@@ -35,6 +35,12 @@ ImuSample to_sample(const ImuPacket& packet) noexcept;
 // "/lidar_top" -> "/lidar_top.imu".
 std::string default_imu_stream(const std::string& points_stream);
 
+// A live sensor's clock for the stream's description (time_base, time_sync), from the metadata's
+// timestamp_mode: TIME_FROM_INTERNAL_OSC is the sensor's own clock from power-on;
+// TIME_FROM_PTP_1588 and TIME_FROM_SYNC_PULSE_IN synchronise it (whether it is locked is not
+// read); without one, or with another, the time base is unknown and the sentence says why.
+void describe_live_clock(SensorInfo& info, const Metadata& metadata);
+
 struct LidarStreamConfig {
   std::string stream = "/lidar_top";
   std::string imu_stream;  // empty: no IMU stream
