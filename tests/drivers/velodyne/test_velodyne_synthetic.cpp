@@ -286,8 +286,10 @@ TEST(VelodyneSynthetic, Hdl64eS3DualReturnPacketsGiveBothReturnsOfEachFiring) {
   }
 }
 
-TEST(VelodyneSynthetic, Vlp32cDualKeepsTheSecondReturnOnlyWhereItDiffers) {
-  const Calibration cal = shipped("VLP32.yaml");
+// 700 VLP-32C dual-return packets (more than two revolutions, 0.2° a sequence): each packet's
+// six pairs of blocks (last return, then strongest) hold unit(sequence, pair, half, laser).
+template <typename UnitOf>
+std::vector<std::vector<std::uint8_t>> vlp32c_dual_packets(UnitOf unit) {
   constexpr unsigned step = 20;
   std::vector<std::vector<std::uint8_t>> packets;
   for (unsigned k = 0; k < 700; ++k) {
@@ -300,16 +302,22 @@ TEST(VelodyneSynthetic, Vlp32cDualKeepsTheSecondReturnOnlyWhereItDiffers) {
       for (unsigned half = 0; half < 2; ++half) {
         auto& block = p.blocks[pair * 2 + half];
         block.azimuth = static_cast<std::uint16_t>((seq * step) % 36000);
-        for (unsigned l = 0; l < 32; ++l) {
-          const std::uint16_t last = raw_distance(seq, l);
-          // Odd lasers see a second, nearer and stronger return; even lasers one return only.
-          const std::uint16_t strongest = (l % 2 == 1 && half == 1) ? static_cast<std::uint16_t>(last / 2) : last;
-          block.units[l] = {half == 0 ? last : strongest, static_cast<std::uint8_t>(half == 0 ? 10 : 200)};
-        }
+        for (unsigned l = 0; l < 32; ++l) block.units[l] = unit(seq, pair, half, l);
       }
     }
     packets.push_back(p.bytes());
   }
+  return packets;
+}
+
+TEST(VelodyneSynthetic, Vlp32cDualKeepsTheSecondReturnOnlyWhereItDiffers) {
+  const Calibration cal = shipped("VLP32.yaml");
+  const auto packets = vlp32c_dual_packets([](unsigned seq, unsigned, unsigned half, unsigned l) {
+    const std::uint16_t last = raw_distance(seq, l);
+    // Odd lasers see a second, nearer and stronger return; even lasers one return only.
+    const std::uint16_t strongest = (l % 2 == 1 && half == 1) ? static_cast<std::uint16_t>(last / 2) : last;
+    return velodyne_test::Unit{half == 0 ? last : strongest, static_cast<std::uint8_t>(half == 0 ? 10 : 200)};
+  });
   AssemblerOptions o;
   o.model = Model::vlp32c;
   o.min_range_m = 0.1f;
@@ -346,31 +354,15 @@ TEST(VelodyneSynthetic, Vlp32cDualKeepsTheSecondReturnOnlyWhereItDiffers) {
 // the blocks after them must still decode, in every packet of the revolution.
 TEST(VelodyneSynthetic, Vlp32cDualBlocksRepeatingTheirPairAddNoPointsAndTheNextBlocksStillDecode) {
   const Calibration cal = shipped("VLP32.yaml");
-  constexpr unsigned step = 20;
   constexpr unsigned differing_laser = 5;
-  std::vector<std::vector<std::uint8_t>> packets;
-  for (unsigned k = 0; k < 700; ++k) {
-    DataPacket p;
-    p.product_id = 0x28;
-    p.return_mode = 0x39;
-    p.timestamp_us = static_cast<std::uint32_t>(std::llround(3'000'000 + k * 331.776));
-    for (unsigned pair = 0; pair < 6; ++pair) {
-      const unsigned seq = k * 6 + pair;
-      // Even pairs: the strongest block repeats the last one exactly; odd pairs: one laser
-      // differs. The last pair of every packet is sky (no return at all) in its strongest block.
-      for (unsigned half = 0; half < 2; ++half) {
-        auto& block = p.blocks[pair * 2 + half];
-        block.azimuth = static_cast<std::uint16_t>((seq * step) % 36000);
-        for (unsigned l = 0; l < 32; ++l) {
-          const std::uint16_t last = raw_distance(seq, l);
-          const bool differs = half == 1 && pair % 2 == 1 && l == differing_laser;
-          const bool sky = half == 1 && pair == 5;
-          block.units[l] = {sky ? std::uint16_t{0} : differs ? static_cast<std::uint16_t>(last / 2) : last, 7};
-        }
-      }
-    }
-    packets.push_back(p.bytes());
-  }
+  // Even pairs: the strongest block repeats the last one exactly; odd pairs: one laser differs.
+  // The last pair of every packet is sky (no return at all) in its strongest block.
+  const auto packets = vlp32c_dual_packets([](unsigned seq, unsigned pair, unsigned half, unsigned l) {
+    const std::uint16_t last = raw_distance(seq, l);
+    const bool differs = half == 1 && pair % 2 == 1 && l == differing_laser;
+    const bool sky = half == 1 && pair == 5;
+    return velodyne_test::Unit{sky ? std::uint16_t{0} : differs ? static_cast<std::uint16_t>(last / 2) : last, 7};
+  });
   AssemblerOptions o;
   o.model = Model::vlp32c;
   o.min_range_m = 0.1f;
