@@ -115,6 +115,9 @@ int run_reader(const std::string& name, std::uint64_t until_seq, long timeout_ms
   std::fflush(stdout);
   std::vector<std::byte> buffer(reader->capacity());
   std::uint64_t received = 0, torn = 0, disorder = 0, first = 0, last = 0;
+  // Borrowed, then overwritten before the check ended: the reader moved past them (not skipped)
+  // but they were not delivered whole.
+  std::uint64_t overwritten = 0;
   bool gone_reported = false;
   while (last < until_seq && monotonic_ns() < deadline) {
     FrameInfo info;
@@ -128,7 +131,11 @@ int run_reader(const std::string& name, std::uint64_t until_seq, long timeout_ms
         if (status == ReadStatus::new_frame) {
           info = b.info();
           whole = test::check_frame(b.bytes(), info.seq);
-          if (!b.still_valid()) continue;  // overwritten while checked: not delivered
+          if (!b.still_valid()) {  // overwritten while checked: not delivered
+            ++overwritten;
+            if (first == 0) first = info.seq;
+            continue;
+          }
         }
       }
     } else {
@@ -155,9 +162,10 @@ int run_reader(const std::string& name, std::uint64_t until_seq, long timeout_ms
     }
   }
   const ReaderStats stats = reader->stats();
-  std::printf("received=%llu torn=%llu disorder=%llu skipped=%llu first=%llu last=%llu overruns=%llu "
-              "spins=%llu\n",
-              static_cast<unsigned long long>(received), static_cast<unsigned long long>(torn),
+  std::printf("received=%llu overwritten=%llu torn=%llu disorder=%llu skipped=%llu first=%llu last=%llu "
+              "overruns=%llu spins=%llu\n",
+              static_cast<unsigned long long>(received), static_cast<unsigned long long>(overwritten),
+              static_cast<unsigned long long>(torn),
               static_cast<unsigned long long>(disorder),
               static_cast<unsigned long long>(stats.skipped), static_cast<unsigned long long>(first),
               static_cast<unsigned long long>(last), static_cast<unsigned long long>(stats.overruns),
