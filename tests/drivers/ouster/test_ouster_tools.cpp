@@ -357,6 +357,10 @@ TEST(OusterLive, TheStreamSaysWhichClockTheSensorStampsWithFromItsTimestampMode)
   json.insert(open + 1, "\"config_params\": {\"timestamp_mode\": \"TIME_FROM_PTP_1588\"}, ");
   const fs::path ptp = dir.path / "ptp.json";
   std::ofstream(ptp) << json;
+  // A mode with a control character is not copied into the description (which would refuse it).
+  json.replace(json.find("TIME_FROM_PTP_1588"), 18, "TIME_\\u0001X");
+  const fs::path odd = dir.path / "odd.json";
+  std::ofstream(odd) << json;
   struct Case {
     std::string metadata;
     sim::TimeBase time_base;
@@ -367,6 +371,7 @@ TEST(OusterLive, TheStreamSaysWhichClockTheSensorStampsWithFromItsTimestampMode)
        "PTP (timestamp_mode TIME_FROM_PTP_1588; whether it is locked is not read)"},
       {data(legacy + ".json"), sim::TimeBase::unknown,
        "the sensor's clock; the metadata does not give its timestamp_mode"},
+      {odd.string(), sim::TimeBase::unknown, "the sensor's clock, with a timestamp_mode this driver does not know"},
   };
   for (const Case& expected : cases) {
     const std::string stream = unique_name("ouster_live_clock");
