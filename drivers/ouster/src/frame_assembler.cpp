@@ -238,6 +238,7 @@ struct detail::PacketColumns {
   static constexpr unsigned capacity = FrameAssembler::max_columns_per_packet;
   static_assert(capacity % lanes == 0, "padding must stay inside the arrays");
   unsigned count = 0;  // accepted columns, without the padding
+  bool consecutive = true;  // measurement_id[k] == measurement_id[0] + k (no column lost or invalid)
   std::size_t pixel_bytes = 0;
   std::size_t beam_bytes = 0;  // a column's pixels: beams × pixel_bytes
   const std::uint8_t* first_pixel[capacity];
@@ -291,19 +292,96 @@ struct FourPixels {
   Ints range, intensity, range2, intensity2;
 };
 
-template <Profile P, bool Dual, IntensityField F>
-[[gnu::always_inline]] inline FourPixels gather_four(const PacketColumns& columns, unsigned k, std::size_t offset) noexcept {
+// Four vectors transposed: lane j of result i is lane i of input j (eight shuffles).
+template <typename V>
+[[gnu::always_inline]] inline std::array<V, lanes> transpose(V a, V b, V c, V d) noexcept {
+#if defined(__has_builtin)
+#if __has_builtin(__builtin_shufflevector)
+#define SIM_OUSTER_SHUFFLE 1
+#endif
+#endif
+#ifdef SIM_OUSTER_SHUFFLE
+  const V ab_low = __builtin_shufflevector(a, b, 0, 4, 1, 5);  // a0 b0 a1 b1
+  const V cd_low = __builtin_shufflevector(c, d, 0, 4, 1, 5);
+  const V ab_high = __builtin_shufflevector(a, b, 2, 6, 3, 7);  // a2 b2 a3 b3
+  const V cd_high = __builtin_shufflevector(c, d, 2, 6, 3, 7);
+  return {__builtin_shufflevector(ab_low, cd_low, 0, 1, 4, 5), __builtin_shufflevector(ab_low, cd_low, 2, 3, 6, 7),
+          __builtin_shufflevector(ab_high, cd_high, 0, 1, 4, 5), __builtin_shufflevector(ab_high, cd_high, 2, 3, 6, 7)};
+#else  // GCC before 12: the compiler finds its own shuffles
+  std::array<V, lanes> out;
+  for (unsigned j = 0; j < lanes; ++j) out[j] = V{a[j], b[j], c[j], d[j]};
+  return out;
+#endif
+}
+
+// Profiles whose pixel is three or four little-endian 32-bit words (LEGACY, RNG19 single and
+// dual): the four pixels are loaded whole and transposed, so each word of the four columns is one
+// vector and every field is a mask or a shift of it, instead of being assembled lane by lane.
+// A 12-byte pixel is always followed by at least 4 bytes of the same packet (the next pixel, a
+// column header or status block, or the footer); they are read and not used.
+template <Profile P>
+constexpr bool whole_word_pixels = std::endian::native == std::endian::little &&
+                                   (P == Profile::legacy || P == Profile::rng19_rfl8_sig16_nir16 ||
+                                    P == Profile::rng19_rfl8_sig16_nir16_dual);
+
+[[gnu::always_inline]] inline std::array<Ints, lanes> pixel_words(const PacketColumns& columns, unsigned k,
+                                                                  std::size_t offset) noexcept {
+  std::array<Ints, lanes> pixel;
+  for (unsigned j = 0; j < lanes; ++j) std::memcpy(&pixel[j], columns.first_pixel[k + j] + offset, sizeof(Ints));
+  return transpose(pixel[0], pixel[1], pixel[2], pixel[3]);
+}
+
+// The fields of decode_pixel_as() for these profiles, from the words: (w >> s) & m.
+template <Profile P, IntensityField F>
+[[gnu::always_inline]] inline FourPixels fields_of_words(const std::array<Ints, lanes>& w) noexcept {
+  auto bits = [](Ints word, int shift, std::int32_t mask) { return (word >> shift) & mask; };
   FourPixels out{};
-  for (unsigned j = 0; j < lanes; ++j) {
-    const Pixel p = decode_pixel_as<P>(columns.first_pixel[k + j] + offset);
-    out.range[j] = static_cast<std::int32_t>(p.range_mm);
-    out.intensity[j] = channel<false>(p, F);
-    if constexpr (Dual) {
-      out.range2[j] = static_cast<std::int32_t>(p.range2_mm);
-      out.intensity2[j] = channel<true>(p, F);
+  if constexpr (P == Profile::rng19_rfl8_sig16_nir16_dual) {
+    // w0: range 19 | flags 5 | reflectivity 8; w1: the same for the second return;
+    // w2: signal 16 | signal2 16; w3: near-IR 16 | reserved 16.
+    out.range = bits(w[0], 0, 0x7ffff);
+    out.range2 = bits(w[1], 0, 0x7ffff);
+    if constexpr (F == IntensityField::signal) {
+      out.intensity = bits(w[2], 0, 0xffff);
+      out.intensity2 = bits(w[2], 16, 0xffff);
+    } else if constexpr (F == IntensityField::reflectivity) {
+      out.intensity = bits(w[0], 24, 0xff);
+      out.intensity2 = bits(w[1], 24, 0xff);
+    } else {
+      out.intensity = out.intensity2 = bits(w[3], 0, 0xffff);
+    }
+  } else {
+    // w0: range (LEGACY 20 bits, RNG19 19 bits and flags); w1: reflectivity 8 | 8 | signal 16;
+    // w2: near-IR 16 | 16.
+    out.range = bits(w[0], 0, P == Profile::legacy ? 0xfffff : 0x7ffff);
+    if constexpr (F == IntensityField::signal) {
+      out.intensity = bits(w[1], 16, 0xffff);
+    } else if constexpr (F == IntensityField::reflectivity) {
+      out.intensity = bits(w[1], 0, 0xff);
+    } else {
+      out.intensity = bits(w[2], 0, 0xffff);
     }
   }
   return out;
+}
+
+template <Profile P, bool Dual, IntensityField F>
+[[gnu::always_inline]] inline FourPixels gather_four(const PacketColumns& columns, unsigned k, std::size_t offset) noexcept {
+  if constexpr (whole_word_pixels<P>) {
+    return fields_of_words<P, F>(pixel_words(columns, k, offset));
+  } else {
+    FourPixels out{};
+    for (unsigned j = 0; j < lanes; ++j) {
+      const Pixel p = decode_pixel_as<P>(columns.first_pixel[k + j] + offset);
+      out.range[j] = static_cast<std::int32_t>(p.range_mm);
+      out.intensity[j] = channel<false>(p, F);
+      if constexpr (Dual) {
+        out.range2[j] = static_cast<std::int32_t>(p.range2_mm);
+        out.intensity2[j] = channel<true>(p, F);
+      }
+    }
+    return out;
+  }
 }
 
 // The direction d = a·E + b·F + g of one beam in four neighbouring columns, metres per
@@ -357,26 +435,9 @@ static_assert(sizeof(PointTail) == 8 && offsetof(LidarPoint, time_offset_ns) == 
   return bits;
 }
 
-// The four points of one return as one (x, y, z, intensity) vector each: a 4 × 4 transpose in
-// eight shuffles.
+// The four points of one return as one (x, y, z, intensity) vector each.
 [[gnu::always_inline]] inline std::array<Floats, lanes> point_vectors(const FourPoints& p) noexcept {
-#if defined(__has_builtin)
-#if __has_builtin(__builtin_shufflevector)
-#define SIM_OUSTER_SHUFFLE 1
-#endif
-#endif
-#ifdef SIM_OUSTER_SHUFFLE
-  const Floats xy_low = __builtin_shufflevector(p.x, p.y, 0, 4, 1, 5);  // x0 y0 x1 y1
-  const Floats zi_low = __builtin_shufflevector(p.z, p.value, 0, 4, 1, 5);
-  const Floats xy_high = __builtin_shufflevector(p.x, p.y, 2, 6, 3, 7);  // x2 y2 x3 y3
-  const Floats zi_high = __builtin_shufflevector(p.z, p.value, 2, 6, 3, 7);
-  return {__builtin_shufflevector(xy_low, zi_low, 0, 1, 4, 5), __builtin_shufflevector(xy_low, zi_low, 2, 3, 6, 7),
-          __builtin_shufflevector(xy_high, zi_high, 0, 1, 4, 5), __builtin_shufflevector(xy_high, zi_high, 2, 3, 6, 7)};
-#else  // GCC before 12: the compiler finds its own shuffles
-  std::array<Floats, lanes> out;
-  for (unsigned j = 0; j < lanes; ++j) out[j] = Floats{p.x[j], p.y[j], p.z[j], p.value[j]};
-  return out;
-#endif
+  return transpose(p.x, p.y, p.z, p.value);
 }
 
 [[gnu::always_inline]] inline void store_point(LidarPoint& to, Floats xyzi, std::uint64_t tail) noexcept {
@@ -396,6 +457,7 @@ struct BeamOutput {
   std::uint64_t ring_bits[2];  // tail_bits of the ring and return 0, 1
   std::size_t next;    // dense: the next free place
   std::uint64_t dropped = 0;
+  LidarPoint* run = nullptr;   // organised run: where the packet's first column goes in this row
 };
 
 // Organised: pixel (u, m) goes to row u, destaggered column (m + shift) mod W; the second
@@ -421,6 +483,22 @@ template <bool Dual, bool Checked>
     const std::uint64_t time = tail_bits({c.time_offset[k + j], 0, 0, 0});
     put(at, a[j], time | o.ring_bits[0]);
     if constexpr (Dual) put(at + o.image, b[j], time | o.ring_bits[1]);
+  }
+}
+
+// Organised, the usual case: the packet's columns are consecutive and this row's part of them
+// does not wrap around the row's end, so column k goes to run[k]: no index arithmetic per point.
+template <bool Dual>
+[[gnu::always_inline]] inline void store_run(const BeamOutput& o, const PacketColumns& c, unsigned k, unsigned n,
+                                             const FourPoints& first, const FourPoints& second) noexcept {
+  const std::array<Floats, lanes> a = point_vectors(first);
+  std::array<Floats, lanes> b{};
+  if constexpr (Dual) b = point_vectors(second);
+  LidarPoint* to = o.run + k;
+  for (unsigned j = 0; j < n; ++j) {
+    const std::uint64_t time = tail_bits({c.time_offset[k + j], 0, 0, 0});
+    store_point(to[j], a[j], time | o.ring_bits[0]);
+    if constexpr (Dual) store_point(to[j + o.image], b[j], time | o.ring_bits[1]);
   }
 }
 
@@ -463,14 +541,14 @@ void prefetch_next_columns(const BeamOutput& o, const PacketColumns& c, unsigned
   }
 }
 
-enum class Store { organized, organized_checked, dense };
+enum class Store { organized_run, organized, organized_checked, dense };
 
 // One beam of a packet: four columns at a time, gathered, located and stored.
 template <Profile P, bool Dual, IntensityField F, Store S>
 void decode_beam(const PacketColumns& columns, const detail::BeamGeometry& g, const RangeTerms& terms,
                  unsigned beam, BeamOutput& out) noexcept {
   const std::size_t offset = std::size_t{beam} * columns.pixel_bytes;
-  if constexpr (S == Store::organized) prefetch_next_columns(out, columns, Dual ? 2 : 1);
+  if constexpr (S == Store::organized || S == Store::organized_run) prefetch_next_columns(out, columns, Dual ? 2 : 1);
   // The pixels a few beams further down each column, so they are in L1 when their beam comes
   // (16 columns 0.4–2 kB apart are more streams than the hardware prefetcher follows).
   constexpr unsigned ahead_bytes = 256;
@@ -485,6 +563,8 @@ void decode_beam(const PacketColumns& columns, const detail::BeamGeometry& g, co
     auto store = [&](unsigned n) {
       if constexpr (S == Store::dense) {
         store_dense<Dual>(out, columns, k, n, first, second);
+      } else if constexpr (S == Store::organized_run) {
+        store_run<Dual>(out, columns, k, n, first, second);
       } else {
         store_organized<Dual, S == Store::organized_checked>(out, columns, k, n, first, second);
       }
@@ -530,6 +610,7 @@ void FrameAssembler::decode_columns(const LidarPacket& packet) noexcept {
 // after the frame's stamp and their geometry.
 void FrameAssembler::accept_columns(const LidarPacket& packet, PacketColumns& out) noexcept {
   out.count = 0;
+  out.consecutive = true;
   out.pixel_bytes = pixel_bytes(metadata_.format.profile);
   out.beam_bytes = out.pixel_bytes * beams_;
   for (unsigned c = 0; c < packet.columns() && c < PacketColumns::capacity; ++c) {
@@ -545,6 +626,7 @@ void FrameAssembler::accept_columns(const LidarPacket& packet, PacketColumns& ou
       continue;
     }
     received_[m] = 1;
+    out.consecutive = out.consecutive && (out.count == 0 || m == out.measurement_id[0] + out.count);
     const auto timestamp = static_cast<std::int64_t>(column.timestamp_ns);
     if (!have_stamp_) {
       stamp_ns_ = timestamp;
@@ -556,6 +638,20 @@ void FrameAssembler::accept_columns(const LidarPacket& packet, PacketColumns& ou
   }
   for (unsigned k = out.count; k % lanes != 0; ++k) out.put(k, out.first_pixel[0], 0, 0, {});
 }
+
+namespace {
+
+// Store::organized_run where it applies to this row (out.run set), else `store`.
+Store row_store(Store store, const PacketColumns& columns, BeamOutput& out) noexcept {
+  if (store != Store::organized || !columns.consecutive) return store;
+  unsigned start = columns.measurement_id[0] + out.shift;  // < 2W
+  start = start >= out.width ? start - out.width : start;
+  if (start + columns.count > out.width) return store;  // wraps around the row's end
+  out.run = out.points + out.row + start;
+  return Store::organized_run;
+}
+
+}  // namespace
 
 // One instance of the beam loop per intensity channel and per kind of store, so no pixel asks
 // which one it wants.
@@ -585,7 +681,8 @@ void FrameAssembler::decode_beams_as(const PacketColumns& columns) noexcept {
     out.ring_bits[0] = tail_bits({0, ring, 0, 0});
     out.ring_bits[1] = tail_bits({0, ring, 1, 0});
     const detail::BeamGeometry& g = beam_geometry_[u];
-    switch (store) {
+    switch (row_store(store, columns, out)) {
+      case Store::organized_run: decode_beam<P, Dual, F, Store::organized_run>(columns, g, terms, u, out); break;
       case Store::organized: decode_beam<P, Dual, F, Store::organized>(columns, g, terms, u, out); break;
       case Store::organized_checked: decode_beam<P, Dual, F, Store::organized_checked>(columns, g, terms, u, out); break;
       case Store::dense: decode_beam<P, Dual, F, Store::dense>(columns, g, terms, u, out); break;

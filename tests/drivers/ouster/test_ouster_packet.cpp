@@ -109,35 +109,48 @@ TEST_P(EveryProfile, DecodesEveryFieldTheIndependentEncoderWrote) {
   }
 }
 
-TEST_P(EveryProfile, AWholeRotationBecomesOneFrameWithEveryReturnAtItsRange) {
+// The channel --intensity asks for, as the encoder wrote it for that return.
+std::uint32_t expected_intensity(const EncodedPixel& want, IntensityField field, unsigned ret) {
+  switch (field) {
+    case IntensityField::signal: return ret == 0 ? want.signal : want.signal2;
+    case IntensityField::reflectivity: return ret == 0 ? want.reflectivity : want.reflectivity2;
+    default: return want.near_ir;  // one near-IR image, shared by both returns
+  }
+}
+
+TEST_P(EveryProfile, AWholeRotationBecomesOneFrameWithEveryReturnAtItsRangeAndTheChosenIntensity) {
   const auto [layout, beams] = GetParam();
   const Metadata m = metadata_for(layout, beams);
-  AssemblerOptions options;
-  options.intensity = IntensityField::reflectivity;
-  auto assembler = FrameAssembler::create(m, options).value();
-  std::vector<sim::LidarPoint> points(assembler.max_points());
-  assembler.set_output(points);
-  std::optional<CompletedFrame> frame;
-  for (const auto& payload : rotation(layout, beams, 3)) {
-    auto r = assembler.push(payload, 0);
-    ASSERT_EQ(r.error, PacketError::none);
-    if (r.frame) frame = r.frame;
-  }
-  ASSERT_TRUE(frame);
-  const unsigned returns = returns_of(m.format.profile);
-  ASSERT_EQ(frame->point_count, std::size_t{beams} * 1024 * returns);
-  EXPECT_EQ(frame->frame_id, 3u);
-  for (unsigned ret = 0; ret < returns; ++ret) {
-    for (unsigned u = 0; u < beams; ++u) {
-      for (unsigned v = 0; v < 1024; v += 37) {
-        const auto& p = points[(ret * beams + u) * 1024 + v];  // no pixel shift: staggered = destaggered
-        const EncodedPixel want = pixel_value(layout, v, u);
-        const std::uint32_t range = ret == 0 ? want.range_mm : want.range2_mm;
-        // No beam offset, identity transform: the point lies at its range from the origin.
-        EXPECT_NEAR(std::sqrt(p.x * p.x + p.y * p.y + p.z * p.z), range / 1000.0, 2e-3 + range * 1e-6);
-        EXPECT_EQ(p.intensity, ret == 0 ? want.reflectivity : want.reflectivity2);
-        EXPECT_EQ(p.ring, u);
-        EXPECT_EQ(p.time_offset_ns, v * 97'656u);
+  for (const IntensityField field : {IntensityField::reflectivity, IntensityField::signal, IntensityField::near_ir}) {
+    if (field == IntensityField::signal && !has_signal(m.format.profile)) continue;  // refused, tested below
+    SCOPED_TRACE(static_cast<int>(field));
+    AssemblerOptions options;
+    options.intensity = field;
+    auto assembler = FrameAssembler::create(m, options).value();
+    std::vector<sim::LidarPoint> points(assembler.max_points());
+    assembler.set_output(points);
+    std::optional<CompletedFrame> frame;
+    for (const auto& payload : rotation(layout, beams, 3)) {
+      auto r = assembler.push(payload, 0);
+      ASSERT_EQ(r.error, PacketError::none);
+      if (r.frame) frame = r.frame;
+    }
+    ASSERT_TRUE(frame);
+    const unsigned returns = returns_of(m.format.profile);
+    ASSERT_EQ(frame->point_count, std::size_t{beams} * 1024 * returns);
+    EXPECT_EQ(frame->frame_id, 3u);
+    for (unsigned ret = 0; ret < returns; ++ret) {
+      for (unsigned u = 0; u < beams; ++u) {
+        for (unsigned v = 0; v < 1024; v += 37) {
+          const auto& p = points[(ret * beams + u) * 1024 + v];  // no pixel shift: staggered = destaggered
+          const EncodedPixel want = pixel_value(layout, v, u);
+          const std::uint32_t range = ret == 0 ? want.range_mm : want.range2_mm;
+          // No beam offset, identity transform: the point lies at its range from the origin.
+          ASSERT_NEAR(std::sqrt(p.x * p.x + p.y * p.y + p.z * p.z), range / 1000.0, 2e-3 + range * 1e-6);
+          ASSERT_EQ(p.intensity, expected_intensity(want, field, ret)) << "column " << v << " beam " << u;
+          ASSERT_EQ(p.ring, u);
+          ASSERT_EQ(p.time_offset_ns, v * 97'656u);
+        }
       }
     }
   }
