@@ -148,6 +148,26 @@ std::string sensor_info_problem(const SensorInfo& info) {
   return "the sensor description cannot be used: " + f.fault + "; " + f.fix;
 }
 
+std::string sensor_text(std::string_view text, std::size_t max_bytes) {
+  std::string out(text.substr(0, max_bytes));
+  if (out.size() < text.size()) {
+    // Cut before a character the limit split: back over its continuation bytes (10xxxxxx) to
+    // its lead byte, which goes too.
+    std::size_t end = out.size();
+    while (end > 0 && (static_cast<unsigned char>(out[end - 1]) & 0xC0) == 0x80) --end;
+    if (end > 0 && static_cast<unsigned char>(out[end - 1]) >= 0xC0) {
+      const auto lead = static_cast<unsigned char>(out[end - 1]);
+      const std::size_t length = lead >= 0xF0 ? 4 : lead >= 0xE0 ? 3 : 2;
+      if (out.size() - (end - 1) < length) out.resize(end - 1);
+    }
+  }
+  for (char& c : out) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte < 0x20 || byte == 0x7f) c = '?';
+  }
+  return out;
+}
+
 std::string frame_id_problem(std::string_view frame) {
   const std::string fault = frame_fault("frame name", frame);
   if (fault.empty()) return {};

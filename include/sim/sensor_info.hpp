@@ -112,6 +112,12 @@ std::string sensor_info_problem(const SensorInfo& info);
 // digit or a slash (tf2 refuses the leading slash), with no empty part between slashes.
 std::string frame_id_problem(std::string_view frame);
 
+// Text from outside (a sensor's metadata, a device name, a file path) made fit for a free-text
+// field of SensorInfo: control characters become '?' and it is cut to `max_bytes` (kMaxName or
+// kMaxSource) without splitting a UTF-8 character. A driver copies outside text through this, so
+// an odd byte from a sensor never makes the description invalid (which would stop the driver).
+std::string sensor_text(std::string_view text, std::size_t max_bytes);
+
 // "1920x1200 plumb_bob fx=1000.0 fy=1000.0 cx=960.0 cy=600.0", for tools' one-line summaries.
 std::string summary(const CameraCalibration& calibration);
 

@@ -180,6 +180,24 @@ TEST(SensorInfoValues, SummaryShowsSizeModelAndIntrinsics) {
   EXPECT_STREQ(to_string(PointTime::after_frame_stamp), "after_frame_stamp");
 }
 
+TEST(SensorInfoValues, OutsideTextIsMadeFitForADescriptionWithoutSplittingACharacter) {
+  EXPECT_EQ(sim::sensor_text("OS-1\a-32\n", sim::SensorInfo::kMaxName), "OS-1?-32?");
+  EXPECT_EQ(sim::sensor_text("Pandar64", 4), "Pand");
+  // "é" is two bytes and "€" three: a limit inside one drops the whole character.
+  EXPECT_EQ(sim::sensor_text("caf\xC3\xA9", 4), "caf");
+  EXPECT_EQ(sim::sensor_text("caf\xC3\xA9", 5), "caf\xC3\xA9");
+  EXPECT_EQ(sim::sensor_text("a\xE2\x82\xAC", 3), "a");
+  EXPECT_EQ(sim::sensor_text("a\xE2\x82\xAC", 4), "a\xE2\x82\xAC");
+  // Whatever comes in, what comes out is a description writers accept.
+  sim::SensorInfo info;
+  info.frame_id = "lidar_top";
+  std::string odd(200, '\x01');
+  odd[7] = '\xC3';
+  info.identity.model = sim::sensor_text(odd, sim::SensorInfo::kMaxName);
+  info.time_sync = sim::sensor_text(odd + "\x7f\xF0\x9F", sim::SensorInfo::kMaxSource);
+  EXPECT_EQ(sim::sensor_info_problem(info), "");
+}
+
 TEST(SensorInfoStream, DescriptionSetAtCreationReachesReadersWhole) {
   StreamGuard g{unique_name("sensor_whole")};
   Writer w = make_writer(g.name, camera_info());

@@ -153,7 +153,7 @@ struct AravisCapture::Impl {
     GError* error = nullptr;
     const char* value = arv_gc_feature_node_get_value_as_string(ARV_GC_FEATURE_NODE(node), &error);
     g_clear_error(&error);
-    return value != nullptr ? std::string(value).substr(0, SensorInfo::kMaxName) : std::string();
+    return value != nullptr ? sensor_text(value, SensorInfo::kMaxName) : std::string();
   }
 
   static std::string first_feature(ArvDevice* device, std::initializer_list<const char*> names) {

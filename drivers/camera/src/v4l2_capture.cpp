@@ -104,8 +104,8 @@ Expected<std::optional<SensorInfo>> V4l2Capture::describe(const V4l2Device& devi
     }
   }
   // V4L2 names the card and the bus it is on; it knows no vendor, serial or firmware.
-  info.identity.model = device.card().substr(0, SensorInfo::kMaxName);
-  info.identity.serial = device.bus().substr(0, SensorInfo::kMaxName);
+  info.identity.model = sensor_text(device.card(), SensorInfo::kMaxName);
+  info.identity.serial = sensor_text(device.bus(), SensorInfo::kMaxName);
   info.time_base = TimeBase::host;
   info.time_sync = config_.timestamps == TimestampSource::device
                        ? "V4L2 buffer time (host monotonic clock) mapped to realtime"

@@ -12,7 +12,7 @@ namespace sim::lidar {
 std::string file_source(const std::filesystem::path& file) {
   std::error_code ignored;
   const auto absolute = std::filesystem::absolute(file, ignored).lexically_normal();
-  return ("file://" + absolute.string()).substr(0, SensorInfo::kMaxSource);
+  return sensor_text("file://" + absolute.string(), SensorInfo::kMaxSource);
 }
 
 void describe_frames(std::ostream& out, bool machine, std::uint64_t frames, std::uint64_t packets,

@@ -348,6 +348,7 @@ TEST(OusterLive, MetadataComesFromTheSensorsHttpApiIsCachedAndTheFramesAndImuAre
 
 // The stream says which clock the sensor stamps with: the metadata's timestamp_mode (PTP here;
 // the captures' metadata give none, and then the time base is unknown and the sentence says why).
+// Odd bytes in the metadata's text never stop the driver.
 TEST(OusterLive, TheStreamSaysWhichClockTheSensorStampsWithFromItsTimestampMode) {
   if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
   TempDir dir;
@@ -357,21 +358,25 @@ TEST(OusterLive, TheStreamSaysWhichClockTheSensorStampsWithFromItsTimestampMode)
   json.insert(open + 1, "\"config_params\": {\"timestamp_mode\": \"TIME_FROM_PTP_1588\"}, ");
   const fs::path ptp = dir.path / "ptp.json";
   std::ofstream(ptp) << json;
-  // A mode with a control character is not copied into the description (which would refuse it).
+  // A mode with a control character is not copied into the description (which would refuse it),
+  // and a product line with one is shown with a '?' in its place: the driver still starts.
   json.replace(json.find("TIME_FROM_PTP_1588"), 18, "TIME_\\u0001X");
+  json.replace(json.find("\"OS-1-32-G\""), 11, "\"OS-1\\u0007-32-G\"");
   const fs::path odd = dir.path / "odd.json";
   std::ofstream(odd) << json;
   struct Case {
     std::string metadata;
     sim::TimeBase time_base;
     std::string time_sync;
+    std::string model = "OS-1-32-G";
   };
   const std::vector<Case> cases = {
       {ptp.string(), sim::TimeBase::sensor_synchronized,
        "PTP (timestamp_mode TIME_FROM_PTP_1588; whether it is locked is not read)"},
       {data(legacy + ".json"), sim::TimeBase::unknown,
        "the sensor's clock; the metadata does not give its timestamp_mode"},
-      {odd.string(), sim::TimeBase::unknown, "the sensor's clock, with a timestamp_mode this driver does not know"},
+      {odd.string(), sim::TimeBase::unknown, "the sensor's clock, with a timestamp_mode this driver does not know",
+       "OS-1?-32-G"},
   };
   for (const Case& expected : cases) {
     const std::string stream = unique_name("ouster_live_clock");
@@ -385,6 +390,7 @@ TEST(OusterLive, TheStreamSaysWhichClockTheSensorStampsWithFromItsTimestampMode)
     ASSERT_TRUE(described && *described);
     EXPECT_EQ((*described)->time_base, expected.time_base);
     EXPECT_EQ((*described)->time_sync, expected.time_sync);
+    EXPECT_EQ((*described)->identity.model, expected.model);
     ::kill(driver.pid(), SIGTERM);
     EXPECT_EQ(driver.wait(), 0) << driver.err();
   }

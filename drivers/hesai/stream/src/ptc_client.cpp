@@ -88,7 +88,7 @@ Expected<SensorIdentity> fetch_identity(const PtcEndpoint& sensor) {
     return failed("sensor " + sensor.host + ":" + std::to_string(sensor.port) + ": " +
                   inventory.error().message);
   }
-  auto fit = [](const std::string& text) { return text.substr(0, SensorInfo::kMaxName); };
+  auto fit = [](const std::string& text) { return sensor_text(text, SensorInfo::kMaxName); };
   SensorIdentity identity;
   identity.vendor = "Hesai";
   identity.serial = fit(inventory->serial);

@@ -60,10 +60,10 @@ namespace {
 SensorInfo describe_sensor(const LidarStreamConfig& config, const Metadata& m) {
   SensorInfo info = *config.sensor;
   info.identity.vendor = "Ouster";
-  info.identity.model = m.prod_line.substr(0, SensorInfo::kMaxName);
-  info.identity.serial = m.serial.substr(0, SensorInfo::kMaxName);
-  info.identity.firmware = m.firmware.substr(0, SensorInfo::kMaxName);
-  info.calibration_source = config.metadata_source.substr(0, SensorInfo::kMaxSource);
+  info.identity.model = sensor_text(m.prod_line, SensorInfo::kMaxName);
+  info.identity.serial = sensor_text(m.serial, SensorInfo::kMaxName);
+  info.identity.firmware = sensor_text(m.firmware, SensorInfo::kMaxName);
+  info.calibration_source = sensor_text(config.metadata_source, SensorInfo::kMaxSource);
   info.point_time = PointTime::after_frame_stamp;
   return info;
 }

@@ -33,7 +33,7 @@ void describe_time_sync(SensorInfo& info, const TimeSync& sync, StampClock clock
       return;
     case StampClock::sensor_recorded:
       info.time_base = sync.base;
-      info.time_sync = (caller_time_sync + "; as recorded: " + sync.text).substr(0, SensorInfo::kMaxSource);
+      info.time_sync = sensor_text(caller_time_sync + "; as recorded: " + sync.text, SensorInfo::kMaxSource);
       return;
     case StampClock::restamped:
       return;  // the stamps are not the sensor's clock: the caller's words stand
