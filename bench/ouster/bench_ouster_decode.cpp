@@ -2,11 +2,12 @@
 // Decode throughput of sim::ouster::FrameAssembler on one core: lidar payloads in memory ->
 // points in a caller's span (organised, destaggered, sensor frame), frames swapped as a driver
 // swaps loans. The real captures (OS-1-32 LEGACY, OS-0-32 dual return; one frame each) and
-// synthetic frames of the heaviest modes (128 beams × 2048 columns, dual and single; RNG15 low
-// data rate), built with the tests' independent encoder. Counters: points/s and x_real_time =
-// seconds of sensor data decoded per second (target ≥ 50×, issue 22). The *_memory_bound
-// benchmarks do only the memory traffic a decoder cannot avoid (read every packet byte once,
-// write every point byte once, with memcpy/memset) as the ceiling this machine puts on decoding.
+// synthetic frames of the heaviest modes (128 beams × 2048 columns, dual and single; 128 × 1024
+// dual, the OS-1-128's default mode; RNG15 low data rate), built with the tests' independent
+// encoder. Counters: points/s and x_real_time = seconds of sensor data decoded per second
+// (target ≥ 50×, issue 22). The *_memory_bound benchmarks do only the memory traffic a decoder
+// cannot avoid (read every packet byte once, write every point byte once, with memcpy/memset) as
+// the ceiling this machine puts on decoding.
 //
 //   build-*/bench/ouster/bench_ouster_decode --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
@@ -135,6 +136,11 @@ void os_128x2048_dual(benchmark::State& s) { decode(s, input_128x2048_dual(), Cl
 void os_128x2048_dual_memory_bound(benchmark::State& s) { memory_bound(s, input_128x2048_dual()); }
 void os_128x2048_single(benchmark::State& s) { decode(s, input_128x2048_single(), CloudLayout::organized); }
 void os_128x2048_single_memory_bound(benchmark::State& s) { memory_bound(s, input_128x2048_single()); }
+// The OS-1-128's default lidar mode (1024×10) with dual return.
+void os_128x1024_dual(benchmark::State& s) {
+  static const Input in = synthetic(ouster_test::Layout::rng19_dual, 128, 1024);
+  decode(s, in, CloudLayout::organized);
+}
 void os_128x1024_low_data_rate(benchmark::State& s) {
   static const Input in = synthetic(ouster_test::Layout::rng15, 128, 1024);
   decode(s, in, CloudLayout::organized);
@@ -153,6 +159,7 @@ BENCHMARK(os_128x2048_dual)->Unit(benchmark::kMicrosecond);
 BENCHMARK(os_128x2048_dual_memory_bound)->Unit(benchmark::kMicrosecond);
 BENCHMARK(os_128x2048_single)->Unit(benchmark::kMicrosecond);
 BENCHMARK(os_128x2048_single_memory_bound)->Unit(benchmark::kMicrosecond);
+BENCHMARK(os_128x1024_dual)->Unit(benchmark::kMicrosecond);
 BENCHMARK(os_128x1024_low_data_rate)->Unit(benchmark::kMicrosecond);
 BENCHMARK(os_32x1024_fusa_dual)->Unit(benchmark::kMicrosecond);
 BENCHMARK_MAIN();
