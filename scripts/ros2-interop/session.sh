@@ -5,6 +5,8 @@
 # Env: WS (ROS 2 workspace), SIM (repository root), B (build dir), OUT (scratch), HERE (this folder).
 set -u
 ip link set lo up; ip link set lo multicast on
+# A bridge that aborts leaves a core in $OUT; stop_bridge prints its backtrace (gdb).
+ulimit -c unlimited; cd "$OUT"; rm -f core core.*
 set +u; . "$WS/install/setup.bash"; set -u
 export RMW_IMPLEMENTATION=rmw_cyclonedds_cpp
 export CYCLONEDDS_URI="file://$WS_TOOLS/cyclonedds-lo.xml"
@@ -32,6 +34,12 @@ start_bridge() { # start_bridge TAG [extra options]
 }
 stop_bridge() { # stop_bridge TAG
   kill -INT $BRIDGE; wait $BRIDGE; echo "[bridge exit $?]"
+  for core in core core.*; do
+    [ -f "$core" ] || continue
+    echo "--- backtrace of the bridge's core ($1)"
+    gdb -batch -ex bt "$B/bridge/dds/sim_dds_bridge" "$core" 2>&1 | grep -E '^#' | head -40
+    mv "$core" "$OUT/bridge-$1.core"
+  done
   echo "--- bridge stderr ($1)"; cat "$OUT/bridge-$1.err"
   echo "--- bridge last counters ($1)"; tail -1 "$OUT/bridge-$1.json"
 }

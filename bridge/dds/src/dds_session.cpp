@@ -5,13 +5,13 @@
 #include <fastdds/dds/log/Log.hpp>
 #include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
 #include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>
-#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 
 #include <algorithm>
 #include <cstring>
 #include <sstream>
 
 #include "ros_message_type.hpp"
+#include "udp_transport.hpp"
 #include "sim/ros2/graph.hpp"
 #include "sim/ros2/metadata.hpp"
 #include "sim/ros2/type_hash.hpp"
@@ -100,12 +100,9 @@ Expected<std::unique_ptr<DdsSession>> DdsSession::create(int domain) {
   // What rmw puts there: a participant without it is no part of the ROS 2 graph.
   qos.user_data().setValue(octets("enclave=/;"));
   qos.transport().use_builtin_transports = false;
-  auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
   // Large frames arrive as bursts of 64 kB fragments: ask for socket buffers that hold a few
   // (the kernel caps them at net.core.{r,w}mem_max; docs/bridge.md).
-  udp->sendBufferSize = 8 * 1024 * 1024;
-  udp->receiveBufferSize = 8 * 1024 * 1024;
-  qos.transport().user_transports.push_back(udp);
+  qos.transport().user_transports.push_back(udp_transport(8 * 1024 * 1024, 8 * 1024 * 1024));
   session->participant_ = dds::DomainParticipantFactory::get_instance()->create_participant(
       static_cast<dds::DomainId_t>(domain), qos, session.get(),
       dds::StatusMask::none());

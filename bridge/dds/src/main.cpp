@@ -209,7 +209,7 @@ struct Topics {
 // One line per topic when the bridge starts: which way it goes.
 void announce(apps::StatusLine& status, const Topics& topics, int domain) {
   for (const auto& o : topics.outbound) {
-    status.note(o->options().stream + " → DDS rt" + o->options().topic + "[/image_raw] (domain " +
+    status.note(o->options().stream + " → DDS rt" + announced_topic(o->options()) + " (domain " +
                 std::to_string(domain) + ")");
   }
   for (const auto& i : topics.inbound) {

@@ -383,6 +383,14 @@ void Publication::send_camera_info(std::int64_t stamp_ns) {
   camera_info_.write(message);
 }
 
+std::string announced_topic(const OutboundOptions& options) {
+  const std::string base = options.topic.empty() ? options.stream : options.topic;
+  if (auto status = inspect(options.stream)) {
+    if (auto type = ros2::message_type_for(status->layout)) return topic_for(base, *type);
+  }
+  return base + "[/image_raw]";
+}
+
 Outbound::Outbound(DdsSession& session, StaticTransforms& transforms, OutboundOptions options)
     : session_(session), transforms_(transforms), options_(std::move(options)) {
   if (options_.topic.empty()) options_.topic = options_.stream;

@@ -40,6 +40,10 @@ struct OutboundOptions {
 // layout, known once it is open).
 std::vector<std::string> published_topics(const OutboundOptions& options);
 
+// The ROS topic the frames of `options`' stream go to, by the stream's layout now; while the
+// stream does not exist, the base name and "[/image_raw]" (images go there, points to the base).
+std::string announced_topic(const OutboundOptions& options);
+
 class Outbound {
  public:
   Outbound(DdsSession& session, StaticTransforms& transforms, OutboundOptions options);

@@ -303,6 +303,27 @@ TEST(BridgeReview, AReaderItsRos2NodeDroppedIsNoLongerServed) {
   EXPECT_EQ(bridge.wait(), 0) << bridge.err();
 }
 
+// The start-up line names the topics the frames really go to: the stream's name for points,
+// <name>/image_raw for images (it used to say "<name>[/image_raw]" for both).
+TEST(BridgeReview, TheStartLineNamesTheTopicEachStreamIsPublishedOn) {
+  SKIP_WITHOUT_NETWORK();
+  StreamGuard lidar(unique_name("start_points"));
+  StreamGuard camera(unique_name("start_image"));
+  FramePump points({.name = lidar.name, .layout = sim::Layout::of(sim::PointLayout::of(sim::PointType::xyz32, 10))});
+  FramePump images({.name = camera.name,
+                    .layout = sim::Layout::of(sim::ImageLayout::packed(16, 12, sim::PixelFormat::mono8))});
+  ASSERT_TRUE(points.ok()) << points.error();
+  ASSERT_TRUE(images.ok()) << images.error();
+  Process bridge({bridge_tool, "--json", "--status-period", "0.1", "--publish", lidar.name, "--publish", camera.name});
+  ASSERT_TRUE(bridge.wait_for_line("\"topics\"")) << bridge.err();
+  EXPECT_NE(bridge.err().find(lidar.name + " → DDS rt" + lidar.name + " (domain 0)"), std::string::npos) << bridge.err();
+  EXPECT_NE(bridge.err().find(camera.name + " → DDS rt" + camera.name + "/image_raw (domain 0)"), std::string::npos)
+      << bridge.err();
+  EXPECT_EQ(bridge.err().find("[/image_raw]"), std::string::npos) << bridge.err();
+  bridge.signal(SIGTERM);
+  EXPECT_EQ(bridge.wait(), 0) << bridge.err();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) { return bridge_test::run_tests(argc, argv); }
