@@ -9,7 +9,7 @@
 # (sim_dds_bridge, sim_replay_pcap, sim_replay_video, sim_ls, sim_rm). Root (unshare --net).
 # NOT part of CI: CI has no ROS 2.
 #
-# Usage: WS=/tmp/ros2ws [SIM=<repo>] [B=<build dir>] [OUT=/tmp/ros2-interop] bash run.sh > log
+# Usage: WS=/tmp/ros2ws [SIM=<repo>] [B=<build dir>] [BRIDGE_BIN=<sim_dds_bridge>] [OUT=/tmp/ros2-interop] bash run.sh > log
 set -euo pipefail
 HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 export HERE

@@ -12,6 +12,7 @@ export RMW_IMPLEMENTATION=rmw_cyclonedds_cpp
 export CYCLONEDDS_URI="file://$WS_TOOLS/cyclonedds-lo.xml"
 unset ROS_DOMAIN_ID ROS_LOCALHOST_ONLY ROS_AUTOMATIC_DISCOVERY_RANGE
 L=/rosi_lidar; C=/rosi_camera
+BRIDGE_BIN=${BRIDGE_BIN:-$B/bridge/dds/sim_dds_bridge}
 run() { echo; echo "\$ $*"; "$@" 2>&1; echo "[exit $?]"; }
 alive() { kill -0 $BRIDGE 2>/dev/null && echo "[bridge alive]" || echo "[BRIDGE GONE]"; }
 trim() { head -n "${1:-60}"; }
@@ -28,7 +29,7 @@ start_producers() {
 }
 start_bridge() { # start_bridge TAG [extra options]
   local tag=$1; shift
-  "$B/bridge/dds/sim_dds_bridge" --publish $L --publish $C --json --status-period 1 "$@" \
+  "$BRIDGE_BIN" --publish $L --publish $C --json --status-period 1 "$@" \
     > "$OUT/bridge-$tag.json" 2> "$OUT/bridge-$tag.err" &
   BRIDGE=$!
 }
@@ -37,7 +38,7 @@ stop_bridge() { # stop_bridge TAG
   for core in core core.*; do
     [ -f "$core" ] || continue
     echo "--- backtrace of the bridge's core ($1)"
-    gdb -batch -ex bt "$B/bridge/dds/sim_dds_bridge" "$core" 2>&1 | grep -E '^#' | head -40
+    gdb -batch -ex bt "$BRIDGE_BIN" "$core" 2>&1 | grep -E '^#' | head -40
     mv "$core" "$OUT/bridge-$1.core"
   done
   echo "--- bridge stderr ($1)"; cat "$OUT/bridge-$1.err"
@@ -77,6 +78,18 @@ echo; echo "\$ timeout 20 ros2 topic echo --once --no-daemon --no-arr $L sensor_
 timeout 20 ros2 topic echo --once --no-daemon --no-arr $L sensor_msgs/msg/PointCloud2 2>&1 | trim 40; echo "[exit ${PIPESTATUS[0]}]"; alive
 echo; echo "\$ timeout 20 ros2 topic echo --once --no-daemon --field fields $L sensor_msgs/msg/PointCloud2"
 timeout 20 ros2 topic echo --once --no-daemon --field fields $L sensor_msgs/msg/PointCloud2 2>&1 | trim 60; echo "[exit ${PIPESTATUS[0]}]"; alive
+# Two ROS 2 nodes join at once while a third reads: each takes a participant index whose user-data
+# port (7411 + 2i) the bridge may never have sent to. Fast DDS 2.9.1 aborted the bridge on such a
+# join (docs/ros2-interop.md, "Defect: the bridge aborts in Fast DDS").
+timeout -s INT 30 ros2 topic hz $C/image_raw > "$OUT/hz-bg2.out" 2>&1 & HZ=$!
+sleep 4
+echo; echo "\$ 2 x timeout 20 ros2 topic echo --once --no-daemon --qos-durability transient_local --qos-reliability reliable /tf_static tf2_msgs/msg/TFMessage, at once   (with ros2 topic hz $C/image_raw running)"
+E1=; E2=
+timeout 20 ros2 topic echo --once --no-daemon --qos-durability transient_local --qos-reliability reliable /tf_static tf2_msgs/msg/TFMessage > "$OUT/echo-1.out" 2>&1 & E1=$!
+timeout 20 ros2 topic echo --once --no-daemon --qos-durability transient_local --qos-reliability reliable /tf_static tf2_msgs/msg/TFMessage > "$OUT/echo-2.out" 2>&1 & E2=$!
+wait $E1; echo "[echo 1 exit $?, $(grep -c child_frame_id "$OUT/echo-1.out") transforms]"
+wait $E2; echo "[echo 2 exit $?, $(grep -c child_frame_id "$OUT/echo-2.out") transforms]"; alive
+kill -INT $HZ 2>/dev/null; wait $HZ 2>/dev/null
 echo; echo "\$ timeout 20 image_listener $C/image_raw 5   (peer_nodes; asks RELIABLE, bridge is best effort: expected not to match)"
 timeout 20 image_listener $C/image_raw 5 2>&1 | trim 10; echo "[exit ${PIPESTATUS[0]}]"; alive
 stop_bridge A

@@ -91,10 +91,12 @@ bool running(pid_t pid) {
 
 // The bridge's reliable writers (ros_discovery_info, /tf_static) each have a reader in every
 // node. With two or more, Fast DDS selects the readers' shared multicast locator; when one more
-// reader matches, it sends that reader alone a heartbeat (and a GAP) to its unicast locator. In a
-// node with a participant index that locator is new: Fast DDS 2.9.1 had opened no output channel
-// for it and aborted in OutputTrafficManager.hpp:87. One node stays, two more join in each
-// round, get everything and leave (their participant indices, hence locators, are reused).
+// reader matches, it sends that reader alone a heartbeat to its unicast locator. A node with a
+// participant index has a unicast locator of its own for data (7411 + 2i), which Fast DDS 2.9.1
+// had opened no output channel for, and it aborted in OutputTrafficManager.hpp:87. The nodes have
+// no writers: a real ROS 2 node's ros_discovery_info writer lets the bridge's graph reader open
+// that locator, when Fast DDS happens to match the writer before the reader. One node stays; two
+// more join in each round, get everything and leave (their indices and locators are reused).
 TEST(BridgePeers, Ros2NodesJoiningInTheirOwnProcessesNeverEndTheBridge) {
   SKIP_WITHOUT_NETWORK();
   StreamGuard camera(unique_name("peers"));
