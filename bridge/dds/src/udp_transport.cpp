@@ -38,6 +38,8 @@ class VectorLocators final : public LocatorsIterator {
   std::vector<Locator_t>::const_iterator at_;
 };
 
+// Fast DDS's UDPv4 transport (the low level) with one addition: a datagram's destinations all
+// have an output channel before it goes out (udp_transport.hpp says why).
 class OpenedLocatorsTransport final : public fr::ChainingTransport {
  public:
   explicit OpenedLocatorsTransport(const fr::ChainingTransportDescriptor& descriptor)
@@ -66,10 +68,12 @@ class OpenedLocatorsTransport final : public fr::ChainingTransport {
     return low_level->send(buffer, size, &first, &last, timeout);
   }
 
+  // The UDP transport's settings (buffer sizes, message size) are the ones in force.
   fr::TransportDescriptorInterface* get_configuration() override {
     return low_level_transport_->get_configuration();
   }
 
+  // Received datagrams are passed on as they came.
   void receive(fr::TransportReceiverInterface* next, const octet* buffer, std::uint32_t size,
                const Locator_t& local, const Locator_t& remote) override {
     next->OnDataReceived(buffer, size, local, remote);
