@@ -204,8 +204,11 @@ Result run_case(const Case& c, const dds_topic_descriptor_t* type, const std::st
   static int counter = 0;
   const std::string name = "/bench_bridge_" + std::to_string(::getpid()) + "_" +
                            std::to_string(counter++) + (via_bridge ? "_b" : "_p");
+  // The bridge publishes an image stream on <stream>/image_raw and points on <stream>
+  // (docs/bridge.md, "Topics"); the plain publisher publishes on the stream's own name.
+  const bool image_raw = via_bridge && c.layout.kind == sim::LayoutKind::image;
   CycloneParticipant participant;
-  Receiver<Sample> receiver(participant, type, "rt" + name, reliable);
+  Receiver<Sample> receiver(participant, type, "rt" + name + (image_raw ? "/image_raw" : ""), reliable);
   std::uint64_t sent = 0;
   double cpu = 0, window = 1;
   if (via_bridge) {
