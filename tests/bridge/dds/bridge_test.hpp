@@ -31,6 +31,15 @@ using sim::testing::CycloneWriter;
 using sim::testing::EndpointQos;
 using sim::testing::Process;
 using sim::testing::StreamGuard;
+using sim::testing::CycloneReader;
+
+// The ROS 2 messages as idlc generated them (idl/sensor_msgs.idl).
+using Cloud = sensor_msgs_msg_dds__PointCloud2_;
+using Image = sensor_msgs_msg_dds__Image_;
+using Compressed = sensor_msgs_msg_dds__CompressedImage_;
+using CameraInfo = sensor_msgs_msg_dds__CameraInfo_;
+using TfMessage = tf2_msgs_msg_dds__TFMessage_;
+using Graph = rmw_dds_common_msg_dds__ParticipantEntitiesInfo_;
 
 const std::string bridge_tool = SIM_DDS_BRIDGE;
 

@@ -35,10 +35,6 @@ namespace {
 namespace fs = std::filesystem;
 using namespace bridge_test;
 using namespace std::chrono_literals;
-using sim::testing::CycloneReader;
-using Cloud = sensor_msgs_msg_dds__PointCloud2_;
-using Image = sensor_msgs_msg_dds__Image_;
-using Compressed = sensor_msgs_msg_dds__CompressedImage_;
 
 const std::string replay_pcap = SIM_REPLAY_PCAP;
 const std::string replay_video = SIM_REPLAY_VIDEO;

@@ -27,11 +27,6 @@
 namespace {
 
 using namespace bridge_test;
-using sim::testing::CycloneReader;
-using Image = sensor_msgs_msg_dds__Image_;
-using CameraInfo = sensor_msgs_msg_dds__CameraInfo_;
-using TfMessage = tf2_msgs_msg_dds__TFMessage_;
-using Graph = rmw_dds_common_msg_dds__ParticipantEntitiesInfo_;
 using Gid = std::array<std::uint8_t, 16>;
 
 constexpr EndpointQos latched{.reliable = true, .transient_local = true, .depth = 10};

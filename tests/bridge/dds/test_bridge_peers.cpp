@@ -26,11 +26,6 @@
 namespace {
 
 using namespace bridge_test;
-using sim::testing::CycloneReader;
-using CameraInfo = sensor_msgs_msg_dds__CameraInfo_;
-using Image = sensor_msgs_msg_dds__Image_;
-using TfMessage = tf2_msgs_msg_dds__TFMessage_;
-using Graph = rmw_dds_common_msg_dds__ParticipantEntitiesInfo_;
 
 constexpr EndpointQos latched{.reliable = true, .transient_local = true, .depth = 1};
 

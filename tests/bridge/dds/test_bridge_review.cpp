@@ -20,10 +20,6 @@
 namespace {
 
 using namespace bridge_test;
-using sim::testing::CycloneReader;
-using Cloud = sensor_msgs_msg_dds__PointCloud2_;
-using Image = sensor_msgs_msg_dds__Image_;
-using Compressed = sensor_msgs_msg_dds__CompressedImage_;
 
 // H1, L1, L2: configurations the bridge used to accept silently.
 TEST(BridgeReview, RefusesLoopsDuplicatesAndImpossibleRatesWithOneSentence) {
