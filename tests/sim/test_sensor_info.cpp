@@ -431,8 +431,6 @@ TEST(SensorInfoConcurrency, ConcurrentUpdatesNeverTearTheDescription) {
   EXPECT_EQ(torn, 0);
 }
 
-// The writer in another process recalibrates while this reader reads: the next frame carries a
-// new generation and sensor_info() then gives the new calibration, without reopening.
 // The description (and the writer's pid) go into a new region before its name does: a reader in
 // another process that opens the stream the moment it appears finds them. Before, a reader could
 // open a new stream between the name and the description and see none.
@@ -449,6 +447,8 @@ TEST(SensorInfoProcesses, AReaderThatOpensANewStreamTheMomentItAppearsFindsItsDe
   EXPECT_EQ(peer.wait(), 0) << peer.out() << peer.err();
 }
 
+// The writer in another process recalibrates while this reader reads: the next frame carries a
+// new generation and sensor_info() then gives the new calibration, without reopening.
 TEST(SensorInfoProcesses, AReaderSeesAnotherProcessRecalibrateWithoutReopening) {
   StreamGuard g{unique_name("sensor_peer")};
   Process peer({SIM_TEST_PEER, "recalibrate", g.name});

@@ -358,8 +358,8 @@ TEST(OusterLive, TheStreamSaysWhichClockTheSensorStampsWithFromItsTimestampMode)
   json.insert(open + 1, "\"config_params\": {\"timestamp_mode\": \"TIME_FROM_PTP_1588\"}, ");
   const fs::path ptp = dir.path / "ptp.json";
   std::ofstream(ptp) << json;
-  // A mode with a control character is not copied into the description (which would refuse it),
-  // and a product line with one is shown with a '?' in its place: the driver still starts.
+  // A mode and a product line with a control character are shown with a '?' in its place (the
+  // description would refuse the character): the driver still starts.
   json.replace(json.find("TIME_FROM_PTP_1588"), 18, "TIME_\\u0001X");
   json.replace(json.find("\"OS-1-32-G\""), 11, "\"OS-1\\u0007-32-G\"");
   const fs::path odd = dir.path / "odd.json";
@@ -375,7 +375,7 @@ TEST(OusterLive, TheStreamSaysWhichClockTheSensorStampsWithFromItsTimestampMode)
        "PTP (timestamp_mode TIME_FROM_PTP_1588; whether it is locked is not read)"},
       {data(legacy + ".json"), sim::TimeBase::unknown,
        "the sensor's clock; the metadata does not give its timestamp_mode"},
-      {odd.string(), sim::TimeBase::unknown, "the sensor's clock, with a timestamp_mode this driver does not know",
+      {odd.string(), sim::TimeBase::unknown, "the sensor's clock, timestamp_mode TIME_?X (not known to this driver)",
        "OS-1?-32-G"},
   };
   for (const Case& expected : cases) {

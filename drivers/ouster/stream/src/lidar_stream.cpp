@@ -1,9 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/ouster/lidar_stream.hpp"
 
-#include <algorithm>
 #include <array>
-#include <cctype>
 #include <cmath>
 #include <numbers>
 #include <string_view>
@@ -37,14 +35,12 @@ void describe_live_clock(SensorInfo& info, const Metadata& metadata) {
     info.time_sync = (mode == "TIME_FROM_PTP_1588" ? "PTP" : "the sync pulse input") +
                      std::string(" (timestamp_mode ") + mode + "; whether it is locked is not read)";
   } else {
-    // Another mode is named only when it looks like one (a later firmware's): the metadata's
-    // text must not put control characters or a long string into the description.
-    const bool named = !mode.empty() && mode.size() <= 64 &&
-                       std::all_of(mode.begin(), mode.end(), [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+    // Another mode (a later firmware's) is named as the metadata gives it, made fit for the
+    // description (64 bytes at most, control characters as '?').
     info.time_base = TimeBase::unknown;
     info.time_sync = mode.empty() ? "the sensor's clock; the metadata does not give its timestamp_mode"
-                     : named      ? "the sensor's clock, timestamp_mode " + mode + " (not known to this driver)"
-                                  : std::string("the sensor's clock, with a timestamp_mode this driver does not know");
+                                  : "the sensor's clock, timestamp_mode " + sensor_text(mode, 64) +
+                                        " (not known to this driver)";
   }
 }
 
