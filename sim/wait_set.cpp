@@ -27,6 +27,9 @@ constexpr std::int64_t kWaitSliceNs = 100'000'000;
 // Sleep at most this long when some stream cannot wake the set (a writer too old to wake readers
 // that may not write its wait page): that stream is polled at this period.
 constexpr std::int64_t kPollSleepNs = 1'000'000;
+// A full set's futex_waitv has no room for the wakeup's word: it sleeps at most this long and
+// looks at the wakeup between sleeps.
+constexpr std::int64_t kFullSetWakeupPollNs = 10'000'000;
 
 #ifndef SYS_futex_waitv
 #define SYS_futex_waitv 449  // the same number on x86-64 and aarch64
@@ -62,6 +65,7 @@ struct WaitSet::Impl {
   WaitSetOptions options;
   WaitSetStrategy strategy;
   std::vector<Reader*> readers;
+  Wakeup* wakeup = nullptr;
   std::size_t next_ready = 0;   // where the next look for a ready reader starts (fairness)
   std::size_t next_sleep = 0;   // the stream the next round-robin slice sleeps on
 
@@ -77,7 +81,14 @@ struct WaitSet::Impl {
     return std::nullopt;
   }
 
-  // One futex_waitv sleep on every stream's word; false if the kernel lacks the call.
+  // Whether the wakeup was notified since the last wait that took it; takes it.
+  bool take_wakeup() noexcept {
+    return wakeup != nullptr && wakeup->pending_.load(std::memory_order_relaxed) != 0 &&
+           wakeup->pending_.exchange(0, std::memory_order_acquire) != 0;
+  }
+
+  // One futex_waitv sleep on every stream's word (and the wakeup's); false if the kernel lacks
+  // the call.
   bool sleep_on_all(const std::array<std::uint32_t, kMaxReaders>& seen, std::int64_t until) noexcept {
     const std::size_t n = readers.size();
     std::array<FutexWaitv, kMaxReaders> waits{};
@@ -87,11 +98,18 @@ struct WaitSet::Impl {
       waits[i] = {seen[i], reinterpret_cast<std::uintptr_t>(&ReaderWaitAccess::futex_word(*readers[i])),
                   kFutex2SizeU32, 0};
     }
+    std::size_t words = n;
+    if (wakeup != nullptr && n < kMaxReaders) {
+      // Sleeps only while nothing is pending: a notify() after take_wakeup() ends it at once.
+      waits[words++] = {0, reinterpret_cast<std::uintptr_t>(&wakeup->pending_), kFutex2SizeU32, 0};
+    } else if (wakeup != nullptr) {
+      until = std::min(until, monotonic_ns() + kFullSetWakeupPollNs);
+    }
     bool supported = true;
     if (!find_ready()) {
       if (!every_stream_wakes) until = std::min(until, monotonic_ns() + kPollSleepNs);
       timespec deadline{until / 1'000'000'000, until % 1'000'000'000};
-      const long rc = syscall(SYS_futex_waitv, waits.data(), static_cast<unsigned>(n), 0, &deadline,
+      const long rc = syscall(SYS_futex_waitv, waits.data(), static_cast<unsigned>(words), 0, &deadline,
                               CLOCK_MONOTONIC);
       supported = !(rc < 0 && errno == ENOSYS);
     }
@@ -129,6 +147,8 @@ Expected<std::size_t> WaitSet::add(Reader& reader) {
   return impl_->readers.size() - 1;
 }
 
+void WaitSet::watch(Wakeup& wakeup) noexcept { impl_->wakeup = &wakeup; }
+
 std::size_t WaitSet::size() const noexcept { return impl_->readers.size(); }
 WaitSetStrategy WaitSet::strategy() const noexcept { return impl_->strategy; }
 
@@ -142,6 +162,7 @@ std::optional<std::size_t> WaitSet::wait(std::chrono::nanoseconds timeout) noexc
   const std::size_t n = s.readers.size();
   std::array<std::uint32_t, kMaxReaders> seen{};
   for (;;) {
+    if (s.take_wakeup()) return std::nullopt;
     bool moved = false;
     for (Reader* r : s.readers) moved = ReaderWaitAccess::refresh(*r) || moved;
     if (moved) continue;  // look again, at the new regions
@@ -152,6 +173,10 @@ std::optional<std::size_t> WaitSet::wait(std::chrono::nanoseconds timeout) noexc
     const std::int64_t now = monotonic_ns();
     if (now >= deadline) return std::nullopt;
     const std::int64_t until = std::min(deadline, now + kWaitSliceNs);
+    if (n == 0 && s.wakeup != nullptr) {
+      detail::futex_wait_until(&s.wakeup->pending_, 0, until);
+      continue;
+    }
     if (n == 0) {
       timespec ts{(until - now) / 1'000'000'000, (until - now) % 1'000'000'000};
       nanosleep(&ts, nullptr);
@@ -168,6 +193,12 @@ std::optional<std::size_t> WaitSet::wait(std::chrono::nanoseconds timeout) noexc
   }
 }
 
+void Wakeup::notify() noexcept {
+  // After whatever the notifying thread did (added work, asked to stop): the waiter that takes
+  // the wakeup sees it.
+  if (pending_.exchange(1, std::memory_order_release) == 0) detail::futex_wake_all(&pending_);
+}
+
 // --- StreamNotifier ---------------------------------------------------------------------------
 
 struct StreamNotifier::Impl {
@@ -175,13 +206,15 @@ struct StreamNotifier::Impl {
   std::unique_ptr<std::atomic<bool>[]> arrived;
   int event_fd = -1;
   std::atomic<bool> stop{false};
+  Wakeup stop_wakeup;  // ends the thread's wait when the notifier closes
   std::thread thread;
 
   void run() noexcept {
     WaitSet set;
     for (Reader& r : readers) (void)set.add(r);
+    set.watch(stop_wakeup);
     while (!stop.load(std::memory_order_relaxed)) {
-      if (!set.wait(std::chrono::milliseconds(50))) continue;
+      if (!set.wait(kForever)) continue;
       for (std::size_t i = 0; i < readers.size(); ++i) {
         if (!set.ready(i)) continue;
         ReaderWaitAccess::skip_to_newest(readers[i]);
@@ -195,6 +228,7 @@ struct StreamNotifier::Impl {
 
   ~Impl() {
     stop.store(true, std::memory_order_relaxed);
+    stop_wakeup.notify();
     if (thread.joinable()) thread.join();
     if (event_fd >= 0) ::close(event_fd);
   }

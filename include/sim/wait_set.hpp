@@ -9,10 +9,13 @@
 //   }
 //
 // The readers keep their own semantics (freshest frame, borrow, still_valid); the set only waits.
+// A sim::Wakeup ends a wait from another thread (new work for the waiting thread, or stop).
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -37,6 +40,23 @@ struct WaitSetOptions {
   std::chrono::nanoseconds round_robin_slice{1'000'000};
 };
 
+// Ends the wait of the WaitSet that watches it, from any thread: for a thread that sleeps on
+// streams and must also notice other work (a stream to add, a request to stop). A notify() while
+// the set is not waiting ends its next wait at once; one wait that ends this way takes every
+// notify() made before it.
+class Wakeup {
+ public:
+  Wakeup() = default;
+  Wakeup(const Wakeup&) = delete;
+  Wakeup& operator=(const Wakeup&) = delete;
+
+  void notify() noexcept;
+
+ private:
+  friend class WaitSet;
+  std::atomic<std::uint32_t> pending_{0};  // 1 from notify() until a wait takes it; a futex word
+};
+
 // Waits until any of its readers has a frame read() or borrow() would deliver. Holds references:
 // each added Reader must outlive the set (or be removed first) and must not move. Not thread-safe:
 // use it from the thread that reads the readers.
@@ -54,9 +74,16 @@ class WaitSet {
   Expected<std::size_t> add(Reader& reader);
   std::size_t size() const noexcept;
 
-  // Sleeps until some reader has a deliverable frame or the timeout passes (kForever: none).
-  // The index of a ready reader (readers are taken in turn, so a busy stream does not hide a
-  // quieter one), or nothing at the timeout.
+  // Also ends each wait when `wakeup` is notified (one wakeup per set; a second replaces the
+  // first). The wakeup must outlive the set. A set of kMaxReaders readers notices it within
+  // 10 ms (futex_waitv takes 128 words, all the readers'); any other set at once, or within one
+  // round-robin slice.
+  void watch(Wakeup& wakeup) noexcept;
+
+  // Sleeps until some reader has a deliverable frame, the watched wakeup is notified, or the
+  // timeout passes (kForever: none). The index of a ready reader (readers are taken in turn, so a
+  // busy stream does not hide a quieter one), or nothing at the timeout or wakeup (which comes
+  // first: a ready reader stays ready for the next wait).
   [[nodiscard]] std::optional<std::size_t> wait(std::chrono::nanoseconds timeout) noexcept;
   template <typename Rep, typename Period>
   [[nodiscard]] std::optional<std::size_t> wait(std::chrono::duration<Rep, Period> timeout) noexcept {

@@ -110,6 +110,82 @@ TEST_P(WaitSetStrategies, TakesReadyStreamsInTurnSoABusyOneHidesNoOther) {
   EXPECT_EQ(seen, (std::set<std::size_t>{0, 1}));
 }
 
+namespace {
+
+// Only a wakeup ends a wait with no frame to come before this: ending well before it is the proof.
+constexpr auto kLongWait = 120s;
+
+// Ends `set`'s wait from another thread, which first lets the set fall asleep (not checked: a
+// notify() before the wait ends it as well). True when the wait ended by the wakeup.
+bool woken_from_another_thread(WaitSet& set, Wakeup& wakeup) {
+  std::thread other([&] {
+    std::this_thread::sleep_for(20ms);
+    wakeup.notify();
+  });
+  const auto start = std::chrono::steady_clock::now();
+  const auto ready = set.wait(kLongWait);
+  const bool early = std::chrono::steady_clock::now() - start < kLongWait;
+  other.join();
+  return !ready.has_value() && early;
+}
+
+}  // namespace
+
+TEST_P(WaitSetStrategies, AWakeupFromAnotherThreadEndsAWaitOnIdleStreams) {
+  auto a = make_stream("wake_a");
+  auto b = make_stream("wake_b");
+  ASSERT_TRUE(a && b);
+  WaitSet set({.strategy = GetParam()});
+  Wakeup wakeup;
+  set.watch(wakeup);
+  ASSERT_TRUE(set.add(a->reader));
+  ASSERT_TRUE(set.add(b->reader));
+  EXPECT_TRUE(woken_from_another_thread(set, wakeup));
+  // The set still waits for frames afterwards.
+  publish(*b);
+  EXPECT_EQ(set.wait(kLongWait), std::optional<std::size_t>(1));
+}
+
+TEST_P(WaitSetStrategies, AWakeupEndsTheWaitOfASetWithNoReaders) {
+  WaitSet set({.strategy = GetParam()});
+  Wakeup wakeup;
+  set.watch(wakeup);
+  EXPECT_TRUE(woken_from_another_thread(set, wakeup));
+}
+
+// futex_waitv takes at most 128 words, all of them the readers' here: the wakeup is looked at
+// between shorter sleeps instead.
+TEST_P(WaitSetStrategies, AWakeupEndsTheWaitOfAFullSet) {
+  auto s = make_stream("wake_full");
+  ASSERT_TRUE(s);
+  std::vector<Reader> readers;
+  for (std::size_t i = 0; i < WaitSet::kMaxReaders; ++i) {
+    auto r = Reader::open(s->guard.name);
+    ASSERT_TRUE(r);
+    readers.push_back(std::move(*r));
+  }
+  WaitSet set({.strategy = GetParam()});
+  for (Reader& r : readers) ASSERT_TRUE(set.add(r));
+  Wakeup wakeup;
+  set.watch(wakeup);
+  EXPECT_TRUE(woken_from_another_thread(set, wakeup));
+}
+
+TEST_P(WaitSetStrategies, AWakeupComesBeforeAReadyStreamAndOneWaitTakesEveryNotifyBeforeIt) {
+  auto s = make_stream("wake_first");
+  ASSERT_TRUE(s);
+  WaitSet set({.strategy = GetParam()});
+  Wakeup wakeup;
+  set.watch(wakeup);
+  ASSERT_TRUE(set.add(s->reader));
+  publish(*s);
+  wakeup.notify();
+  wakeup.notify();
+  EXPECT_FALSE(set.wait(kLongWait).has_value());
+  // The frame stayed ready, and both notifies were taken by that one wait.
+  EXPECT_EQ(set.wait(kLongWait), std::optional<std::size_t>(0));
+}
+
 TEST_P(WaitSetStrategies, APeerProcessReadsTwoStreamsAtDifferentRatesWhole) {
   StreamGuard fast{unique_name("ws_fast")}, slow{unique_name("ws_slow")};
   ASSERT_TRUE(Writer::create({.name = fast.name, .capacity = 16384}));

@@ -43,8 +43,8 @@ class Hub {
   void unsubscribe(const Client* client, std::uint32_t channel_id);
 
   // Ends the pumps nobody subscribes to any more, and the runners left without pumps. Called
-  // from the catalog's thread, not from a client's: a runner takes up to one wait slice to stop,
-  // and a flood of subscribe/unsubscribe then reuses the running pump.
+  // from the catalog's thread, not from a client's: a runner stops only after the frame it is
+  // encoding, and a flood of subscribe/unsubscribe then reuses the running pump.
   void reap();
 
   // From the catalog.

@@ -13,7 +13,8 @@ namespace {
 
 using namespace std::chrono_literals;
 
-// The longest a runner sleeps in one wait: how soon it notices added and removed pumps.
+// The longest a runner sleeps in one wait (added and removed pumps and the destructor wake it
+// at once, through its Wakeup).
 constexpr auto kWaitSlice = 100ms;
 // How often a pump tries again to open a stream it could not open (the catalog unadvertises
 // it if it stays gone).
@@ -142,20 +143,28 @@ PumpRunner::PumpRunner() : thread_([this] { run(); }) {}
 
 PumpRunner::~PumpRunner() {
   stopping_.store(true);
+  wakeup_.notify();
   if (thread_.joinable()) thread_.join();
 }
 
 bool PumpRunner::add(const std::shared_ptr<Pump>& pump) {
-  std::lock_guard lock(mutex_);
-  if (pumps_.size() >= WaitSet::kMaxReaders) return false;
-  pumps_.push_back(pump);
-  changed_ = true;
+  {
+    std::lock_guard lock(mutex_);
+    if (pumps_.size() >= WaitSet::kMaxReaders) return false;
+    pumps_.push_back(pump);
+    changed_ = true;
+  }
+  wakeup_.notify();  // the new subscriber's first frame goes out without waiting for a slice
   return true;
 }
 
 void PumpRunner::remove(const Pump* pump) {
-  std::lock_guard lock(mutex_);
-  if (std::erase_if(pumps_, [&](const auto& p) { return p.get() == pump; }) > 0) changed_ = true;
+  {
+    std::lock_guard lock(mutex_);
+    if (std::erase_if(pumps_, [&](const auto& p) { return p.get() == pump; }) == 0) return;
+    changed_ = true;
+  }
+  wakeup_.notify();
 }
 
 std::size_t PumpRunner::size() const {
@@ -167,12 +176,18 @@ void PumpRunner::run() {
   std::vector<std::shared_ptr<Pump>> pumps;  // this thread's copy of pumps_
   std::vector<Pump*> waiting;                // the pumps whose readers are in `set`, by index
   std::vector<Pump*> wanted;
-  WaitSet set;
+  // A set of no readers yet that ends its waits when add(), remove() or the destructor notify.
+  auto empty_set = [this] {
+    WaitSet set;
+    set.watch(wakeup_);
+    return set;
+  };
+  WaitSet set = empty_set();
   while (!stopping_.load(std::memory_order_relaxed)) {
     {
       std::lock_guard lock(mutex_);
       if (changed_) {
-        set = WaitSet();  // it may name readers of pumps let go now: built anew below
+        set = empty_set();  // it may name readers of pumps let go now: built anew below
         waiting.clear();
         pumps = pumps_;
         changed_ = false;
@@ -191,7 +206,7 @@ void PumpRunner::run() {
       wake = std::min(wake, std::max(pump->next_wait(now), now + 1ms));
     }
     if (wanted != waiting) {
-      set = WaitSet();
+      set = empty_set();
       for (Pump* pump : wanted) (void)set.add(*pump->reader(now));  // at most kMaxReaders
       waiting = wanted;
     }
@@ -203,7 +218,7 @@ void PumpRunner::run() {
     }
     if (reader_closed) {  // the set names a closed reader: build it anew
       waiting.clear();
-      set = WaitSet();
+      set = empty_set();
     }
   }
 }

@@ -21,6 +21,7 @@
 
 #include "encoder.hpp"
 #include "sim/reader.hpp"
+#include "sim/wait_set.hpp"
 
 namespace sim::foxglove {
 
@@ -112,7 +113,7 @@ class PumpRunner {
 
   // False when the runner already feeds as many pumps as one wait can hold.
   bool add(const std::shared_ptr<Pump>& pump);
-  // The runner stops using the pump within one wait slice (100 ms).
+  // The runner stops using the pump at its next turn (it is woken for it).
   void remove(const Pump* pump);
   std::size_t size() const;
 
@@ -123,7 +124,8 @@ class PumpRunner {
   std::vector<std::shared_ptr<Pump>> pumps_;
   bool changed_ = false;
   std::atomic<bool> stopping_{false};
-  std::thread thread_;
+  Wakeup wakeup_;      // ends the thread's wait when pumps_ changes or the runner stops
+  std::thread thread_;  // last: starts once the members above exist
 };
 
 }  // namespace sim::foxglove
