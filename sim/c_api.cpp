@@ -23,6 +23,7 @@ struct sim_reader {
   std::uint64_t sensor_generation = 0;  // of the frame SIM_readData delivered last
 };
 struct sim_waitset {
+  sim::Wakeup wakeup;  // SIM_waitsetWake's; the set watches it
   sim::WaitSet set;
 };
 struct sim_notifier {
@@ -355,7 +356,9 @@ int SIM_readerSetWaitMode(sim_reader* r, int mode) {
 
 sim_waitset* SIM_waitsetCreate(void) {
   clear_last_error();
-  return new (std::nothrow) sim_waitset{sim::WaitSet()};
+  auto* ws = new (std::nothrow) sim_waitset{};
+  if (ws != nullptr) ws->set.watch(ws->wakeup);
+  return ws;
 }
 
 int SIM_waitsetAdd(sim_waitset* ws, sim_reader* r) {
@@ -372,7 +375,14 @@ int SIM_waitsetWait(sim_waitset* ws, int timeout_ms) {
                                      : std::chrono::nanoseconds(std::chrono::milliseconds(timeout_ms));
   clear_last_error();
   const auto ready = ws->set.wait(timeout);
-  return ready ? static_cast<int>(*ready) : SIM_ETIMEDOUT;
+  if (ready) return static_cast<int>(*ready);
+  return ws->set.woken() ? SIM_EWOKEN : SIM_ETIMEDOUT;
+}
+
+int SIM_waitsetWake(sim_waitset* ws) {
+  if (ws == nullptr) return fail(SIM_EINVAL, "SIM_waitsetWake needs a wait set");
+  ws->wakeup.notify();
+  return 0;
 }
 
 int SIM_waitsetReady(const sim_waitset* ws, int index) {

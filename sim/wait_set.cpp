@@ -66,6 +66,7 @@ struct WaitSet::Impl {
   WaitSetStrategy strategy;
   std::vector<Reader*> readers;
   Wakeup* wakeup = nullptr;
+  bool woken = false;  // the last wait ended by the wakeup
   std::size_t next_ready = 0;   // where the next look for a ready reader starts (fairness)
   std::size_t next_sleep = 0;   // the stream the next round-robin slice sleeps on
 
@@ -150,6 +151,7 @@ Expected<std::size_t> WaitSet::add(Reader& reader) {
 void WaitSet::watch(Wakeup& wakeup) noexcept { impl_->wakeup = &wakeup; }
 
 std::size_t WaitSet::size() const noexcept { return impl_->readers.size(); }
+bool WaitSet::woken() const noexcept { return impl_->woken; }
 WaitSetStrategy WaitSet::strategy() const noexcept { return impl_->strategy; }
 
 bool WaitSet::ready(std::size_t index) const noexcept {
@@ -161,8 +163,12 @@ std::optional<std::size_t> WaitSet::wait(std::chrono::nanoseconds timeout) noexc
   const std::int64_t deadline = deadline_after(timeout);
   const std::size_t n = s.readers.size();
   std::array<std::uint32_t, kMaxReaders> seen{};
+  s.woken = false;
   for (;;) {
-    if (s.take_wakeup()) return std::nullopt;
+    if (s.take_wakeup()) {
+      s.woken = true;
+      return std::nullopt;
+    }
     bool moved = false;
     for (Reader* r : s.readers) moved = ReaderWaitAccess::refresh(*r) || moved;
     if (moved) continue;  // look again, at the new regions

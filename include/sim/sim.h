@@ -39,7 +39,8 @@ enum {
   SIM_ESTALE = -6,          /* nothing new and the newest frame is older than the deadline */
   SIM_EREGION = -7,         /* the region failed validation */
   SIM_EOVERRUN = -8,        /* the writer kept overwriting the frame during the copy; retry */
-  SIM_ETIMEDOUT = -9        /* SIM_waitsetWait: no stream had a new frame before the timeout */
+  SIM_ETIMEDOUT = -9,       /* SIM_waitsetWait: no stream had a new frame before the timeout */
+  SIM_EWOKEN = -10          /* SIM_waitsetWait: ended early by SIM_waitsetWake */
 };
 
 /* Creates or takes over the stream; NULL on error (see SIM_lastError). */
@@ -76,9 +77,12 @@ typedef struct sim_waitset sim_waitset;
 sim_waitset *SIM_waitsetCreate(void);
 /* Adds a reader: its index in the set (0, 1, ...), or a negative SIM_E* code. */
 int SIM_waitsetAdd(sim_waitset *ws, sim_reader *r);
-/* Sleeps until a reader of the set has a new frame: its index (>= 0), SIM_ETIMEDOUT, or
- * SIM_EINVAL. timeout_ms < 0 waits for ever. */
+/* Sleeps until a reader of the set has a new frame: its index (>= 0), SIM_ETIMEDOUT, SIM_EWOKEN,
+ * or SIM_EINVAL. timeout_ms < 0 waits for ever. */
 int SIM_waitsetWait(sim_waitset *ws, int timeout_ms);
+/* From any thread (not racing SIM_waitsetClose): the current or next SIM_waitsetWait returns
+ * SIM_EWOKEN at once (sim::Wakeup). 0, or SIM_EINVAL. */
+int SIM_waitsetWake(sim_waitset *ws);
 /* 1 if reader `index` has a new frame now, else 0. */
 int SIM_waitsetReady(const sim_waitset *ws, int index);
 void SIM_waitsetClose(sim_waitset *ws);

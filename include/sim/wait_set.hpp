@@ -82,13 +82,15 @@ class WaitSet {
 
   // Sleeps until some reader has a deliverable frame, the watched wakeup is notified, or the
   // timeout passes (kForever: none). The index of a ready reader (readers are taken in turn, so a
-  // busy stream does not hide a quieter one), or nothing at the timeout or wakeup (which comes
-  // first: a ready reader stays ready for the next wait).
+  // busy stream does not hide a quieter one), or nothing at the timeout or wakeup (woken() says
+  // which; a wakeup comes first: a ready reader stays ready for the next wait).
   [[nodiscard]] std::optional<std::size_t> wait(std::chrono::nanoseconds timeout) noexcept;
   template <typename Rep, typename Period>
   [[nodiscard]] std::optional<std::size_t> wait(std::chrono::duration<Rep, Period> timeout) noexcept {
     return wait(saturating_nanoseconds(timeout));
   }
+  // Whether the last wait() ended by the wakeup (else by a ready reader or its timeout).
+  [[nodiscard]] bool woken() const noexcept;
   // Whether reader `index` has a deliverable frame now (no system call).
   [[nodiscard]] bool ready(std::size_t index) const noexcept;
   // The strategy in use: automatic resolves to futex_waitv or round_robin at the first wait.

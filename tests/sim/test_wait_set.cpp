@@ -126,7 +126,7 @@ bool woken_from_another_thread(WaitSet& set, Wakeup& wakeup) {
   const auto ready = set.wait(kLongWait);
   const bool early = std::chrono::steady_clock::now() - start < kLongWait;
   other.join();
-  return !ready.has_value() && early;
+  return !ready.has_value() && early && set.woken();
 }
 
 }  // namespace
@@ -182,8 +182,15 @@ TEST_P(WaitSetStrategies, AWakeupComesBeforeAReadyStreamAndOneWaitTakesEveryNoti
   wakeup.notify();
   wakeup.notify();
   EXPECT_FALSE(set.wait(kLongWait).has_value());
+  EXPECT_TRUE(set.woken());
   // The frame stayed ready, and both notifies were taken by that one wait.
   EXPECT_EQ(set.wait(kLongWait), std::optional<std::size_t>(0));
+  EXPECT_FALSE(set.woken());
+  std::vector<std::byte> out(4096);
+  FrameInfo info;
+  ASSERT_EQ(s->reader.read(out, info), ReadStatus::new_frame);
+  EXPECT_FALSE(set.wait(0ms).has_value());
+  EXPECT_FALSE(set.woken()) << "a timeout is not a wakeup";
 }
 
 TEST_P(WaitSetStrategies, APeerProcessReadsTwoStreamsAtDifferentRatesWhole) {
@@ -294,6 +301,17 @@ TEST(WaitSetCApi, WaitsOnTwoReadersAndTimesOut) {
   char buf[4096];
   sim_frame_info info{};
   EXPECT_EQ(SIM_readData(rb, buf, sizeof buf, &info), 128);
+  // A wake from another thread ends a wait for ever, and says so.
+  std::thread other([ws] {
+    std::this_thread::sleep_for(20ms);  // lets the set fall asleep (not checked)
+    EXPECT_EQ(SIM_waitsetWake(ws), 0);
+  });
+  EXPECT_EQ(SIM_waitsetWait(ws, -1), SIM_EWOKEN);
+  other.join();
+  EXPECT_EQ(SIM_waitsetWait(ws, 0), SIM_ETIMEDOUT);  // the wake was taken
+  EXPECT_EQ(SIM_waitsetWake(ws), 0);
+  EXPECT_EQ(SIM_waitsetWait(ws, 0), SIM_EWOKEN);  // even a wait that would not sleep says so
+  EXPECT_EQ(SIM_waitsetWake(nullptr), SIM_EINVAL);
   SIM_waitsetClose(ws);
 
   const char* names[] = {a->guard.name.c_str(), b->guard.name.c_str()};
