@@ -627,14 +627,15 @@ void FrameAssembler::accept_columns(const LidarPacket& packet, PacketColumns& ou
     }
     received_[m] = 1;
     out.consecutive = out.consecutive && (out.count == 0 || m == out.measurement_id[0] + out.count);
-    const auto timestamp = static_cast<std::int64_t>(column.timestamp_ns);
     if (!have_stamp_) {
-      stamp_ns_ = timestamp;
+      stamp_ns_ = static_cast<std::int64_t>(column.timestamp_ns);
       have_stamp_ = true;
     }
-    const std::int64_t offset =
-        std::clamp<std::int64_t>(timestamp - stamp_ns_, 0, std::numeric_limits<std::uint32_t>::max());
-    out.put(out.count++, packet.pixel_bytes(c, 0), m, static_cast<std::uint32_t>(offset), column_geometry_[m]);
+    // In the sensor's unsigned clock: any two stamps of a corrupt packet subtract without overflow.
+    const auto first = static_cast<std::uint64_t>(stamp_ns_);
+    const std::uint64_t after = column.timestamp_ns >= first ? column.timestamp_ns - first : 0;
+    const auto offset = static_cast<std::uint32_t>(std::min<std::uint64_t>(after, std::numeric_limits<std::uint32_t>::max()));
+    out.put(out.count++, packet.pixel_bytes(c, 0), m, offset, column_geometry_[m]);
   }
   for (unsigned k = out.count; k % lanes != 0; ++k) out.put(k, out.first_pixel[0], 0, 0, {});
 }

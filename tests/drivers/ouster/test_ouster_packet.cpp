@@ -366,6 +366,51 @@ TEST(OusterFrames, ColumnsMissingFromAReusedSpanHoldNoReturnInEitherReturnsImage
   }
 }
 
+// The sensor's clock is unsigned 64-bit. Stamps beyond the signed range (corrupt, or a clock
+// set wrong) once overflowed the subtraction that gives a column its time after the frame's stamp.
+TEST(OusterFrames, ColumnTimesAreRightAcrossTheSignedLimitAndClampedWhenAStampGoesBackOrFarAhead) {
+  const Metadata m = metadata_for(Layout::rng19, 32);
+  constexpr std::uint64_t kPeriod = 97'656;
+  auto frame_starting_at = [&](std::uint32_t frame_id, std::uint64_t first) {
+    std::vector<std::vector<std::uint8_t>> packets;
+    for (unsigned c = 0; c < 1024; c += 16) {
+      PacketSpec s;
+      s.layout = Layout::rng19;
+      s.frame_id = frame_id;
+      s.first_column = static_cast<std::uint16_t>(c);
+      s.first_timestamp_ns = first;
+      packets.push_back(
+          ouster_test::encode_packet(s, [](unsigned v, unsigned u) { return pixel_value(Layout::rng19, v, u); }));
+    }
+    return packets;
+  };
+  constexpr std::uint64_t kNearTheLimit = (std::uint64_t{1} << 63) - 100 * kPeriod;  // column 100 crosses it
+  auto second = frame_starting_at(2, 1'000'000'000);
+  PacketSpec back;  // columns 80–95 stamped before the frame's first column
+  back.frame_id = 2;
+  back.first_column = 80;
+  back.first_timestamp_ns = 0;
+  second[5] = ouster_test::encode_packet(back, [](unsigned v, unsigned u) { return pixel_value(Layout::rng19, v, u); });
+  PacketSpec ahead = back;  // columns 96–111 at the end of the clock
+  ahead.first_column = 96;
+  ahead.first_timestamp_ns = std::numeric_limits<std::uint64_t>::max() - 1024 * kPeriod;
+  second[6] = ouster_test::encode_packet(ahead, [](unsigned v, unsigned u) { return pixel_value(Layout::rng19, v, u); });
+
+  auto assembler = FrameAssembler::create(m, {}).value();
+  std::vector<sim::LidarPoint> points(assembler.max_points());
+  const auto first_frame = feed(assembler, frame_starting_at(1, kNearTheLimit), points);
+  ASSERT_EQ(first_frame.size(), 1u);
+  EXPECT_EQ(static_cast<std::uint64_t>(first_frame[0].stamp_ns), kNearTheLimit);
+  for (unsigned v = 0; v < 1024; ++v) ASSERT_EQ(points[v].time_offset_ns, v * kPeriod) << "column " << v;
+  ASSERT_EQ(feed(assembler, second, points).size(), 1u);
+  for (unsigned v = 0; v < 1024; ++v) {
+    const std::uint64_t want = v >= 80 && v < 96    ? 0
+                               : v >= 96 && v < 112 ? std::numeric_limits<std::uint32_t>::max()
+                                                    : v * kPeriod;
+    ASSERT_EQ(points[v].time_offset_ns, want) << "column " << v;
+  }
+}
+
 TEST(OusterFrames, ASpanSmallerThanAFrameGetsItsFirstPointsAndTheRestAreCountedAsDropped) {
   const Metadata m = metadata_for(Layout::rng19_dual, 32);
   const auto packets = rotation(Layout::rng19_dual, 32, 1);
