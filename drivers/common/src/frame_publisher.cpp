@@ -5,6 +5,7 @@
 #include <system_error>
 #include <utility>
 
+#include "sim/clock.hpp"
 #include "sim/sensor_info.hpp"
 
 namespace sim::lidar {
@@ -32,7 +33,7 @@ std::span<LidarPoint> FramePublisher::slot() const noexcept { return loan_.as<Li
 std::span<LidarPoint> FramePublisher::publish(std::size_t point_count, std::int64_t stamp_ns,
                                               std::int64_t host_receive_ns, bool whole) noexcept {
   const WriteStatus status = std::move(loan_).commit(point_count * sizeof(LidarPoint),
-                                                     stamp_ns + stamp_offset_ns_, host_receive_ns);
+                                                     saturating_add_ns(stamp_ns, stamp_offset_ns_), host_receive_ns);
   if (status == WriteStatus::ok) {
     ++counters_.frames;
     counters_.points += point_count;

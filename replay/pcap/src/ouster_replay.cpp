@@ -37,14 +37,17 @@ class OusterTarget final : public ReplayTarget {
       ouster::LidarPacket packet;
       const auto& m = stream_.metadata();
       if (ouster::LidarPacket::parse(bytes, m.format, packet, m.init_id) == ouster::PacketError::none) {
-        stream_.set_stamp_offset(realtime_ns() - static_cast<std::int64_t>(packet.column(0).timestamp_ns));
+        stream_.set_stamp_offset(
+            saturating_sub_ns(realtime_ns(), static_cast<std::int64_t>(packet.column(0).timestamp_ns)));
         restamped_ = true;
       }
     }
     return stream_.push_lidar(bytes, realtime_ns()).frame.has_value();
   }
   void restart() override { stream_.reset(); }
-  void shift_stamps(std::int64_t shift_ns) override { stream_.set_stamp_offset(stream_.stamp_offset() + shift_ns); }
+  void shift_stamps(std::int64_t shift_ns) override {
+    stream_.set_stamp_offset(saturating_add_ns(stream_.stamp_offset(), shift_ns));
+  }
   void finish() override { stream_.finish(); }
   std::uint64_t decoded_packets() const override { return stream_.counters().packets; }
   std::uint64_t frames() const override { return stream_.published().frames; }

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -17,6 +18,7 @@
 
 #include <gtest/gtest.h>
 
+#include "sim/clock.hpp"
 #include "sim/lidar/frame_publisher.hpp"
 #include "sim/lidar/tcp_client.hpp"
 #include "sim/lidar/udp_receiver.hpp"
@@ -286,6 +288,22 @@ TEST(FramePublisher, AFrameIsPublishedWithTheStampOffsetAndCounted) {
   EXPECT_EQ(counters.partial_frames, 1u);
   EXPECT_EQ(counters.failed, 0u);
   EXPECT_EQ(frames.last_points(), 3u);
+
+  // A corrupt sensor clock near the limit plus a replay's offset: the stamp is held at the
+  // limit (an overflow here was undefined behaviour).
+  frames.set_stamp_offset(INT64_MAX - 10);
+  frames.publish(1, 5000, 7000, /*whole=*/true);
+  ASSERT_EQ(reader->read(buffer, info), sim::ReadStatus::new_frame);
+  EXPECT_EQ(info.stamp_ns, INT64_MAX);
+}
+
+TEST(Stamps, SumsAndDifferencesOfNanosecondsStopAtTheLimitsInsteadOfOverflowing) {
+  EXPECT_EQ(sim::saturating_add_ns(5, -7), -2);
+  EXPECT_EQ(sim::saturating_add_ns(INT64_MAX - 1, 5), INT64_MAX);
+  EXPECT_EQ(sim::saturating_add_ns(INT64_MIN + 1, -5), INT64_MIN);
+  EXPECT_EQ(sim::saturating_sub_ns(5, 7), -2);
+  EXPECT_EQ(sim::saturating_sub_ns(1'700'000'000'000'000'000, INT64_MIN), INT64_MAX);
+  EXPECT_EQ(sim::saturating_sub_ns(-5, INT64_MAX), INT64_MIN);
 }
 
 }  // namespace

@@ -8,6 +8,8 @@
 #include <sstream>
 #include <utility>
 
+#include "sim/clock.hpp"
+
 namespace sim::ouster {
 
 ImuSample to_sample(const ImuPacket& packet) noexcept {
@@ -151,8 +153,8 @@ bool LidarStream::push_imu(std::span<const std::uint8_t> payload) noexcept {
   ++impl_->published.imu_samples;
   if (impl_->imu) {
     ImuSample sample = to_sample(*packet);
-    sample.stamp_ns += impl_->frames.stamp_offset();
-    sample.gyro_stamp_ns += impl_->frames.stamp_offset();
+    sample.stamp_ns = saturating_add_ns(sample.stamp_ns, impl_->frames.stamp_offset());
+    sample.gyro_stamp_ns = saturating_add_ns(sample.gyro_stamp_ns, impl_->frames.stamp_offset());
     (void)impl_->imu->write(std::span<const ImuSample>(&sample, 1), sample.stamp_ns);
   }
   return true;
