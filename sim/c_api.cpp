@@ -356,7 +356,7 @@ int SIM_readerSetWaitMode(sim_reader* r, int mode) {
 
 sim_waitset* SIM_waitsetCreate(void) {
   clear_last_error();
-  auto* ws = new (std::nothrow) sim_waitset{};
+  auto* ws = new (std::nothrow) sim_waitset;
   if (ws != nullptr) ws->set.watch(ws->wakeup);
   return ws;
 }
