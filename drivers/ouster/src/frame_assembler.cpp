@@ -634,7 +634,8 @@ void FrameAssembler::accept_columns(const LidarPacket& packet, PacketColumns& ou
     // In the sensor's unsigned clock: any two stamps of a corrupt packet subtract without overflow.
     const auto first = static_cast<std::uint64_t>(stamp_ns_);
     const std::uint64_t after = column.timestamp_ns >= first ? column.timestamp_ns - first : 0;
-    const auto offset = static_cast<std::uint32_t>(std::min<std::uint64_t>(after, std::numeric_limits<std::uint32_t>::max()));
+    const auto offset =
+        static_cast<std::uint32_t>(std::min<std::uint64_t>(after, std::numeric_limits<std::uint32_t>::max()));
     out.put(out.count++, packet.pixel_bytes(c, 0), m, offset, column_geometry_[m]);
   }
   for (unsigned k = out.count; k % lanes != 0; ++k) out.put(k, out.first_pixel[0], 0, 0, {});

@@ -371,7 +371,10 @@ TEST(OusterFrames, ColumnsMissingFromAReusedSpanHoldNoReturnInEitherReturnsImage
 TEST(OusterFrames, ColumnTimesAreRightAcrossTheSignedLimitAndClampedWhenAStampGoesBackOrFarAhead) {
   const Metadata m = metadata_for(Layout::rng19, 32);
   constexpr std::uint64_t kPeriod = 97'656;
-  auto frame_starting_at = [&](std::uint32_t frame_id, std::uint64_t first) {
+  auto packet = [](const PacketSpec& s) {
+    return ouster_test::encode_packet(s, [](unsigned v, unsigned u) { return pixel_value(Layout::rng19, v, u); });
+  };
+  auto frame_starting_at = [&packet](std::uint32_t frame_id, std::uint64_t first) {
     std::vector<std::vector<std::uint8_t>> packets;
     for (unsigned c = 0; c < 1024; c += 16) {
       PacketSpec s;
@@ -379,8 +382,7 @@ TEST(OusterFrames, ColumnTimesAreRightAcrossTheSignedLimitAndClampedWhenAStampGo
       s.frame_id = frame_id;
       s.first_column = static_cast<std::uint16_t>(c);
       s.first_timestamp_ns = first;
-      packets.push_back(
-          ouster_test::encode_packet(s, [](unsigned v, unsigned u) { return pixel_value(Layout::rng19, v, u); }));
+      packets.push_back(packet(s));
     }
     return packets;
   };
@@ -390,11 +392,11 @@ TEST(OusterFrames, ColumnTimesAreRightAcrossTheSignedLimitAndClampedWhenAStampGo
   back.frame_id = 2;
   back.first_column = 80;
   back.first_timestamp_ns = 0;
-  second[5] = ouster_test::encode_packet(back, [](unsigned v, unsigned u) { return pixel_value(Layout::rng19, v, u); });
+  second[5] = packet(back);
   PacketSpec ahead = back;  // columns 96–111 at the end of the clock
   ahead.first_column = 96;
   ahead.first_timestamp_ns = std::numeric_limits<std::uint64_t>::max() - 1024 * kPeriod;
-  second[6] = ouster_test::encode_packet(ahead, [](unsigned v, unsigned u) { return pixel_value(Layout::rng19, v, u); });
+  second[6] = packet(ahead);
 
   auto assembler = FrameAssembler::create(m, {}).value();
   std::vector<sim::LidarPoint> points(assembler.max_points());
