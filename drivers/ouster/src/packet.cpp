@@ -88,6 +88,10 @@ Expected<PacketFormat> PacketFormat::create(Profile profile, unsigned pixels_per
     return invalid("columns_per_packet " + std::to_string(columns_per_packet) +
                    " does not fit a frame of " + std::to_string(columns_per_frame) + " columns");
   }
+  if (columns_per_packet > max_columns_per_packet) {
+    return invalid("columns_per_packet " + std::to_string(columns_per_packet) +
+                   " is more than any Ouster sensor sends (at most " + std::to_string(max_columns_per_packet) + ")");
+  }
   PacketFormat f;
   f.profile = profile;
   f.fusa_header = fusa_header || profile == Profile::fusa_rng15_rfl8_nir8_dual;

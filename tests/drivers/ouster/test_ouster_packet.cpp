@@ -213,6 +213,12 @@ TEST(OusterMetadata, BrokenMetadataIsRefusedWithOneSentenceNamingTheKey) {
   auto nan = json;
   nan["beam_azimuth_angles"][3] = "x";
   EXPECT_FALSE(Metadata::parse(nan.dump()));
+  // Refused when read, not later by the decoder (found by fuzz_ouster_metadata): every metadata
+  // that parses makes a frame assembler.
+  auto wide = json;
+  wide["data_format"]["columns_per_packet"] = 74;
+  EXPECT_EQ(Metadata::parse(wide.dump()).error().message,
+            "the metadata's columns_per_packet 74 is more than any Ouster sensor sends (at most 64)");
 }
 
 // Feeds packets and returns the frames the assembler published.

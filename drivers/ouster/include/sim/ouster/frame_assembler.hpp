@@ -119,7 +119,7 @@ class FrameAssembler {
   // profile without it.
   static Expected<FrameAssembler> create(const Metadata& metadata, AssemblerOptions options);
 
-  static constexpr unsigned max_columns_per_packet = 64;
+  static constexpr unsigned max_columns_per_packet = PacketFormat::max_columns_per_packet;
 
   // Points one frame can hold: H × W × returns.
   std::size_t max_points() const noexcept;

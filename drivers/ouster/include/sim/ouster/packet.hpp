@@ -120,13 +120,16 @@ struct PacketFormat {
   Profile profile = Profile::legacy;
   bool fusa_header = false;       // 32-bit frame_id header (the FUSA profile)
   unsigned pixels_per_column = 0;  // H, beams: 16, 32, 64 or 128
-  unsigned columns_per_packet = 0;
+  unsigned columns_per_packet = 0;  // sensors send 16; at most max_columns_per_packet
   unsigned columns_per_frame = 0;  // W: 512, 1024, 2048 or 4096
   std::size_t header_bytes = 0;
   std::size_t column_header_bytes = 0;
   std::size_t column_bytes = 0;
   std::size_t footer_bytes = 0;
   std::size_t packet_bytes = 0;
+
+  // More than any Ouster sensor sends, with room to spare (the decoder's per-packet arrays).
+  static constexpr unsigned max_columns_per_packet = 64;
 
   // Fails (one sentence) for sizes no sensor uses or a packet above 65,507 bytes (UDP's limit).
   static Expected<PacketFormat> create(Profile profile, unsigned pixels_per_column,
