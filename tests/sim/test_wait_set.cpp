@@ -115,9 +115,18 @@ namespace {
 // Only a wakeup ends a wait with no frame to come before this: ending well before it is the proof.
 constexpr auto kLongWait = 120s;
 
-// Ends `set`'s wait from another thread, which first lets the set fall asleep (not checked: a
+// A wait set that watches a wakeup of its own.
+struct WatchingSet {
+  explicit WatchingSet(WaitSetStrategy strategy) : set({.strategy = strategy}) { set.watch(wakeup); }
+  Wakeup wakeup;
+  WaitSet set;
+};
+
+// Ends the set's wait from another thread, which first lets the set fall asleep (not checked: a
 // notify() before the wait ends it as well). True when the wait ended by the wakeup.
-bool woken_from_another_thread(WaitSet& set, Wakeup& wakeup) {
+bool woken_from_another_thread(WatchingSet& watching) {
+  Wakeup& wakeup = watching.wakeup;
+  WaitSet& set = watching.set;
   std::thread other([&] {
     std::this_thread::sleep_for(20ms);
     wakeup.notify();
@@ -135,22 +144,18 @@ TEST_P(WaitSetStrategies, AWakeupFromAnotherThreadEndsAWaitOnIdleStreams) {
   auto a = make_stream("wake_a");
   auto b = make_stream("wake_b");
   ASSERT_TRUE(a && b);
-  WaitSet set({.strategy = GetParam()});
-  Wakeup wakeup;
-  set.watch(wakeup);
-  ASSERT_TRUE(set.add(a->reader));
-  ASSERT_TRUE(set.add(b->reader));
-  EXPECT_TRUE(woken_from_another_thread(set, wakeup));
+  WatchingSet watching(GetParam());
+  ASSERT_TRUE(watching.set.add(a->reader));
+  ASSERT_TRUE(watching.set.add(b->reader));
+  EXPECT_TRUE(woken_from_another_thread(watching));
   // The set still waits for frames afterwards.
   publish(*b);
-  EXPECT_EQ(set.wait(kLongWait), std::optional<std::size_t>(1));
+  EXPECT_EQ(watching.set.wait(kLongWait), std::optional<std::size_t>(1));
 }
 
 TEST_P(WaitSetStrategies, AWakeupEndsTheWaitOfASetWithNoReaders) {
-  WaitSet set({.strategy = GetParam()});
-  Wakeup wakeup;
-  set.watch(wakeup);
-  EXPECT_TRUE(woken_from_another_thread(set, wakeup));
+  WatchingSet watching(GetParam());
+  EXPECT_TRUE(woken_from_another_thread(watching));
 }
 
 // futex_waitv takes at most 128 words, all of them the readers' here: the wakeup is looked at
@@ -164,19 +169,17 @@ TEST_P(WaitSetStrategies, AWakeupEndsTheWaitOfAFullSet) {
     ASSERT_TRUE(r);
     readers.push_back(std::move(*r));
   }
-  WaitSet set({.strategy = GetParam()});
-  for (Reader& r : readers) ASSERT_TRUE(set.add(r));
-  Wakeup wakeup;
-  set.watch(wakeup);
-  EXPECT_TRUE(woken_from_another_thread(set, wakeup));
+  WatchingSet watching(GetParam());
+  for (Reader& r : readers) ASSERT_TRUE(watching.set.add(r));
+  EXPECT_TRUE(woken_from_another_thread(watching));
 }
 
 TEST_P(WaitSetStrategies, AWakeupComesBeforeAReadyStreamAndOneWaitTakesEveryNotifyBeforeIt) {
   auto s = make_stream("wake_first");
   ASSERT_TRUE(s);
-  WaitSet set({.strategy = GetParam()});
-  Wakeup wakeup;
-  set.watch(wakeup);
+  WatchingSet watching(GetParam());
+  Wakeup& wakeup = watching.wakeup;
+  WaitSet& set = watching.set;
   ASSERT_TRUE(set.add(s->reader));
   publish(*s);
   wakeup.notify();
