@@ -304,12 +304,13 @@ TEST(WaitSetCApi, WaitsOnTwoReadersAndTimesOut) {
   char buf[4096];
   sim_frame_info info{};
   EXPECT_EQ(SIM_readData(rb, buf, sizeof buf, &info), 128);
-  // A wake from another thread ends a wait for ever, and says so.
+  // A wake from another thread ends a long wait early, and says so (a wake that did not work
+  // would end it by the timeout, SIM_ETIMEDOUT, instead of hanging the test).
   std::thread other([ws] {
     std::this_thread::sleep_for(20ms);  // lets the set fall asleep (not checked)
     EXPECT_EQ(SIM_waitsetWake(ws), 0);
   });
-  EXPECT_EQ(SIM_waitsetWait(ws, -1), SIM_EWOKEN);
+  EXPECT_EQ(SIM_waitsetWait(ws, 120'000), SIM_EWOKEN);
   other.join();
   EXPECT_EQ(SIM_waitsetWait(ws, 0), SIM_ETIMEDOUT);  // the wake was taken
   EXPECT_EQ(SIM_waitsetWake(ws), 0);
