@@ -48,7 +48,10 @@ struct LiveReceiver::Impl final : lidar::DatagramHandler {
     // meanwhile (stale by its publish time); start over with fresh packets.
     if (udp.resumed_after_silence(d.arrival_ns)) published->reset();
     last_packet_ns = d.taken_ns;
-    published->push(d.payload, d.arrival_ns);
+    const PushResult result = published->push(d.payload, d.arrival_ns);
+    // The packet's own time against its arrival on this host; judged about once a second.
+    published->clock().add(result.packet_ns, d.arrival_ns);
+    published->tick_clock(d.arrival_ns);
     return true;
   }
 };

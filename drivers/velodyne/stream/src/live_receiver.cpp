@@ -36,7 +36,11 @@ struct LiveReceiver::Impl final : lidar::DatagramHandler {
     if (published == nullptr) return !stream.error();
     if (udp.resumed_after_silence(d.arrival_ns)) published->reset();  // the revolution is stale
     last_packet_ns = d.taken_ns;
-    published->push(d.payload, d.arrival_ns);
+    const PushResult result = published->push(d.payload, d.arrival_ns);
+    // The packet's own time against its arrival on this host; judged about once a second. Its
+    // hour is the arrival's (a Velodyne counts µs past the hour): an hour off cannot show.
+    published->clock().add(result.packet_ns, d.arrival_ns);
+    published->tick_clock(d.arrival_ns);
     return true;
   }
 };
