@@ -47,11 +47,9 @@ std::optional<ClockStatus> ClockReporter::tick(Writer& writer, std::int64_t now_
 }
 
 bool write_clock(Writer& writer, const ClockStatus& clock) {
-  // Writer::set_clock lands with the lead's clock record; until then the judgement is kept
-  // (ClockReporter::last) and not stored.
-  (void)writer;
-  (void)clock;
-  return true;
+  // Refused only for a record that cannot be stored (ClockCheck keeps its sentences short and
+  // its numbers finite); the stream then keeps the last one written.
+  return writer.set_clock(clock).has_value();
 }
 
 }  // namespace sim::lidar
