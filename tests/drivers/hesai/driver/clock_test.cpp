@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <functional>
 #include <optional>
+#include <span>
 #include <string>
 #include <thread>
 #include <vector>
@@ -23,6 +24,12 @@
 #include "frames.hpp"
 #include "sim/clock_status.hpp"
 #include "sim/hesai/hesai.hpp"
+#include "sim/ouster/frame_assembler.hpp"
+#include "sim/ouster/metadata.hpp"
+#include "sim/ouster/packet.hpp"
+#include "sim/velodyne/frame_assembler.hpp"
+#include "sim/velodyne/model.hpp"
+#include "sim/velodyne/packet.hpp"
 #include "sim/pcap/capture.hpp"
 #include "sim/reader.hpp"
 #include "sim_test/process.hpp"
@@ -135,13 +142,31 @@ struct TempDir {
   }
 };
 
+// Each packet's own time, as the family's decoder reads it (nullopt: not one of its packets),
+// against its capture time: the median.
+std::int64_t median_offset(const fs::path& capture,
+                           const std::function<std::optional<std::int64_t>(std::span<const std::uint8_t>, std::int64_t)>& time_of,
+                           std::size_t& packets) {
+  auto reader = sim::pcap::CaptureReader::open(capture.string());
+  EXPECT_TRUE(reader) << reader.error().message;
+  std::vector<std::int64_t> offsets;
+  sim::pcap::Datagram d;
+  while (reader && reader->next(d) == sim::pcap::NextStatus::datagram) {
+    const std::span<const std::uint8_t> bytes(reinterpret_cast<const std::uint8_t*>(d.payload.data()), d.payload.size());
+    if (const auto sensor = time_of(bytes, d.timestamp_ns)) offsets.push_back(*sensor - d.timestamp_ns);
+  }
+  packets = offsets.size();
+  EXPECT_FALSE(offsets.empty());
+  return offsets.empty() ? 0 : median(offsets);
+}
+
 // Replays the capture to its end (as fast as it goes: the check measures against capture times,
 // not the pace) and reads the clock the replay left in the stream.
-ClockStatus replayed_clock(const fs::path& capture, const std::string& calibration,
+ClockStatus replayed_clock(const fs::path& capture, const fs::path& calibration,
                            const std::vector<std::string>& extra = {"--max-rate"}) {
   sim::testing::StreamGuard stream(sim::testing::unique_name("hesai_clock"));
   std::vector<std::string> argv{replay_tool, capture.string(), "--stream", stream.name, "--calibration",
-                                (data_dir / calibration).string(), "--quiet"};
+                                (calibration.is_absolute() ? calibration : data_dir / calibration).string(), "--quiet"};
   argv.insert(argv.end(), extra.begin(), extra.end());
   const auto run = sim::testing::run(argv);
   EXPECT_EQ(run.code, 0) << run.err;
@@ -268,6 +293,59 @@ TEST(HesaiReplayClock, rewritten_sensor_times_each_get_their_sentence) {
       ASSERT_TRUE(clock.offset_to_host_ns);
       EXPECT_NEAR(static_cast<double>(*clock.offset_to_host_ns), 500'000.0, 300'000.0);
     }
+  }
+}
+
+TEST(ReplayClock, velodyne_and_ouster_replays_measure_their_packets_against_the_capture) {
+  const fs::path drivers = SIM_DRIVERS_TEST_DIR;
+  {
+    SCOPED_TRACE("Velodyne VLP-16");
+    const fs::path capture = drivers / "velodyne/data/vlp16_dual.pcap";
+    std::size_t packets = 0;
+    // µs past the hour, in the hour nearest the capture time (as the replay reads it).
+    const std::int64_t expected = median_offset(
+        capture,
+        [](std::span<const std::uint8_t> bytes, std::int64_t capture_ns) -> std::optional<std::int64_t> {
+          if (bytes.size() != sim::velodyne::packet_size) return std::nullopt;
+          return sim::velodyne::packet_time_ns(
+              sim::velodyne::Packet::read_u32(bytes.data() + sim::velodyne::timestamp_offset), capture_ns);
+        },
+        packets);
+    const ClockStatus clock = replayed_clock(capture, drivers / "velodyne/data/VLP16.yaml");
+    ASSERT_TRUE(clock.offset_to_host_ns);
+    EXPECT_NEAR(static_cast<double>(*clock.offset_to_host_ns), static_cast<double>(expected), 1e6);
+    EXPECT_EQ(clock.packets_measured, packets);
+    EXPECT_EQ(clock.source, sim::ClockSource::replayed);
+    EXPECT_NE(clock.verdict, ClockVerdict::unknown);
+  }
+  {
+    SCOPED_TRACE("Ouster OS-1-32 (legacy)");
+    const fs::path capture = drivers / "ouster/data/OS-1-32-G_v2.1.1_1024x10.pcap";
+    const fs::path metadata_path = drivers / "ouster/data/OS-1-32-G_v2.1.1_1024x10.json";
+    auto metadata = sim::ouster::Metadata::load(metadata_path);
+    ASSERT_TRUE(metadata) << metadata.error().message;
+    std::size_t packets = 0;
+    // The first valid column's time.
+    const std::int64_t expected = median_offset(
+        capture,
+        [&](std::span<const std::uint8_t> bytes, std::int64_t) -> std::optional<std::int64_t> {
+          sim::ouster::LidarPacket packet;
+          if (sim::ouster::LidarPacket::parse(bytes, metadata->format, packet, metadata->init_id) !=
+              sim::ouster::PacketError::none) {
+            return std::nullopt;
+          }
+          for (unsigned c = 0; c < packet.columns(); ++c) {
+            if (packet.column(c).valid) return static_cast<std::int64_t>(packet.column(c).timestamp_ns);
+          }
+          return std::nullopt;
+        },
+        packets);
+    const ClockStatus clock = replayed_clock(capture, metadata_path);
+    ASSERT_TRUE(clock.offset_to_host_ns);
+    EXPECT_NEAR(static_cast<double>(*clock.offset_to_host_ns), static_cast<double>(expected), 1e6);
+    EXPECT_EQ(clock.packets_measured, packets);
+    EXPECT_EQ(clock.source, sim::ClockSource::replayed);
+    EXPECT_NE(clock.verdict, ClockVerdict::unknown);
   }
 }
 
