@@ -4,7 +4,12 @@
 // sensor time minus its capture time, the median), and the same packets with their sensor times
 // rewritten here (+37 s, −1 h, 1970, a 2 s step, +100 ppm) each get their sentence, while
 // rewritten to agree with the capture they get ok. Read back with a sim::Reader (Reader::clock()).
+// The live driver, fed the same packets on loopback in a private network namespace, judges them
+// against their arrival the same way.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -32,6 +37,8 @@
 #include "sim/velodyne/packet.hpp"
 #include "sim/pcap/capture.hpp"
 #include "sim/reader.hpp"
+#include "sim/clock.hpp"
+#include "sim_test/network.hpp"
 #include "sim_test/process.hpp"
 #include "sim_test/streams.hpp"
 
@@ -46,6 +53,7 @@ constexpr std::int64_t kMs = 1'000'000;
 constexpr std::int64_t kS = 1'000'000'000;
 constexpr double kYearNs = 365.25 * 86400.0 * 1e9;
 
+std::optional<std::string> g_no_network;  // why the private network namespace is missing
 const fs::path data_dir = SIM_HESAI_TEST_DATA;
 const std::string replay_tool = SIM_REPLAY_PCAP;
 
@@ -349,4 +357,73 @@ TEST(ReplayClock, velodyne_and_ouster_replays_measure_their_packets_against_the_
   }
 }
 
+// The live driver on loopback: each Pandar64 packet goes out with its sensor time set to this
+// host's clock at sending plus `offset`, about a thousand a second, until the driver's clock
+// record has measured `packets` of them (a bound against hangs only).
+ClockStatus live_clock(std::int64_t offset, std::uint64_t packets) {
+  const auto recorded = packets_of(data_dir / "pandar64_dual.pcap", sim::hesai::Model::pandar64);
+  sim::testing::StreamGuard stream(sim::testing::unique_name("hesai_live_clock"));
+  sim::testing::Process driver({SIM_LIDAR_HESAI, "--model", "Pandar64", "--port", "0", "--bind", "127.0.0.1",
+                                "--stream", stream.name, "--calibration",
+                                (data_dir / "pandar64.calibration.csv").string(), "--status-interval", "0"});
+  const auto line = driver.wait_for_line("listening on");
+  EXPECT_TRUE(line) << driver.err();
+  if (!line) return {};
+  auto reader = sim::testing::wait_for_stream(stream.name);
+  EXPECT_TRUE(reader);
+  if (!reader) return {};
+
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(static_cast<std::uint16_t>(std::stoi(line->substr(line->rfind(':') + 1))));
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  std::optional<ClockStatus> clock;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  for (std::size_t i = 0; !clock && std::chrono::steady_clock::now() < deadline; ++i) {
+    std::vector<std::uint8_t> bytes = recorded[i % recorded.size()].bytes;
+    write_p64_time(bytes, sim::realtime_ns() + offset);
+    ::sendto(fd, bytes.data(), bytes.size(), 0, reinterpret_cast<const sockaddr*>(&to), sizeof to);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    if (i % 50 != 0) continue;
+    auto read = reader->clock();
+    EXPECT_TRUE(read) << read.error().message;
+    if (read && *read && (*read)->packets_measured >= packets) clock = **read;
+  }
+  ::close(fd);
+  driver.signal(SIGINT);
+  EXPECT_EQ(driver.wait(), 0) << driver.err();
+  EXPECT_TRUE(clock) << "the driver measured no " << packets << " packets";
+  return clock.value_or(ClockStatus{});
+}
+
+TEST(LiveClock, the_live_driver_judges_the_same_packets_against_their_arrival) {
+  if (g_no_network) GTEST_SKIP() << *g_no_network;
+  {
+    SCOPED_TRACE("37 s ahead");
+    const ClockStatus clock = live_clock(37 * kS, 300);
+    ASSERT_TRUE(clock.offset_to_host_ns);
+    // Loopback takes microseconds; the sender stamps just before sending.
+    EXPECT_NEAR(static_cast<double>(*clock.offset_to_host_ns), 37e9, 5e6);
+    EXPECT_EQ(clock.verdict, ClockVerdict::error);
+    EXPECT_TRUE(says(clock, "37 s ahead of this host")) << clock.problem;
+    EXPECT_TRUE(says(clock, "TAI")) << clock.problem;
+    EXPECT_EQ(clock.stamps, sim::StampClock::sensor);
+  }
+  {
+    SCOPED_TRACE("on time");
+    const ClockStatus clock = live_clock(0, 300);
+    ASSERT_TRUE(clock.offset_to_host_ns);
+    EXPECT_LT(std::abs(*clock.offset_to_host_ns), 10 * kMs) << clock.problem;
+    EXPECT_FALSE(says(clock, "TAI")) << clock.problem;
+    EXPECT_NE(clock.verdict, ClockVerdict::error) << clock.problem;
+  }
+}
+
 }  // namespace
+
+int main(int argc, char** argv) {
+  g_no_network = sim::testing::enter_private_network(sim::testing::Multicast::off);
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
