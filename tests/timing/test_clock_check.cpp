@@ -142,8 +142,8 @@ TEST(ClockCheck, a_clock_whole_seconds_off_says_how_many) {
 
 TEST(ClockCheck, a_clock_years_behind_says_how_many_years) {
   ClockCheck check;
-  const auto years = static_cast<std::int64_t>(2.5 * 365.25 * 86400.0) * kS;
-  Feed{.offset = [years](std::int64_t) { return -years; }}.run(check);
+  constexpr auto years = static_cast<std::int64_t>(2.5 * 365.25 * 86400.0) * kS;
+  Feed{.offset = [](std::int64_t) { return -years; }}.run(check);
   const ClockStatus clock = judged(check);
   EXPECT_EQ(clock.verdict, ClockVerdict::error);
   EXPECT_TRUE(says(clock, "2.5 years behind")) << clock.problem;
@@ -221,8 +221,8 @@ TEST(ClockCheck, stamps_in_the_future_are_told) {
 
 TEST(ClockCheck, a_replay_starting_over_is_neither_a_step_nor_time_going_backwards) {
   ClockCheck check;
-  const auto years = 3 * 365 * 86400 * kS;
-  const Feed pass{.seconds = 5, .offset = [years](std::int64_t) { return -years; }};
+  constexpr auto years = 3 * 365 * 86400 * kS;
+  const Feed pass{.seconds = 5, .offset = [](std::int64_t) { return -years; }};
   pass.run(check);
   const ClockStatus before = judged(check);
   for (int loop = 0; loop < 3; ++loop) {

@@ -20,7 +20,6 @@ constexpr std::int64_t kSecondNs = 1'000'000'000;
 constexpr std::int64_t kMinuteNs = 60 * kSecondNs;
 constexpr std::int64_t kHourNs = 60 * kMinuteNs;
 constexpr std::int64_t kDayNs = 24 * kHourNs;
-constexpr double kYearNs = 365.25 * static_cast<double>(kDayNs);
 // TAI − UTC since 2017-01-01, as a PTP master announces it (currentUtcOffset 37).
 constexpr std::int64_t kTaiUtcNs = 37 * kSecondNs;
 // GPS time − UTC (the 18 leap seconds since 1980): a GNSS receiver's time not turned into UTC.

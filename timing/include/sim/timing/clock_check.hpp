@@ -79,9 +79,8 @@ class ClockCheck {
 
   ClockTolerance tolerance_;
   std::uint64_t packets_ = 0;
-  // Every packet: the last and highest sensor time, for stamps going backwards.
+  // Every packet: the last sensor time, for stamps going backwards.
   bool have_last_ = false;
-  std::int64_t max_sensor_ns_ = 0;
   std::int64_t last_sensor_ns_ = 0;
   std::int64_t last_arrival_ns_ = 0;
   // Recent offsets, decimated (the median, the spread and the first value within ~1 s).
