@@ -277,7 +277,9 @@ Expected<Ptp4lAnswer> ask_ptp4l(const HostClockOptions& options) {
     Ptp4lAnswer answer;
     const bool may_sweep = !known;
     const auto first_until = may_sweep ? std::chrono::steady_clock::now() + timeout / 2 : deadline;
-    if (const int error = send_all(talk, known ? known->domain : 0, first_until); error != 0) {
+    // EAGAIN: its queue stayed full (nobody reads it): below, that is "did not answer".
+    if (const int error = send_all(talk, known ? known->domain : 0, first_until);
+        error != 0 && error != EAGAIN) {
       const std::string sentence = errno_sentence(path, error);
       absent = absent.empty() ? sentence : absent + "; " + sentence;
       if (error == ENOENT || error == ECONNREFUSED) continue;  // try the next default socket

@@ -146,8 +146,13 @@ void map_ptp4l(const Ptp4lAnswer& a, HostClock& h) {
       h.description = name + " slave of " + s.grandmaster;
     } else if (port == PortState::master || port == PortState::grand_master) {
       h.description = name + " master: this host is the grandmaster (" + s.grandmaster + ")";
+    } else if (port == PortState::uncalibrated) {
+      h.description = name + " UNCALIBRATED, grandmaster " + s.grandmaster;
     } else {
-      h.description = name + " " + ptp::to_string(port) + ", grandmaster " + s.grandmaster;
+      // ptp4l keeps its last parent and offset after losing its master: stale, not reported.
+      h.description = name + " " + ptp::to_string(port) + ", last grandmaster " + s.grandmaster;
+      s.offset_from_master_ns.reset();
+      s.path_delay_ns.reset();
     }
     if (problem.empty()) problem = problem_of(port, s.grandmaster);
     if (problem.empty() && s.offset_from_master_ns &&
