@@ -14,6 +14,7 @@
 #include "clocks.hpp"
 #include "sim/apps/clock_text.hpp"
 #include "sim/apps/command_line.hpp"
+#include "sim/apps/host_clock_options.hpp"
 #include "sim/apps/sensor_text.hpp"
 #include "sim/apps/status_line.hpp"
 #include "sim/apps/stop_signal.hpp"
@@ -29,7 +30,7 @@ struct Options {
   bool watch = false;
   bool clocks = false;
   double tolerance_ms = 10.0;  // --clocks: the largest stamp difference of a pair
-  std::string ptp4l_socket;
+  sim::timing::HostClockOptions host_clock;  // --ptp4l-socket
   double interval_s = 1.0;
   double window_s = 0.5;
   std::vector<std::string> streams;  // only these; empty: every stream on the machine
@@ -217,9 +218,7 @@ std::vector<Row> look(RateMeter& rates, const std::vector<std::string>& named) {
 // --clocks: the host's clock (asked of ptp4l itself), every stream's, and the pairs; exit 1 when
 // any stream's clock is in error, so a launch script can refuse to start the stack.
 int show_clocks(const Options& o, const std::vector<Row>& rows, std::int64_t now) {
-  sim::timing::HostClockOptions host_options;
-  host_options.ptp4l_socket = o.ptp4l_socket;
-  const sim::ClockStatus host = sim::timing::read_host_clock(host_options);
+  const sim::ClockStatus host = sim::timing::read_host_clock(o.host_clock);
   std::vector<sim::ls::ClockRow> clocks;
   for (const auto& row : rows) {
     if (row.status) clocks.push_back({row.name, row.status->clock, row.status->clock_problem});
@@ -249,15 +248,14 @@ int main(int argc, char** argv) {
       "until stopped.");
   auto& app = cli.app();
   app.add_flag("--json", o.json, "one JSON object per stream (per refresh with --watch)");
-  app.add_flag("--watch,-w", o.watch, "live view, refreshed every --interval until stopped");
+  auto* watch = app.add_flag("--watch,-w", o.watch, "live view, refreshed every --interval until stopped");
   app.add_flag("--clocks", o.clocks,
                "the host's clock and every stream's side by side, and which streams can be paired by "
                "stamp within --tolerance; exit 1 when any stream's clock is in error")
-      ->excludes("--watch,-w");
+      ->excludes(watch);
   app.add_option("--tolerance", o.tolerance_ms, "--clocks: the largest stamp difference of a pair, ms")
       ->check(CLI::Range(0.0, 3.6e6));
-  app.add_option("--ptp4l-socket", o.ptp4l_socket,
-                 "ptp4l's management socket for --clocks (default /var/run/ptp/ptp4l, then /var/run/ptp4l)");
+  sim::apps::add_host_clock_options(cli, o.host_clock);
   app.add_option("--interval", o.interval_s, "seconds between --watch refreshes")
       ->check(CLI::Range(0.05, 3600.0));
   app.add_option("--window", o.window_s, "seconds over which a single listing measures rates")
