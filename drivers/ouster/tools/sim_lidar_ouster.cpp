@@ -112,6 +112,8 @@ int run(const sim::apps::CommandLine& cli, Options& o) {
   auto stream = sim::ouster::LidarStream::create(*config, *metadata);
   if (!stream) return cli.fail(std::string_view(stream.error().message));
   if (auto code = cli.apply_placement(o.stream.placement)) return *code;
+  const sim::apps::HostClockSource host_clock(o.receive);
+  stream->clock().set_sources(host_clock.sources());
 
   const std::int64_t silence_ns = network.listen.silence_timeout.count();
   const auto text = [&](bool final_line) {
