@@ -202,7 +202,7 @@ void ClockCheck::add(std::int64_t sensor_ns, std::int64_t arrival_ns) noexcept {
 
   // Decimated: a few samples per 10 ms are plenty for a median and keep a second in the ring.
   if (sample_count_ != 0 && arrival_ns >= last_sample_ns_ &&
-      arrival_ns - last_sample_ns_ < kSamplePeriodNs) {
+      saturating_sub(arrival_ns, last_sample_ns_) < kSamplePeriodNs) {
     return;
   }
   last_sample_ns_ = arrival_ns;

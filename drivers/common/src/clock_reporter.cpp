@@ -3,6 +3,8 @@
 
 #include <utility>
 
+#include "sim/clock.hpp"
+
 namespace sim::lidar {
 
 void ClockReporter::set_tolerance(const timing::ClockTolerance& tolerance) noexcept {
@@ -37,9 +39,9 @@ std::optional<ClockStatus> ClockReporter::tick(Writer& writer, std::int64_t now_
                                                bool at_once) {
   if (check_.packets() == 0) return std::nullopt;
   if (first_tick_ns_ == 0) first_tick_ns_ = now_realtime_ns;
-  const bool due = at_once || (last_ ? now_realtime_ns - last_judged_ns_ >= kPeriodNs ||
+  const bool due = at_once || (last_ ? saturating_sub_ns(now_realtime_ns, last_judged_ns_) >= kPeriodNs ||
                                            now_realtime_ns < last_judged_ns_  // the host's clock was set back
-                                     : now_realtime_ns - first_tick_ns_ >= kFirstNs);
+                                     : saturating_sub_ns(now_realtime_ns, first_tick_ns_) >= kFirstNs);
   if (!due) return std::nullopt;
   ClockStatus clock = judge(now_realtime_ns);
   write_clock(writer, clock);
