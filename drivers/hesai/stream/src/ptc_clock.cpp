@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "sim/clock.hpp"
-#include "sim/lidar/clock_poll.hpp"
+#include "sim/lidar/clock_notes.hpp"
 
 namespace sim::hesai {
 namespace {

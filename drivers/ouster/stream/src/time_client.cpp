@@ -2,7 +2,7 @@
 #include "sim/ouster/time_client.hpp"
 
 #include "sim/clock.hpp"
-#include "sim/lidar/clock_poll.hpp"
+#include "sim/lidar/clock_notes.hpp"
 
 namespace sim::ouster {
 namespace {

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The sensor's clock over PTC, asked about once a second off the frame path:
 //
-//   sim::lidar::ClockPoll poll(sim::hesai::PtcClockReader(sensor, model), 1s);
+//   sim::apps::ClockPoll poll(sim::hesai::PtcClockReader(sensor, model), 1s);
 //   poll.latest() -> sim::ClockStatus: source (ptp/gptp/pps_nmea/free_running), state, domain,
 //                    offset from master, path delay, grandmaster, UTC offset, when it was read
 //

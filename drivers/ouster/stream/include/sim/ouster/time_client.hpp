@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The sensor's clock over its HTTP API, asked about once a second off the frame path:
 //
-//   sim::lidar::ClockPoll poll(sim::ouster::HttpClockReader(sensor), 1s);
+//   sim::apps::ClockPoll poll(sim::ouster::HttpClockReader(sensor), 1s);
 //   poll.latest() -> sim::ClockStatus: source (ptp/sync_pulse/pps_nmea/free_running), state,
 //                    offset from master, path delay, grandmaster, UTC offset, timescale
 //

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "sim/lidar/clock_poll.hpp"
+#include "sim/lidar/clock_notes.hpp"
 
 #include <algorithm>
 #include <cstdio>
@@ -116,47 +116,6 @@ std::vector<std::string> ClockNotes::update(const ClockStatus& status, std::int6
                     "sensor's PTP domain");
   }
   return notes;
-}
-
-ClockPoll::ClockPoll(std::function<ClockStatus()> read, std::chrono::milliseconds period)
-    : read_(std::move(read)), period_(period), thread_([this] { loop(); }) {}
-
-ClockPoll::~ClockPoll() {
-  {
-    std::lock_guard lock(mutex_);
-    stop_ = true;
-  }
-  wake_.notify_all();
-  thread_.join();
-}
-
-void ClockPoll::loop() {
-  std::unique_lock lock(mutex_);
-  while (!stop_) {
-    lock.unlock();
-    ClockStatus status = read_();  // bounded by the reader's own deadline
-    auto notes = notes_.update(status, monotonic_ns());
-    lock.lock();
-    latest_ = std::move(status);
-    ++reads_;
-    for (auto& note : notes) pending_.push_back(std::move(note));
-    wake_.wait_for(lock, period_, [this] { return stop_; });
-  }
-}
-
-ClockStatus ClockPoll::latest() const {
-  std::lock_guard lock(mutex_);
-  return latest_;
-}
-
-std::uint64_t ClockPoll::reads() const {
-  std::lock_guard lock(mutex_);
-  return reads_;
-}
-
-std::vector<std::string> ClockPoll::take_notes() {
-  std::lock_guard lock(mutex_);
-  return std::exchange(pending_, {});
 }
 
 }  // namespace sim::lidar
