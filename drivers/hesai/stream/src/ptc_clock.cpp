@@ -11,12 +11,15 @@
 namespace sim::hesai {
 namespace {
 
-// One exchange with what is left of the round's deadline (CLOCK_MONOTONIC).
+// One exchange with what is left of the round's deadline (CLOCK_MONOTONIC); the first has the
+// whole timeout (and its messages say so).
 Expected<std::vector<std::uint8_t>> ask(const PtcEndpoint& sensor, std::int64_t deadline_ns, std::uint8_t command,
                                         std::span<const std::uint8_t> payload, const char* what) {
-  const std::int64_t left_ms = (deadline_ns - monotonic_ns()) / 1'000'000;
   PtcEndpoint bounded = sensor;
-  bounded.timeout = std::chrono::milliseconds(std::max<std::int64_t>(left_ms, 1));
+  if (command != ptc::get_ptp_config) {
+    const std::int64_t left_ms = (deadline_ns - monotonic_ns()) / 1'000'000;
+    bounded.timeout = std::chrono::milliseconds(std::max<std::int64_t>(left_ms, 1));
+  }
   return ptc_exchange(bounded, command, payload, what);
 }
 
