@@ -123,8 +123,11 @@ Expected<ClockStatus> clock_status_from_time_json(std::string_view json) {
   if (root.is_discarded()) {
     return Error{ErrorCode::invalid_argument, "the sensor's time answer is not JSON"};
   }
+  // A part that is not an object is no part.
   const Json* sensor = member(&root, "sensor");
   const Json* ptp = member(&root, "ptp");
+  if (sensor != nullptr && !sensor->is_object()) sensor = nullptr;
+  if (ptp != nullptr && !ptp->is_object()) ptp = nullptr;
   if (!root.is_object() || (sensor == nullptr && ptp == nullptr)) {
     return Error{ErrorCode::invalid_argument,
                  "the sensor's time answer has neither \"sensor\" nor \"ptp\"; it is not an Ouster "
