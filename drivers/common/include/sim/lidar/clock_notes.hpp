@@ -47,8 +47,6 @@ class ClockNotes {
   std::deque<std::int64_t> changes_;  // when the grandmaster changed, within the window
   std::int64_t offset_said_ns_ = 0;
   std::int64_t changes_said_ns_ = 0;
-  bool offset_said_ = false;
-  bool changes_said_ = false;
 };
 
 }  // namespace sim::lidar
