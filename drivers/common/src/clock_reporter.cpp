@@ -14,6 +14,11 @@ void ClockReporter::set_tolerance(const timing::ClockTolerance& tolerance) noexc
   last_.reset();
 }
 
+void ClockReporter::add(const std::optional<std::int64_t>& sensor_ns, std::int64_t stamp_offset_ns,
+                        std::int64_t arrival_ns) noexcept {
+  if (sensor_ns) check_.add(saturating_add_ns(*sensor_ns, stamp_offset_ns), arrival_ns);
+}
+
 ClockStatus ClockReporter::judge(std::int64_t now_realtime_ns) {
   ClockStatus reported = sources_.reported ? sources_.reported() : ClockStatus{};
   // A replay's stamps are the recording's, a restamped replay's this host's: no sensor report

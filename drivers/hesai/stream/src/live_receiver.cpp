@@ -56,7 +56,7 @@ struct LiveReceiver::Impl final : lidar::DatagramHandler {
     last_packet_ns = d.taken_ns;
     const PushResult result = published->push(d.payload, d.arrival_ns);
     // The packet's own time against its arrival on this host; judged about once a second.
-    published->clock().add(result.packet_ns, d.arrival_ns);
+    published->clock().add(result.packet_ns, published->stamp_offset(), d.arrival_ns);
     published->tick_clock(d.arrival_ns);
     return true;
   }

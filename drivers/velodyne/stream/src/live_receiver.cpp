@@ -45,7 +45,7 @@ struct LiveReceiver::Impl final : lidar::DatagramHandler {
     const PushResult result = published->push(d.payload, d.arrival_ns);
     // The packet's own time against its arrival on this host; judged about once a second. Its
     // hour is the arrival's (a Velodyne counts µs past the hour): an hour off cannot show.
-    published->clock().add(result.packet_ns, d.arrival_ns);
+    published->clock().add(result.packet_ns, published->stamp_offset(), d.arrival_ns);
     published->tick_clock(d.arrival_ns);
     return true;
   }

@@ -47,6 +47,10 @@ class ClockReporter {
   void add(const std::optional<std::int64_t>& sensor_ns, std::int64_t arrival_ns) noexcept {
     if (sensor_ns) check_.add(*sensor_ns, arrival_ns);
   }
+  // A live packet as the stream stamps it: its sensor time plus the stream's stamp offset (a
+  // --tai-correction), so a corrected clock is judged by what readers get.
+  void add(const std::optional<std::int64_t>& sensor_ns, std::int64_t stamp_offset_ns,
+           std::int64_t arrival_ns) noexcept;
   // A replay's --loop started over: neither a step nor time going backwards.
   void restart() noexcept { check_.restart(); }
 
