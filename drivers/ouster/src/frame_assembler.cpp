@@ -169,6 +169,12 @@ PushResult FrameAssembler::push(std::span<const std::uint8_t> payload,
     return result;
   }
   ++counters_.packets;
+  for (unsigned c = 0; c < packet.columns(); ++c) {
+    const Column& column = packet.column(c);
+    if (!column.valid || column.timestamp_ns > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max())) continue;
+    result.packet_ns = static_cast<std::int64_t>(column.timestamp_ns);
+    break;
+  }
   if (open_ && packet.frame_id() != frame_id_) {
     // The last packet of the frame in progress was lost: it ends here.
     result.frame = close();

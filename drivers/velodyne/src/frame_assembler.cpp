@@ -407,6 +407,7 @@ PushResult FrameAssembler::push(std::span<const std::uint8_t> payload, std::int6
   const std::int64_t packet_ns =
       packet_time_ns(packet.timestamp_us(), time_reference_ns != 0 ? time_reference_ns : host_receive_ns);
   count_packet(packet_ns);
+  result.packet_ns = packet_ns;
 
   std::array<BlockAzimuth, blocks_per_packet> azimuths{};
   block_azimuths(packet, azimuths);  // also learns the step across packets

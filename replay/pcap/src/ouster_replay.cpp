@@ -6,6 +6,7 @@
 #include <span>
 #include <string>
 
+#include "replay_clock.hpp"
 #include "replay_loop.hpp"
 #include "replays.hpp"
 #include "sim/apps/ouster_options.hpp"
@@ -23,9 +24,11 @@ std::span<const std::uint8_t> as_u8(std::span<const std::byte> bytes) {
 
 class OusterTarget final : public ReplayTarget {
  public:
-  OusterTarget(ouster::LidarStream stream, bool restamp) : stream_(std::move(stream)), restamp_(restamp) {}
+  OusterTarget(ouster::LidarStream stream, bool restamp) : stream_(std::move(stream)), restamp_(restamp) {
+    stream_.clock().set_base(restamp ? lidar::ClockBase::restamped : lidar::ClockBase::replayed);
+  }
 
-  bool push(std::span<const std::byte> payload, std::int64_t) override {
+  bool push(std::span<const std::byte> payload, std::int64_t capture_ns) override {
     const auto bytes = as_u8(payload);
     // IMU packets are the 48-byte ones (port 7503); everything else is offered as lidar.
     if (bytes.size() == ouster::imu_packet_bytes) {
@@ -42,13 +45,22 @@ class OusterTarget final : public ReplayTarget {
         restamped_ = true;
       }
     }
-    return stream_.push_lidar(bytes, realtime_ns()).frame.has_value();
+    const std::int64_t now = realtime_ns();
+    const ouster::PushResult result = stream_.push_lidar(bytes, now);
+    clock_replayed_packet(stream_, result.packet_ns, capture_ns, now);
+    return result.frame.has_value();
   }
-  void restart() override { stream_.reset(); }
+  void restart() override {
+    stream_.reset();
+    stream_.clock().restart();
+  }
   void shift_stamps(std::int64_t shift_ns) override {
     stream_.set_stamp_offset(saturating_add_ns(stream_.stamp_offset(), shift_ns));
   }
-  void finish() override { stream_.finish(); }
+  void finish() override {
+    stream_.finish();
+    clock_at_end(stream_);
+  }
   std::uint64_t decoded_packets() const override { return stream_.counters().packets; }
   std::uint64_t frames() const override { return stream_.published().frames; }
   std::string status() const override { return stream_.describe_counters(); }

@@ -9,6 +9,7 @@
 #include <span>
 #include <string>
 
+#include "replay_clock.hpp"
 #include "replay_loop.hpp"
 #include "replays.hpp"
 #include "sim/apps/sensor_options.hpp"
@@ -69,7 +70,9 @@ Expected<Detected> detect(const ReplayArgs& r, std::optional<velodyne::Model> fo
 
 class VelodyneTarget final : public ReplayTarget {
  public:
-  VelodyneTarget(velodyne::LidarStream stream, bool restamp) : stream_(std::move(stream)), restamp_(restamp) {}
+  VelodyneTarget(velodyne::LidarStream stream, bool restamp) : stream_(std::move(stream)), restamp_(restamp) {
+    stream_.clock().set_base(restamp ? lidar::ClockBase::restamped : lidar::ClockBase::replayed);
+  }
 
   bool push(std::span<const std::byte> payload, std::int64_t capture_ns) override {
     const auto bytes = as_u8(payload);
@@ -83,11 +86,20 @@ class VelodyneTarget final : public ReplayTarget {
                                                    bytes.data() + velodyne::timestamp_offset), capture_ns));
       restamped_ = true;
     }
-    return stream_.push(bytes, realtime_ns(), capture_ns).frame.has_value();
+    const std::int64_t now = realtime_ns();
+    const velodyne::PushResult result = stream_.push(bytes, now, capture_ns);
+    clock_replayed_packet(stream_, result.packet_ns, capture_ns, now);
+    return result.frame.has_value();
   }
-  void restart() override { stream_.reset(); }
+  void restart() override {
+    stream_.reset();
+    stream_.clock().restart();
+  }
   void shift_stamps(std::int64_t shift_ns) override { stream_.set_stamp_offset(stream_.stamp_offset() + shift_ns); }
-  void finish() override { stream_.finish(); }
+  void finish() override {
+    stream_.finish();
+    clock_at_end(stream_);
+  }
   std::uint64_t decoded_packets() const override { return stream_.counters().packets; }
   std::uint64_t frames() const override { return stream_.published().frames; }
   std::string status() const override { return stream_.describe_counters(); }

@@ -126,6 +126,10 @@ const AssemblerCounters& LidarStream::counters() const noexcept { return impl_->
 const PublishCounters& LidarStream::published() const noexcept { return impl_->published; }
 const TimeSync& LidarStream::time_sync() const noexcept { return impl_->sync; }
 Writer& LidarStream::writer() noexcept { return impl_->frames.writer(); }
+lidar::ClockReporter& LidarStream::clock() noexcept { return impl_->clock; }
+std::optional<ClockStatus> LidarStream::tick_clock(std::int64_t now_realtime_ns, bool at_once) {
+  return impl_->tick_clock(now_realtime_ns, at_once);
+}
 
 std::string LidarStream::describe_counters(bool machine) const {
   const AssemblerCounters& c = impl_->assembler.counters();

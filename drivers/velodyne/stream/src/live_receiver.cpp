@@ -26,6 +26,8 @@ struct LiveReceiver::Impl final : lidar::DatagramHandler {
   lidar::UdpReceiver udp;
   lidar::DetectedStream<LidarStream, LidarStreamConfig, detect_model, returns_in> stream;
   std::int64_t last_packet_ns = 0;   // monotonic time the last data packet was taken
+  lidar::ClockSources clock_sources;  // for the stream, once it exists
+  bool clock_sources_given = false;
 
   bool on_datagram(const lidar::Datagram& d) override {
     if (d.socket == position_socket) {
@@ -34,9 +36,17 @@ struct LiveReceiver::Impl final : lidar::DatagramHandler {
     }
     LidarStream* published = stream.for_packet(d, udp);
     if (published == nullptr) return !stream.error();
+    if (!clock_sources_given) {
+      published->clock().set_sources(clock_sources);
+      clock_sources_given = true;
+    }
     if (udp.resumed_after_silence(d.arrival_ns)) published->reset();  // the revolution is stale
     last_packet_ns = d.taken_ns;
-    published->push(d.payload, d.arrival_ns);
+    const PushResult result = published->push(d.payload, d.arrival_ns);
+    // The packet's own time against its arrival on this host; judged about once a second. Its
+    // hour is the arrival's (a Velodyne counts µs past the hour): an hour off cannot show.
+    published->clock().add(result.packet_ns, published->stamp_offset(), d.arrival_ns);
+    published->tick_clock(d.arrival_ns);
     return true;
   }
 };
@@ -54,7 +64,13 @@ LiveReceiver::LiveReceiver(LiveReceiver&&) noexcept = default;
 LiveReceiver& LiveReceiver::operator=(LiveReceiver&&) noexcept = default;
 LiveReceiver::~LiveReceiver() = default;
 
+void LiveReceiver::set_clock_sources(lidar::ClockSources sources) {
+  impl_->clock_sources = std::move(sources);
+  impl_->clock_sources_given = false;
+}
+
 Expected<void> LiveReceiver::publish_to(LidarStreamConfig config, std::optional<Model> model) {
+  impl_->clock_sources_given = false;
   return impl_->stream.publish_to(std::move(config), model);
 }
 

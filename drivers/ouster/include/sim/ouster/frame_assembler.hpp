@@ -74,6 +74,9 @@ struct CompletedFrame {
 struct PushResult {
   PacketError error = PacketError::none;
   std::optional<CompletedFrame> frame;
+  // The sensor time of the packet's first valid column, for the clock check against its
+  // arrival; nullopt when it was rejected or has no valid column.
+  std::optional<std::int64_t> packet_ns;
 };
 
 struct AssemblerCounters {

@@ -96,6 +96,9 @@ struct CompletedFrame {
 struct PushResult {
   PacketError error = PacketError::none;
   std::optional<CompletedFrame> frame;
+  // The packet's sensor time (its µs past the hour, in the hour nearest the reference), for the
+  // clock check against its arrival; nullopt when it was rejected.
+  std::optional<std::int64_t> packet_ns;
 };
 
 struct AssemblerCounters {
