@@ -116,7 +116,7 @@ struct LidarStream::Impl : lidar::PointPipeline<FrameAssembler, PublishCounters>
   using PointPipeline::PointPipeline;
   std::optional<SensorInfo> sensor;  // the description, re-set when the time sync changes
   TimeSync sync;
-  ReportedClock clock;
+  ReportedClock reported;  // what the position packets last said of the clock
   StampClock stamp_clock = StampClock::sensor_live;
   std::string caller_time_sync;  // LidarStreamConfig::sensor's, which sensor_recorded extends
 };
@@ -149,7 +149,7 @@ Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config) {
   auto impl = std::make_unique<Impl>(std::move(writer.value()), std::move(assembler.value()));
   impl->sensor = sensor;
   impl->stamp_clock = config.stamp_clock;
-  impl->clock.set(initial_clock(config.stamp_clock));
+  impl->reported.set(initial_clock(config.stamp_clock));
   if (config.sensor) impl->caller_time_sync = config.sensor->time_sync;
   return LidarStream(std::move(impl));
 }
@@ -172,7 +172,7 @@ bool LidarStream::push_position(std::span<const std::uint8_t> payload, std::int6
   }
   ++impl_->published.position_packets;
   const std::int64_t arrival = host_receive_ns != 0 ? host_receive_ns : realtime_ns();
-  impl_->clock.set(stream_clock(clock_status_of(*report, arrival), impl_->stamp_clock));
+  impl_->reported.set(stream_clock(clock_status_of(*report, arrival), impl_->stamp_clock));
   TimeSync sync = time_sync_of(*report);
   if (sync.text == impl_->sync.text && sync.base == impl_->sync.base) return true;
   impl_->sync = std::move(sync);
@@ -199,7 +199,7 @@ Model LidarStream::model() const noexcept { return impl_->assembler.options().mo
 const AssemblerCounters& LidarStream::counters() const noexcept { return impl_->assembler.counters(); }
 const PublishCounters& LidarStream::published() const noexcept { return impl_->published; }
 const TimeSync& LidarStream::time_sync() const noexcept { return impl_->sync; }
-ReportedClock LidarStream::reported_clock() const { return impl_->clock; }
+ReportedClock LidarStream::reported_clock() const { return impl_->reported; }
 Writer& LidarStream::writer() noexcept { return impl_->frames.writer(); }
 
 std::string LidarStream::describe_counters(bool machine) const {

@@ -35,12 +35,12 @@ struct LiveReceiver::Impl final : lidar::DatagramHandler {
   std::int64_t last_packet_ns = 0;   // monotonic time the last data packet was taken
   // The stream's reported clock, readable before the stream exists (its model may come with the
   // first data packet); copied from the stream after each position packet.
-  ReportedClock clock{sensor_stamps()};
+  ReportedClock reported{sensor_stamps()};
 
   bool on_datagram(const lidar::Datagram& d) override {
     if (d.socket == position_socket) {
       if (LidarStream* published = stream.get()) {
-        if (published->push_position(d.payload, d.arrival_ns)) clock.set(published->reported_clock()());
+        if (published->push_position(d.payload, d.arrival_ns)) reported.set(published->reported_clock()());
       }
       return true;
     }
@@ -82,7 +82,7 @@ std::string LiveReceiver::local_address() const { return impl_->udp.local_addres
 int LiveReceiver::receive_buffer() const noexcept { return impl_->udp.receive_buffer(); }
 const ReceiveCounters& LiveReceiver::counters() const noexcept { return impl_->udp.counters(); }
 const LidarStream* LiveReceiver::stream() const noexcept { return impl_->stream.get(); }
-ReportedClock LiveReceiver::reported_clock() const { return impl_->clock; }
+ReportedClock LiveReceiver::reported_clock() const { return impl_->reported; }
 std::int64_t LiveReceiver::last_packet_ns() const noexcept { return impl_->last_packet_ns; }
 
 }  // namespace sim::velodyne
