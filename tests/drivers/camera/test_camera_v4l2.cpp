@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <thread>
 
 #include "fake_v4l2_device.hpp"
@@ -285,6 +286,84 @@ TEST_F(V4l2CaptureTest, ReceiveTimestampsIgnoreTheDeviceClock) {
   ASSERT_EQ(reader.read(got, info), ReadStatus::new_frame);
   EXPECT_GE(info.stamp_ns, before);
   EXPECT_LE(info.stamp_ns, realtime_ns());
+}
+
+// --- the clock of the stamps ----------------------------------------------------------------
+
+// UVC and most capture drivers stamp with CLOCK_MONOTONIC: the host's clock, mapped per frame.
+TEST_F(V4l2CaptureTest, TheReportedClockSaysTheStampsAreTheBuffersOnTheHostsClock) {
+  config.format.width = 64;
+  config.format.height = 48;
+  auto capture = start();
+  ASSERT_TRUE(capture);
+  // What a clock reporter takes, called from its own thread.
+  const std::function<ClockStatus()> clock = capture->reported_clock();
+  EXPECT_EQ(clock().source, ClockSource::host);
+  EXPECT_EQ(clock().reported_ns, 0);  // no frame yet
+  const std::int64_t before = realtime_ns();
+  fake.push_frame({testing::noise(64 * 48 * 2, 1), 0, false, -1});
+  ASSERT_EQ(capture->step(100ms), StepResult::published);
+  const ClockStatus now = clock();
+  EXPECT_EQ(now.source, ClockSource::host);
+  EXPECT_EQ(now.state, ClockState::unknown);  // the host's own synchronisation is judged apart
+  EXPECT_EQ(now.stamps, StampClock::sensor);
+  EXPECT_EQ(now.verdict, ClockVerdict::unknown) << now.problem;
+  EXPECT_GE(now.reported_ns, before);
+}
+
+// A buffer without a monotonic stamp cannot be mapped: the frame carries the receive time, and
+// the clock record says so, for UNKNOWN, COPY and a value V4L2 does not define; a monotonic
+// buffer afterwards clears the warning at once.
+TEST_F(V4l2CaptureTest, AnUnknownOrCopiedBufferClockIsAWarningAndTheFramesCarryTheReceiveTime) {
+  config.format.width = 64;
+  config.format.height = 48;
+  auto capture = start();
+  ASSERT_TRUE(capture);
+  const ReportedClock clock = capture->reported_clock();
+  auto reader = open_reader();
+  Bytes got(reader.capacity());
+  struct Case {
+    std::uint32_t flags;
+    const char* named;
+  };
+  for (const Case c : {Case{V4L2_BUF_FLAG_TIMESTAMP_UNKNOWN, "TIMESTAMP_UNKNOWN"},
+                       Case{V4L2_BUF_FLAG_TIMESTAMP_COPY | V4L2_BUF_FLAG_TSTAMP_SRC_SOE, "TIMESTAMP_COPY"},
+                       Case{V4L2_BUF_FLAG_TIMESTAMP_MASK, "TIMESTAMP_UNKNOWN"}}) {
+    const std::int64_t before = realtime_ns();
+    FakeFrame frame{testing::noise(64 * 48 * 2, 1), 0, false, 12345};
+    frame.timestamp_flags = c.flags;
+    fake.push_frame(frame);
+    ASSERT_EQ(capture->step(100ms), StepResult::published);
+    FrameInfo info;
+    ASSERT_EQ(reader.read(got, info), ReadStatus::new_frame);
+    EXPECT_GE(info.stamp_ns, before);  // the receive time, not 12 µs after boot
+    EXPECT_LE(info.stamp_ns, realtime_ns());
+    const ClockStatus now = clock();
+    EXPECT_EQ(now.source, ClockSource::host);
+    EXPECT_EQ(now.stamps, StampClock::host_arrival);
+    EXPECT_EQ(now.verdict, ClockVerdict::warn);
+    EXPECT_NE(now.problem.find(c.named), std::string::npos) << now.problem;
+  }
+  fake.push_frame({testing::noise(64 * 48 * 2, 1), 0, false, -1});
+  ASSERT_EQ(capture->step(100ms), StepResult::published);
+  EXPECT_EQ(clock().stamps, StampClock::sensor);
+  EXPECT_EQ(clock().verdict, ClockVerdict::unknown) << clock().problem;
+}
+
+TEST_F(V4l2CaptureTest, ReceiveTimestampsReportTheHostsArrivalWhateverTheBuffersSay) {
+  config.format.width = 64;
+  config.format.height = 48;
+  config.timestamps = TimestampSource::receive;
+  auto capture = start();
+  ASSERT_TRUE(capture);
+  FakeFrame frame{testing::noise(64 * 48 * 2, 1), 0, false, 12345};
+  frame.timestamp_flags = V4L2_BUF_FLAG_TIMESTAMP_UNKNOWN;
+  fake.push_frame(frame);
+  ASSERT_EQ(capture->step(100ms), StepResult::published);
+  const ClockStatus now = capture->reported_clock()();
+  EXPECT_EQ(now.source, ClockSource::host);
+  EXPECT_EQ(now.stamps, StampClock::host_arrival);
+  EXPECT_EQ(now.verdict, ClockVerdict::unknown) << now.problem;  // asked for: nothing wrong
 }
 
 TEST_F(V4l2CaptureTest, SequenceGapsCountDroppedFrames) {
