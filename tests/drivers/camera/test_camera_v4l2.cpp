@@ -547,6 +547,26 @@ std::optional<int> parse_v4l2(std::vector<std::string> words, V4l2Options& optio
   return parse_options(std::move(words), options, add_v4l2_options, finish_v4l2_options);
 }
 
+// A camera's exposure and transfer put its stamps tens of milliseconds before their arrival:
+// the clock check's tolerance for cameras is wider than a LiDAR's, and an option.
+TEST(V4l2Config, TheClockToleranceIsACamerasByDefaultAndAnOption) {
+  const timing::ClockTolerance lidar;
+  V4l2Options defaults;
+  EXPECT_FALSE(parse_v4l2({"t"}, defaults));
+  EXPECT_EQ(defaults.clock.tolerance.offset_ok_ns, 250'000'000);
+  EXPECT_GT(defaults.clock.tolerance.offset_ok_ns, lidar.offset_ok_ns);
+  EXPECT_GT(defaults.clock.tolerance.spread_warn_ns, lidar.spread_warn_ns);
+  EXPECT_EQ(defaults.clock.tolerance.offset_error_ns, lidar.offset_error_ns);
+  V4l2Options wider;
+  EXPECT_FALSE(parse_v4l2({"t", "--clock-offset-ok-ms", "400", "--clock-spread-warn-ms", "80.5"}, wider));
+  EXPECT_EQ(wider.clock.tolerance.offset_ok_ns, 400'000'000);
+  EXPECT_EQ(wider.clock.tolerance.spread_warn_ns, 80'500'000);
+  V4l2Options too_wide;
+  ::testing::internal::CaptureStderr();
+  EXPECT_EQ(parse_v4l2({"t", "--clock-offset-ok-ms", "5000"}, too_wide), std::optional<int>(2));
+  EXPECT_NE(::testing::internal::GetCapturedStderr().find("--clock-offset-ok-ms"), std::string::npos);
+}
+
 TEST(V4l2Config, YamlFillsTheConfigUnderTheCommandLineAndRefusesBadKeys) {
   const std::string path = "/tmp/test_camera_config_" + std::to_string(getpid()) + ".yaml";
   {
