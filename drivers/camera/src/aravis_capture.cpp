@@ -209,7 +209,10 @@ struct AravisCapture::Impl {
 
   // Reads the camera's clock into `reported` (the control channel: main thread, off the frame path).
   void report_clock(ArvDevice* device) {
-    reported.set(genicam_clock_status(read_ptp(device), device_time, realtime_ns()));
+    const ClockStatus clock = genicam_clock_status(read_ptp(device), device_time, realtime_ns());
+    // Said once when it changes, not every second.
+    if (!clock.problem.empty() && clock.problem != reported().problem) log("warning: " + clock.problem);
+    reported.set(clock);
     clock_read = std::chrono::steady_clock::now();
   }
 

@@ -61,7 +61,9 @@ V4l2Capture::V4l2Capture(V4l2Io& io, V4l2CaptureConfig config) noexcept
 void V4l2Capture::report_clock(BufferClock clock, std::int64_t received) {
   // Not per frame: when the buffers' clock changes, and once a second for reported_ns.
   if (reported_for_ == clock && received - reported_at_ < 1'000'000'000) return;
-  reported_.set(v4l2_clock_status(config_.timestamps, clock, received));
+  const ClockStatus status = v4l2_clock_status(config_.timestamps, clock, received);
+  if (reported_for_ != clock && !status.problem.empty()) log("warning: " + status.problem);
+  reported_.set(status);
   reported_for_ = clock;
   reported_at_ = received;
 }

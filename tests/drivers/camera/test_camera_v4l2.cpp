@@ -317,6 +317,8 @@ TEST_F(V4l2CaptureTest, TheReportedClockSaysTheStampsAreTheBuffersOnTheHostsCloc
 TEST_F(V4l2CaptureTest, AnUnknownOrCopiedBufferClockIsAWarningAndTheFramesCarryTheReceiveTime) {
   config.format.width = 64;
   config.format.height = 48;
+  std::vector<std::string> logged;
+  config.log = [&logged](std::string_view line) { logged.emplace_back(line); };
   auto capture = start();
   ASSERT_TRUE(capture);
   const ReportedClock clock = capture->reported_clock();
@@ -348,6 +350,10 @@ TEST_F(V4l2CaptureTest, AnUnknownOrCopiedBufferClockIsAWarningAndTheFramesCarryT
   ASSERT_EQ(capture->step(100ms), StepResult::published);
   EXPECT_EQ(clock().stamps, StampClock::sensor);
   EXPECT_EQ(clock().verdict, ClockVerdict::unknown) << clock().problem;
+  // Each change to a clock that cannot be mapped is said once in the log, not per frame.
+  ASSERT_EQ(logged.size(), 3U);
+  EXPECT_EQ(logged[1].rfind("warning: ", 0), 0U) << logged[1];
+  EXPECT_NE(logged[1].find("TIMESTAMP_COPY"), std::string::npos) << logged[1];
 }
 
 TEST_F(V4l2CaptureTest, ReceiveTimestampsReportTheHostsArrivalWhateverTheBuffersSay) {
