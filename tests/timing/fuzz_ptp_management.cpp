@@ -2,7 +2,7 @@
 // Fuzzes the parser of ptp4l's management responses (outside bytes from a Unix socket) and the
 // mapping of what it says to the clock record. Input: one datagram; or "SIMM" then records of
 // [u16 big-endian length][datagram], folded together as one conversation with ptp4l. The record
-// must always be storable: its texts within their bounds.
+// must always be storable (sim::clock_status_problem finds nothing).
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -43,7 +43,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const auto host = sim::timing::host_clock_from(answer, {}, sim::timing::KernelClock{}, 1);
   if (host.status.problem.size() > sim::ClockStatus::kMaxProblem ||
       host.status.grandmaster.size() > sim::ClockStatus::kMaxGrandmaster ||
-      host.description.empty()) {
+      host.description.empty() || !sim::clock_status_problem(host.status).empty()) {
     std::abort();
   }
   return 0;

@@ -243,6 +243,7 @@ TEST(HostClock, ASlavePtp4lNamesItsMastersIdentityAndNoticesTheMasterStopping) {
   EXPECT_LT(std::llabs(*slave.status.offset_from_master_ns), 1'000'000'000LL);
   EXPECT_TRUE(slave.status.path_delay_ns.has_value());
   EXPECT_GT(slave.status.reported_ns, 0);
+  EXPECT_EQ(sim::clock_status_problem(slave.status), "");  // a writer can store it as it is
 
   // The watch logged the change from "no ptp4l" (it started before ptp4l's socket existed, or
   // while it was still listening) to the slave of the master, once.
@@ -426,7 +427,42 @@ TEST(HostClock, AnswersCutShortAreAWarningWithTheirReason) {
   EXPECT_EQ(host.status.state, ClockState::unknown);
   EXPECT_EQ(host.status.verdict, ClockVerdict::warn);
   EXPECT_NE(host.status.problem.find("cut short"), std::string::npos) << host.status.problem;
-  EXPECT_LE(host.status.problem.size(), sim::ClockStatus::kMaxProblem);
+  EXPECT_EQ(sim::clock_status_problem(host.status), "");
+}
+
+TEST(HostClock, Ptp4lInAnotherDomainAndSpeaking8021ASIsFoundAndReadAsGptp) {
+  TempDir dir;
+  std::atomic<int> requests{0};
+  // Answers only domain 7 with transportSpecific 1, as ptp4l with gPTP.cfg and domainNumber 7.
+  FakePtp4l gptp(dir / "ptp4l", [&](const std::vector<std::uint8_t>& request)
+                                    -> std::vector<std::vector<std::uint8_t>> {
+    ++requests;
+    if ((request[0] >> 4) != 1 || request[4] != 7) return {};
+    if (asked_id(request) == 0x2000) {  // DEFAULT_DATA_SET: domainNumber 7
+      std::vector<std::uint8_t> d(20, 0);
+      d[18] = 7;
+      return {response_to(request, d)};
+    }
+    if (asked_id(request) == 0x2004) {  // PORT_DATA_SET: port 1 SLAVE
+      std::vector<std::uint8_t> d(26, 0);
+      d[9] = 1;
+      d[10] = 9;
+      return {response_to(request, d)};
+    }
+    return {};
+  });
+  HostClockOptions options;
+  options.ptp4l_socket = dir / "ptp4l";
+  const HostClock found = sim::timing::read_host_clock_details(options);
+  ASSERT_TRUE(found.ptp4l.has_value()) << found.ptp4l_absent;
+  EXPECT_EQ(found.status.source, ClockSource::gptp);
+  EXPECT_EQ(found.status.ptp_domain, 7);
+  EXPECT_EQ(found.status.state, ClockState::locked);
+  // The next reading asks the domain it learned: far fewer requests than a sweep.
+  const int before = requests.load();
+  const HostClock again = sim::timing::read_host_clock_details(options);
+  EXPECT_EQ(again.status.ptp_domain, 7);
+  EXPECT_LE(requests.load() - before, 12);
 }
 
 // The mapping on its own (no I/O), for the states the rig cannot reach without touching the clock.

@@ -256,51 +256,92 @@ void fold_response(const ptp::Response& r, Ptp4lAnswer& answer) {
   }
 }
 
+namespace {
+
+// One socket asked: its answer, or the errno of sending to it (0: sent, and no answer came).
+struct Asked {
+  std::optional<Ptp4lAnswer> answer;
+  int error = 0;
+};
+
+Asked ask_socket(const ClientSocket& client, const std::string& path,
+                 const HostClockOptions& options, std::chrono::steady_clock::time_point deadline) {
+  std::optional<Learned> known;
+  if (options.ptp_domain) {
+    known = Learned{*options.ptp_domain, 0};
+  } else {
+    std::lock_guard lock(learned_mutex);
+    if (auto it = learned().find(path); it != learned().end()) known = it->second;
+  }
+  Conversation talk(client, path, deadline);
+  Ptp4lAnswer answer;
+  const bool may_sweep = !known;
+  const auto first_until =
+      may_sweep ? std::chrono::steady_clock::now() + (deadline - std::chrono::steady_clock::now()) / 2
+                : deadline;
+  // EAGAIN: its queue stayed full (nobody reads it): below, that is "did not answer".
+  if (const int error = send_all(talk, known ? known->domain : 0, first_until);
+      error != 0 && error != EAGAIN) {
+    return {std::nullopt, error};
+  }
+  bool answered = talk.gather(answer, first_until);
+  if (!answered && may_sweep) answered = sweep_domains(talk, answer, deadline);
+  std::lock_guard lock(learned_mutex);
+  if (!answered) {
+    if (known && !options.ptp_domain) learned().erase(path);  // restarted in another domain?
+    return {};
+  }
+  if (answer.socket.empty()) {
+    answer.socket = path;  // it answered, with nothing readable
+  } else {
+    learned()[path] = Learned{answer.domain, answer.transport_specific};
+  }
+  return {std::move(answer), 0};
+}
+
+// "no ptp4l socket at A, B or C".
+std::string missing_sentence(const std::vector<std::string>& missing) {
+  std::string sentence = "no ptp4l socket at ";
+  for (std::size_t i = 0; i < missing.size(); ++i) {
+    if (i > 0) sentence += i + 1 == missing.size() ? " or " : ", ";
+    sentence += missing[i];
+  }
+  return sentence;
+}
+
+}  // namespace
+
 Expected<Ptp4lAnswer> ask_ptp4l(const HostClockOptions& options) {
   const auto timeout = std::max(options.ptp4l_timeout, std::chrono::milliseconds(1));
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   auto client = ClientSocket::open();
   if (!client) return client.error();
-  std::string absent;
+  std::vector<std::string> missing;
+  std::string refused;
   for (const auto& path : sockets_to_try(options)) {
     if (path.size() >= sizeof(sockaddr_un{}.sun_path)) {
       return Error{ErrorCode::invalid_argument,
                    "the ptp4l socket path " + path + " is too long for a Unix socket"};
     }
-    std::optional<Learned> known;
-    if (options.ptp_domain) known = Learned{*options.ptp_domain, 0};
-    {
-      std::lock_guard lock(learned_mutex);
-      if (auto it = learned().find(path); it != learned().end() && !options.ptp_domain) known = it->second;
+    Asked asked = ask_socket(*client, path, options, deadline);
+    if (asked.answer) return std::move(*asked.answer);
+    if (asked.error == 0) {
+      return Error{ErrorCode::not_found, "ptp4l at " + path + " did not answer within " +
+                                             std::to_string(timeout.count()) +
+                                             " ms (another domain? set it)"};
     }
-    Conversation talk(*client, path, deadline);
-    Ptp4lAnswer answer;
-    const bool may_sweep = !known;
-    const auto first_until = may_sweep ? std::chrono::steady_clock::now() + timeout / 2 : deadline;
-    // EAGAIN: its queue stayed full (nobody reads it): below, that is "did not answer".
-    if (const int error = send_all(talk, known ? known->domain : 0, first_until);
-        error != 0 && error != EAGAIN) {
-      const std::string sentence = errno_sentence(path, error);
-      absent = absent.empty() ? sentence : absent + "; " + sentence;
-      if (error == ENOENT || error == ECONNREFUSED) continue;  // try the next default socket
-      return Error{ErrorCode::not_found, absent};
+    if (asked.error == ENOENT) {
+      missing.push_back(path);
+    } else if (refused.empty()) {
+      refused = errno_sentence(path, asked.error);
     }
-    bool answered = talk.gather(answer, first_until);
-    if (!answered && may_sweep) answered = sweep_domains(talk, answer, deadline);
-    if (!answered) {
-      return Error{ErrorCode::not_found,
-                   "ptp4l at " + path + " did not answer within " +
-                       std::to_string(timeout.count()) + " ms (another domain? set it)"};
-    }
-    if (!answer.socket.empty()) {
-      std::lock_guard lock(learned_mutex);
-      learned()[path] = Learned{answer.domain, answer.transport_specific};
-    } else {
-      answer.socket = path;
-    }
-    return answer;
+    const bool next = options.ptp4l_socket.empty() &&
+                      (asked.error == ENOENT || asked.error == ECONNREFUSED ||
+                       asked.error == EACCES || asked.error == EPERM);
+    if (!next) break;  // try the next default socket only past a missing or closed one
   }
-  return Error{ErrorCode::not_found, absent};
+  // A refusal (permission, nobody listening) says more than the sockets that do not exist.
+  return Error{ErrorCode::not_found, refused.empty() ? missing_sentence(missing) : refused};
 }
 
 KernelClock read_kernel_clock() noexcept {

@@ -131,6 +131,7 @@ void map_ptp4l(const Ptp4lAnswer& a, HostClock& h) {
     s.ptp_timescale = a.time_properties_ds->ptp_timescale;
   }
   const std::string name = gptp ? "gptp" : "ptp";
+  const std::string gm = s.grandmaster.empty() ? "unknown" : s.grandmaster;
   const auto best = std::min_element(a.ports.begin(), a.ports.end(), [](const auto& x, const auto& y) {
     return rank(x.state) < rank(y.state);
   });
@@ -143,18 +144,18 @@ void map_ptp4l(const Ptp4lAnswer& a, HostClock& h) {
     const PortState port = best->state;
     s.state = state_of(port);
     if (port == PortState::slave) {
-      h.description = name + " slave of " + s.grandmaster;
+      h.description = name + " slave of " + gm;
     } else if (port == PortState::master || port == PortState::grand_master) {
-      h.description = name + " master: this host is the grandmaster (" + s.grandmaster + ")";
+      h.description = name + " master: this host is the grandmaster (" + gm + ")";
     } else if (port == PortState::uncalibrated) {
-      h.description = name + " UNCALIBRATED, grandmaster " + s.grandmaster;
+      h.description = name + " UNCALIBRATED, grandmaster " + gm;
     } else {
       // ptp4l keeps its last parent and offset after losing its master: stale, not reported.
-      h.description = name + " " + ptp::to_string(port) + ", last grandmaster " + s.grandmaster;
+      h.description = name + " " + ptp::to_string(port) + ", last grandmaster " + gm;
       s.offset_from_master_ns.reset();
       s.path_delay_ns.reset();
     }
-    if (problem.empty()) problem = problem_of(port, s.grandmaster);
+    if (problem.empty()) problem = problem_of(port, gm);
     if (problem.empty() && s.offset_from_master_ns &&
         (*s.offset_from_master_ns > kAbsurdOffsetNs || *s.offset_from_master_ns < -kAbsurdOffsetNs)) {
       problem = "ptp4l says " + std::string(ptp::to_string(port)) + " yet reports an offset of " +

@@ -28,7 +28,8 @@ namespace sim::timing {
 
 struct HostClockOptions {
   // ptp4l's management socket; empty: /var/run/ptp/ptp4l, then /var/run/ptp4l (linuxptp after
-  // and up to v4.4). Every program that reads it takes --ptp4l-socket PATH.
+  // and up to v4.4), each followed by its read-only twin (kPtp4lSockets). Every program that
+  // reads it takes --ptp4l-socket PATH.
   std::string ptp4l_socket{};
   // The whole exchange with ptp4l: a socket that never answers costs this, and no more.
   std::chrono::milliseconds ptp4l_timeout{200};
@@ -37,8 +38,11 @@ struct HostClockOptions {
   std::optional<std::uint8_t> ptp_domain{};
 };
 
-// The default sockets, in the order they are tried.
-inline constexpr const char* kPtp4lSockets[] = {"/var/run/ptp/ptp4l", "/var/run/ptp4l"};
+// The default sockets, in the order they are tried (the next one when a socket is missing, has
+// nobody listening, or may not be written): each read-write socket, then its read-only one
+// (linuxptp 4's uds_ro_address, writable by every user; GET is all the reader sends).
+inline constexpr const char* kPtp4lSockets[] = {"/var/run/ptp/ptp4l", "/var/run/ptp/ptp4lro",
+                                                "/var/run/ptp4l", "/var/run/ptp4lro"};
 
 // What ptp4l said (every part optional: a part it did not answer, or answered malformed, is
 // missing, and `problem` says so).
