@@ -309,6 +309,79 @@ TEST(OusterFrames, ALostLastPacketEndsTheFrameAtTheNextFramesFirstPacketWhichSta
   // The missing columns of frame 1 hold no return: checked on a frame of its own.
 }
 
+TEST(OusterFrames, AColumnWindowThatWrapsThroughColumnZeroIsOneWholeFramePerFrameId) {
+  // ouster-sdk's windowed_frame2.pcap: 512 columns, window [370, 85]. The sensor sends each
+  // frame_id as columns 0–95 (its end), then 368–511 (its start).
+  Metadata m = metadata_for(Layout::rng19, 32, 512);
+  m.column_window = {370, 85};
+  std::vector<std::vector<std::uint8_t>> packets;
+  for (std::uint32_t frame_id = 1; frame_id <= 3; ++frame_id) {
+    for (const auto& packet : rotation(Layout::rng19, 32, frame_id, 512)) {
+      const unsigned first = packet[32 + 8] | (packet[32 + 9] << 8);  // measurement_id of its first column
+      if (first < 96 || first >= 368) packets.push_back(packet);
+    }
+  }
+  auto assembler = FrameAssembler::create(m, {}).value();
+  std::vector<sim::LidarPoint> points(assembler.max_points());
+  auto frames = feed(assembler, packets, points);
+  ASSERT_EQ(frames.size(), 3u) << "one frame per frame_id, each complete at column 511";
+  for (std::uint32_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(frames[i].frame_id, i + 1);
+    EXPECT_TRUE(frames[i].whole);
+    EXPECT_EQ(frames[i].packets, 15u);
+    EXPECT_EQ(frames[i].missing_columns, 0u);
+  }
+  EXPECT_EQ(assembler.counters().lost_packets, 0u);
+  EXPECT_EQ(assembler.counters().partial_frames_dropped, 0u);
+  // Columns 0–85 are in the (last) frame: beam 0's pixel of column 10 (no pixel shift) has its return.
+  ASSERT_NE(pixel_value(Layout::rng19, 10, 0).range_mm, 0u);
+  const sim::LidarPoint& p = points[10];
+  EXPECT_NE(p.x * p.x + p.y * p.y + p.z * p.z, 0.0F);
+}
+
+TEST(OusterFrames, APacketArrivingAfterTheNextFramesFirstPacketIsDroppedAsLateNotMadeAFrame) {
+  // The last packet of frame 1 swapped with the first of frame 2 (the review's late_packet.pcap).
+  const Metadata m = metadata_for(Layout::rng19, 32);
+  std::vector<std::vector<std::uint8_t>> packets;
+  for (std::uint32_t frame_id = 1; frame_id <= 3; ++frame_id) {
+    const auto r = rotation(Layout::rng19, 32, frame_id);
+    packets.insert(packets.end(), r.begin(), r.end());
+  }
+  std::swap(packets[63], packets[64]);
+  auto assembler = FrameAssembler::create(m, {}).value();
+  std::vector<sim::LidarPoint> points(assembler.max_points());
+  const auto frames = feed(assembler, packets, points);
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[0].frame_id, 1u);
+  EXPECT_EQ(frames[0].missing_columns, 16u) << "its last packet came after frame 2 began";
+  EXPECT_EQ(frames[1].frame_id, 2u);
+  EXPECT_TRUE(frames[1].whole);
+  EXPECT_EQ(frames[1].packets, 64u);
+  EXPECT_EQ(frames[1].missing_columns, 0u);
+  EXPECT_EQ(frames[2].frame_id, 3u);
+  EXPECT_EQ(assembler.counters().late_packets, 1u);
+  EXPECT_EQ(assembler.counters().partial_frames_dropped, 0u);
+  EXPECT_EQ(assembler.counters().lost_packets, 1u);
+}
+
+TEST(OusterFrames, APacketOfAFrameAlreadyPublishedIsDroppedAndAFrameCounterThatRestartsIsFollowed) {
+  const Metadata m = metadata_for(Layout::rng19, 32);
+  std::vector<std::vector<std::uint8_t>> packets = rotation(Layout::rng19, 32, 1000);
+  packets.push_back(packets[10]);  // a straggler of frame 1000, already complete
+  for (std::uint32_t frame_id : {1001u, 5u}) {  // 5: the sensor restarted its counter
+    const auto r = rotation(Layout::rng19, 32, frame_id);
+    packets.insert(packets.end(), r.begin(), r.end());
+  }
+  auto assembler = FrameAssembler::create(m, {}).value();
+  std::vector<sim::LidarPoint> points(assembler.max_points());
+  const auto frames = feed(assembler, packets, points);
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[1].frame_id, 1001u);
+  EXPECT_EQ(frames[2].frame_id, 5u);
+  EXPECT_EQ(assembler.counters().late_packets, 1u);
+  EXPECT_EQ(assembler.counters().partial_frames_dropped, 0u);
+}
+
 TEST(OusterFrames, AFrameJoinedMidRotationIsDroppedUnlessPartialFramesAreAsked) {
   const Metadata m = metadata_for(Layout::rng19, 32);
   auto packets = rotation(Layout::rng19, 32, 1);
