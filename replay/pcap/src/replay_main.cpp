@@ -21,9 +21,10 @@ int finish_replay(const apps::CommandLine& cli, const ReplayArgs& r, const Repla
     return cli.fail(message);
   }
   if (r.summary) {
-    std::printf("summary %s datagrams=%llu skipped=%llu passes=%u\n", target.summary().c_str(),
+    std::printf("summary %s datagrams=%llu skipped=%llu passes=%u other_senders=%llu\n", target.summary().c_str(),
                 static_cast<unsigned long long>(result.datagrams),
-                static_cast<unsigned long long>(result.skipped), result.passes);
+                static_cast<unsigned long long>(result.skipped), result.passes,
+                static_cast<unsigned long long>(result.other_senders));
     std::fflush(stdout);
   }
   if (result.read_error) {

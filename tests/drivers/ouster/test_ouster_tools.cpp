@@ -214,6 +214,68 @@ TEST(OusterReplay, AFragmentedCaptureReplaysLikeTheWholeOne) {
   EXPECT_NE(r.out.find("skipped=0"), std::string::npos) << r.out;
 }
 
+// The capture's lidar packets sent by `senders` sensors (192.168.1.100, .101, …) to the ports
+// given, interleaved packet by packet, with its IMU packets from the first sensor on 7503.
+std::string several_sensors(const TempDir& dir, const std::string& name, const std::vector<std::uint16_t>& ports) {
+  const auto capture = ouster_test::load_capture(dual);
+  std::vector<sim::pcap::testing::Record> records;
+  std::int64_t t = 1'600'000'000'000'000'000;
+  const auto add = [&](std::uint8_t host, std::uint16_t port, const std::vector<std::uint8_t>& payload) {
+    const auto ip = sim::pcap::testing::ipv4({192, 168, 1, host}, {192, 168, 1, 1},
+                                             sim::pcap::testing::udp(port, port, payload), 17, {}, 0);
+    records.push_back({sim::pcap::testing::ethernet(0x0800, ip), t += 20'000});
+  };
+  for (const auto& payload : capture.lidar) {
+    for (std::size_t s = 0; s < ports.size(); ++s) add(static_cast<std::uint8_t>(100 + s), ports[s], payload);
+  }
+  for (const auto& payload : capture.imu) add(100, 7503, payload);
+  const std::string file = (dir.path / name).string();
+  sim::pcap::testing::write_capture(file, DLT_EN10MB, records);
+  return file;
+}
+
+TEST(OusterReplay, SensorsOnOtherPortsThanTheMetadatasAreLeftOutAsOusterSdkDispatchesThem) {
+  TempDir dir;
+  for (const auto& ports : {std::vector<std::uint16_t>{7502, 7504}, std::vector<std::uint16_t>{7502, 7504, 7506}}) {
+    const std::string file = several_sensors(dir, std::to_string(ports.size()) + "_ousters.pcap", ports);
+    const std::string stream = unique_name("ouster_ports");
+    StreamGuard guard(stream);
+    guard.names.push_back(stream + ".imu");
+    const auto r = sim::testing::run({replay_tool, file, "--calibration", data(dual + ".json"), "--stream", stream,
+                                      "--max-rate", "--summary", "-q"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("frames=1 packets=64 lost=0 malformed=0 imu=10"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("partial_frames_dropped=0"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("duplicate_columns=0"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("skipped=" + std::to_string(64 * (ports.size() - 1))), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("other_senders=0"), std::string::npos) << r.out;
+  }
+}
+
+TEST(OusterReplay, TwoAndThreeSensorsOnOnePortAreCountedAndWarnedOfOnce) {
+  TempDir dir;
+  for (std::size_t sensors : {2u, 3u}) {
+    const std::string file = several_sensors(dir, std::to_string(sensors) + "_on_one_port.pcap",
+                                             std::vector<std::uint16_t>(sensors, 7502));
+    const std::string stream = unique_name("ouster_one_port");
+    StreamGuard guard(stream);
+    guard.names.push_back(stream + ".imu");
+    const auto r = sim::testing::run({replay_tool, file, "--calibration", data(dual + ".json"), "--stream", stream,
+                                      "--max-rate", "--summary", "-q"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("other_senders=" + std::to_string(64 * (sensors - 1))), std::string::npos) << r.out;
+    const std::string warning = "warning: packets from 192.168.1.101 are decoded besides those from 192.168.1.100";
+    ASSERT_NE(r.err.find(warning), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find(warning), r.err.rfind(warning)) << "said once: " << r.err;
+    // The user's way out: keep one sensor.
+    const auto one = sim::testing::run({replay_tool, file, "--calibration", data(dual + ".json"), "--stream", stream,
+                                        "--max-rate", "--summary", "-q", "--filter", "src host 192.168.1.100"});
+    ASSERT_EQ(one.code, 0) << one.err;
+    EXPECT_NE(one.out.find("frames=1 packets=64 lost=0"), std::string::npos) << one.out;
+    EXPECT_NE(one.out.find("other_senders=0"), std::string::npos) << one.out;
+  }
+}
+
 // A sensor's HTTP API on 127.0.0.1 (port 0): answers GET /api/v1/sensor/metadata with `body`.
 class FakeSensorHttp {
  public:
