@@ -101,7 +101,7 @@ bool is_ouster_capture(int argc, char** argv) {
     if (arg.front() != '-' && (ends_with(arg, ".pcap") || ends_with(arg, ".pcapng"))) capture = arg;
   }
   if (capture.empty()) return false;
-  auto reader = CaptureReader::open(capture);
+  auto reader = CaptureReader::open(capture, detection_options(argc, argv));
   if (!reader) return false;  // the Hesai replay explains the file
   // The first datagrams tell: Ouster-sized lidar packets and not one Hesai packet.
   Datagram datagram;
