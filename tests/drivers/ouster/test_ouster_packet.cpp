@@ -194,6 +194,23 @@ TEST(OusterMetadata, NestedFirmware3MetadataReadsLikeTheFlatFirmware2One) {
   EXPECT_EQ(flat.describe(), "OS-1-32-G (sn 992101000280, v2.1.1), LEGACY, 32 beams × 1024 columns at 10 Hz");
 }
 
+// FW 1.14 and older name neither lidar_origin_to_beam_origin_mm nor beam_to_lidar_transform:
+// ouster-sdk (metadata.cpp, sensor_info.cpp) then takes n by product line, not 0.
+TEST(OusterMetadata, MetadataWithoutTheBeamOriginTakesOusterSdksDefaultForItsProductLine) {
+  const std::vector<std::pair<std::string, double>> lines{
+      {"OS-0-128", 27.67}, {"OS-1-64", 15.806}, {"OS-2-32", 13.762}, {"OS1-64", 12.163}};
+  for (const auto& line : lines) {
+    auto j = nlohmann::json::parse(ouster_test::nested_metadata(Layout::rng19, 32, 1024, 16, 0x123456));
+    j["beam_intrinsics"].erase("lidar_origin_to_beam_origin_mm");
+    j["beam_intrinsics"].erase("beam_to_lidar_transform");
+    j["sensor_info"]["prod_line"] = line.first;
+    auto m = Metadata::parse(j.dump());
+    ASSERT_TRUE(m) << m.error().message;
+    EXPECT_DOUBLE_EQ(m->lidar_origin_to_beam_origin_mm, line.second) << line.first;
+    EXPECT_DOUBLE_EQ(m->beam_to_lidar[3], line.second) << line.first;
+  }
+}
+
 TEST(OusterMetadata, BrokenMetadataIsRefusedWithOneSentenceNamingTheKey) {
   EXPECT_NE(Metadata::parse("{not json").error().message.find("not valid JSON"), std::string::npos);
   EXPECT_NE(Metadata::parse("{}").error().message.find("data_format"), std::string::npos);
