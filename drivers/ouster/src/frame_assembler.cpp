@@ -123,8 +123,12 @@ std::size_t FrameAssembler::max_points() const noexcept {
 void FrameAssembler::set_output(std::span<LidarPoint> output) noexcept {
   output_ = output;
   attached_ = true;
-  // Mid-frame, the points decoded so far went elsewhere: what follows is a partial frame.
-  if (open_) open_ = false;
+  // Mid-frame, the points decoded so far went elsewhere: what follows is a partial frame (not
+  // late packets of a frame already closed).
+  if (open_) {
+    open_ = false;
+    have_frame_id_ = false;
+  }
   if (pending_size_ != 0) {
     LidarPacket packet;
     const std::span<const std::uint8_t> bytes(pending_.data(), pending_size_);

@@ -399,6 +399,24 @@ TEST(OusterFrames, APacketOfAFrameAlreadyPublishedIsDroppedAndAFrameCounterThatR
   EXPECT_EQ(assembler.counters().partial_frames_dropped, 0u);
 }
 
+TEST(OusterFrames, ANewSpanMidFrameMakesTheRestAPartialFrameNotLatePackets) {
+  const Metadata m = metadata_for(Layout::rng19, 32);
+  const auto packets = rotation(Layout::rng19, 32, 1);
+  AssemblerOptions options;
+  options.emit_partial_frames = true;
+  auto assembler = FrameAssembler::create(m, options).value();
+  std::vector<sim::LidarPoint> points(assembler.max_points());
+  assembler.set_output(points);
+  for (std::size_t i = 0; i < 10; ++i) EXPECT_FALSE(assembler.push(packets[i], 0).frame);
+  assembler.set_output(points);  // the points so far went elsewhere
+  std::optional<CompletedFrame> frame;
+  for (std::size_t i = 10; i < packets.size(); ++i) frame = assembler.push(packets[i], 0).frame;
+  ASSERT_TRUE(frame);
+  EXPECT_FALSE(frame->whole);
+  EXPECT_EQ(frame->packets, 54u);
+  EXPECT_EQ(assembler.counters().late_packets, 0u);
+}
+
 TEST(OusterFrames, AFrameJoinedMidRotationIsDroppedUnlessPartialFramesAreAsked) {
   const Metadata m = metadata_for(Layout::rng19, 32);
   auto packets = rotation(Layout::rng19, 32, 1);
