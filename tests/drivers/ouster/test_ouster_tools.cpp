@@ -11,12 +11,14 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
@@ -489,6 +491,41 @@ TEST(OusterLive, PacketsThatDoNotFitTheMetadataAreCountedAndToldOnceNeverPublish
   sim::FrameInfo info;
   std::vector<std::byte> buffer(reader->capacity());
   EXPECT_NE(reader->read_next(buffer, info, 0ms), sim::ReadStatus::new_frame);
+}
+
+// Two sensors multicasting to two groups on one port, a driver for each: each driver publishes
+// its own sensor's frames only (Linux would hand both groups to both sockets by default).
+TEST(OusterLive, TwoDriversOnOnePortWithTwoGroupsEachPublishOnlyTheirGroup) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  const auto capture = ouster_test::load_capture(dual);
+  const std::array<const char*, 2> groups{"239.201.201.1", "239.201.201.2"};
+  std::vector<std::string> streams{unique_name("ouster_group_a"), unique_name("ouster_group_b")};
+  StreamGuard guard_a(streams[0]);
+  StreamGuard guard_b(streams[1]);
+  std::vector<std::unique_ptr<Process>> drivers;
+  std::string port = "0";
+  for (std::size_t d = 0; d < 2; ++d) {
+    drivers.push_back(std::make_unique<Process>(std::vector<std::string>{
+        live_tool, "--calibration", data(dual + ".json"), "--lidar-port", port, "--imu-port", "0", "--no-imu",
+        "--multicast", groups[d], "--stream", streams[d], "--summary", "--status-interval", "0"}));
+    const auto ports = listening(*drivers[d]);
+    ASSERT_TRUE(ports) << drivers[d]->err();
+    port = std::to_string(ports->lidar);
+  }
+  auto reader_a = sim::testing::wait_for_stream(streams[0]);
+  auto reader_b = sim::testing::wait_for_stream(streams[1]);
+  ASSERT_TRUE(reader_a && reader_b);
+  send_to(static_cast<std::uint16_t>(std::stoi(port)), capture.lidar, groups[0]);
+  std::vector<std::byte> buffer(reader_a->capacity());
+  sim::FrameInfo info;
+  EXPECT_EQ(reader_a->read_next(buffer, info, 30s), sim::ReadStatus::new_frame) << drivers[0]->err();
+  for (auto& driver : drivers) {
+    ::kill(driver->pid(), SIGTERM);
+    EXPECT_EQ(driver->wait(), 0) << driver->err();
+  }
+  EXPECT_NE(drivers[0]->out().find("packets=64 "), std::string::npos) << drivers[0]->out();
+  EXPECT_NE(drivers[1]->out().find("frames=0 packets=0 "), std::string::npos) << drivers[1]->out();
+  EXPECT_NE(drivers[1]->out().find(" datagrams=0 "), std::string::npos) << drivers[1]->out();
 }
 
 TEST(OusterLive, AMulticastGroupIsJoinedAndPacketsOfAnotherSenderAreIgnored) {
