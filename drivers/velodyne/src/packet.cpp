@@ -65,13 +65,14 @@ PacketError Packet::parse(std::span<const std::uint8_t> payload, Model model, Pa
   if (const auto detected = detect_model(payload); detected && *detected != model) {
     return PacketError::wrong_model;
   }
-  // The HDL-64E sends no product ID (bytes 1204-1205 are its rotating status); every other
-  // model names itself.
-  if (model != Model::hdl64e && data[product_id_offset] != info(model).product_id) {
+  // The HDL-64E sends no product ID (bytes 1204-1205 are its rotating status), nor does an
+  // HDL-32E before firmware 2.2.20 (both bytes 0: strongest); every other model names itself.
+  const bool unnamed_hdl32e = model == Model::hdl32e && is_unnamed_hdl32e(payload);
+  if (model != Model::hdl64e && !unnamed_hdl32e && data[product_id_offset] != info(model).product_id) {
     return PacketError::wrong_model;
   }
   ReturnMode mode = ReturnMode::strongest;
-  if (model != Model::hdl64e) {
+  if (model != Model::hdl64e && !unnamed_hdl32e) {
     const std::uint8_t byte = data[return_mode_offset];
     if (byte < 0x37 || byte > 0x39) return PacketError::bad_return_mode;
     mode = static_cast<ReturnMode>(byte);

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <vector>
 
@@ -119,6 +120,45 @@ TEST(VelodyneSynthetic, Hdl32ePointsFollowTheManualsGeometryAndFiringTimes) {
   }
   EXPECT_EQ(i, frame.size());
   EXPECT_EQ(r.info[0].stamp_ns, stamp);
+}
+
+// An HDL-32E with firmware before 2.2.20.0 (2016) leaves bytes 1204 (return mode) and 1205
+// (product ID) at 0 (velodyne_decoder's unpack_16_32_beam); ros-drivers/velodyne decodes it.
+TEST(VelodyneSynthetic, Hdl32eFirmwareBefore2_2_20WithoutProductIdDecodesAsHdl32eStrongestWhenChosen) {
+  const Calibration cal = shipped("HDL32.yaml");
+  std::vector<std::vector<std::uint8_t>> named, unnamed;
+  for (unsigned k = 0; k < 400; ++k) {
+    DataPacket p;
+    p.product_id = 0x21;
+    p.timestamp_us = static_cast<std::uint32_t>(std::llround(1'000'000 + k * 552.96));
+    for (unsigned b = 0; b < 12; ++b) {
+      const unsigned seq = k * 12 + b;
+      p.blocks[b].azimuth = static_cast<std::uint16_t>((30000 + seq * 16) % 36000);
+      for (unsigned l = 0; l < 32; ++l) p.blocks[b].units[l] = {raw_distance(seq, l), static_cast<std::uint8_t>(l)};
+    }
+    named.push_back(p.bytes());
+    p.product_id = 0;
+    p.return_mode = 0;
+    unnamed.push_back(p.bytes());
+  }
+  EXPECT_FALSE(detect_model(unnamed[0])) << "it does not name itself: chosen, never guessed";
+  EXPECT_TRUE(is_unnamed_hdl32e(unnamed[0]));
+  EXPECT_FALSE(is_unnamed_hdl32e(named[0]));
+  Packet packet;
+  ASSERT_EQ(Packet::parse(unnamed[0], Model::hdl32e, packet), PacketError::none);
+  EXPECT_EQ(packet.return_mode(), ReturnMode::strongest);
+  EXPECT_EQ(Packet::parse(unnamed[0], Model::vlp16, packet), PacketError::wrong_model);
+  AssemblerOptions o;
+  o.model = Model::hdl32e;
+  auto with_id = FrameAssembler::create(cal, o);
+  auto without_id = FrameAssembler::create(cal, o);
+  ASSERT_TRUE(with_id && without_id);
+  const Decoded a = run(*with_id, named);
+  const Decoded b = run(*without_id, unnamed);
+  ASSERT_EQ(b.frames.size(), 1U);
+  EXPECT_EQ(b.counters.malformed, 0U);
+  ASSERT_EQ(a.frames[0].size(), b.frames[0].size());
+  EXPECT_EQ(std::memcmp(a.frames[0].data(), b.frames[0].data(), a.frames[0].size() * sizeof(sim::LidarPoint)), 0);
 }
 
 // The full HDL-64E model of ros-drivers/velodyne, written out here in double precision.
@@ -412,6 +452,35 @@ TEST(VelodyneSynthetic, TheCutAzimuthStartsEachFrameThere) {
     EXPECT_GT(azimuth(frame.back()), 89.5);  // the last firing before 90°
     EXPECT_LT(azimuth(frame.back()), 90.0);
     EXPECT_EQ(frame.size(), 900U * 32U);  // 360° / 0.4° per block of two 16-laser sequences
+  }
+}
+
+// VLS-128 dual return: a packet is one firing sequence (53.3 µs): every other packet missing is
+// half of them lost, not none (the estimate once assumed 1.5 sequences per dual packet).
+TEST(VelodyneSynthetic, Vls128DualPacketsLostAreCountedOneSequenceEach) {
+  const Calibration cal = shipped("VLS128.yaml");
+  std::vector<std::vector<std::uint8_t>> all, every_other;
+  for (unsigned k = 0; k < 600; ++k) {
+    DataPacket p;
+    p.product_id = 0xA1;
+    p.return_mode = 0x39;  // dual
+    p.timestamp_us = static_cast<std::uint32_t>(std::llround(1'000'000 + k * 53.3));
+    for (unsigned b = 0; b < 8; ++b) {
+      p.blocks[b].flag = std::array<std::uint8_t, 4>{0xEE, 0xDD, 0xCC, 0xBB}[(b / 2) % 4];
+      p.blocks[b].azimuth = static_cast<std::uint16_t>((k * 19) % 36000);
+      for (unsigned l = 0; l < 32; ++l) p.blocks[b].units[l] = {static_cast<std::uint16_t>(3000 + l), 10};
+    }
+    all.push_back(p.bytes());
+    if (k % 2 == 0) every_other.push_back(p.bytes());
+  }
+  for (const bool half : {false, true}) {
+    AssemblerOptions o;
+    o.model = Model::vls128;
+    auto assembler = FrameAssembler::create(cal, o);
+    ASSERT_TRUE(assembler) << assembler.error().message;
+    const Decoded r = run(*assembler, half ? every_other : all);
+    EXPECT_EQ(r.counters.malformed, 0U);
+    EXPECT_EQ(r.counters.lost_packets, half ? 299U : 0U);
   }
 }
 
