@@ -94,7 +94,7 @@ TEST(BridgeClock, AStreamsClockReachesACycloneNodeOnDiagnosticsAndTurnsStaleWhen
 
   Process bridge = start_bridge({"--publish", lidar.name});
   CycloneParticipant node;
-  CycloneReader<Diagnostics> diagnostics(node, &diagnostic_msgs_msg_dds_DiagnosticArray__desc,
+  CycloneReader<Diagnostics> diagnostics(node, &diagnostic_msgs_msg_dds__DiagnosticArray__desc,
                                          "rt/diagnostics", EndpointQos{.reliable = true, .depth = 10});
 
   // The error, told in the clock's own words, with the sensor's serial and every value.
@@ -144,7 +144,7 @@ TEST(BridgeClock, TheDiagnosticsWriterAnnouncesDiagnosticArraysRosTypeHash) {
 
   Process bridge = start_bridge({"--publish", lidar.name});
   CycloneParticipant node;
-  CycloneReader<Diagnostics> diagnostics(node, &diagnostic_msgs_msg_dds_DiagnosticArray__desc,
+  CycloneReader<Diagnostics> diagnostics(node, &diagnostic_msgs_msg_dds__DiagnosticArray__desc,
                                          "rt/diagnostics", EndpointQos{.reliable = true, .depth = 10});
   // A stream whose writer reports no clock is STALE and says so.
   auto seen = wait_for_status(diagnostics, lidar.name, [](const Seen&) { return true; });
