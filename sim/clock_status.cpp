@@ -1,9 +1,11 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/clock_status.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <utility>
 
 namespace sim {
 
@@ -122,6 +124,42 @@ std::string clock_status_problem(const ClockStatus& c) {
            " printable bytes (pass it through sim::sensor_text)";
   }
   if (!std::isfinite(c.drift_ppm)) return "the clock's drift is not a finite number of ppm";
+  return {};
+}
+
+std::string pairing_problem(std::string_view first_name, const ClockStatus& first,
+                            std::string_view second_name, const ClockStatus& second,
+                            std::int64_t tolerance_ns) {
+  const std::string a(first_name), b(second_name);
+  for (const auto& [name, clock] : {std::pair{&a, &first}, std::pair{&b, &second}}) {
+    if (clock->verdict == ClockVerdict::error) {
+      return *name + "'s clock is in error (" + (clock->problem.empty() ? "no reason given" : clock->problem) +
+             "), so its stamps cannot be paired with " + (name == &a ? b : a) + "'s";
+    }
+  }
+  if (!first.grandmaster.empty() && !second.grandmaster.empty() && first.grandmaster != second.grandmaster) {
+    return a + " and " + b + " follow different PTP grandmasters (" + first.grandmaster + ", " +
+           second.grandmaster + "): put both on one grandmaster before pairing their stamps";
+  }
+  const auto is_ptp = [](const ClockStatus& c) {
+    return c.source == ClockSource::ptp || c.source == ClockSource::gptp;
+  };
+  if (is_ptp(first) && is_ptp(second) && first.ptp_domain >= 0 && second.ptp_domain >= 0 &&
+      first.ptp_domain != second.ptp_domain) {
+    return a + " and " + b + " are in different PTP domains (" + std::to_string(first.ptp_domain) + ", " +
+           std::to_string(second.ptp_domain) + "): put both in one domain before pairing their stamps";
+  }
+  if (first.offset_to_host_ns && second.offset_to_host_ns) {
+    // In double: two offsets near the int64 limits must not overflow their difference.
+    const double apart = static_cast<double>(*first.offset_to_host_ns) - static_cast<double>(*second.offset_to_host_ns);
+    if (std::fabs(apart) > static_cast<double>(tolerance_ns)) {
+      return "the clocks of " + a + " and " + b + " disagree by " +
+             human_duration(static_cast<std::int64_t>(std::min(std::fabs(apart), 9.2e18))) + " (" + a + " " +
+             signed_duration(*first.offset_to_host_ns) + ", " + b + " " +
+             signed_duration(*second.offset_to_host_ns) + " against the host), beyond the tolerance of " +
+             human_duration(tolerance_ns);
+    }
+  }
   return {};
 }
 

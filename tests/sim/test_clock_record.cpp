@@ -339,3 +339,67 @@ TEST(ClockRecordCApi, CProgramsSetAndReadTheSameRecord) {
   SIM_readerClose(r);
   SIM_writerClose(w);
 }
+
+// ---- pairing by stamps only where the clocks agree (sim/pairing.hpp) ----
+
+namespace {
+ClockStatus measured(std::int64_t offset_to_host_ns, ClockVerdict verdict = ClockVerdict::ok) {
+  ClockStatus c;
+  c.source = ClockSource::ptp;
+  c.state = ClockState::locked;
+  c.offset_to_host_ns = offset_to_host_ns;
+  c.verdict = verdict;
+  return c;
+}
+}  // namespace
+
+TEST(ClockPairing, ClocksThatAgreeWithinTheToleranceMayBePaired) {
+  EXPECT_EQ(pairing_problem("/cam", measured(2'000'000), "/lidar", measured(-3'000'000), 10'000'000), "");
+  EXPECT_EQ(pairing_problem("/cam", ClockStatus{}, "/lidar", ClockStatus{}, 1), "")
+      << "nothing known is no reason to refuse";
+}
+
+TEST(ClockPairing, RefusalsNameBothStreamsAndTheReason) {
+  const std::string apart = pairing_problem("/cam", measured(0), "/lidar", measured(37'000'000'000), 20'000'000);
+  EXPECT_NE(apart.find("the clocks of /cam and /lidar disagree by 37.0 s"), std::string::npos) << apart;
+  EXPECT_NE(apart.find("tolerance of 20.0 ms"), std::string::npos) << apart;
+
+  ClockStatus broken = measured(0, ClockVerdict::error);
+  broken.problem = "stepped by +2.0 s";
+  const std::string error = pairing_problem("/cam", measured(0), "/lidar", broken, 20'000'000);
+  EXPECT_NE(error.find("/lidar's clock is in error (stepped by +2.0 s)"), std::string::npos) << error;
+  EXPECT_NE(error.find("paired with /cam's"), std::string::npos) << error;
+
+  ClockStatus a = measured(0), b = measured(0);
+  a.grandmaster = "001122.fffe.334455";
+  b.grandmaster = "001122.fffe.667788";
+  EXPECT_NE(pairing_problem("/a", a, "/b", b, 1'000'000).find("different PTP grandmasters"), std::string::npos);
+  b.grandmaster = a.grandmaster;
+  a.ptp_domain = 0;
+  b.ptp_domain = 24;
+  EXPECT_NE(pairing_problem("/a", a, "/b", b, 1'000'000).find("different PTP domains (0, 24)"), std::string::npos);
+
+  const std::string extreme = pairing_problem("/a", measured(INT64_MIN), "/b", measured(INT64_MAX), 1);
+  EXPECT_NE(extreme.find("disagree by"), std::string::npos) << "no overflow at the limits: " << extreme;
+}
+
+TEST(ClockPairing, ThePairerRefusesWhileClocksDisagreeUnlessToldTo) {
+  ApproximatePairer<int, int> pairer(std::chrono::milliseconds(20));
+  pairer.set_clocks("/cam", measured(0), "/lidar", measured(37'000'000'000));
+  pairer.add_first(1'000, 1);
+  pairer.add_second(2'000, 2);
+  EXPECT_FALSE(pairer.take()) << "stamps 1 µs apart, clocks 37 s apart: the pair would be wrong";
+  EXPECT_NE(pairer.refusal().find("disagree by 37.0 s"), std::string::npos) << pairer.refusal();
+
+  pairer.ignore_clocks(true);
+  EXPECT_TRUE(pairer.refusal().empty());
+  auto forced = pairer.take();
+  ASSERT_TRUE(forced);
+  EXPECT_EQ(forced->first, 1);
+
+  pairer.ignore_clocks(false);
+  pairer.set_clocks("/cam", measured(0), "/lidar", measured(1'000'000));
+  pairer.add_first(5'000, 3);
+  pairer.add_second(6'000, 4);
+  EXPECT_TRUE(pairer.take()) << "clocks 1 ms apart are within 20 ms";
+}
