@@ -52,7 +52,7 @@ stage() { printf '\n=== %s ===\n' "$*"; }
 # make recursion; lld links; ccache only when SIM_CCACHE_DIR names a cache that survives runs.
 generator=()
 command -v ninja >/dev/null && generator=(-G Ninja)
-launcher=()
+launcher=(-DCMAKE_C_COMPILER_LAUNCHER= -DCMAKE_CXX_COMPILER_LAUNCHER=)  # none, even if a tree had one
 if [[ -n ${SIM_CCACHE_DIR:-} ]] && command -v ccache >/dev/null; then
   export CCACHE_DIR=$SIM_CCACHE_DIR CCACHE_BASEDIR=$root CCACHE_NOHASHDIR=1
   export CCACHE_SLOPPINESS=${CCACHE_SLOPPINESS:-pch_defines,time_macros,include_file_mtime,include_file_ctime}
