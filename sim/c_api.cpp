@@ -21,6 +21,8 @@ struct sim_writer {
 struct sim_reader {
   sim::Reader reader;
   std::uint64_t sensor_generation = 0;  // of the frame SIM_readData delivered last
+  std::uint64_t clock_generation = 0;   // likewise
+  sim::StampClock stamp_clock = sim::StampClock::unknown;
 };
 struct sim_waitset {
   sim::Wakeup wakeup;  // SIM_waitsetWake's; the set watches it
@@ -113,6 +115,70 @@ std::optional<std::string> take_text(const char (&in)[N]) {
   const void* end = std::memchr(in, '\0', N);
   if (end == nullptr) return std::nullopt;
   return std::string(in, static_cast<const char*>(end));
+}
+
+template <typename T>
+void put_optional(int& has, T& value, const std::optional<T>& from) {
+  has = from ? 1 : 0;
+  value = from.value_or(T{});
+}
+template <typename T>
+std::optional<T> take_optional(int has, T value) {
+  return has != 0 ? std::optional<T>(value) : std::nullopt;
+}
+
+void to_c(const sim::ClockStatus& c, sim_clock_status& out) {
+  out = sim_clock_status{};
+  out.source = static_cast<int>(c.source);
+  out.state = static_cast<int>(c.state);
+  out.ptp_domain = c.ptp_domain;
+  put_optional(out.has_offset_from_master, out.offset_from_master_ns, c.offset_from_master_ns);
+  put_optional(out.has_path_delay, out.path_delay_ns, c.path_delay_ns);
+  put_optional(out.has_utc_offset, out.utc_offset_s, c.utc_offset_s);
+  put_optional(out.has_offset_to_host, out.offset_to_host_ns, c.offset_to_host_ns);
+  put_text(out.grandmaster, c.grandmaster);
+  out.ptp_timescale = c.ptp_timescale ? 1 : 0;
+  out.tai_correction_ns = c.tai_correction_ns;
+  out.reported_ns = c.reported_ns;
+  out.spread_ns = c.spread_ns;
+  out.drift_ppm = c.drift_ppm;
+  out.steps = c.steps;
+  out.last_step_ns = c.last_step_ns;
+  out.packets_measured = c.packets_measured;
+  out.measured_ns = c.measured_ns;
+  out.verdict = static_cast<int>(c.verdict);
+  put_text(out.problem, c.problem);
+  out.stamps = static_cast<int>(c.stamps);
+}
+
+// The record of a C struct; the enums are checked by Writer::set_clock (clock_status_problem).
+std::string from_c(const sim_clock_status& in, sim::ClockStatus& c) {
+  const auto grandmaster = take_text(in.grandmaster);
+  const auto problem = take_text(in.problem);
+  if (!grandmaster) return "the clock's grandmaster is not NUL-terminated";
+  if (!problem) return "the clock's problem is not NUL-terminated";
+  const auto enum_value = [](int v) { return static_cast<std::uint32_t>(v < 0 ? 0x7fffffff : v); };
+  c.source = static_cast<sim::ClockSource>(enum_value(in.source));
+  c.state = static_cast<sim::ClockState>(enum_value(in.state));
+  c.ptp_domain = in.ptp_domain;
+  c.offset_from_master_ns = take_optional(in.has_offset_from_master, in.offset_from_master_ns);
+  c.path_delay_ns = take_optional(in.has_path_delay, in.path_delay_ns);
+  c.utc_offset_s = take_optional(in.has_utc_offset, in.utc_offset_s);
+  c.offset_to_host_ns = take_optional(in.has_offset_to_host, in.offset_to_host_ns);
+  c.grandmaster = *grandmaster;
+  c.ptp_timescale = in.ptp_timescale != 0;
+  c.tai_correction_ns = in.tai_correction_ns;
+  c.reported_ns = in.reported_ns;
+  c.spread_ns = in.spread_ns;
+  c.drift_ppm = in.drift_ppm;
+  c.steps = in.steps;
+  c.last_step_ns = in.last_step_ns;
+  c.packets_measured = in.packets_measured;
+  c.measured_ns = in.measured_ns;
+  c.verdict = static_cast<sim::ClockVerdict>(enum_value(in.verdict));
+  c.problem = *problem;
+  c.stamps = static_cast<sim::StampClock>(enum_value(in.stamps));
+  return {};
 }
 
 void to_c(const sim::CameraCalibration& c, sim_camera_calibration& out) {
@@ -278,6 +344,8 @@ long long SIM_readData(sim_reader* r, void* buf, size_t size, sim_frame_info* in
       *info = {frame.seq, frame.stamp_ns, frame.publish_ns, frame.size, frame.receive_ns};
     }
     r->sensor_generation = frame.sensor_generation;
+    r->clock_generation = frame.clock_generation;
+    r->stamp_clock = frame.stamp_clock;
     clear_last_error();
     return static_cast<long long>(frame.size);  // 0 for an empty frame: info->seq says it is one
   }
@@ -328,6 +396,33 @@ int SIM_readerSensorInfo(sim_reader* r, sim_sensor_info* out) {
 }
 
 uint64_t SIM_readerSensorGeneration(const sim_reader* r) { return r != nullptr ? r->sensor_generation : 0; }
+
+int SIM_writerSetClock(sim_writer* w, const sim_clock_status* clock) {
+  if (w == nullptr || clock == nullptr) return fail(SIM_EINVAL, "SIM_writerSetClock needs a writer and a clock");
+  sim::ClockStatus status;
+  if (const std::string problem = from_c(*clock, status); !problem.empty()) {
+    return fail(SIM_EINVAL, problem + "; terminate every string");
+  }
+  if (auto set = w->writer.set_clock(status); !set) return fail(SIM_EINVAL, set.error().message);
+  clear_last_error();
+  return 0;
+}
+
+int SIM_readerClock(sim_reader* r, sim_clock_status* out) {
+  if (r == nullptr || out == nullptr) return fail(SIM_EINVAL, "SIM_readerClock needs a reader and a struct");
+  auto clock = r->reader.clock();
+  if (!clock) return fail(SIM_EREGION, clock.error().message);
+  clear_last_error();
+  if (!clock->has_value()) {
+    *out = sim_clock_status{};
+    return 0;
+  }
+  to_c(**clock, *out);
+  return 1;
+}
+
+uint64_t SIM_readerClockGeneration(const sim_reader* r) { return r != nullptr ? r->clock_generation : 0; }
+int SIM_readerStampClock(const sim_reader* r) { return r != nullptr ? static_cast<int>(r->stamp_clock) : 0; }
 
 int SIM_destroy(const char* name) {
   if (name == nullptr) return fail(SIM_EINVAL, "SIM_destroy needs a stream name");

@@ -17,6 +17,7 @@
 
 #include "futex.hpp"
 #include "region_file.hpp"
+#include "clock_block.hpp"
 #include "sensor_block.hpp"
 #include "shared_copy.hpp"
 #include "sim/clock.hpp"
@@ -45,6 +46,7 @@ struct Snapshot {
   std::int64_t publish_ns;
   std::int64_t receive_ns;
   std::uint64_t checksum;
+  std::uint32_t stamp_clock;
 };
 
 enum class Begin { ready, idle, lapped, invalid, reopened };
@@ -335,6 +337,7 @@ struct Reader::Impl {
     s.publish_ns = m.publish_ns.load(std::memory_order_relaxed);
     s.receive_ns = m.receive_ns.load(std::memory_order_relaxed);
     s.checksum = m.checksum.load(std::memory_order_relaxed);
+    s.stamp_clock = m.stamp_clock.load(std::memory_order_relaxed);
     if (s.size > capacity()) {
       // A torn metadata read is retried; a length the writer really published is a bad region.
       return unchanged(seq) ? Begin::invalid : Begin::lapped;
@@ -355,6 +358,11 @@ struct Reader::Impl {
     // One load of a word in the header page the frame's metadata already brought in. After the
     // acquire of the frame's slot: a description set before the frame was published is seen.
     info.sensor_generation = sensor_generation(header->sensor.word.load(std::memory_order_relaxed));
+    info.clock_generation = clock_generation(header->clock.word.load(std::memory_order_relaxed));
+    // A value beyond the enum (a damaged slot) reads as unknown rather than as a wrong clock.
+    info.stamp_clock = s.stamp_clock <= static_cast<std::uint32_t>(StampClock::host_arrival)
+                           ? static_cast<StampClock>(s.stamp_clock)
+                           : StampClock::unknown;
   }
 
   bool checksum_ok(const void* data, const Snapshot& s) noexcept {
@@ -555,11 +563,21 @@ StreamStatus Reader::status() noexcept {
   } else {
     s.sensor_problem = sensor.error().message;
   }
+  auto clock = read_clock_block(h.clock, &s.clock_generation);
+  if (clock) {
+    s.clock = std::move(*clock);
+  } else {
+    s.clock_problem = clock.error().message;
+  }
   return s;
 }
 
 Expected<std::optional<SensorInfo>> Reader::sensor_info() const {
   return read_sensor_block(impl_->header->sensor);
+}
+
+Expected<std::optional<ClockStatus>> Reader::clock() const {
+  return read_clock_block(impl_->header->clock);
 }
 
 double StreamStatus::rate_hz(std::int64_t now_monotonic_ns) const noexcept {

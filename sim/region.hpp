@@ -144,6 +144,9 @@ struct alignas(kCacheLine) SlotMeta {
   // Added in place of padding (zero in regions whose writer did not set it): readers of either
   // age agree on every other field, so the format version stays 1.
   std::atomic<std::int64_t> receive_ns;
+  // Added in place of padding (0, "unknown", from writers that predate it): the StampClock the
+  // frame's stamp_ns is in, as the writer's clock record said when it published the frame.
+  std::atomic<std::uint32_t> stamp_clock;
 };
 static_assert(sizeof(SlotMeta) == kCacheLine);
 
@@ -204,6 +207,49 @@ struct alignas(kCacheLine) SensorBlock {
   SensorRecord record;
 };
 
+// The clock record (sim/clock_status.hpp) as stored: fixed-width fields only, no padding.
+// Optional numbers are a flag bit and a value (zero when the bit is clear); strings are
+// NUL-terminated and NUL-padded. It has its own seqlock word, with the same bits as the sensor
+// description's (kSensorWriting, kSensorPresent, generation in steps of kSensorGenerationStep),
+// so a clock that changes every second never makes readers re-read the calibration.
+inline constexpr std::size_t kGrandmasterField = 24;  // ClockStatus::kMaxGrandmaster + its NUL
+inline constexpr std::size_t kProblemField = 256;     // ClockStatus::kMaxProblem + its NUL
+inline constexpr std::uint32_t kClockHasOffsetFromMaster = 1u << 0;
+inline constexpr std::uint32_t kClockHasPathDelay = 1u << 1;
+inline constexpr std::uint32_t kClockHasUtcOffset = 1u << 2;
+inline constexpr std::uint32_t kClockHasOffsetToHost = 1u << 3;
+inline constexpr std::uint32_t kClockPtpTimescale = 1u << 4;
+inline constexpr std::uint32_t kClockKnownFlags = (1u << 5) - 1;
+struct ClockRecord {
+  std::uint32_t flags;  // kClock*
+  std::uint32_t source;
+  std::uint32_t state;
+  std::int32_t ptp_domain;
+  std::int64_t offset_from_master_ns;
+  std::int64_t path_delay_ns;
+  std::int32_t utc_offset_s;
+  std::uint32_t verdict;
+  std::int64_t tai_correction_ns;
+  std::int64_t reported_ns;
+  std::int64_t offset_to_host_ns;
+  std::int64_t spread_ns;
+  double drift_ppm;
+  std::uint32_t steps;
+  std::uint32_t stamps;
+  std::int64_t last_step_ns;
+  std::uint64_t packets_measured;
+  std::int64_t measured_ns;
+  char grandmaster[kGrandmasterField];
+  char problem[kProblemField];
+};
+static_assert(sizeof(ClockRecord) == 392, "the record has no padding: readers compare it bytewise");
+
+struct alignas(kCacheLine) ClockBlock {
+  std::atomic<std::uint64_t> word;  // as SensorBlock::word
+  std::uint64_t reserved[7];
+  ClockRecord record;
+};
+
 // The writer's whole program name ("sim_replay_video"), of which WriterIdentity::command keeps
 // the kernel's 15 characters ("sim_replay_vide"). NUL-terminated and NUL-padded. Readers show it
 // only when it continues a 15-character `command`: all zero (writers that predate it) or a name
@@ -224,8 +270,11 @@ struct alignas(kPage) RegionHeader {
   SensorBlock sensor;
   // Added in place of padding (zero from older writers: the 15 characters of `writer.command`).
   ProgramName program;
+  // Added in place of padding (zero from older writers: no clock record).
+  ClockBlock clock;
 };
 static_assert(sizeof(RegionHeader) == kPage);
+static_assert(offsetof(RegionHeader, clock) == 2048, "the clock record stays in the old padding");
 static_assert(offsetof(RegionHeader, sensor) == 448, "the sensor block stays in the old padding");
 static_assert(offsetof(RegionHeader, program) == 1792, "the program name stays in the old padding");
 

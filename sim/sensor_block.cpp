@@ -1,44 +1,16 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sensor_block.hpp"
 
-#include <sched.h>
-
 #include <algorithm>
 #include <cstring>
 #include <string_view>
 
-#include "shared_copy.hpp"
-#include "sim/clock.hpp"
+#include "fixed_text.hpp"
+#include "seqlock_block.hpp"
 
 namespace sim::detail {
 
 namespace {
-
-// An update is a ~1 KiB copy: a block that stays in the middle of the same update this long
-// belongs to a writer that stopped (died) there.
-constexpr std::int64_t kStuckUpdateNs = 50'000'000;
-// A reader gives up after this long if every copy overlapped another update (a writer changing
-// its description without pause).
-constexpr std::int64_t kMaxReadNs = 1'000'000'000;
-
-template <std::size_t N>
-void put(char (&field)[N], const std::string& text) noexcept {
-  std::memset(field, 0, N);
-  std::memcpy(field, text.data(), std::min(text.size(), N - 1));
-}
-
-// The string in a field, or a fault if it is not NUL-terminated and NUL-padded.
-template <std::size_t N>
-bool take(const char (&field)[N], std::string& out) {
-  const void* end = std::memchr(field, '\0', N);
-  if (end == nullptr) return false;
-  const std::size_t length = static_cast<std::size_t>(static_cast<const char*>(end) - field);
-  for (std::size_t i = length; i < N; ++i) {
-    if (field[i] != '\0') return false;
-  }
-  out.assign(field, length);
-  return true;
-}
 
 // The fields of a record as a SensorInfo, or the name of the first string field that is not a
 // NUL-terminated string (empty on success).
@@ -59,10 +31,10 @@ std::string unpack_strings(const SensorRecord& r, SensorInfo& info) {
                          {&r.distortion_model, &info.calibration->distortion_model,
                           "distortion_model"}};
   for (const Field& f : names) {
-    if (!take(*f.text, *f.out)) return f.name;
+    if (!take_text(*f.text, *f.out)) return f.name;
   }
-  if (!take(r.calibration_source, info.calibration_source)) return "calibration_source";
-  if (!take(r.time_sync, info.time_sync)) return "time_sync";
+  if (!take_text(r.calibration_source, info.calibration_source)) return "calibration_source";
+  if (!take_text(r.time_sync, info.time_sync)) return "time_sync";
   return {};
 }
 
@@ -108,10 +80,8 @@ std::string decode(const SensorRecord& r, SensorInfo& info) {
   return {};
 }
 
-Error damaged(const std::string& fault) {
-  return Error{ErrorCode::region_invalid,
-               "the stream's sensor description is damaged: " + fault + "; restart its writer"};
-}
+// A fault phrase as the error read_block() turns into its "damaged" sentence.
+Error fault_error(std::string fault) { return Error{ErrorCode::region_invalid, std::move(fault)}; }
 
 }  // namespace
 
@@ -120,14 +90,14 @@ SensorRecord to_record(const SensorInfo& info) noexcept {
   std::memset(&r, 0, sizeof r);  // every byte, padding too: readers compare records bytewise
   r.time_base = static_cast<std::uint32_t>(info.time_base);
   r.point_time = static_cast<std::uint32_t>(info.point_time);
-  put(r.frame_id, info.frame_id);
-  put(r.parent_frame, info.parent_frame);
-  put(r.vendor, info.identity.vendor);
-  put(r.model, info.identity.model);
-  put(r.serial, info.identity.serial);
-  put(r.firmware, info.identity.firmware);
-  put(r.calibration_source, info.calibration_source);
-  put(r.time_sync, info.time_sync);
+  put_text(r.frame_id, info.frame_id);
+  put_text(r.parent_frame, info.parent_frame);
+  put_text(r.vendor, info.identity.vendor);
+  put_text(r.model, info.identity.model);
+  put_text(r.serial, info.identity.serial);
+  put_text(r.firmware, info.identity.firmware);
+  put_text(r.calibration_source, info.calibration_source);
+  put_text(r.time_sync, info.time_sync);
   if (info.mounting) {
     r.flags |= kSensorHasMounting;
     std::copy(info.mounting->translation.begin(), info.mounting->translation.end(), r.translation);
@@ -137,8 +107,8 @@ SensorRecord to_record(const SensorInfo& info) noexcept {
     r.flags |= kSensorHasCalibration;
     r.width = c->width;
     r.height = c->height;
-    put(r.camera_name, c->camera_name);
-    put(r.distortion_model, c->distortion_model);
+    put_text(r.camera_name, c->camera_name);
+    put_text(r.distortion_model, c->distortion_model);
     r.distortion_count = static_cast<std::uint32_t>(std::min(c->d.size(), CameraCalibration::kMaxDistortion));
     std::copy_n(c->d.begin(), r.distortion_count, r.d);
     std::copy(c->k.begin(), c->k.end(), r.k);
@@ -156,63 +126,31 @@ SensorRecord to_record(const SensorInfo& info) noexcept {
 }
 
 void start_sensor_block(SensorBlock& block, std::uint64_t previous_word) noexcept {
-  block.word.store(previous_word & ~(kSensorWriting | kSensorPresent), std::memory_order_relaxed);
+  start_block(block.word, previous_word);
 }
 
 void write_sensor_block(SensorBlock& block, const std::optional<SensorInfo>& info) noexcept {
   const SensorRecord record = info ? to_record(*info) : SensorRecord{};  // before: keep the window short
-  const std::uint64_t old_word = block.word.load(std::memory_order_relaxed);
-  const std::uint64_t generation_bits = old_word & ~(kSensorWriting | kSensorPresent);
-  // Odd first, keeping the old presence: frames read meanwhile still carry the old generation.
-  block.word.store(old_word | kSensorWriting, std::memory_order_relaxed);
-  // Orders the mark before the record's stores (pairs with the readers' fence after their copy).
-  std::atomic_thread_fence(std::memory_order_release);
-  std::memcpy(static_cast<void*>(&block.record), &record, sizeof record);
-  block.word.store((generation_bits + kSensorGenerationStep) | (info ? kSensorPresent : 0),
-                   std::memory_order_release);
+  write_block(block.word, block.record, record, info.has_value());
 }
 
 Expected<std::optional<SensorInfo>> read_sensor_block(const SensorBlock& block,
                                                       std::uint64_t* generation) {
-  SensorRecord record;
-  const std::int64_t start = monotonic_ns();
-  std::uint64_t odd_word = 0;  // the update the writer was in the middle of when first seen
-  std::int64_t odd_since = 0;
-  for (;;) {
-    const std::uint64_t before = block.word.load(std::memory_order_acquire);
-    if ((before & kSensorWriting) != 0) {  // the writer is in the middle of an update
-      const std::int64_t now = monotonic_ns();
-      if (before != odd_word) {
-        odd_word = before;
-        odd_since = now;
-      } else if (now - odd_since > kStuckUpdateNs) {
-        return damaged("its writer stopped in the middle of changing it");
-      }
-      sched_yield();
-      continue;
-    }
-    if (monotonic_ns() - start > kMaxReadNs) {
-      return Error{ErrorCode::system_error,
-                   "the stream's sensor description changed during every attempt to read it; "
-                   "try again"};
-    }
-    if (generation != nullptr) *generation = sensor_generation(before);
-    if ((before & kSensorPresent) == 0) return std::optional<SensorInfo>{};
-    copy_from_shared(&record, &block.record, sizeof record);
-    std::atomic_thread_fence(std::memory_order_acquire);
-    if (block.word.load(std::memory_order_relaxed) != before) continue;
-
-    if (sensor_generation(before) == 0) return damaged("it is marked present in generation 0");
-    SensorInfo info;
-    if (const std::string fault = decode(record, info); !fault.empty()) return damaged(fault);
-    if (const SensorFault fault = sensor_info_fault(info); !fault.empty()) return damaged(fault.fault);
-    // Every byte outside the fields in use must be zero, as the writer leaves it.
-    const SensorRecord canonical = to_record(info);
-    if (std::memcmp(&canonical, &record, sizeof record) != 0) {
-      return damaged("it holds bytes outside its fields");
-    }
-    return std::optional<SensorInfo>{std::move(info)};
-  }
+  return read_block<SensorInfo>(
+      block.word, block.record, "sensor description", generation,
+      [](const SensorRecord& record) -> Expected<SensorInfo> {
+        SensorInfo info;
+        if (const std::string fault = decode(record, info); !fault.empty()) return fault_error(fault);
+        if (const SensorFault fault = sensor_info_fault(info); !fault.empty()) {
+          return fault_error(fault.fault);
+        }
+        // Every byte outside the fields in use must be zero, as the writer leaves it.
+        const SensorRecord canonical = to_record(info);
+        if (std::memcmp(&canonical, &record, sizeof record) != 0) {
+          return fault_error("it holds bytes outside its fields");
+        }
+        return info;
+      });
 }
 
 }  // namespace sim::detail

@@ -26,7 +26,7 @@ SensorFault sensor_info_fault(const SensorInfo& info);
 // FrameInfo::sensor_generation for a value of SensorBlock::word: its generation while a
 // description is present, else 0.
 constexpr std::uint64_t sensor_generation(std::uint64_t word) noexcept {
-  return (word & kSensorPresent) != 0 ? word / kSensorGenerationStep : 0;
+  return (word & kSensorPresent) != 0 ? word / kSensorGenerationStep : 0;  // as block_generation
 }
 
 // A new region's block, carrying on the generation of the region it replaces (`previous_word`,

@@ -14,6 +14,7 @@
 #include "futex.hpp"
 #include "period_estimate.hpp"
 #include "region_file.hpp"
+#include "clock_block.hpp"
 #include "sensor_block.hpp"
 #include "sim/clock.hpp"
 
@@ -41,6 +42,8 @@ struct detail::WriterState {
   detail::PeriodEstimate period;
   std::int64_t last_heal_ns = 0;  // last scan for sleepers that died asleep
   bool loan_open = false;
+  // The StampClock of the clock record set last; set_clock may run on another thread.
+  std::atomic<std::uint32_t> stamp_clock{0};
 
   // Optional idle heartbeat.
   std::thread heartbeat_thread;
@@ -129,6 +132,8 @@ void initialise_header(RegionHeader& h, std::uint64_t capacity, const StreamSpec
       previous != nullptr ? previous->publication.latest_seq.load(std::memory_order_acquire) : 0;
   start_sensor_block(h.sensor,
                      previous != nullptr ? previous->sensor.word.load(std::memory_order_acquire) : 0);
+  start_clock_block(h.clock,
+                    previous != nullptr ? previous->clock.word.load(std::memory_order_acquire) : 0);
   const Geometry g = geometry_for(capacity);
   Identity& id = h.identity;
   id.version = kVersion;
@@ -215,6 +220,10 @@ void announce_writer(RegionHeader& h, const StreamSpec& spec, bool wakes_every_p
   // another sensor); a region that never had one is left untouched.
   if (spec.sensor || h.sensor.word.load(std::memory_order_relaxed) != 0) {
     write_sensor_block(h.sensor, spec.sensor);
+  }
+  // A previous writer's clock record says nothing of this one's clock: gone until it sets one.
+  if ((h.clock.word.load(std::memory_order_relaxed) & kSensorPresent) != 0) {
+    write_clock_block(h.clock, std::nullopt);
   }
 }
 
@@ -369,6 +378,7 @@ WriteStatus publish(WriterState& w, std::uint64_t size, std::int64_t stamp_ns,
   meta.stamp_ns.store(stamp_ns, std::memory_order_relaxed);
   meta.publish_ns.store(now, std::memory_order_relaxed);
   meta.receive_ns.store(receive_ns, std::memory_order_relaxed);
+  meta.stamp_clock.store(w.stamp_clock.load(std::memory_order_relaxed), std::memory_order_relaxed);
   meta.checksum.store(w.checksum ? XXH3_64bits(w.slot(seq), size) : 0, std::memory_order_relaxed);
   // The frame is complete: release it under its number, then make it the newest.
   meta.seq.store(seq, std::memory_order_release);
@@ -421,6 +431,16 @@ Expected<void> Writer::set_sensor_info(const SensorInfo& info) {
     return Error{ErrorCode::invalid_argument, "stream " + impl_->name + ": " + problem};
   }
   write_sensor_block(impl_->header->sensor, info);
+  return {};
+}
+
+Expected<void> Writer::set_clock(const ClockStatus& clock) {
+  if (!impl_) return Error{ErrorCode::invalid_argument, "this writer was moved from"};
+  if (const std::string problem = clock_status_problem(clock); !problem.empty()) {
+    return Error{ErrorCode::invalid_argument, "stream " + impl_->name + ": " + problem};
+  }
+  write_clock_block(impl_->header->clock, clock);
+  impl_->stamp_clock.store(static_cast<std::uint32_t>(clock.stamps), std::memory_order_relaxed);
   return {};
 }
 

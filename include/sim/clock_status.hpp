@@ -102,6 +102,14 @@ std::string summary(const ClockStatus& clock);
 // not finite, an enum out of range), in one sentence; empty when it can be stored.
 std::string clock_status_problem(const ClockStatus& clock);
 
+// Why frames of two streams with these clocks cannot be paired by their stamps within
+// `tolerance_ns`, in one sentence naming both streams (a clock in error, measured offsets to the
+// host that differ by more than the tolerance, different grandmasters or PTP domains), or empty
+// when nothing known says they cannot. Unknown clocks are not refused: nothing is known.
+std::string pairing_problem(std::string_view first_name, const ClockStatus& first,
+                            std::string_view second_name, const ClockStatus& second,
+                            std::int64_t tolerance_ns);
+
 // A duration for people: "12 µs", "37.0 s", "1.0 h", "6.4 years" (signed, no '+').
 std::string human_duration(std::int64_t ns);
 

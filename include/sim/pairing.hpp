@@ -8,6 +8,10 @@
 //   pairer.add_first(info.stamp_ns, std::move(image));
 //   pairer.add_second(info.stamp_ns, std::move(scan));
 //   if (auto pair = pairer.take()) fuse(pair->first, pair->second);
+//
+// Stamps are only as good as their clocks: give the pairer both streams' clock records
+// (Reader::clock(), when FrameInfo::clock_generation changes) and it refuses to pair while they
+// are known to disagree beyond its tolerance (refusal() says why), unless told to ignore clocks.
 #pragma once
 
 #include <chrono>
@@ -15,7 +19,10 @@
 #include <cstdint>
 #include <deque>
 #include <optional>
+#include <string>
 #include <utility>
+
+#include "sim/clock_status.hpp"
 
 namespace sim {
 
@@ -35,12 +42,24 @@ class ApproximatePairer {
   explicit ApproximatePairer(std::chrono::nanoseconds tolerance, std::size_t history = 8)
       : tolerance_ns_(tolerance.count()), history_(history == 0 ? 1 : history) {}
 
+  // The streams' clocks as their records say now (names for the refusal's sentence). While
+  // they are known to disagree (sim::pairing_problem), take() pairs nothing and refusal() says
+  // why; ignore_clocks(true) pairs regardless (you know better, e.g. both stamped on arrival).
+  void set_clocks(std::string_view first_name, const ClockStatus& first, std::string_view second_name,
+                  const ClockStatus& second) {
+    refusal_ = pairing_problem(first_name, first, second_name, second, tolerance_ns_);
+  }
+  void ignore_clocks(bool ignore) noexcept { ignore_clocks_ = ignore; }
+  // Why take() pairs nothing although stamps may match; empty when it pairs.
+  const std::string& refusal() const noexcept { return ignore_clocks_ ? kNoRefusal : refusal_; }
+
   void add_first(std::int64_t stamp_ns, First value) { add(firsts_, stamp_ns, std::move(value)); }
   void add_second(std::int64_t stamp_ns, Second value) { add(seconds_, stamp_ns, std::move(value)); }
 
   // The freshest pair within the tolerance, removed with every older frame of both streams (a
   // fused result newer than them exists now); nothing if no pair is within the tolerance.
   std::optional<Pair> take() {
+    if (!refusal().empty()) return std::nullopt;
     std::optional<std::pair<std::size_t, std::size_t>> best;
     std::int64_t best_older = 0, best_gap = 0;
     for (std::size_t i = 0; i < firsts_.size(); ++i) {
@@ -77,8 +96,11 @@ class ApproximatePairer {
     while (queue.size() > history_) queue.pop_front();
   }
 
+  inline static const std::string kNoRefusal{};
   std::int64_t tolerance_ns_;
   std::size_t history_;
+  std::string refusal_{};
+  bool ignore_clocks_ = false;
   std::deque<std::pair<std::int64_t, First>> firsts_;
   std::deque<std::pair<std::int64_t, Second>> seconds_;
 };

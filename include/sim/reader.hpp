@@ -16,6 +16,7 @@
 
 #include "sim/layout.hpp"
 #include "sim/result.hpp"
+#include "sim/clock_status.hpp"
 #include "sim/sensor_info.hpp"
 #include "sim/span.hpp"
 
@@ -33,6 +34,12 @@ struct FrameInfo {
   // has none, else a number that changes every time the writer sets one (Writer::set_sensor_info,
   // a new writer). Compare it with the last one seen to know when to call Reader::sensor_info().
   std::uint64_t sensor_generation = 0;
+  // Likewise for the stream's clock record (Writer::set_clock, about once a second from a
+  // driver): compare it with the last one seen to know when to call Reader::clock().
+  std::uint64_t clock_generation = 0;
+  // Which clock stamp_ns is in (the sensor's, corrected for TAI, or the host's at arrival), as
+  // the writer's clock record said when it published the frame; unknown from older writers.
+  StampClock stamp_clock = StampClock::unknown;
 };
 
 enum class ReadStatus {
@@ -145,6 +152,9 @@ struct StreamStatus {
   std::optional<SensorInfo> sensor{};  // the stream's sensor description, if it has a valid one
   std::string sensor_problem{};        // why `sensor` is empty though the stream has one (damaged)
   std::uint64_t sensor_generation = 0; // as FrameInfo::sensor_generation
+  std::optional<ClockStatus> clock{};  // the stream's clock record, if it has a valid one
+  std::string clock_problem{};         // why `clock` is empty though the stream has one (damaged)
+  std::uint64_t clock_generation = 0;  // as FrameInfo::clock_generation
 
   // Frames per second over the current writer's recent frames; 0 when it has not published twice
   // or has not published for three periods (it stopped).
@@ -241,6 +251,10 @@ class Reader {
   // flowing. Copies about 1 KiB and allocates: call it when FrameInfo::sensor_generation changed,
   // not per frame.
   Expected<std::optional<SensorInfo>> sensor_info() const;
+  // The stream's clock record as its writer set it last (sim/clock_status.hpp): nullopt when it
+  // has none (yet); an Error (one sentence) when the record in the region is damaged, which
+  // leaves frames flowing. Call it when FrameInfo::clock_generation changed, not per frame.
+  Expected<std::optional<ClockStatus>> clock() const;
 
   struct Impl;
 

@@ -147,6 +147,53 @@ int SIM_readerSensorInfo(sim_reader *r, sim_sensor_info *out);
  * again then. (Not in sim_frame_info, whose size programs built against older headers rely on.) */
 uint64_t SIM_readerSensorGeneration(const sim_reader *r);
 
+/* A stream's clock as data (sim::ClockStatus, sim/clock_status.hpp): where its stamps come from,
+ * what the sensor reports of its synchronisation, what the driver measured against the host, and
+ * the verdict. Optional numbers come with a has_ flag. */
+enum {
+  SIM_CLOCK_SOURCE_UNKNOWN = 0, SIM_CLOCK_SOURCE_HOST = 1, SIM_CLOCK_SOURCE_PTP = 2,
+  SIM_CLOCK_SOURCE_GPTP = 3, SIM_CLOCK_SOURCE_PPS_NMEA = 4, SIM_CLOCK_SOURCE_SYNC_PULSE = 5,
+  SIM_CLOCK_SOURCE_FREE_RUNNING = 6, SIM_CLOCK_SOURCE_REPLAYED = 7
+};
+enum {
+  SIM_CLOCK_STATE_UNKNOWN = 0, SIM_CLOCK_STATE_LOCKED = 1, SIM_CLOCK_STATE_ACQUIRING = 2,
+  SIM_CLOCK_STATE_HOLDOVER = 3, SIM_CLOCK_STATE_FREE_RUNNING = 4
+};
+enum { SIM_CLOCK_UNKNOWN = 0, SIM_CLOCK_OK = 1, SIM_CLOCK_WARN = 2, SIM_CLOCK_ERROR = 3 };
+enum {
+  SIM_STAMP_UNKNOWN = 0, SIM_STAMP_SENSOR = 1, SIM_STAMP_SENSOR_TAI_CORRECTED = 2,
+  SIM_STAMP_HOST_ARRIVAL = 3
+};
+enum { SIM_GRANDMASTER_MAX = 24, SIM_PROBLEM_MAX = 256 };
+typedef struct sim_clock_status {
+  int source, state, ptp_domain; /* SIM_CLOCK_SOURCE_*, SIM_CLOCK_STATE_*, -1 unknown */
+  int has_offset_from_master, has_path_delay, has_utc_offset, has_offset_to_host;
+  int64_t offset_from_master_ns, path_delay_ns;
+  char grandmaster[SIM_GRANDMASTER_MAX]; /* "xxxxxx.xxxx.xxxxxx", "" unknown */
+  int32_t utc_offset_s;                  /* TAI - UTC announced by the master */
+  int ptp_timescale;
+  int64_t tai_correction_ns, reported_ns;
+  int64_t offset_to_host_ns, spread_ns; /* sensor - host, measured */
+  double drift_ppm;
+  uint32_t steps;
+  int64_t last_step_ns;
+  uint64_t packets_measured;
+  int64_t measured_ns;
+  int verdict;                   /* SIM_CLOCK_OK, ... */
+  char problem[SIM_PROBLEM_MAX]; /* one sentence, "" when ok */
+  int stamps;                    /* SIM_STAMP_*: the clock frames are stamped in now */
+} sim_clock_status;
+/* Sets (or replaces) the stream's clock record: 0, or SIM_EINVAL with SIM_lastError saying what
+ * is wrong. Frames published from now on carry clock->stamps (SIM_readerStampClock). */
+int SIM_writerSetClock(sim_writer *w, const sim_clock_status *clock);
+/* Copies the stream's clock record into *out: 1 copied, 0 the stream has none, SIM_EREGION when
+ * the record is damaged (frames still flow; SIM_lastError says what). */
+int SIM_readerClock(sim_reader *r, sim_clock_status *out);
+/* Of the frame SIM_readData delivered last: the clock record's generation (call SIM_readerClock
+ * when it changed) and the SIM_STAMP_* clock its stamp is in. */
+uint64_t SIM_readerClockGeneration(const sim_reader *r);
+int SIM_readerStampClock(const sim_reader *r);
+
 /* Removes the stream's region; refused (<0) while its writer is alive. */
 int SIM_destroy(const char *name);
 /* The last error of this thread, in one sentence; "" after a call that succeeded. The pointer

@@ -13,6 +13,7 @@
 
 #include "sim/layout.hpp"
 #include "sim/result.hpp"
+#include "sim/clock_status.hpp"
 #include "sim/sensor_info.hpp"
 #include "sim/span.hpp"
 
@@ -134,6 +135,14 @@ class Writer {
   // FrameInfo::sensor_generation. Refused with the sentence of sensor_info_problem(). Costs a
   // copy of about 1 KiB into the header page; publishing frames costs nothing more for it.
   Expected<void> set_sensor_info(const SensorInfo& info);
+
+  // Replaces the stream's clock record (sim/clock_status.hpp; a driver's clock check, about once
+  // a second): readers see it with their next Reader::clock() and a new
+  // FrameInfo::clock_generation; the frames published from now on carry `clock.stamps` as their
+  // FrameInfo::stamp_clock. Refused with the sentence of clock_status_problem(). May be called
+  // from another thread than the one publishing, by one thread at a time. Costs a copy of
+  // 400 bytes into the header page; publishing frames costs nothing more for it.
+  Expected<void> set_clock(const ClockStatus& clock);
 
   // Keeps the region mapped while held, even after this Writer is gone (its lock is released
   // all the same): for bindings whose views into a loan may outlive the writer. Null if moved from.

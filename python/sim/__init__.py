@@ -19,12 +19,21 @@ A stream may describe its sensor: `reader.sensor_info` is None or a SensorInfo (
 parent_frame, mounting, calibration with numpy K/R/P, identity, time base); a frame's
 `info.sensor_generation` changes whenever the writer sets a new one (Writer(..., sensor=…),
 writer.set_sensor_info(…)).
+
+A stream may also carry its clock: `reader.clock` is None or a ClockStatus (source, state,
+grandmaster, offset to the host, verdict and its problem sentence; `summary()` in one line); a
+frame's `info.clock_generation` changes whenever the writer sets a new one (writer.set_clock(…)),
+and `info.stamp_clock` says which clock its stamp is in.
 """
 
 from ._sim import (
     LIDAR_POINT_DTYPE,
     Borrow,
     CameraCalibration,
+    ClockSource,
+    ClockState,
+    ClockStatus,
+    ClockVerdict,
     Frame,
     FrameInfo,
     Layout,
@@ -41,6 +50,7 @@ from ._sim import (
     SensorIdentity,
     SensorInfo,
     SimError,
+    StampClock,
     TimeBase,
     Writer,
     destroy,
@@ -52,6 +62,10 @@ __all__ = [
     "LIDAR_POINT_DTYPE",
     "Borrow",
     "CameraCalibration",
+    "ClockSource",
+    "ClockState",
+    "ClockStatus",
+    "ClockVerdict",
     "Frame",
     "FrameInfo",
     "Layout",
@@ -68,6 +82,7 @@ __all__ = [
     "SensorIdentity",
     "SensorInfo",
     "SimError",
+    "StampClock",
     "TimeBase",
     "Writer",
     "destroy",

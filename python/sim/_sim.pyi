@@ -109,7 +109,12 @@ class FrameInfo:
     @property
     def sensor_generation(self) -> int:
         """0 when the stream has no sensor description; changes whenever the writer sets one."""
-    def as_dict(self) -> dict[str, int]: ...
+    @property
+    def clock_generation(self) -> int:
+        """0 when the stream has no clock record; changes whenever the writer sets one."""
+    @property
+    def stamp_clock(self) -> StampClock: ...
+    def as_dict(self) -> dict[str, Any]: ...
 
 class ReaderStats:
     @property
@@ -173,6 +178,9 @@ class Reader:
     def sensor_info(self) -> Optional[SensorInfo]:
         """The stream's description (a copy) or None; raises SimError (code 'region_invalid') when
         the description in the stream is damaged, while frames keep flowing."""
+    @property
+    def clock(self) -> Optional[ClockStatus]:
+        """The stream's clock record (a copy) or None; raises SimError when it is damaged."""
     def __enter__(self) -> Reader: ...
     def __exit__(self, *args: object) -> None: ...
 
@@ -200,6 +208,7 @@ class Writer:
         sensor: Optional[SensorInfo] = None,
     ) -> None: ...
     def set_sensor_info(self, info: SensorInfo) -> None: ...
+    def set_clock(self, clock: ClockStatus) -> None: ...
     def write(self, frame: Any, *, stamp_ns: Optional[int] = None, receive_ns: int = 0) -> None: ...
     def loan(self) -> Loan: ...
     def close(self) -> None: ...
@@ -221,6 +230,61 @@ class TimeBase(enum.Enum):
     host = 1
     sensor_synchronized = 2
     sensor_free_running = 3
+
+class ClockSource(enum.Enum):
+    unknown = 0
+    host = 1
+    ptp = 2
+    gptp = 3
+    pps_nmea = 4
+    sync_pulse = 5
+    free_running = 6
+    replayed = 7
+
+class ClockState(enum.Enum):
+    unknown = 0
+    locked = 1
+    acquiring = 2
+    holdover = 3
+    free_running = 4
+
+class ClockVerdict(enum.Enum):
+    unknown = 0
+    ok = 1
+    warn = 2
+    error = 3
+
+class StampClock(enum.Enum):
+    unknown = 0
+    sensor = 1
+    sensor_tai_corrected = 2
+    host_arrival = 3
+
+class ClockStatus:
+    """A stream's clock: reported, measured against the host, judged (C++ sim::ClockStatus)."""
+    source: ClockSource
+    state: ClockState
+    ptp_domain: int
+    offset_from_master_ns: Optional[int]
+    path_delay_ns: Optional[int]
+    grandmaster: str
+    utc_offset_s: Optional[int]
+    ptp_timescale: bool
+    tai_correction_ns: int
+    reported_ns: int
+    offset_to_host_ns: Optional[int]
+    spread_ns: int
+    drift_ppm: float
+    steps: int
+    last_step_ns: int
+    packets_measured: int
+    measured_ns: int
+    verdict: ClockVerdict
+    problem: str
+    stamps: StampClock
+    def __init__(self) -> None: ...
+    def summary(self) -> str: ...
+    def problem_text(self) -> str: ...
 
 class PointTime(enum.Enum):
     none = 0

@@ -297,6 +297,13 @@ class ReaderObject {
     return std::move(*info);
   }
 
+  // nullopt: the stream has no clock record (yet); raises SimError when it is damaged.
+  std::optional<sim::ClockStatus> clock() {
+    auto clock = with_reader([](sim::Reader& reader) { return reader.clock(); });
+    if (!clock) raise(clock.error());
+    return std::move(*clock);
+  }
+
   void close() {
     locked(state_->mutex, [&] { state_->open = false; });  // the mapping goes with the last borrow
   }
@@ -468,6 +475,10 @@ class WriterObject {
     raise_if_error(locked(state_->mutex, [&] { return state_->usable().set_sensor_info(info); }));
   }
 
+  void set_clock(const sim::ClockStatus& clock) {
+    raise_if_error(locked(state_->mutex, [&] { return state_->usable().set_clock(clock); }));
+  }
+
   void close() {
     py::gil_scoped_release release;
     std::lock_guard lock(state_->mutex);
@@ -523,6 +534,8 @@ py::dict info_to_dict(const sim::FrameInfo& info) {
   d["receive_ns"] = info.receive_ns;
   d["size"] = info.size;
   d["sensor_generation"] = info.sensor_generation;
+  d["clock_generation"] = info.clock_generation;
+  d["stamp_clock"] = sim::to_string(info.stamp_clock);
   return d;
 }
 
@@ -550,6 +563,63 @@ std::vector<double> number_list(const py::handle& values, const char* what) {
   const auto array = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(values);
   if (!array || array.ndim() > 1) throw py::value_error(std::string(what) + " takes a list of numbers");
   return {array.data(), array.data() + array.size()};
+}
+
+// The clock record: its enums and ClockStatus (sim/clock_status.hpp).
+void bind_clock(py::module_& m) {
+  py::enum_<sim::ClockSource>(m, "ClockSource", "Where a clock gets its time from.")
+      .value("unknown", sim::ClockSource::unknown)
+      .value("host", sim::ClockSource::host)
+      .value("ptp", sim::ClockSource::ptp)
+      .value("gptp", sim::ClockSource::gptp)
+      .value("pps_nmea", sim::ClockSource::pps_nmea)
+      .value("sync_pulse", sim::ClockSource::sync_pulse)
+      .value("free_running", sim::ClockSource::free_running)
+      .value("replayed", sim::ClockSource::replayed);
+  py::enum_<sim::ClockState>(m, "ClockState", "What a clock's synchronisation says of itself.")
+      .value("unknown", sim::ClockState::unknown)
+      .value("locked", sim::ClockState::locked)
+      .value("acquiring", sim::ClockState::acquiring)
+      .value("holdover", sim::ClockState::holdover)
+      .value("free_running", sim::ClockState::free_running);
+  py::enum_<sim::ClockVerdict>(m, "ClockVerdict", "The verdict on a stream's clock.")
+      .value("unknown", sim::ClockVerdict::unknown)
+      .value("ok", sim::ClockVerdict::ok)
+      .value("warn", sim::ClockVerdict::warn)
+      .value("error", sim::ClockVerdict::error);
+  py::enum_<sim::StampClock>(m, "StampClock", "Which clock a frame's stamp is in.")
+      .value("unknown", sim::StampClock::unknown)
+      .value("sensor", sim::StampClock::sensor)
+      .value("sensor_tai_corrected", sim::StampClock::sensor_tai_corrected)
+      .value("host_arrival", sim::StampClock::host_arrival);
+  using C = sim::ClockStatus;
+  py::class_<C>(m, "ClockStatus", "A stream's clock: reported, measured against the host, judged.")
+      .def(py::init<>())
+      .def_readwrite("source", &C::source)
+      .def_readwrite("state", &C::state)
+      .def_readwrite("ptp_domain", &C::ptp_domain, "-1: unknown or not PTP.")
+      .def_readwrite("offset_from_master_ns", &C::offset_from_master_ns, "As reported; None when not.")
+      .def_readwrite("path_delay_ns", &C::path_delay_ns)
+      .def_readwrite("grandmaster", &C::grandmaster, "Clock identity as ptp4l prints it; '' unknown.")
+      .def_readwrite("utc_offset_s", &C::utc_offset_s, "TAI - UTC announced by the master; None unknown.")
+      .def_readwrite("ptp_timescale", &C::ptp_timescale)
+      .def_readwrite("tai_correction_ns", &C::tai_correction_ns)
+      .def_readwrite("reported_ns", &C::reported_ns)
+      .def_readwrite("offset_to_host_ns", &C::offset_to_host_ns,
+                     "Measured median of sensor - host time per packet, ns; None until measured.")
+      .def_readwrite("spread_ns", &C::spread_ns)
+      .def_readwrite("drift_ppm", &C::drift_ppm)
+      .def_readwrite("steps", &C::steps)
+      .def_readwrite("last_step_ns", &C::last_step_ns)
+      .def_readwrite("packets_measured", &C::packets_measured)
+      .def_readwrite("measured_ns", &C::measured_ns)
+      .def_readwrite("verdict", &C::verdict)
+      .def_readwrite("problem", &C::problem, "One sentence; '' when ok.")
+      .def_readwrite("stamps", &C::stamps, "The clock the frames' stamps are in now.")
+      .def("summary", [](const C& c) { return sim::summary(c); }, "One line for people.")
+      .def("problem_text", &sim::clock_status_problem, "Why it cannot be stored, or ''.")
+      .def(py::self == py::self)
+      .def("__repr__", [](const C& c) { return "<sim.ClockStatus " + sim::summary(c) + ">"; });
 }
 
 // TimeBase, PointTime and Mounting.
@@ -649,7 +719,7 @@ void bind_calibration(py::module_& m) {
       .def_readwrite("binning_x", &Calibration::binning_x)
       .def_readwrite("binning_y", &Calibration::binning_y)
       .def_readwrite("roi", &Calibration::roi)
-      .def("summary", &sim::summary, "\"1920x1200 plumb_bob fx=… fy=… cx=… cy=…\"")
+      .def("summary", [](const Calibration& c) { return sim::summary(c); }, "\"1920x1200 plumb_bob fx=… fy=… cx=… cy=…\"")
       .def(py::self == py::self);
 
 }
@@ -815,6 +885,10 @@ void bind_frame_info(py::module_& m) {
       .def_readonly("sensor_generation", &sim::FrameInfo::sensor_generation,
                     "0 when the stream has no sensor description, else a number that changes whenever the "
                     "writer sets one: read Reader.sensor_info again when it changed.")
+      .def_readonly("clock_generation", &sim::FrameInfo::clock_generation,
+                    "0 when the stream has no clock record, else a number that changes whenever the "
+                    "writer sets one: read Reader.clock again when it changed.")
+      .def_readonly("stamp_clock", &sim::FrameInfo::stamp_clock, "The clock stamp_ns is in (StampClock).")
       .def("as_dict", &info_to_dict)
       .def("__repr__", [](const sim::FrameInfo& i) {
         return "<sim.FrameInfo seq=" + std::to_string(i.seq) + " size=" + std::to_string(i.size) +
@@ -883,6 +957,9 @@ void bind_reader(py::module_& m) {
       .def_property_readonly("sensor_info", &ReaderObject::sensor_info,
                              "The stream's SensorInfo (a copy), or None when it has none. Raises SimError "
                              "when the description in the stream is damaged (frames still flow).")
+      .def_property_readonly("clock", &ReaderObject::clock,
+                             "The stream's ClockStatus (a copy), or None when it has none yet. Raises "
+                             "SimError when the record in the stream is damaged (frames still flow).")
       .def("__enter__", [](py::object self) { return self; })
       .def("__exit__", [](ReaderObject& r, py::args) { r.close(); });
 }
@@ -910,6 +987,8 @@ void bind_writer(py::module_& m) {
            "(a SensorInfo) describes the stream's sensor.")
       .def("set_sensor_info", &WriterObject::set_sensor_info, py::arg("info"),
            "Replaces the stream's sensor description (a recalibration); SimError when it is invalid.")
+      .def("set_clock", &WriterObject::set_clock, py::arg("clock"),
+           "Replaces the stream's clock record (a ClockStatus); SimError when it is invalid.")
       .def("write", &WriterObject::write, py::arg("frame"), py::kw_only(), py::arg("stamp_ns") = py::none(),
            py::arg("receive_ns") = 0,
            "Copies a C-contiguous buffer (numpy array, bytes) in and publishes it. stamp_ns defaults to now.")
@@ -946,5 +1025,6 @@ PYBIND11_MODULE(_sim, m) {
   bind_reader(m);
   bind_writer(m);
   bind_sensor_info(m);
+  bind_clock(m);
   bind_functions(m);
 }

@@ -10,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <thread>
+#include <unistd.h>
 
 #include "sim/sim.hpp"
 #include "sim_test/process.hpp"
@@ -345,5 +346,141 @@ TEST(SimEcho, PrintsTheSensorBeforeTheFirstFrameAndAgainWhenItChanges) {
   ASSERT_TRUE(changed) << echo.err();
   EXPECT_NE(changed->find("\"translation\":[2,0,1.2]"), std::string::npos) << *changed;
   EXPECT_NE(json_number(*changed, "sensor_generation"), json_number(*first, "sensor_generation"));
+  EXPECT_EQ(echo.wait(), 0) << echo.err();
+}
+
+// ---- each stream's clock (issue 30): sim_ls, sim_ls --clocks, sim_echo ----
+
+namespace {
+
+sim::ClockStatus years_behind_clock() {
+  sim::ClockStatus c;
+  c.source = sim::ClockSource::replayed;
+  c.state = sim::ClockState::unknown;
+  c.offset_to_host_ns = -80'000'000'000'000'000;
+  c.spread_ns = 900'000;
+  c.verdict = sim::ClockVerdict::error;
+  c.problem = "the sensor's clock is 2.5 years behind its capture host: it was not synchronised";
+  c.stamps = sim::StampClock::sensor;
+  return c;
+}
+
+sim::ClockStatus good_clock(std::int64_t offset_to_host_ns) {
+  sim::ClockStatus c;
+  c.source = sim::ClockSource::ptp;
+  c.state = sim::ClockState::locked;
+  c.grandmaster = "00a069.fffe.0b552d";
+  c.offset_to_host_ns = offset_to_host_ns;
+  c.spread_ns = 20'000;
+  c.verdict = sim::ClockVerdict::ok;
+  c.stamps = sim::StampClock::sensor;
+  return c;
+}
+
+sim::Expected<sim::Writer> clocked_writer(const std::string& name, const sim::ClockStatus& clock) {
+  auto writer = sim::Writer::create({.name = name, .capacity = 64});
+  if (writer) {
+    if (auto set = writer->set_clock(clock); !set) return set.error();
+  }
+  return writer;
+}
+
+// The value of "key" in the first JSON object of `text` that holds `anchor`.
+std::string json_line_with(const std::string& text, const std::string& anchor) {
+  const auto at = text.find(anchor);
+  if (at == std::string::npos) return {};
+  const auto begin = text.rfind('\n', at);
+  const auto end = text.find('\n', at);
+  return text.substr(begin == std::string::npos ? 0 : begin + 1, end - (begin == std::string::npos ? 0 : begin + 1));
+}
+
+}  // namespace
+
+TEST(SimLs, ShowsEachStreamsClockWithItsVerdictForPeopleAndScripts) {
+  StreamGuard g{unique_name("ls_clock")};
+  auto writer = clocked_writer(g.name, years_behind_clock());
+  ASSERT_TRUE(writer) << writer.error().message;
+  const auto table = sim::testing::run({kLs, g.name});
+  ASSERT_EQ(table.code, 0) << table.err;
+  EXPECT_NE(table.out.find("clock: replayed unknown, offset to host -2.5 years ±900 µs: error: the sensor's "
+                           "clock is 2.5 years behind"),
+            std::string::npos)
+      << table.out;
+  const auto json = sim::testing::run({kLs, "--json", g.name});
+  ASSERT_EQ(json.code, 0) << json.err;
+  EXPECT_NE(json.out.find("\"clock\":{\"source\":\"replayed\",\"state\":\"unknown\","
+                          "\"offset_to_host_ns\":-80000000000000000,\"verdict\":\"error\","
+                          "\"problem\":\"the sensor's clock is 2.5 years behind"),
+            std::string::npos)
+      << json.out;
+}
+
+TEST(SimLs, AStreamWithoutAClockRecordHasAnUnknownClockWithANullOffset) {
+  StreamGuard g{unique_name("ls_noclock")};
+  auto writer = start_writer(g.name, 1000000, 50, 0);
+  const auto json = sim::testing::run({kLs, "--json", g.name});
+  ASSERT_EQ(json.code, 0) << json.err;
+  EXPECT_NE(json.out.find("\"clock\":{\"source\":\"unknown\",\"state\":\"unknown\",\"offset_to_host_ns\":null,"
+                          "\"verdict\":\"unknown\",\"problem\":\"the stream's writer does not report its clock"),
+            std::string::npos)
+      << json.out;
+}
+
+TEST(SimLs, ClocksSaysWhichStreamsPairAndFailsWhenAnyClockIsInError) {
+  StreamGuard cam{unique_name("clocks_cam")}, lidar{unique_name("clocks_lidar")}, old{unique_name("clocks_old")};
+  auto a = clocked_writer(cam.name, good_clock(1'000'000));
+  auto b = clocked_writer(lidar.name, good_clock(-2'000'000));
+  ASSERT_TRUE(a && b);
+  // No ptp4l here: the socket path names nothing, and --clocks still answers.
+  const std::string no_ptp4l = "/tmp/sim_test_no_ptp4l_" + std::to_string(getpid());
+  const auto fine = sim::testing::run({kLs, "--clocks", "--ptp4l-socket", no_ptp4l, cam.name, lidar.name});
+  EXPECT_EQ(fine.code, 0) << fine.out << fine.err;
+  EXPECT_EQ(fine.out.rfind("host: ", 0), 0u) << fine.out;
+  EXPECT_NE(fine.out.find(cam.name + " + " + lidar.name + ": yes"), std::string::npos) << fine.out;
+  const auto strict = sim::testing::run(
+      {kLs, "--clocks", "--tolerance", "1", "--ptp4l-socket", no_ptp4l, cam.name, lidar.name});
+  EXPECT_NE(strict.out.find(": no: the clocks of " + cam.name + " and " + lidar.name + " disagree by 3.0 ms"),
+            std::string::npos)
+      << strict.out;
+
+  auto c = clocked_writer(old.name, years_behind_clock());
+  ASSERT_TRUE(c);
+  const auto bad = sim::testing::run({kLs, "--clocks", "--json", "--ptp4l-socket", no_ptp4l, cam.name, old.name});
+  EXPECT_EQ(bad.code, 1) << "a launch script must be able to refuse to start: " << bad.out;
+  const std::string host = json_line_with(bad.out, "{\"host\":");
+  EXPECT_NE(host.find("\"source\":"), std::string::npos) << bad.out;
+  EXPECT_NE(host.find("\"state\":"), std::string::npos) << host;
+  EXPECT_NE(host.find("\"offset_ns\":"), std::string::npos) << host;
+  EXPECT_NE(host.find("\"grandmaster\":"), std::string::npos) << host;
+  EXPECT_NE(json_line_with(bad.out, "\"name\":\"" + old.name + "\"").find("\"verdict\":\"error\""), std::string::npos)
+      << bad.out;
+  const std::string pairs = json_line_with(bad.out, "\"pairs\":");
+  EXPECT_NE(pairs.find("\"pairable\":false,\"reason\":\"" + old.name + "'s clock is in error"), std::string::npos)
+      << pairs;
+}
+
+TEST(SimEcho, PrintsTheClockBeforeTheFirstFrameAndAgainWhenItChanges) {
+  StreamGuard g{unique_name("echo_clock")};
+  auto writer = clocked_writer(g.name, good_clock(5'000));
+  ASSERT_TRUE(writer) << writer.error().message;
+  Process echo({kEcho, g.name, "--count", "2"});
+  const std::vector<std::byte> frame(8);
+  std::optional<std::string> first;
+  for (int i = 0; i < 3000 && !first; ++i) {
+    ASSERT_EQ(writer->write(frame, i + 1), WriteStatus::ok);
+    first = echo.next_line(std::chrono::milliseconds(10));
+  }
+  ASSERT_TRUE(first) << echo.err();
+  EXPECT_EQ(first->rfind("clock ptp locked", 0), 0u) << *first;
+  EXPECT_NE(first->find("offset to host +5 µs ±20 µs: ok"), std::string::npos) << *first;
+  EXPECT_TRUE(echo.next_line().value_or("").starts_with("seq ")) << echo.err();
+  ASSERT_TRUE(writer->set_clock(years_behind_clock()));
+  std::optional<std::string> changed;
+  for (int i = 0; i < 3000 && !changed; ++i) {
+    ASSERT_EQ(writer->write(frame, 100 + i), WriteStatus::ok);
+    changed = echo.next_line(std::chrono::milliseconds(10));
+  }
+  ASSERT_TRUE(changed) << echo.err();
+  EXPECT_NE(changed->find(": error: the sensor's clock is 2.5 years behind"), std::string::npos) << *changed;
   EXPECT_EQ(echo.wait(), 0) << echo.err();
 }

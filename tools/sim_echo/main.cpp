@@ -11,6 +11,7 @@
 #include "sim/apps/command_line.hpp"
 #include "sim/apps/stop_signal.hpp"
 #include "sim/clock.hpp"
+#include "sim/apps/clock_text.hpp"
 #include "sim/apps/sensor_text.hpp"
 #include "sim/reader.hpp"
 
@@ -39,12 +40,13 @@ void print_frame(const Options& o, const sim::FrameInfo& info, std::int64_t read
     std::printf(
         "{\"seq\":%llu,\"stamp_ns\":%lld,\"receive_ns\":%lld,\"publish_ns\":%lld,"
         "\"size\":%llu,\"latency_us\":%.1f,\"delay_us\":%.1f,\"skipped\":%llu,\"layout\":\"%s\","
-        "\"sensor_generation\":%llu}\n",
+        "\"sensor_generation\":%llu,\"clock_generation\":%llu,\"stamp_clock\":\"%s\"}\n",
         static_cast<unsigned long long>(info.seq), static_cast<long long>(info.stamp_ns),
         static_cast<long long>(info.receive_ns), static_cast<long long>(info.publish_ns),
         static_cast<unsigned long long>(info.size), latency_us, delay_us,
         static_cast<unsigned long long>(skipped), info.layout.describe().c_str(),
-        static_cast<unsigned long long>(info.sensor_generation));
+        static_cast<unsigned long long>(info.sensor_generation),
+        static_cast<unsigned long long>(info.clock_generation), sim::to_string(info.stamp_clock));
   } else {
     std::printf("seq %llu  size %llu B  latency %.1f us  delay %.1f us  skipped %llu  %s\n",
                 static_cast<unsigned long long>(info.seq),
@@ -76,6 +78,23 @@ void print_sensor(const Options& o, const sim::Reader& reader, std::uint64_t gen
                 static_cast<unsigned long long>(generation), json.c_str());
   } else {
     std::printf("sensor %s\n", text.c_str());
+  }
+}
+
+// The stream's clock in one line with its verdict, printed before the first frame and again
+// whenever the writer's clock record changes (FrameInfo::clock_generation), so a reader sees at
+// once whether the stamps below can be trusted. A stream without one gets no such line.
+void print_clock(const Options& o, const sim::Reader& reader) {
+  sim::apps::StreamClock stream;
+  if (auto clock = reader.clock()) {
+    stream.clock = *clock;
+  } else {
+    stream.problem = clock.error().message;
+  }
+  if (o.json) {
+    std::printf("{\"clock\":%s}\n", sim::apps::clock_json(stream).c_str());
+  } else {
+    std::printf("clock %s\n", sim::apps::describe_clock(stream).c_str());
   }
 }
 
@@ -135,6 +154,8 @@ struct Echo {
   std::int64_t last_frame_at = window_start;
   // Of the last description printed: a stream without one prints no sensor line at all.
   std::uint64_t sensor_generation = 0;
+  // Of the last clock line printed: a stream without a clock record prints no clock line at all.
+  std::uint64_t clock_generation = 0;
 };
 
 // Counts a new frame and prints it (with --stats: adds it to the window). True when --count
@@ -151,6 +172,10 @@ bool take_frame(const Options& o, const sim::Reader& reader, const sim::FrameInf
     if (e.sensor_generation != info.sensor_generation) {
       print_sensor(o, reader, info.sensor_generation);
       e.sensor_generation = info.sensor_generation;
+    }
+    if (e.clock_generation != info.clock_generation) {
+      print_clock(o, reader);
+      e.clock_generation = info.clock_generation;
     }
     print_frame(o, info, frame.read_ns, frame.read_realtime_ns, e.total.skipped());
   }

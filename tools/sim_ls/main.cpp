@@ -1,20 +1,26 @@
 // SPDX-License-Identifier: Apache-2.0
 // sim_ls: every SIM stream on this machine, with its layout, rate, age and writer; --watch
 // keeps a live view of them all (rate, bandwidth, age, latency, skips, sleeping readers, writer),
-// refreshed in place.
+// refreshed in place; --clocks puts the host's clock and every stream's side by side and says which
+// streams can be paired by stamp.
 #include <cstdio>
+#include <algorithm>
 #include <map>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "clocks.hpp"
+#include "sim/apps/clock_text.hpp"
 #include "sim/apps/command_line.hpp"
+#include "sim/apps/host_clock_options.hpp"
 #include "sim/apps/sensor_text.hpp"
 #include "sim/apps/status_line.hpp"
 #include "sim/apps/stop_signal.hpp"
 #include "sim/clock.hpp"
 #include "sim/reader.hpp"
+#include "sim/timing/host_clock.hpp"
 #include "stream_watch.hpp"
 
 namespace {
@@ -22,6 +28,9 @@ namespace {
 struct Options {
   bool json = false;
   bool watch = false;
+  bool clocks = false;
+  double tolerance_ms = 10.0;  // --clocks: the largest stamp difference of a pair
+  sim::timing::HostClockOptions host_clock;  // --ptp4l-socket
   double interval_s = 1.0;
   double window_s = 0.5;
   std::vector<std::string> streams;  // only these; empty: every stream on the machine
@@ -112,7 +121,7 @@ void print_json(const Row& row, std::int64_t now) {
       "{\"name\":\"%s\",\"layout\":\"%s\",\"capacity\":%llu,\"frames\":%llu,\"latest_seq\":%llu,"
       "\"rate_hz\":%.2f,\"age_ns\":%lld,\"max_interval_ns\":%lld,\"writer_alive\":%s,"
       "\"writer_pid\":%d,\"writer\":\"%s\",\"checksum\":%s,\"sleeping_readers\":%u%s,"
-      "\"sensor\":%s%s}\n",
+      "\"sensor\":%s%s,\"clock\":%s}\n",
       json_escape(s.name).c_str(), json_escape(s.layout.describe()).c_str(),
       static_cast<unsigned long long>(s.capacity),
       static_cast<unsigned long long>(s.frames_published),
@@ -124,7 +133,8 @@ void print_json(const Row& row, std::int64_t now) {
       s.sensor ? sim::apps::sensor_json(*s.sensor).c_str() : "null",
       s.sensor_problem.empty()
           ? ""
-          : (",\"sensor_problem\":" + sim::apps::json_string(s.sensor_problem)).c_str());
+          : (",\"sensor_problem\":" + sim::apps::json_string(s.sensor_problem)).c_str(),
+      sim::apps::clock_json({s.clock, s.clock_problem}).c_str());
 }
 
 std::string writer_text(const sim::StreamStatus& s) {
@@ -178,6 +188,7 @@ void print_table(const std::vector<Row>& rows, std::int64_t now, bool watch) {
       } else if (!s.sensor_problem.empty()) {
         std::printf("%-*s   sensor: damaged: %s\n", w, "", s.sensor_problem.c_str());
       }
+      std::printf("%-*s   clock: %s\n", w, "", sim::apps::describe_clock({s.clock, s.clock_problem}).c_str());
     }
   }
 }
@@ -204,6 +215,26 @@ std::vector<Row> look(RateMeter& rates, const std::vector<std::string>& named) {
   return rows;
 }
 
+// --clocks: the host's clock (asked of ptp4l itself), every stream's, and the pairs; exit 1 when
+// any stream's clock is in error, so a launch script can refuse to start the stack.
+int show_clocks(const Options& o, const std::vector<Row>& rows, std::int64_t now) {
+  const sim::ClockStatus host = sim::timing::read_host_clock(o.host_clock);
+  std::vector<sim::ls::ClockRow> clocks;
+  for (const auto& row : rows) {
+    if (row.status) clocks.push_back({row.name, row.status->clock, row.status->clock_problem});
+  }
+  const auto tolerance_ns = static_cast<std::int64_t>(o.tolerance_ms * 1e6);
+  if (o.json) {
+    sim::ls::print_host_json(host);
+    for (const auto& row : rows) print_json(row, now);
+    sim::ls::print_pairs_json(clocks, tolerance_ns);
+  } else {
+    sim::ls::print_clocks_table(host, clocks, tolerance_ns);
+  }
+  const bool unreadable = std::any_of(rows.begin(), rows.end(), [](const Row& r) { return !r.status; });
+  return sim::ls::any_clock_in_error(clocks) || unreadable ? sim::apps::kExitFailure : sim::apps::kExitOk;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -212,12 +243,19 @@ int main(int argc, char** argv) {
       "sim_ls",
       "List the SIM streams on this machine (every stream, or the ones named): layout, "
       "capacity, frames, rate (over a recent window), age of the newest frame, sleeping readers, "
-      "writer and checksum. --watch keeps a live view: rate, bandwidth, age, latency (publish to "
+      "writer, checksum and clock. --watch keeps a live view: rate, bandwidth, age, latency (publish to "
       "read), skipped frames, sleeping readers and writer of each stream, refreshed in place "
       "until stopped.");
   auto& app = cli.app();
   app.add_flag("--json", o.json, "one JSON object per stream (per refresh with --watch)");
-  app.add_flag("--watch,-w", o.watch, "live view, refreshed every --interval until stopped");
+  auto* watch = app.add_flag("--watch,-w", o.watch, "live view, refreshed every --interval until stopped");
+  app.add_flag("--clocks", o.clocks,
+               "the host's clock and every stream's side by side, and which streams can be paired by "
+               "stamp within --tolerance; exit 1 when any stream's clock is in error")
+      ->excludes(watch);
+  app.add_option("--tolerance", o.tolerance_ms, "--clocks: the largest stamp difference of a pair, ms")
+      ->check(CLI::Range(0.0, 3.6e6));
+  sim::apps::add_host_clock_options(cli, o.host_clock);
   app.add_option("--interval", o.interval_s, "seconds between --watch refreshes")
       ->check(CLI::Range(0.05, 3600.0));
   app.add_option("--window", o.window_s, "seconds over which a single listing measures rates")
@@ -232,6 +270,7 @@ int main(int argc, char** argv) {
     if (o.window_s > 0 && !stop.sleep_for_seconds(o.window_s)) return 0;
     const auto rows = look(rates, o.streams);
     const std::int64_t now = sim::monotonic_ns();
+    if (o.clocks) return show_clocks(o, rows, now);
     int problems = 0;
     if (o.json) {
       for (const auto& row : rows) print_json(row, now);

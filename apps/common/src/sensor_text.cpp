@@ -51,34 +51,27 @@ std::string identity_text(const SensorIdentity& id) {
 
 // `,"name":value` (or without the comma first), appended piece by piece: GCC 12 warns
 // (-Wrestrict, wrongly) about chains of "literal" + std::string temporaries.
-void field(std::string& out, const char* name, const std::string& value) {
-  if (out.size() > 1) out += ',';
-  out += '"';
-  out += name;
-  out += "\":";
-  out += value;
-}
 
 std::string calibration_json(const CameraCalibration& c) {
   std::string out = "{";
-  field(out, "summary", json_string(summary(c)));
-  field(out, "width", std::to_string(c.width));
-  field(out, "height", std::to_string(c.height));
-  field(out, "camera_name", json_string(c.camera_name));
-  field(out, "distortion_model", json_string(c.distortion_model));
-  field(out, "d", json_array(c.d));
-  field(out, "k", json_array(c.k));
-  field(out, "r", json_array(c.r));
-  field(out, "p", json_array(c.p));
-  field(out, "binning_x", std::to_string(c.binning_x));
-  field(out, "binning_y", std::to_string(c.binning_y));
+  json_field(out, "summary", json_string(summary(c)));
+  json_field(out, "width", std::to_string(c.width));
+  json_field(out, "height", std::to_string(c.height));
+  json_field(out, "camera_name", json_string(c.camera_name));
+  json_field(out, "distortion_model", json_string(c.distortion_model));
+  json_field(out, "d", json_array(c.d));
+  json_field(out, "k", json_array(c.k));
+  json_field(out, "r", json_array(c.r));
+  json_field(out, "p", json_array(c.p));
+  json_field(out, "binning_x", std::to_string(c.binning_x));
+  json_field(out, "binning_y", std::to_string(c.binning_y));
   std::string roi = "{";
-  field(roi, "x_offset", std::to_string(c.roi.x_offset));
-  field(roi, "y_offset", std::to_string(c.roi.y_offset));
-  field(roi, "height", std::to_string(c.roi.height));
-  field(roi, "width", std::to_string(c.roi.width));
-  field(roi, "do_rectify", c.roi.do_rectify ? "true" : "false");
-  field(out, "roi", roi + "}");
+  json_field(roi, "x_offset", std::to_string(c.roi.x_offset));
+  json_field(roi, "y_offset", std::to_string(c.roi.y_offset));
+  json_field(roi, "height", std::to_string(c.roi.height));
+  json_field(roi, "width", std::to_string(c.roi.width));
+  json_field(roi, "do_rectify", c.roi.do_rectify ? "true" : "false");
+  json_field(out, "roi", roi + "}");
   return out + "}";
 }
 
@@ -133,28 +126,28 @@ std::string describe_sensor(const SensorInfo& info) {
 
 std::string sensor_json(const SensorInfo& info) {
   std::string out = "{";
-  field(out, "frame_id", json_string(info.frame_id));
-  field(out, "parent_frame", json_string(info.parent_frame));
+  json_field(out, "frame_id", json_string(info.frame_id));
+  json_field(out, "parent_frame", json_string(info.parent_frame));
   if (info.mounting) {
     std::string mounting = "{";
-    field(mounting, "translation", json_array(info.mounting->translation));
-    field(mounting, "rotation", json_array(info.mounting->rotation));
-    field(mounting, "rpy", json_array(roll_pitch_yaw(*info.mounting)));
-    field(out, "mounting", mounting + "}");
+    json_field(mounting, "translation", json_array(info.mounting->translation));
+    json_field(mounting, "rotation", json_array(info.mounting->rotation));
+    json_field(mounting, "rpy", json_array(roll_pitch_yaw(*info.mounting)));
+    json_field(out, "mounting", mounting + "}");
   } else {
-    field(out, "mounting", "null");
+    json_field(out, "mounting", "null");
   }
-  field(out, "calibration", info.calibration ? calibration_json(*info.calibration) : "null");
+  json_field(out, "calibration", info.calibration ? calibration_json(*info.calibration) : "null");
   std::string identity = "{";
-  field(identity, "vendor", json_string(info.identity.vendor));
-  field(identity, "model", json_string(info.identity.model));
-  field(identity, "serial", json_string(info.identity.serial));
-  field(identity, "firmware", json_string(info.identity.firmware));
-  field(out, "identity", identity + "}");
-  field(out, "calibration_source", json_string(info.calibration_source));
-  field(out, "time_base", json_string(to_string(info.time_base)));
-  field(out, "time_sync", json_string(info.time_sync));
-  field(out, "point_time", json_string(to_string(info.point_time)));
+  json_field(identity, "vendor", json_string(info.identity.vendor));
+  json_field(identity, "model", json_string(info.identity.model));
+  json_field(identity, "serial", json_string(info.identity.serial));
+  json_field(identity, "firmware", json_string(info.identity.firmware));
+  json_field(out, "identity", identity + "}");
+  json_field(out, "calibration_source", json_string(info.calibration_source));
+  json_field(out, "time_base", json_string(to_string(info.time_base)));
+  json_field(out, "time_sync", json_string(info.time_sync));
+  json_field(out, "point_time", json_string(to_string(info.point_time)));
   return out + "}";
 }
 
@@ -174,6 +167,14 @@ std::string json_string(std::string_view text) {
     }
   }
   return out + "\"";
+}
+
+void json_field(std::string& out, const char* name, const std::string& value) {
+  if (out.size() > 1) out += ',';
+  out += '"';
+  out += name;
+  out += "\":";
+  out += value;
 }
 
 }  // namespace sim::apps

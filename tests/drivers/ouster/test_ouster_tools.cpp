@@ -21,6 +21,7 @@
 #include <thread>
 #include <vector>
 
+#include "fake_sensor_http.hpp"
 #include "frames.hpp"  // tests/drivers/hesai/driver: hand-built frames and capture files
 #include "ouster_test_support.hpp"
 #include "sim/sim.hpp"
@@ -214,59 +215,7 @@ TEST(OusterReplay, AFragmentedCaptureReplaysLikeTheWholeOne) {
   EXPECT_NE(r.out.find("skipped=0"), std::string::npos) << r.out;
 }
 
-// A sensor's HTTP API on 127.0.0.1 (port 0): answers GET /api/v1/sensor/metadata with `body`.
-class FakeSensorHttp {
- public:
-  explicit FakeSensorHttp(std::string body) : body_(std::move(body)), listener_(::socket(AF_INET, SOCK_STREAM, 0)) {
-    sockaddr_in address{};
-    address.sin_family = AF_INET;
-    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ::bind(listener_, reinterpret_cast<const sockaddr*>(&address), sizeof address);
-    ::listen(listener_, 8);
-    socklen_t length = sizeof address;
-    ::getsockname(listener_, reinterpret_cast<sockaddr*>(&address), &length);
-    port_ = ntohs(address.sin_port);
-    thread_ = std::thread([this] { serve(); });
-  }
-  ~FakeSensorHttp() {
-    stop_ = true;
-    thread_.join();
-    ::close(listener_);
-  }
-  std::uint16_t port() const { return port_; }
-  int requests() const { return requests_; }
-
- private:
-  void serve() {
-    while (!stop_) {
-      pollfd p{listener_, POLLIN, 0};
-      if (::poll(&p, 1, 20) <= 0) continue;
-      const int fd = ::accept(listener_, nullptr, nullptr);
-      if (fd < 0) continue;
-      std::string request;
-      char chunk[1024];
-      while (request.find("\r\n\r\n") == std::string::npos) {
-        const ssize_t n = ::recv(fd, chunk, sizeof chunk, 0);
-        if (n <= 0) break;
-        request.append(chunk, static_cast<std::size_t>(n));
-      }
-      ++requests_;
-      const bool right = request.rfind("GET /api/v1/sensor/metadata HTTP/1.", 0) == 0;
-      const std::string answer =
-          right ? "HTTP/1.0 200 OK\r\nContent-Type: application/json\r\n\r\n" + body_
-                : std::string("HTTP/1.0 404 Not Found\r\n\r\n");
-      (void)::send(fd, answer.data(), answer.size(), MSG_NOSIGNAL);
-      ::close(fd);
-    }
-  }
-
-  std::string body_;
-  int listener_;
-  std::uint16_t port_ = 0;
-  std::thread thread_;
-  std::atomic<bool> stop_{false};
-  std::atomic<int> requests_{0};
-};
+using ouster_test::FakeSensorHttp;
 
 void send_to(std::uint16_t port, const std::vector<std::vector<std::uint8_t>>& payloads,
              const char* address = "127.0.0.1") {
@@ -310,7 +259,7 @@ TEST(OusterLive, MetadataComesFromTheSensorsHttpApiIsCachedAndTheFramesAndImuAre
                     "0", "--stream", stream, "--status-interval", "0", "--summary", "--frame-id", "os_sensor"});
     const auto ports = listening(driver);
     ASSERT_TRUE(ports) << driver.err();
-    EXPECT_EQ(sensor.requests(), 1);
+    EXPECT_EQ(sensor.requests_for("/api/v1/sensor/metadata"), 1);  // (the clock poll asks too)
     EXPECT_EQ(ouster_test::read_text(cache), ouster_test::read_text(ouster_test::data_path(dual + ".json")));
     auto reader = sim::testing::wait_for_stream(stream);
     ASSERT_TRUE(reader);

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/apps/live_lidar.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <string_view>
 #include <utility>
@@ -97,6 +98,39 @@ lidar::ReceiverCallbacks LiveStatus::callbacks(Text text) {
       }
     };
   }
+  return callbacks;
+}
+
+void add_clock_poll_option(CommandLine& cli, double& seconds) {
+  cli.app()
+      .add_option("--clock-poll-seconds", seconds,
+                  "how often to ask the sensor about its clock (source, lock, offset from master, "
+                  "grandmaster) off the frame path, when its address is known (--sensor-ip or "
+                  "--source); 0: never")
+      ->check(CLI::Range(0.0, 3600.0));
+}
+
+lidar::ReceiverCallbacks with_clock_tick(lidar::ReceiverCallbacks callbacks, std::function<void()> clock_tick,
+                                         std::chrono::nanoseconds period) {
+  if (!clock_tick) return callbacks;
+  if (!callbacks.tick || callbacks.tick_period.count() <= 0) {
+    callbacks.tick_period = period;
+    callbacks.tick = std::move(clock_tick);
+    return callbacks;
+  }
+  const std::int64_t status_ns = callbacks.tick_period.count();
+  callbacks.tick_period = std::min(callbacks.tick_period, period);
+  callbacks.tick = [status = std::move(callbacks.tick), clock = std::move(clock_tick), status_ns,
+                    next_ns = monotonic_ns() + status_ns]() mutable {
+    clock();
+    // The receiver calls at the shorter period; the status line keeps its own (a tick may come
+    // a little early, so "due" allows a millisecond).
+    const std::int64_t now = monotonic_ns();
+    if (now + 1'000'000 >= next_ns) {
+      next_ns = now + status_ns;
+      status();
+    }
+  };
   return callbacks;
 }
 

@@ -26,6 +26,9 @@ std::string sensor_json(const SensorInfo& info);
 // `text` as a JSON string, quotes included.
 std::string json_string(std::string_view text);
 
+// Appends "name":value to a JSON object being built ("{" so far, or "{…" with fields).
+void json_field(std::string& object, const char* name, const std::string& value);
+
 // The mounting's rotation as roll, pitch, yaw (radians; the inverse of Mounting::from_xyz_rpy).
 std::array<double, 3> roll_pitch_yaw(const Mounting& mounting) noexcept;
 

@@ -46,6 +46,16 @@ void add_output_options(CommandLine& cli, LiveReceiveOptions& options, const std
 // silence timeout (the family keeps its IP versions).
 void set_listen(lidar::UdpListen& listen, const LiveReceiveOptions& options);
 
+// Adds --clock-poll-seconds: how often the sensor's clock is asked about (its PTC or HTTP
+// service, off the frame path); 0 turns the asking off.
+void add_clock_poll_option(CommandLine& cli, double& seconds);
+
+// `callbacks` with `clock_tick` also called every `period` on the receive thread (before the
+// status tick when both are due), for what must happen there: the clock's notes on the status
+// line, a stamp correction the stream applies. An empty clock_tick leaves callbacks as they are.
+lidar::ReceiverCallbacks with_clock_tick(lidar::ReceiverCallbacks callbacks, std::function<void()> clock_tick,
+                                         std::chrono::nanoseconds period);
+
 // Messages joined from several parts end with exactly one full stop.
 std::string sentence(std::string text);
 
@@ -91,6 +101,7 @@ struct ModelReceiverWords {
   std::string stream;  // "/lidar_top"
   std::uint16_t port = 0;
   std::int64_t silence_ns = 0;  // the silence timeout
+  std::function<void()> clock_tick{};  // once a second on the receive thread (with_clock_tick)
 };
 
 // Runs such a receiver (sim::hesai or sim::velodyne LiveReceiver) until `stop_fd` is readable,
@@ -108,7 +119,8 @@ int run_model_receiver(const CommandLine& cli, Receiver& receiver, LiveStatus& s
     return line + receive_status(receiver.counters(), receiver.last_packet_ns(), words.silence_ns,
                                  published != nullptr, final_line);
   };
-  if (auto ran = receiver.run(stop_fd, status.callbacks(text)); !ran) return cli.fail(std::string_view(ran.error().message));
+  auto callbacks = with_clock_tick(status.callbacks(text), words.clock_tick, std::chrono::seconds(1));
+  if (auto ran = receiver.run(stop_fd, std::move(callbacks)); !ran) return cli.fail(std::string_view(ran.error().message));
   const auto* published = receiver.stream();
   status.finish(published != nullptr ? published->describe_counters(true)
                                      : "frames=0 packets=0 lost=0 malformed=0 wrong_model=0",

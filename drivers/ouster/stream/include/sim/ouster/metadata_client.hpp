@@ -10,6 +10,7 @@
 #pragma once
 
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -24,6 +25,20 @@ struct HttpEndpoint {
   std::uint16_t port = 80;
   std::chrono::milliseconds timeout{5000};  // for the whole exchange
 };
+
+// A whole HTTP/1.x answer: its status code (0 when the status line has none), the status line
+// (printable, at most 80 bytes) and the body.
+struct HttpAnswer {
+  int status = 0;
+  std::string status_line;
+  std::string body;
+};
+
+// GET `path` (HTTP/1.0, so the sensor closes when done) within sensor.timeout. Errors, one
+// sentence naming the sensor: refused, no answer, stopped halfway, more than `max_body` bytes,
+// not HTTP. `what` names the answer in messages ("metadata", "time").
+Expected<HttpAnswer> http_get(const HttpEndpoint& sensor, const std::string& path, std::size_t max_body,
+                              const std::string& what);
 
 // The body of the sensor's answer to GET /api/v1/sensor/metadata (HTTP/1.0, so the sensor
 // closes when done), or one sentence naming the sensor and what went wrong. Bodies above 4 MB
