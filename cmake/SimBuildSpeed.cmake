@@ -15,26 +15,18 @@ if(SIM_USE_LLD)
   endif()
 endif()
 
-# ccache only caches GCC's compiles of a precompiled header's users with -fpch-preprocess
-# (and CCACHE_SLOPPINESS=pch_defines,time_macros, which scripts/test.sh sets).
-if(CMAKE_CXX_COMPILER_LAUNCHER MATCHES "ccache" AND CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
-  add_compile_options($<$<COMPILE_LANGUAGE:CXX>:-fpch-preprocess>)
-endif()
-
-# sim_use_test_pch(target): the suite compiles with the precompiled GoogleTest header that every
-# suite shares. Parsing gtest.h and the standard headers it pulls in is most of the work of a
-# small suite's compile; the header is built once per build tree (target sim_test_pch) and
-# reused. Reuse needs the same compiler flags, so the PCH target is set up as a suite is
-# (sim_target_defaults, an executable: -fPIE, GTest's usage requirements) and carries no
-# definitions of its own (a suite may add its own -D's; GCC and clang accept extra ones).
-# Every user and the PCH compile with -pthread: some libraries' pkg-config flags carry it (Aravis)
-# and both compilers refuse a PCH made without it; for the rest it only defines _REENTRANT.
-# -DCMAKE_DISABLE_PRECOMPILE_HEADERS=ON turns it off.
-# Clang only: GCC 12 reports warnings from system headers' code inlined at -O3 when the headers
-# come from a PCH (a -Warray-bounds false positive in std::string's operator+ became an error
-# in tests/drivers/velodyne), and measured on a test there, GCC's PCH saved 30% of a compile
-# while clang's, which also instantiates the templates once (-fpch-instantiate-templates), saves
-# more: the sanitizer stages, which compile the suites twice, are where it pays.
+# sim_use_test_pch(target): with clang (the sanitizer stages, which compile every suite again),
+# the suite compiles with the precompiled header all suites share: GoogleTest and the standard
+# headers it pulls in, parsed and their templates instantiated once per tree (target
+# sim_test_pch, REUSE_FROM); 0.80 of the CPU time on the Velodyne suites (docs/build-times.md).
+# Reuse needs the same flags, so sim_test_pch is set up as a suite is (sim_target_defaults, an
+# executable: -fPIE, GTest's usage requirements) with no definitions of its own (a suite may
+# add -D's). Users and PCH compile with -pthread: some pkg-config flags carry it (Aravis) and a
+# PCH made without it is refused; elsewhere it only defines _REENTRANT.
+# Not with GCC: GCC 12 then reports warnings in system headers' code inlined at -O3 (a
+# -Warray-bounds false positive in std::string's operator+ broke test_velodyne_synthetic).
+# Off: -DCMAKE_DISABLE_PRECOMPILE_HEADERS=ON (ccache: CCACHE_SLOPPINESS=pch_defines,time_macros,
+# as scripts/test.sh sets).
 function(sim_use_test_pch target)
   if(CMAKE_DISABLE_PRECOMPILE_HEADERS OR NOT CMAKE_CXX_COMPILER_ID MATCHES "Clang")
     return()
@@ -56,9 +48,8 @@ function(sim_use_test_pch target)
       $<$<COMPILE_LANGUAGE:CXX>:<thread$<ANGLE-R>>
       $<$<COMPILE_LANGUAGE:CXX>:<gtest/gtest.h$<ANGLE-R>>)
   endif()
-  # A suite whose flags differ (say, an -m or -f option from a library it links) cannot use the
-  # PCH: GCC says so with -Winvalid-pch, an error under SIM_WERROR, rather than silently
-  # compiling slower; clang refuses it. Such a suite calls sim_add_test with NO_PCH.
+  # clang refuses a PCH made with other flags (say, an -m or -f option from a library a suite
+  # links): such a suite calls sim_add_test with NO_PCH.
   target_precompile_headers(${target} REUSE_FROM sim_test_pch)
   target_compile_options(${target} PRIVATE -pthread)
 endfunction()
