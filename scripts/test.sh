@@ -71,6 +71,14 @@ configure() {  # configure BUILD_DIR [cmake options…]
     { cat "$dir.configure.log"; return 1; }
 }
 
+# ctest starts the longest suites first when it knows their times (Testing/Temporary/
+# CTestCostData.txt, written by every run); a fresh clone takes them from scripts/ctest-cost/,
+# refreshed by copying a CI run's file there (docs/build-times.md).
+seed_costs() {  # seed_costs BUILD_DIR STAGE
+  local known=$root/scripts/ctest-cost/$2.txt dest=$1/Testing/Temporary/CTestCostData.txt
+  if [[ -f $known && ! -f $dest ]]; then mkdir -p "${dest%/*}" && cp "$known" "$dest"; fi
+}
+
 # Sanitizer reports end the test that triggered them, with a stack.
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:strict_string_checks=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
@@ -86,6 +94,7 @@ for s in $stages; do
       # of the Debian packages the deb stage makes from this tree.
       timed "release: configure" configure build/release -DCMAKE_BUILD_TYPE=Release -DCMAKE_INSTALL_PREFIX=/usr
       timed "release: build" cmake --build build/release -j"$jobs"
+      seed_costs build/release release
       SIM_STRESS_FRAMES=$stress timed "release: test" ctest --test-dir build/release -j"$jobs" --output-on-failure \
         "${ctest_args[@]}"
       # The whole vehicle under chaos for SIM_SOAK_SECONDS (tests/soak/README.md); 0 skips it.
@@ -108,6 +117,7 @@ for s in $stages; do
         -DSIM_SANITIZE=address,undefined -DSIM_FUZZ=ON -DSIM_FUZZ_SECONDS="$fuzz_seconds" \
         -DSIM_BUILD_BENCH=OFF
       timed "asan: build" cmake --build build/asan -j"$jobs"
+      seed_costs build/asan asan
       SIM_STRESS_FRAMES=$sanitizer_stress timed "asan: test" ctest --test-dir build/asan -j"$jobs" --output-on-failure
       ;;
     tsan)
@@ -117,6 +127,7 @@ for s in $stages; do
         -DSIM_SANITIZE=thread -DSIM_BUILD_DRIVERS=OFF -DSIM_BUILD_BENCH=OFF
       # Only the suites it runs and the programs they start (cmake/SimHelpers.cmake).
       timed "tsan: build" cmake --build build/tsan -j"$jobs" --target sim_concurrency_suites
+      seed_costs build/tsan tsan
       SIM_STRESS_FRAMES=$sanitizer_stress timed "tsan: test" ctest --test-dir build/tsan -j"$jobs" -L concurrency \
         --output-on-failure
       ;;
