@@ -70,8 +70,8 @@ Expected<Detected> detect(const ReplayArgs& r, std::optional<hesai::Model> force
                "none of the " + std::to_string(seen) + " UDP datagrams" + on_port + " in " +
                    r.file + " is a Hesai point-cloud packet (models: " +
                    std::string(hesai::model_names()) +
-                   ", unitree-l1, unitree-l2); check the file, or choose the sensor's port with "
-                   "--port"};
+                   ", unitree-l1, unitree-l2), nor a Velodyne or Ouster one; check the file, or "
+                   "choose the sensor's port with --port"};
 }
 
 class HesaiTarget final : public ReplayTarget {

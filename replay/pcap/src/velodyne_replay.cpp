@@ -43,12 +43,18 @@ Expected<Detected> detect(const ReplayArgs& r, std::optional<velodyne::Model> fo
   Datagram datagram;
   std::optional<velodyne::Model> other;
   std::uint64_t seen = 0;
+  std::uint64_t unnamed = 0;  // HDL-32E packets of firmware before 2.2.20
   for (;;) {
     const NextStatus status = reader->next(datagram);
     if (status == NextStatus::error) return reader->error();
     if (status == NextStatus::end) break;
     ++seen;
     const auto bytes = as_u8(datagram.payload);
+    if (velodyne::is_unnamed_hdl32e(bytes)) {
+      if (forced == velodyne::Model::hdl32e) return Detected{velodyne::Model::hdl32e, 1};
+      ++unnamed;
+      continue;
+    }
     const auto model = velodyne::detect_model(bytes);
     if (!model) continue;
     if (forced && *model != *forced) {
@@ -61,6 +67,12 @@ Expected<Detected> detect(const ReplayArgs& r, std::optional<velodyne::Model> fo
     return Error{ErrorCode::invalid_argument,
                  r.file + " holds " + std::string(velodyne::to_string(*other)) + " packets, not " +
                      std::string(velodyne::to_string(*forced)) + "; give the right --model or leave it out"};
+  }
+  if (unnamed != 0) {
+    return Error{ErrorCode::invalid_argument,
+                 std::to_string(unnamed) + " of the " + std::to_string(seen) + " UDP datagrams in " + r.file +
+                     " are Velodyne data packets that do not name their model (product ID 0), as an "
+                     "HDL-32E with firmware before 2.2.20 sends them; give --model HDL-32E"};
   }
   return Error{ErrorCode::invalid_argument,
                "none of the " + std::to_string(seen) + " UDP datagrams in " + r.file +
@@ -122,14 +134,23 @@ bool is_velodyne_replay(int argc, char** argv) {
     if (arg == "--model" && i + 1 < argc) value = argv[i + 1];
     if (arg.rfind("--model=", 0) == 0) value = arg.substr(8);
     if (!value.empty()) return velodyne::parse_model(value).has_value();
+    // Velodyne calibrations are ros-drivers YAML or db.xml (Hesai's are CSV, Ouster's JSON):
+    // then the Velodyne replay explains a capture it cannot decode, not the Hesai one.
+    if (arg == "--calibration" && i + 1 < argc) value = argv[i + 1];
+    if (arg.rfind("--calibration=", 0) == 0) value = arg.substr(14);
+    const auto ends = [&](std::string_view end) {
+      return value.size() >= end.size() && value.substr(value.size() - end.size()) == end;
+    };
+    if (ends(".yaml") || ends(".yml") || ends(".xml")) return true;
     if (is_capture_name(arg)) capture = arg;
   }
   if (capture.empty()) return false;
-  auto reader = CaptureReader::open(capture);
+  auto reader = CaptureReader::open(capture, detection_options(argc, argv));
   if (!reader) return false;  // the Hesai replay explains the file
   Datagram datagram;
   for (unsigned seen = 0; seen < 256 && reader->next(datagram) == NextStatus::datagram; ++seen) {
-    if (velodyne::detect_model(as_u8(datagram.payload))) return true;
+    const auto bytes = as_u8(datagram.payload);
+    if (velodyne::detect_model(bytes) || velodyne::is_unnamed_hdl32e(bytes)) return true;
   }
   return false;
 }

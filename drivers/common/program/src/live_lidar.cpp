@@ -159,9 +159,10 @@ void LiveStatus::finish(const std::string& stream_summary, const lidar::ReceiveC
   line_.finish(text_ ? text_(true) : std::string());
   if (!options_.summary) return;
   const auto ull = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
-  std::printf("summary %s datagrams=%llu other_source=%llu unrecognised=%llu oversized=%llu resumes=%llu\n",
+  std::printf("summary %s datagrams=%llu other_source=%llu unrecognised=%llu oversized=%llu resumes=%llu "
+              "other_senders=%llu\n",
               stream_summary.c_str(), ull(c.datagrams), ull(c.other_source), ull(c.unrecognised),
-              ull(c.oversized), ull(c.resumes));
+              ull(c.oversized), ull(c.resumes), ull(c.other_senders));
   std::fflush(stdout);
 }
 

@@ -204,7 +204,7 @@ std::string LidarStream::describe_counters(bool machine) const {
   out << (machine ? " imu=" : " imu ") << p.imu_samples;
   if (machine) {
     out << " points=" << p.points << " partial_frames=" << p.partial_frames
-        << " partial_frames_dropped=" << c.partial_frames_dropped
+        << " partial_frames_dropped=" << c.partial_frames_dropped << " late_packets=" << c.late_packets
         << " invalid_columns=" << c.invalid_columns << " duplicate_columns=" << c.duplicate_columns
         << " dropped_points=" << c.dropped_points << " publish_failures=" << p.failed
         << " imu_malformed=" << p.imu_malformed;

@@ -266,7 +266,7 @@ class FrameAssembler {
   void move_packet_tail_to_next() noexcept;
   bool in_window(std::int32_t azimuth_centi) const noexcept;
   void abandon_current() noexcept;
-  void count_packet(std::int64_t packet_ns) noexcept;
+  void count_packet(std::int64_t packet_ns, const Packet& packet) noexcept;
 
   static constexpr std::size_t max_lasers = 128;
   static constexpr std::size_t banks = 4;

@@ -99,7 +99,7 @@ class LiveStatus {
   // The receiver's callbacks: its notes as sentences, and `text` every interval (unless quiet).
   lidar::ReceiverCallbacks callbacks(Text text);
   // The final line and, with --summary, on stdout: "summary <stream_summary> datagrams=…
-  // other_source=… unrecognised=… oversized=… resumes=…".
+  // other_source=… unrecognised=… oversized=… resumes=… other_senders=…".
   void finish(const std::string& stream_summary, const lidar::ReceiveCounters& counters);
 
  private:

@@ -66,6 +66,9 @@ class LiveReceiver {
   int receive_buffer() const noexcept;
   const ReceiveCounters& counters() const noexcept;
   const LidarStream* stream() const noexcept;
+  // What the position packets last said of the sensor's clock (LidarStream::reported_clock),
+  // valid before the stream exists and from any thread: hand it to the clock reporter.
+  ReportedClock reported_clock() const;
   std::int64_t last_packet_ns() const noexcept;  // CLOCK_MONOTONIC of the last data packet
 
   struct Impl;
