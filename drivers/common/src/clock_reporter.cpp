@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/lidar/clock_reporter.hpp"
 
+#include <cstdio>
 #include <utility>
 
 #include "sim/clock.hpp"
@@ -12,6 +13,42 @@ void ClockReporter::set_tolerance(const timing::ClockTolerance& tolerance) noexc
   first_tick_ns_ = 0;
   last_judged_ns_ = 0;
   last_.reset();
+  judged_.reset();
+}
+
+void ClockReporter::set_sources(ClockSources sources) {
+  if (sources.stamp_fallback == StampFallback::off) {
+    stamps_ = StampSwitch();
+  } else if (!stamps_.enabled()) {
+    stamps_ = StampSwitch(sources.stamp_fallback);
+  }
+  sources_ = std::move(sources);
+}
+
+std::int64_t ClockReporter::switch_stamp(Writer& writer, std::int64_t sensor_stamp_ns, std::int64_t host_ns) {
+  const auto choice = stamps_.choose(sensor_stamp_ns, host_ns,
+                                     judged_ ? std::optional(judged_->verdict) : std::nullopt);
+  if (!record_written_) {
+    // Before the first judgement: the record says at least which clock the frames are in.
+    ClockStatus unjudged;
+    unjudged.stamps = stamps_.on_host() ? StampClock::host_arrival : StampClock::sensor;
+    write_clock(writer, unjudged);
+    record_written_ = true;
+  }
+  if (choice.event == StampEvent::none) return choice.stamp_ns;
+  const std::string line = stamps_.explain(choice, judged_ ? &*judged_ : nullptr);
+  if (sources_.log) {
+    sources_.log(line);
+  } else {
+    std::fprintf(stderr, "%s\n", line.c_str());
+  }
+  if (judged_ && choice.event != StampEvent::held) {
+    ClockStatus clock = *judged_;
+    stamps_.describe(clock);
+    last_ = clock;
+    write_clock(writer, clock);
+  }
+  return choice.stamp_ns;
 }
 
 void ClockReporter::add(const std::optional<std::int64_t>& sensor_ns, std::int64_t stamp_offset_ns,
@@ -35,6 +72,8 @@ ClockStatus ClockReporter::judge(std::int64_t now_realtime_ns) {
   }
   const ClockStatus host = sources_.host ? sources_.host() : ClockStatus{};
   ClockStatus clock = check_.judge(reported, host, now_realtime_ns);
+  judged_ = clock;
+  stamps_.describe(clock);
   last_judged_ns_ = now_realtime_ns;
   last_ = clock;
   return clock;
@@ -50,6 +89,7 @@ std::optional<ClockStatus> ClockReporter::tick(Writer& writer, std::int64_t now_
   if (!due) return std::nullopt;
   ClockStatus clock = judge(now_realtime_ns);
   write_clock(writer, clock);
+  record_written_ = true;
   return clock;
 }
 

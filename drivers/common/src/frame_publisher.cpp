@@ -30,10 +30,10 @@ FramePublisher::FramePublisher(Writer writer, PublishCounters& counters) noexcep
 
 std::span<LidarPoint> FramePublisher::slot() const noexcept { return loan_.as<LidarPoint>(); }
 
-std::span<LidarPoint> FramePublisher::publish(std::size_t point_count, std::int64_t stamp_ns,
-                                              std::int64_t host_receive_ns, bool whole) noexcept {
-  const WriteStatus status = std::move(loan_).commit(point_count * sizeof(LidarPoint),
-                                                     saturating_add_ns(stamp_ns, stamp_offset_ns_), host_receive_ns);
+std::span<LidarPoint> FramePublisher::publish_stamped(std::size_t point_count, std::int64_t stamp_ns,
+                                                      std::int64_t host_receive_ns, bool whole) noexcept {
+  const WriteStatus status =
+      std::move(loan_).commit(point_count * sizeof(LidarPoint), stamp_ns, host_receive_ns);
   if (status == WriteStatus::ok) {
     ++counters_.frames;
     counters_.points += point_count;

@@ -40,6 +40,12 @@ void add_receive_options(CommandLine& cli, LiveReceiveOptions& o, lidar::IpVersi
                  "a gap this long (s) means the sensor stopped: the next packet starts a new frame")
       ->check(CLI::PositiveNumber);
   add_host_clock_options(cli, o.host_clock);
+  app.add_option("--stamp-fallback", o.stamp_fallback,
+                 "host: while the sensor's clock is judged in error (or not judged yet), stamp frames "
+                 "with their arrival on this host instead, and say so in the clock record and each "
+                 "frame; back to the sensor's stamps when it is not [off]")
+      ->type_name("off|host")
+      ->check(CLI::IsMember({"off", "host"}));
 }
 
 void add_output_options(CommandLine& cli, LiveReceiveOptions& o, const std::string& summary_help) {
@@ -66,11 +72,14 @@ timing::HostClockWatchOptions watch_options(const LiveReceiveOptions& o) {
 
 }  // namespace
 
-HostClockSource::HostClockSource(const LiveReceiveOptions& options) : watch_(watch_options(options)) {}
+HostClockSource::HostClockSource(const LiveReceiveOptions& options)
+    : watch_(watch_options(options)),
+      stamp_fallback_(options.stamp_fallback == "host" ? lidar::StampFallback::host : lidar::StampFallback::off) {}
 
 lidar::ClockSources HostClockSource::sources() const {
   lidar::ClockSources sources;
   sources.host = [this] { return watch_.latest(); };
+  sources.stamp_fallback = stamp_fallback_;  // each switch on stderr, --quiet or not: it changes the stamps
   return sources;
 }
 

@@ -15,8 +15,10 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <string>
 
 #include "sim/clock_status.hpp"
+#include "sim/lidar/stamp_switch.hpp"
 #include "sim/timing/clock_check.hpp"
 #include "sim/writer.hpp"
 
@@ -32,6 +34,10 @@ enum class ClockBase {
 struct ClockSources {
   std::function<ClockStatus()> reported;  // the sensor's own report; empty: none
   std::function<ClockStatus()> host;      // the host's synchronisation; empty: unknown
+  // What the live program asks of the stream's stamps (--stamp-fallback; a replay has none), and
+  // where each switch of their clock is told, one line (empty: stderr).
+  StampFallback stamp_fallback = StampFallback::off;
+  std::function<void(const std::string& line)> log{};
 };
 
 class ClockReporter {
@@ -56,7 +62,8 @@ class ClockReporter {
 
   void set_base(ClockBase base) noexcept { base_ = base; }
   ClockBase base() const noexcept { return base_; }
-  void set_sources(ClockSources sources) { sources_ = std::move(sources); }
+  // The sources and the stamp fallback (a switch already under way is kept when it is the same).
+  void set_sources(ClockSources sources);
   void set_tolerance(const timing::ClockTolerance& tolerance) noexcept;
 
   // When a second has passed since the last judgement (`now_realtime_ns`, the host's
@@ -68,6 +75,16 @@ class ClockReporter {
   // Judges now without writing (a test, a status line).
   ClockStatus judge(std::int64_t now_realtime_ns);
   const std::optional<ClockStatus>& last() const noexcept { return last_; }
+
+  // The stamp a frame is published with: `sensor_stamp_ns` (the sensor's, the stamp offset
+  // applied), or with --stamp-fallback host its arrival `host_ns` while the last judgement is
+  // error (see StampSwitch). A switch rewrites the stream's clock record before the frame is
+  // committed, so the frame's FrameInfo::stamp_clock names the clock of its stamp.
+  std::int64_t frame_stamp(Writer& writer, std::int64_t sensor_stamp_ns, std::int64_t host_ns) {
+    if (!stamps_.enabled()) return sensor_stamp_ns;
+    return switch_stamp(writer, sensor_stamp_ns, host_ns);
+  }
+  const StampSwitch& stamps() const noexcept { return stamps_; }
   const timing::ClockCheck& check() const noexcept { return check_; }
 
  private:
@@ -76,7 +93,12 @@ class ClockReporter {
   ClockSources sources_;
   std::int64_t first_tick_ns_ = 0;  // the first tick that saw packets
   std::int64_t last_judged_ns_ = 0;
-  std::optional<ClockStatus> last_;
+  std::optional<ClockStatus> last_;     // as written: with the stamps it describes
+  std::optional<ClockStatus> judged_;   // the sensor's clock as judged, before that
+  StampSwitch stamps_;
+  bool record_written_ = false;
+
+  std::int64_t switch_stamp(Writer& writer, std::int64_t sensor_stamp_ns, std::int64_t host_ns);
 };
 
 // Writes `clock` to the stream (Writer::set_clock); false when the writer refused it.

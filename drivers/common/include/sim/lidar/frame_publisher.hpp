@@ -17,6 +17,7 @@
 #include <string>
 #include <utility>
 
+#include "sim/clock.hpp"
 #include "sim/lidar/clock_reporter.hpp"
 #include "sim/lidar_point.hpp"
 #include "sim/writer.hpp"
@@ -69,7 +70,12 @@ class FramePublisher {
   // stamp offset, counts it, and returns the next slot (give it to the assembler before the
   // next packet).
   std::span<LidarPoint> publish(std::size_t point_count, std::int64_t stamp_ns, std::int64_t host_receive_ns,
-                                bool whole) noexcept;
+                                bool whole) noexcept {
+    return publish_stamped(point_count, saturating_add_ns(stamp_ns, stamp_offset_ns_), host_receive_ns, whole);
+  }
+  // The same with the stamp as published (the offset already applied, or another clock's).
+  std::span<LidarPoint> publish_stamped(std::size_t point_count, std::int64_t stamp_ns,
+                                        std::int64_t host_receive_ns, bool whole) noexcept;
 
   // Added to every published stamp from now on: a replay keeps stamps increasing across loops
   // of its capture, or moves them to the present (--restamp). Zero (the default) publishes the
@@ -135,7 +141,10 @@ struct PointPipeline {
     } else {
       whole = f.whole;  // Ouster: the column window from its first column
     }
-    assembler.set_output(frames.publish(f.point_count, f.stamp_ns, f.host_receive_ns, whole));
+    // The sensor's stamp, or with --stamp-fallback its arrival while the sensor's clock is in error.
+    const std::int64_t stamp =
+        clock.frame_stamp(frames.writer(), saturating_add_ns(f.stamp_ns, frames.stamp_offset()), f.host_receive_ns);
+    assembler.set_output(frames.publish_stamped(f.point_count, stamp, f.host_receive_ns, whole));
   }
 };
 

@@ -36,11 +36,12 @@ struct LiveReceiveOptions {
   bool summary = false;
   bool quiet = false;
   timing::HostClockOptions host_clock{};  // --ptp4l-socket: the host's clock for the clock check
+  std::string stamp_fallback = "off";     // --stamp-fallback: "off" or "host" (lidar::StampFallback)
 };
 
 // Adds --bind, the family's port options (`add_ports`), then --multicast, --source,
-// --receive-buffer, --status-interval, --silence-timeout and --ptp4l-socket; addresses are
-// checked as `versions`.
+// --receive-buffer, --status-interval, --silence-timeout, --ptp4l-socket and --stamp-fallback;
+// addresses are checked as `versions`.
 void add_receive_options(CommandLine& cli, LiveReceiveOptions& options, lidar::IpVersions versions,
                          const std::function<void(CLI::App&)>& add_ports);
 // Adds --summary (with `summary_help`) and -q,--quiet: the last options of each live program.
@@ -55,11 +56,12 @@ void set_listen(lidar::UdpListen& listen, const LiveReceiveOptions& options);
 class HostClockSource {
  public:
   explicit HostClockSource(const LiveReceiveOptions& options);
-  // sources.host: the watch's last reading (never waits).
+  // sources.host: the watch's last reading (never waits); the --stamp-fallback asked for.
   lidar::ClockSources sources() const;
 
  private:
   timing::HostClockWatch watch_;
+  lidar::StampFallback stamp_fallback_;
 };
 
 // Adds --clock-poll-seconds: how often the sensor's clock is asked about (its PTC or HTTP

@@ -1,0 +1,79 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "sim/lidar/stamp_switch.hpp"
+
+#include "sim/clock.hpp"
+
+namespace sim::lidar {
+namespace {
+
+constexpr char kMeanwhile[] = " Meanwhile the frames are stamped with their host arrival time (--stamp-fallback host).";
+
+// `text` cut to at most `size` bytes, not inside a UTF-8 character.
+void cut_to(std::string& text, std::size_t size) {
+  if (text.size() <= size) return;
+  while (size > 0 && (static_cast<unsigned char>(text[size]) & 0xC0) == 0x80) --size;
+  text.resize(size);
+}
+
+}  // namespace
+
+StampSwitch::Choice StampSwitch::choose(std::int64_t sensor_stamp_ns, std::int64_t host_ns,
+                                        std::optional<ClockVerdict> verdict) noexcept {
+  if (!enabled()) return {sensor_stamp_ns, StampEvent::none};
+  // Untrusted: in error, or not judged yet (a sensor 37 s ahead would otherwise stamp its first
+  // frames 37 s ahead, and the switch to host time would then go back 37 s).
+  const bool want_host = !verdict || *verdict == ClockVerdict::error;
+  Choice choice;
+  if (want_host != on_host_) {
+    const std::int64_t wanted = want_host ? host_ns : sensor_stamp_ns;
+    if (!last_stamp_ns_ || wanted > *last_stamp_ns_) {
+      on_host_ = want_host;
+      held_ = false;
+      announced_ = want_host && verdict.has_value();
+      choice.event = want_host ? StampEvent::to_host : StampEvent::to_sensor;
+    } else if (!held_) {
+      held_ = true;
+      held_by_ns_ = *last_stamp_ns_ - wanted;
+      choice.event = StampEvent::held;
+    }
+  } else {
+    held_ = false;  // the switch is no longer wanted
+    if (on_host_ && verdict && !announced_) {
+      announced_ = true;  // on host time from the start: say why once the verdict is in
+      choice.event = StampEvent::to_host;
+    }
+  }
+  choice.stamp_ns = on_host_ ? host_ns : sensor_stamp_ns;
+  last_stamp_ns_ = choice.stamp_ns;
+  return choice;
+}
+
+void StampSwitch::describe(ClockStatus& clock) const {
+  if (!on_host()) return;
+  clock.stamps = StampClock::host_arrival;
+  if (clock.problem.empty()) return;  // judged fine: the next frame goes back to the sensor's
+  cut_to(clock.problem, ClockStatus::kMaxProblem - (sizeof kMeanwhile - 1));
+  clock.problem += kMeanwhile;
+}
+
+std::string StampSwitch::explain(const Choice& choice, const ClockStatus* clock) const {
+  const std::string verdict = clock != nullptr ? to_string(clock->verdict) : "not judged yet";
+  switch (choice.event) {
+    case StampEvent::to_host:
+      return "stamps: host arrival time from now on: the sensor's clock is " +
+             (clock != nullptr ? "in " + verdict + (clock->problem.empty() ? "" : " (" + clock->problem + ")")
+                               : verdict) + " (--stamp-fallback host)";
+    case StampEvent::to_sensor:
+      return "stamps: the sensor's clock from now on: its verdict is " + verdict + ", no longer error";
+    case StampEvent::held:
+      return "warning: stamps: switching to " + std::string(on_host_ ? "the sensor's clock" : "host arrival time") +
+             " now would take the stamps back by " + human_duration(held_by_ns_) +
+             "; the frames keep " + (on_host_ ? "host arrival time" : "the sensor's stamps") +
+             " until the new clock passes the last stamp published (no frame is reordered)";
+    case StampEvent::none:
+      break;
+  }
+  return {};
+}
+
+}  // namespace sim::lidar
