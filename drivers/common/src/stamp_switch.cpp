@@ -26,15 +26,18 @@ StampSwitch::Choice StampSwitch::choose(std::int64_t sensor_stamp_ns, std::int64
   Choice choice;
   if (want_host != on_host_) {
     const std::int64_t wanted = want_host ? host_ns : sensor_stamp_ns;
-    if (!last_stamp_ns_ || wanted > *last_stamp_ns_) {
+    const bool backwards = last_stamp_ns_ && wanted <= *last_stamp_ns_;
+    if (backwards && !held_) {
+      held_ = true;  // wait: the new clock may pass the last stamp within a frame or two
+      held_since_ns_ = host_ns;
+      went_back_ns_ = *last_stamp_ns_ - wanted;
+      choice.event = StampEvent::held;
+    } else if (!backwards || host_ns - held_since_ns_ >= kLongestHoldNs) {
+      went_back_ns_ = backwards ? *last_stamp_ns_ - wanted : 0;
       on_host_ = want_host;
       held_ = false;
       announced_ = want_host && verdict.has_value();
       choice.event = want_host ? StampEvent::to_host : StampEvent::to_sensor;
-    } else if (!held_) {
-      held_ = true;
-      held_by_ns_ = *last_stamp_ns_ - wanted;
-      choice.event = StampEvent::held;
     }
   } else {
     held_ = false;  // the switch is no longer wanted
@@ -62,18 +65,25 @@ std::string StampSwitch::explain(const Choice& choice, const ClockStatus* clock)
     case StampEvent::to_host:
       return "stamps: host arrival time from now on: the sensor's clock is " +
              (clock != nullptr ? "in " + verdict + (clock->problem.empty() ? "" : " (" + clock->problem + ")")
-                               : verdict) + " (--stamp-fallback host)";
+                               : verdict) +
+             " (--stamp-fallback host)" + went_back();
     case StampEvent::to_sensor:
-      return "stamps: the sensor's clock from now on: its verdict is " + verdict + ", no longer error";
+      return "stamps: the sensor's clock from now on: its verdict is " + verdict + ", no longer error" + went_back();
     case StampEvent::held:
       return "warning: stamps: switching to " + std::string(on_host_ ? "the sensor's clock" : "host arrival time") +
-             " now would take the stamps back by " + human_duration(held_by_ns_) +
-             "; the frames keep " + (on_host_ ? "host arrival time" : "the sensor's stamps") +
-             " until the new clock passes the last stamp published (no frame is reordered)";
+             " now would take the stamps back by " + human_duration(went_back_ns_) + "; the frames keep " +
+             (on_host_ ? "host arrival time" : "the sensor's stamps") +
+             " for up to 1 s until the new clock passes the last stamp published, then switch anyway "
+             "(no frame is reordered)";
     case StampEvent::none:
       break;
   }
   return {};
+}
+
+std::string StampSwitch::went_back() const {
+  if (went_back_ns_ <= 0) return {};
+  return "; warning: the stamps went back by " + human_duration(went_back_ns_) + " at this switch";
 }
 
 }  // namespace sim::lidar

@@ -2,8 +2,12 @@
 // StampSwitch: the rule of --stamp-fallback host, the opt-in fix for a sensor clock in error.
 // While the stream's clock verdict is `error` (or not judged yet), frames are stamped with their
 // host arrival time instead of the sensor's; once it is not, with the sensor's again. Decided
-// at frame boundaries (a frame keeps one clock) and never taking the stamps backwards: a switch
-// that would waits, with one warning, until the new clock's stamp passes the last one published.
+// at frame boundaries (a frame keeps one clock). A switch that would take the stamps backwards
+// waits, with one warning, until the new clock's stamp passes the last one published, for up to
+// a second (a clock a frame or two behind); a clock further off than that would never pass it,
+// so the switch then happens anyway and its log line says by how much the stamps went back. A
+// new switch starts on host time (untrusted until judged), so a sensor 37 s ahead never has its
+// stamps published and then stepped back from.
 //
 //   StampSwitch stamps(StampFallback::host);
 //   const auto choice = stamps.choose(sensor_stamp_ns, host_receive_ns, last_verdict);
@@ -32,7 +36,7 @@ enum class StampEvent {
   none,
   to_host,        // from this frame on (or, at the first verdict, still): host arrival time
   to_sensor,      // from this frame on: the sensor's stamps again
-  held,           // a switch would take the stamps backwards: it waits (once per switch wanted)
+  held,           // a switch would take the stamps backwards: it waits up to kLongestHoldNs
 };
 
 class StampSwitch {
@@ -41,6 +45,8 @@ class StampSwitch {
     std::int64_t stamp_ns = 0;
     StampEvent event = StampEvent::none;
   };
+
+  static constexpr std::int64_t kLongestHoldNs = 1'000'000'000;  // host time a switch may wait
 
   explicit StampSwitch(StampFallback fallback = StampFallback::off) noexcept : fallback_(fallback) {}
 
@@ -62,11 +68,14 @@ class StampSwitch {
   std::string explain(const Choice& choice, const ClockStatus* clock) const;
 
  private:
+  std::string went_back() const;
+
   StampFallback fallback_;
-  bool on_host_ = true;  // untrusted until judged
-  bool held_ = false;    // the wanted switch waits; warned
-  bool announced_ = false;  // a judgement said why the frames are on host time
-  std::int64_t held_by_ns_ = 0;  // how far back it would have taken the stamps
+  bool on_host_ = true;         // untrusted until judged
+  bool held_ = false;           // the wanted switch waits; warned
+  bool announced_ = false;      // a judgement said why the frames are on host time
+  std::int64_t held_since_ns_ = 0;  // host time the wait began
+  std::int64_t went_back_ns_ = 0;   // how far back the switch would take (or took) the stamps
   std::optional<std::int64_t> last_stamp_ns_;
 };
 
