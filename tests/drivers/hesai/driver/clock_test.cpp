@@ -357,21 +357,35 @@ TEST(ReplayClock, velodyne_and_ouster_replays_measure_their_packets_against_the_
   }
 }
 
+// What a reader saw of the live driver: its clock record and the newest frame read after the
+// record had measured enough packets, with this host's clock when it was read.
+struct LiveRun {
+  ClockStatus clock;
+  std::optional<sim::FrameInfo> frame;
+  std::int64_t read_ns = 0;  // CLOCK_REALTIME when `frame` was read
+  std::int64_t sent_from_ns = 0;  // CLOCK_REALTIME when the first packet was sent
+  std::string err;  // the driver's stderr
+};
+
 // The live driver on loopback: each Pandar64 packet goes out with its sensor time set to this
 // host's clock at sending plus `offset`, about a thousand a second, until the driver's clock
-// record has measured `packets` of them (a bound against hangs only).
-ClockStatus live_clock(std::int64_t offset, std::uint64_t packets) {
+// record has measured `packets` of them and a frame published after that was read (a bound
+// against hangs only).
+LiveRun live_run(std::int64_t offset, std::uint64_t packets, const std::vector<std::string>& extra = {}) {
   const auto recorded = packets_of(data_dir / "pandar64_dual.pcap", sim::hesai::Model::pandar64);
   sim::testing::StreamGuard stream(sim::testing::unique_name("hesai_live_clock"));
-  sim::testing::Process driver({SIM_LIDAR_HESAI, "--model", "Pandar64", "--port", "0", "--bind", "127.0.0.1",
+  std::vector<std::string> argv{SIM_LIDAR_HESAI, "--model", "Pandar64", "--port", "0", "--bind", "127.0.0.1",
                                 "--stream", stream.name, "--calibration",
-                                (data_dir / "pandar64.calibration.csv").string(), "--status-interval", "0"});
+                                (data_dir / "pandar64.calibration.csv").string(), "--status-interval", "0"};
+  argv.insert(argv.end(), extra.begin(), extra.end());
+  sim::testing::Process driver(argv);
+  LiveRun out;
   const auto line = driver.wait_for_line("listening on");
   EXPECT_TRUE(line) << driver.err();
-  if (!line) return {};
+  if (!line) return out;
   auto reader = sim::testing::wait_for_stream(stream.name);
   EXPECT_TRUE(reader);
-  if (!reader) return {};
+  if (!reader) return out;
 
   const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
   sockaddr_in to{};
@@ -379,23 +393,42 @@ ClockStatus live_clock(std::int64_t offset, std::uint64_t packets) {
   to.sin_port = htons(static_cast<std::uint16_t>(std::stoi(line->substr(line->rfind(':') + 1))));
   to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
   std::optional<ClockStatus> clock;
+  std::vector<std::byte> points(reader->capacity());
+  out.sent_from_ns = sim::realtime_ns();
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
-  for (std::size_t i = 0; !clock && std::chrono::steady_clock::now() < deadline; ++i) {
+  for (std::size_t i = 0; !out.frame && std::chrono::steady_clock::now() < deadline; ++i) {
     std::vector<std::uint8_t> bytes = recorded[i % recorded.size()].bytes;
     write_p64_time(bytes, sim::realtime_ns() + offset);
     ::sendto(fd, bytes.data(), bytes.size(), 0, reinterpret_cast<const sockaddr*>(&to), sizeof to);
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
     if (i % 50 != 0) continue;
-    auto read = reader->clock();
-    EXPECT_TRUE(read) << read.error().message;
-    if (read && *read && (*read)->packets_measured >= packets) clock = **read;
+    if (!clock) {
+      auto read = reader->clock();
+      EXPECT_TRUE(read) << read.error().message;
+      if (read && *read && (*read)->packets_measured >= packets) clock = **read;
+      sim::FrameInfo before;
+      if (clock) (void)reader->read(points, before);  // frames published before: seen
+      continue;
+    }
+    sim::FrameInfo info;
+    if (reader->read(points, info) == sim::ReadStatus::new_frame) {
+      out.read_ns = sim::realtime_ns();
+      out.frame = info;
+      auto read = reader->clock();  // the record as it stands with that frame
+      if (read && *read) clock = **read;
+    }
   }
   ::close(fd);
   driver.signal(SIGINT);
   EXPECT_EQ(driver.wait(), 0) << driver.err();
+  out.err = driver.err();
   EXPECT_TRUE(clock) << "the driver measured no " << packets << " packets";
-  return clock.value_or(ClockStatus{});
+  EXPECT_TRUE(out.frame) << "no frame was read after the clock was judged";
+  out.clock = clock.value_or(ClockStatus{});
+  return out;
 }
+
+ClockStatus live_clock(std::int64_t offset, std::uint64_t packets) { return live_run(offset, packets).clock; }
 
 TEST(LiveClock, the_live_driver_judges_the_same_packets_against_their_arrival) {
   if (g_no_network) GTEST_SKIP() << *g_no_network;
@@ -418,6 +451,44 @@ TEST(LiveClock, the_live_driver_judges_the_same_packets_against_their_arrival) {
     EXPECT_FALSE(says(clock, "TAI")) << clock.problem;
     EXPECT_NE(clock.verdict, ClockVerdict::error) << clock.problem;
   }
+}
+
+TEST(LiveClock, with_stamp_fallback_host_frames_of_a_clock_in_error_are_stamped_at_their_arrival) {
+  if (g_no_network) GTEST_SKIP() << *g_no_network;
+  const LiveRun run = live_run(37 * kS, 300, {"--stamp-fallback", "host"});
+  ASSERT_TRUE(run.frame);
+  EXPECT_EQ(run.frame->stamp_clock, sim::StampClock::host_arrival);
+  // The arrival of the frame's first packet on this host: sent after the sending began, read
+  // after it arrived, and not the sensor's 37 s ahead.
+  EXPECT_EQ(run.frame->stamp_ns, run.frame->receive_ns);
+  EXPECT_GE(run.frame->stamp_ns, run.sent_from_ns);
+  EXPECT_LE(run.frame->stamp_ns, run.read_ns);
+  EXPECT_LT(run.read_ns - run.frame->stamp_ns, 5 * kS) << "a frame spans ~0.6 s of packets here";
+  // The check still judges the sensor's own clock, and the record says what the frames are in.
+  EXPECT_EQ(run.clock.verdict, ClockVerdict::error);
+  ASSERT_TRUE(run.clock.offset_to_host_ns);
+  EXPECT_NEAR(static_cast<double>(*run.clock.offset_to_host_ns), 37e9, 5e6);
+  EXPECT_TRUE(says(run.clock, "37 s ahead of this host")) << run.clock.problem;
+  EXPECT_TRUE(says(run.clock, "host arrival time")) << run.clock.problem;
+  EXPECT_EQ(run.clock.stamps, sim::StampClock::host_arrival);
+  EXPECT_NE(sim::summary(run.clock).find("host arrival time"), std::string::npos) << sim::summary(run.clock);
+  // Told once on stderr, with the reason.
+  const auto told = run.err.find("stamps: host arrival time from now on");
+  EXPECT_NE(told, std::string::npos) << run.err;
+  EXPECT_EQ(run.err.find("stamps: host arrival time from now on", told + 1), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("37 s ahead"), std::string::npos) << run.err;
+}
+
+TEST(LiveClock, without_stamp_fallback_frames_keep_the_sensors_stamps) {
+  if (g_no_network) GTEST_SKIP() << *g_no_network;
+  const LiveRun run = live_run(37 * kS, 300);
+  ASSERT_TRUE(run.frame);
+  EXPECT_EQ(run.frame->stamp_clock, sim::StampClock::sensor);
+  EXPECT_GT(run.frame->stamp_ns - run.read_ns, 30 * kS);  // the sensor's, 37 s ahead
+  EXPECT_EQ(run.clock.verdict, ClockVerdict::error);
+  EXPECT_EQ(run.clock.stamps, sim::StampClock::sensor);
+  EXPECT_FALSE(says(run.clock, "host arrival time")) << run.clock.problem;
+  EXPECT_EQ(run.err.find("stamps:"), std::string::npos) << run.err;
 }
 
 }  // namespace
