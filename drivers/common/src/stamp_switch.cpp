@@ -6,13 +6,14 @@
 namespace sim::lidar {
 namespace {
 
-constexpr char kMeanwhile[] = " Meanwhile the frames are stamped with their host arrival time (--stamp-fallback host).";
+constexpr char kMeanwhile[] = " Meanwhile frames are stamped with host arrival time (--stamp-fallback host).";
 
-// `text` cut to at most `size` bytes, not inside a UTF-8 character.
+// `text` cut to at most `size` bytes at a space, marked "...".
 void cut_to(std::string& text, std::size_t size) {
   if (text.size() <= size) return;
-  while (size > 0 && (static_cast<unsigned char>(text[size]) & 0xC0) == 0x80) --size;
-  text.resize(size);
+  const std::size_t space = text.rfind(' ', size - 3);
+  text.resize(space == std::string::npos ? 0 : space);
+  text += "...";
 }
 
 }  // namespace
