@@ -10,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "sim/apps/clock_poll.hpp"
 #include "sim/apps/command_line.hpp"
@@ -158,13 +159,17 @@ int run(const sim::apps::CommandLine& cli, Options& o) {
     return cli.fail(std::string_view(published.error().message));
   }
   if (auto code = cli.apply_placement(o.stream.placement)) return *code;
+  const sim::apps::HostClockSource host_clock(o.receive);
 
   sim::apps::ModelReceiverWords words{"Hesai", o.stream.stream, receiver->port(),
                                       network.listen.silence_timeout.count()};
   const auto clock = poll_clock(o);
+  // The stream's clock check: its packets against their arrival, with the host's clock and what
+  // the sensor reports of its own.
+  sim::lidar::ClockSources sources = host_clock.sources();
+  if (clock) sources.reported = [&clock] { return clock->latest(); };
+  receiver->set_clock_sources(std::move(sources));
   if (clock) {
-    // What the sensor reports of its clock, for the stream's clock record (issue 30: the
-    // ClockReporter takes this accessor): [&clock] { return clock->latest(); }.
     words.clock_tick = [&clock, &status] {
       for (const auto& note : clock->take_notes()) status.line().note(sim::apps::sentence(note));
     };

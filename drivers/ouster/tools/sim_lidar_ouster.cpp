@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "sim/apps/clock_poll.hpp"
 #include "sim/apps/command_line.hpp"
@@ -147,7 +148,7 @@ struct TaiCorrection {
 };
 
 // The clock record's reported half: the sensor's report and what the driver does to its stamps.
-[[maybe_unused]] sim::ClockStatus reported_clock(const sim::apps::ClockPoll* poll, const TaiCorrection& tai) {
+sim::ClockStatus reported_clock(const sim::apps::ClockPoll* poll, const TaiCorrection& tai) {
   sim::ClockStatus clock = poll != nullptr ? poll->latest() : sim::ClockStatus{};
   clock.tai_correction_ns = tai.applied_ns.load(std::memory_order_relaxed);
   clock.stamps = clock.tai_correction_ns != 0 ? sim::StampClock::sensor_tai_corrected : sim::StampClock::sensor;
@@ -177,6 +178,7 @@ int run(const sim::apps::CommandLine& cli, Options& o) {
   auto stream = sim::ouster::LidarStream::create(*config, *metadata);
   if (!stream) return cli.fail(std::string_view(stream.error().message));
   if (auto code = cli.apply_placement(o.stream.placement)) return *code;
+  const sim::apps::HostClockSource host_clock(o.receive);
 
   const auto clock = poll_clock(o);
   TaiCorrection tai;
@@ -189,8 +191,11 @@ int run(const sim::apps::CommandLine& cli, Options& o) {
     tai.applied_ns = std::llround(std::stod(o.tai_correction) * 1e9);
     stream->set_stamp_offset(-tai.applied_ns.load());
   }
-  // Issue 30: the ClockReporter takes [&] { return reported_clock(clock.get(), tai); } as the
-  // sensor's reported clock.
+  // The stream's clock check: its packets (as stamped, after the correction) against their
+  // arrival, with the host's clock and what the sensor reports and the driver corrects.
+  sim::lidar::ClockSources sources = host_clock.sources();
+  sources.reported = [&clock, &tai] { return reported_clock(clock.get(), tai); };
+  stream->clock().set_sources(std::move(sources));
   const auto clock_tick = [&] {
     if (!clock) return;
     for (const auto& note : clock->take_notes()) status.line().note(sim::apps::sentence(note));

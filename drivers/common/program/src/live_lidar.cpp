@@ -6,6 +6,7 @@
 #include <string_view>
 #include <utility>
 
+#include "sim/apps/host_clock_options.hpp"
 #include "sim/clock.hpp"
 
 namespace sim::apps {
@@ -38,6 +39,7 @@ void add_receive_options(CommandLine& cli, LiveReceiveOptions& o, lidar::IpVersi
   app.add_option("--silence-timeout", o.silence_timeout,
                  "a gap this long (s) means the sensor stopped: the next packet starts a new frame")
       ->check(CLI::PositiveNumber);
+  add_host_clock_options(cli, o.host_clock);
 }
 
 void add_output_options(CommandLine& cli, LiveReceiveOptions& o, const std::string& summary_help) {
@@ -51,6 +53,25 @@ void set_listen(lidar::UdpListen& listen, const LiveReceiveOptions& o) {
   listen.source = o.source;
   listen.receive_buffer = o.receive_buffer;
   listen.silence_timeout = std::chrono::nanoseconds(static_cast<std::int64_t>(o.silence_timeout * 1e9));
+}
+
+namespace {
+
+timing::HostClockWatchOptions watch_options(const LiveReceiveOptions& o) {
+  timing::HostClockWatchOptions options;
+  options.clock = o.host_clock;
+  if (o.quiet) options.log = [](const std::string&) {};
+  return options;
+}
+
+}  // namespace
+
+HostClockSource::HostClockSource(const LiveReceiveOptions& options) : watch_(watch_options(options)) {}
+
+lidar::ClockSources HostClockSource::sources() const {
+  lidar::ClockSources sources;
+  sources.host = [this] { return watch_.latest(); };
+  return sources;
 }
 
 std::string sentence(std::string text) {
@@ -138,9 +159,10 @@ void LiveStatus::finish(const std::string& stream_summary, const lidar::ReceiveC
   line_.finish(text_ ? text_(true) : std::string());
   if (!options_.summary) return;
   const auto ull = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
-  std::printf("summary %s datagrams=%llu other_source=%llu unrecognised=%llu oversized=%llu resumes=%llu\n",
+  std::printf("summary %s datagrams=%llu other_source=%llu unrecognised=%llu oversized=%llu resumes=%llu "
+              "other_senders=%llu\n",
               stream_summary.c_str(), ull(c.datagrams), ull(c.other_source), ull(c.unrecognised),
-              ull(c.oversized), ull(c.resumes));
+              ull(c.oversized), ull(c.resumes), ull(c.other_senders));
   std::fflush(stdout);
 }
 

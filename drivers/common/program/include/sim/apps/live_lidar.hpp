@@ -20,7 +20,9 @@
 
 #include "sim/apps/command_line.hpp"
 #include "sim/apps/status_line.hpp"
+#include "sim/lidar/clock_reporter.hpp"
 #include "sim/lidar/udp_receiver.hpp"
+#include "sim/timing/host_clock.hpp"
 
 namespace sim::apps {
 
@@ -33,10 +35,12 @@ struct LiveReceiveOptions {
   double silence_timeout = 0.5;           // s
   bool summary = false;
   bool quiet = false;
+  timing::HostClockOptions host_clock{};  // --ptp4l-socket: the host's clock for the clock check
 };
 
 // Adds --bind, the family's port options (`add_ports`), then --multicast, --source,
-// --receive-buffer, --status-interval and --silence-timeout; addresses are checked as `versions`.
+// --receive-buffer, --status-interval, --silence-timeout and --ptp4l-socket; addresses are
+// checked as `versions`.
 void add_receive_options(CommandLine& cli, LiveReceiveOptions& options, lidar::IpVersions versions,
                          const std::function<void(CLI::App&)>& add_ports);
 // Adds --summary (with `summary_help`) and -q,--quiet: the last options of each live program.
@@ -45,6 +49,18 @@ void add_output_options(CommandLine& cli, LiveReceiveOptions& options, const std
 // The receiver's side of the options: bind, multicast group, source, receive buffer and
 // silence timeout (the family keeps its IP versions).
 void set_listen(lidar::UdpListen& listen, const LiveReceiveOptions& options);
+
+// The host's clock for the stream's clock check, read once a second on its own thread (each
+// change logged once on stderr, unless --quiet). Outlives the receiver's run().
+class HostClockSource {
+ public:
+  explicit HostClockSource(const LiveReceiveOptions& options);
+  // sources.host: the watch's last reading (never waits).
+  lidar::ClockSources sources() const;
+
+ private:
+  timing::HostClockWatch watch_;
+};
 
 // Adds --clock-poll-seconds: how often the sensor's clock is asked about (its PTC or HTTP
 // service, off the frame path); 0 turns the asking off.
@@ -83,7 +99,7 @@ class LiveStatus {
   // The receiver's callbacks: its notes as sentences, and `text` every interval (unless quiet).
   lidar::ReceiverCallbacks callbacks(Text text);
   // The final line and, with --summary, on stdout: "summary <stream_summary> datagrams=…
-  // other_source=… unrecognised=… oversized=… resumes=…".
+  // other_source=… unrecognised=… oversized=… resumes=… other_senders=…".
   void finish(const std::string& stream_summary, const lidar::ReceiveCounters& counters);
 
  private:

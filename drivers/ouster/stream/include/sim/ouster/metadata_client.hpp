@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // The sensor's metadata over its HTTP API (GET /api/v1/sensor/metadata), checked and cached:
 //
-//   auto got = sim::ouster::metadata_from_sensor({"os-122.local"}, cache_path);
+//   auto got = sim::ouster::metadata_from_sensor({"169.254.0.5"}, cache_path);  // IPv4 only: a
+//   name such as os-<serial>.local is not resolved (--sensor-ip refuses it in one sentence)
 //   if (!got) -> got.error().message: why, and that no cache exists to fall back on
 //   got->from_cache -> got->warning says why the sensor's answer could not be used
 //
