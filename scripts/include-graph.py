@@ -29,15 +29,13 @@ FLOORS = [
     ("core", ["include/sim", "sim"]),
     ("timing and imaging", ["timing", "imaging"]),
     ("drivers/common", ["drivers/common"]),
-    # The programs' shared layer. apps/<family> sits here by its folder, but it holds one family's
-    # program options (it includes that family's stream and drivers/common/program): the arrows
-    # up it makes are the misplaced folder, reported until it moves to drivers/<family>/program.
-    ("apps", ["apps"]),
+    ("apps", ["apps"]),  # the programs' shared layer
     ("drivers/common/program", ["drivers/common/program"]),
     ("family decoders", ["drivers/hesai", "drivers/ouster", "drivers/velodyne", "drivers/unitree",
                          "drivers/camera"]),
     ("family streams", ["drivers/hesai/stream", "drivers/ouster/stream", "drivers/velodyne/stream"]),
-    ("family programs", ["drivers/hesai/tools", "drivers/ouster/tools", "drivers/velodyne/tools",
+    ("family programs", ["drivers/hesai/program", "drivers/ouster/program", "drivers/velodyne/program",
+                         "drivers/hesai/tools", "drivers/ouster/tools", "drivers/velodyne/tools",
                          "drivers/unitree/tools", "drivers/camera/tools"]),
     ("replay", ["replay"]),
     ("top", ["tools", "bridge", "viewer", "mcap", "ros2", "python"]),
