@@ -26,7 +26,7 @@ if [[ ! -f $build/CMakeCache.txt ]]; then
     { cat "$build.configure.log"; exit 1; }
 fi
 cmake --build "$build" -j"${SIM_JOBS:-2}" --target sim_soak_agent sim_soak_c_reader sim_soak_dds \
-  sim_replay_video sim_replay_pcap sim_record sim_dds_bridge sim_rm sim_foxglove sim_python
+  sim_replay_video sim_replay_pcap sim_record sim_play sim_dds_bridge sim_rm sim_foxglove sim_python
 # The Foxglove client's npm packages (pinned; installed once, as for the viewer's tests).
 "$root/tests/viewer/foxglove/node/install.sh"
 # The Python the module was built for (with numpy), not whichever python3 is first on the PATH.
