@@ -16,6 +16,7 @@ import json
 import os
 import queue
 import random
+import re
 import shutil
 import signal
 import subprocess
@@ -490,7 +491,8 @@ class Soak:
         play = subprocess.run([self.bin("tools/sim_play/sim_play"), path, "--max-rate", "--remap",
                                f"{self.lidars[1]}=/{tag}play_lidar1"], capture_output=True, text=True)
         out = play.stdout + play.stderr
-        played = int(out.split("frames=", 1)[1].split()[0]) if "frames=" in out else -1
+        counts = re.findall(r"\bframes (\d+)", out)  # its summary line: "frames N  passes 1  …"
+        played = int(counts[-1]) if counts else -1
         self.recordings["played"] += 1
         if ended_by == "SIGKILL" or child.proc.returncode != 0:  # (a SIGTERM before its handler: killed)
             return
