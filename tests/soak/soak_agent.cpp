@@ -483,10 +483,10 @@ void print_stats(const char* role, std::deque<StreamCheck>& checks, bool final) 
     std::snprintf(text, sizeof text,
                   "%s\"%s\":{\"frames\":%" PRIu64 ",\"torn\":%" PRIu64 ",\"out_of_order\":%" PRIu64
                   ",\"missed\":%" PRIu64 ",\"timed\":%" PRIu64 ",\"untimed\":%" PRIu64
-                  ",\"skipped\":%" PRIu64 ",\"overwritten\":%" PRIu64 ",\"opens\":%" PRIu64 ",\"replaced\":%" PRIu64
+                  ",\"skipped\":%" PRIu64 ",\"lost\":%" PRIu64 ",\"overwritten\":%" PRIu64 ",\"opens\":%" PRIu64 ",\"replaced\":%" PRIu64
                   ",\"worst_stall_ms\":%.3f}",
                   first ? "" : ",", check.name().c_str(), c.frames, c.torn, c.out_of_order, c.missed,
-                  c.timed, c.untimed, c.skipped, c.overwritten, c.reopens, c.replacements, static_cast<double>(c.worst_stall_ns) / 1e6);
+                  c.timed, c.untimed, c.skipped, c.lost, c.overwritten, c.reopens, c.replacements, static_cast<double>(c.worst_stall_ns) / 1e6);
     line += text;
     first = false;
   }

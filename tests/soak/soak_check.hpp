@@ -125,6 +125,9 @@ struct StreamCounters {
   std::uint64_t skipped = 0;        // frames the writer published that this reader never got
                                     // (gaps in the numbering of one region's run; frames
                                     // published while the reader was not open are not counted)
+  std::uint64_t lost = 0;           // of those, frames it slept through: skipped during a wait
+                                    // that began before they were there, not explained by the
+                                    // run delays (the rest: it was busy or kept from running)
   std::uint64_t overwritten = 0;    // borrowed frames the writer reused meanwhile (discarded)
   std::uint64_t reopens = 0;        // opened by name (first open included)
   std::uint64_t replacements = 0;   // regions replaced under the reader and followed
@@ -187,7 +190,7 @@ class StreamCheck {
     const bool new_stream = info.seq <= last_seq_ && info.publish_ns > last_publish_ns_;
     if (last_seq_ != 0 && info.seq <= last_seq_ && !new_stream) report("out_of_order", info.seq, 0);
     if (last_seq_ != 0 && info.seq > last_seq_) {
-      counters_.skipped += info.seq - last_seq_ - 1;
+      count_skipped(info, wait);
       time_delivery(info, wait, carried_first_unseen);
     }
     last_seq_ = info.seq;
@@ -217,6 +220,19 @@ class StreamCheck {
   }
 
  private:
+  // Frames skipped by design (the reader takes the newest: it was busy, or a loaded machine kept
+  // it or the writer from running) or slept through (lost). Lost: the wait began with nothing
+  // newer there, the delivered frame was published before the wait ended (not while the reader
+  // was already awake), the reader did not follow the stream to a new region, and the run
+  // delays and steal during the wait cover less than three quarters of the skipped frames'
+  // periods.
+  void count_skipped(const sim::FrameInfo& info, const Wait& wait) {
+    const std::uint64_t skipped = info.seq - last_seq_ - 1;
+    counters_.skipped += skipped;
+    if (skipped == 0 || wait.newer_at_start || wait.new_region || info.publish_ns > wait.end_ns) return;
+    const std::int64_t kept_from_running = wait.own_delay_ns + wait.writer_delay_ns + wait.steal_ns;
+    if (4 * kept_from_running < 3 * static_cast<std::int64_t>(skipped) * period_ns_) counters_.lost += skipped;
+  }
   void time_delivery(const sim::FrameInfo& info, const Wait& wait, std::int64_t carried) {
     std::int64_t became_readable = 0;  // when frame last_seq+1 was published
     if (wait.newer_at_start) {
