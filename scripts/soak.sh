@@ -9,6 +9,7 @@
 #   scripts/soak.sh --seconds 3600        one hour
 #   scripts/soak.sh --seconds 600 --json soak.json --seed 7
 #   SIM_SOAK_BUILD=build/release scripts/soak.sh   use (and build) another build folder
+#   scripts/soak.sh --seconds 60 --fault all      break every guarantee on purpose: must FAIL
 #
 # Needs root (or CAP_SYS_ADMIN) for the private network namespace, like the bridge's tests.
 # What is checked and why it is fair on a loaded machine: tests/soak/README.md.
