@@ -165,11 +165,12 @@ class Child:
 
 def classify_stalls(violations, publish_gaps):
     """Tells a writer's (or the whole machine's) stall from a reader's lost wake-up. A "missed"
-    stall that another reader process had on the same stream at the same moment, while the
-    writer itself did not publish for more than 1.5 periods (its own publish_gap lines), is a
-    "writer_stall": nothing new was there to wake anyone for, or nothing ran at all. A stall of
-    one reader alone, or while the writer published on time, stays "missed". Changes the
-    violations in place; returns how many it reclassified."""
+    stall is a "writer_stall" when another reader process had one on the same stream at the same
+    moment and the writer itself published nothing for long enough (its own publish_gap lines)
+    that, without the part of the stall inside the writer's pause, the stall would have been
+    within its allowance: nothing ran, or nothing new came, for that long. A stall of one reader
+    alone, or of every reader while the writer published on time (its wake-up failed them all),
+    stays "missed". Changes the violations in place; returns how many it reclassified."""
     def window(v):
         return v.get("readable_ns"), v.get("end_ns")
     missed = [v for v in violations if v.get("what") == "missed" and None not in window(v)]
@@ -178,12 +179,14 @@ def classify_stalls(violations, publish_gaps):
         start, end = window(v)
         others = {w["process"] for w in missed if w is not v and w["stream"] == v["stream"] and
                   w["process"] != v["process"] and w["readable_ns"] < end and w["end_ns"] > start}
-        paused = [g for g in publish_gaps if g["stream"] == v["stream"] and g["from_ns"] < end and g["to_ns"] > start]
-        if others and paused:
+        paused_ms = max([(min(end, g["to_ns"]) - max(start, g["from_ns"])) / 1e6 for g in publish_gaps
+                         if g["stream"] == v["stream"]] + [0.0])
+        allowance_ms = min(2 * v.get("period_ms", 0), CAMERA_PERIOD_MS * 2)
+        if others and paused_ms > 0 and v.get("stall_ms", 0) - paused_ms <= allowance_ms:
             changed += 1
             v["what"] = "writer_stall"
             v["why"] = (f"also stalled in {', '.join(sorted(others))}; the writer published nothing for "
-                        f"{max(g['gap_ms'] for g in paused):.1f} ms meanwhile")
+                        f"{paused_ms:.1f} ms of it")
     return changed
 
 

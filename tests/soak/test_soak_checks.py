@@ -57,7 +57,8 @@ def test_a_stall_of_every_reader_while_the_writer_paused_is_a_writer_stall():
     from soak import classify_stalls
     ms = 1_000_000
     miss = lambda process, start, end: {"process": process, "what": "missed", "stream": "/s_cam4",
-                                        "readable_ns": start * ms, "end_ns": end * ms}
+                                        "readable_ns": start * ms, "end_ns": end * ms,
+                                        "stall_ms": float(end - start), "period_ms": 33.333}
     gap = {"stream": "/s_cam4", "from_ns": 1000 * ms, "to_ns": 1090 * ms, "gap_ms": 90.0}
     together = [miss("read_block", 1000, 1100), miss("read_borrow", 1002, 1101)]
     assert classify_stalls(together, [gap]) == 2
@@ -68,6 +69,9 @@ def test_a_stall_of_every_reader_while_the_writer_paused_is_a_writer_stall():
     # One reader alone while the writer paused: still missed (the others were woken).
     alone = [miss("read_block", 1000, 1100)]
     assert classify_stalls(alone, [gap]) == 0 and alone[0]["what"] == "missed"
+    # The writer paused for a moment only: the rest of the stall is still over the allowance.
+    short = [miss("read_block", 1000, 1140), miss("read_borrow", 1000, 1140)]
+    assert classify_stalls(short, [dict(gap, to_ns=1050 * ms, gap_ms=50.0)]) == 0
     # Another stream's writer paused, or the pause was at another moment: missed.
     elsewhere = [miss("read_block", 1000, 1100), miss("read_borrow", 1000, 1100)]
     other = [dict(gap, stream="/s_cam2"), dict(gap, from_ns=2000 * ms, to_ns=2100 * ms)]
