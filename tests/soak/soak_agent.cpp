@@ -136,16 +136,27 @@ class PublishLog {
       }
     }
     last_ns_ = at_ns;
-    if (at_ns - printed_ns_ > 1'000'000'000) {
-      printed_ns_ = at_ns;
-      std::printf("{\"kind\":\"stats\",\"role\":\"writer\",\"stream\":\"%s\",\"published\":%" PRIu64
-                  ",\"max_publish_interval_ms\":%.3f}\n",
-                  stream_.c_str(), published_, static_cast<double>(max_interval_ns_) / 1e6);
-      std::fflush(stdout);
-    }
+    if (at_ns - printed_ns_ > 1'000'000'000) print_stats(at_ns);
+  }
+  // A commit that took more than half a period: the frame became readable inside it, but its
+  // wake-up came only as it returned, so every sleeping reader waited for the writer meanwhile.
+  void committed(std::uint64_t seq, std::int64_t began_ns, std::int64_t returned_ns) {
+    if (2 * (returned_ns - began_ns) <= period_ns_) return;
+    std::printf("{\"kind\":\"publish_gap\",\"in_commit\":true,\"stream\":\"%s\",\"seq\":%" PRIu64
+                ",\"from_ns\":%" PRId64 ",\"to_ns\":%" PRId64 ",\"gap_ms\":%.3f}\n",
+                stream_.c_str(), seq, began_ns, returned_ns, static_cast<double>(returned_ns - began_ns) / 1e6);
+    std::fflush(stdout);
   }
 
  private:
+  void print_stats(std::int64_t at_ns) {
+    printed_ns_ = at_ns;
+    std::printf("{\"kind\":\"stats\",\"role\":\"writer\",\"stream\":\"%s\",\"published\":%" PRIu64
+                ",\"max_publish_interval_ms\":%.3f}\n",
+                stream_.c_str(), published_, static_cast<double>(max_interval_ns_) / 1e6);
+    std::fflush(stdout);
+  }
+
   std::string stream_;
   std::int64_t period_ns_;
   std::uint64_t published_ = 0;
@@ -184,6 +195,7 @@ int run_writer(const WriterOptions& o) {
     next += period;
     std::this_thread::sleep_until(next);
     const auto stamp = std::chrono::system_clock::now().time_since_epoch();
+    const std::int64_t commit_began = monotonic_ns();
     if (std::move(loan).commit(size, std::chrono::duration_cast<std::chrono::nanoseconds>(stamp).count()) !=
         sim::WriteStatus::ok) {
       std::fprintf(stderr, "sim_soak_agent: the commit of frame %" PRIu64 " failed\n", seq);
@@ -192,6 +204,7 @@ int run_writer(const WriterOptions& o) {
     // Taken after commit returned (wake-ups included): never earlier than a reader could see it.
     history.push_front(monotonic_ns());
     if (history.size() > soak::kHistory) history.pop_back();
+    log.committed(seq, commit_began, history.front());
     log.published(seq, history.front());
     if (std::chrono::steady_clock::now() > next + 10 * period) next = std::chrono::steady_clock::now();
   }

@@ -69,6 +69,10 @@ def test_a_stall_of_every_reader_while_the_writer_paused_is_a_writer_stall():
     # One reader alone while the writer paused: still missed (the others were woken).
     alone = [miss("read_block", 1000, 1100)]
     assert classify_stalls(alone, [gap]) == 0 and alone[0]["what"] == "missed"
+    # One reader alone, but the writer's commit of the frame took 120 ms (recorded in a 120 s soak
+    # here: read_block, cam6 seq 269, stall 101.8 ms; the wake-up came as the commit returned).
+    in_commit = [miss("read_block", 1000, 1102)]
+    assert classify_stalls(in_commit, [dict(gap, in_commit=True, from_ns=999 * ms, to_ns=1120 * ms)]) == 1
     # The writer paused for a moment only: the rest of the stall is still over the allowance.
     short = [miss("read_block", 1000, 1140), miss("read_borrow", 1000, 1140)]
     assert classify_stalls(short, [dict(gap, to_ns=1050 * ms, gap_ms=50.0)]) == 0
