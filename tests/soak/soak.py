@@ -712,9 +712,14 @@ class Soak:
         window = points[-1][0] - points[0][0] if len(points) > 1 else 0.0
         slope = theil_sen(points) * 60  # KiB a minute
         limit = max(MEMORY_NOISE_KIB / window * 60 if window > 0 else float("inf"), MEMORY_SLOPE_KIB_PER_H / 60)
+        # A leak also ends above every earlier peak; memory that rises and falls (a DDS stack's
+        # buffers) can have a rising median slope and still end lower than it began.
+        early = [kib for _, kib in points[:max(1, len(points) // 4)]]
+        rise = points[-1][1] - max(early) if points else 0
         return {"process": name, "what": "rss_anon_kib", "start": a["rss_anon_kib"], "end": b["rss_anon_kib"],
                 "limit": f"slope {limit:.0f} KiB/min" if judged else "shown", "slope_kib_per_min": round(slope, 1),
-                "samples": len(points), "ok": slope <= limit or not judged}
+                "rise_over_first_quarter_kib": rise, "samples": len(points),
+                "ok": slope <= limit or rise <= MEMORY_NOISE_KIB or not judged}
 
     def deliveries(self):
         """Frames each long-lived (or restarted C++) reader got per stream, against the frames the
