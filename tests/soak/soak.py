@@ -811,7 +811,10 @@ class Soak:
                   "readers": kinds, "chaos": self.chaos, "resources": resources,
                   "failures": self.failures, "violations": self.violations, "deliveries": deliveries,
                   "publish_gaps": self.publish_gaps, "recordings": self.recordings,
-                  "faults": sorted(self.faults), "judged": [c[0] for c in checks[:-1]]}
+                  "faults": sorted(self.faults), "judged": [c[0] for c in checks[:-1]],
+                  # private memory over the run, for people judging a slope: [seconds, KiB], ≤ 120 a process
+                  "memory": {name: [[round(t - self.t0, 1), kib] for t, kib in points[::max(1, len(points) // 120)]]
+                             for name, points in self.memory.items()}}
         if self.args.json:
             with open(self.args.json, "w") as f:
                 json.dump(result, f, indent=1)
