@@ -18,14 +18,18 @@ if(NOT TARGET sim_concurrency_suites)
   add_custom_target(sim_concurrency_suites)
 endif()
 
-# sim_add_test(NAME name SOURCES a.cpp… [LIBS lib…] [LABELS concurrency…] [TIMEOUT s])
+# sim_add_test(NAME name SOURCES a.cpp… [LIBS lib…] [LABELS concurrency…] [TIMEOUT s] [NO_PCH])
 # One GoogleTest executable registered as one ctest test, so ctest -j2 schedules whole suites.
-# Label "concurrency" marks the suites the ThreadSanitizer build also runs.
+# Label "concurrency" marks the suites the ThreadSanitizer build also runs. The suite compiles
+# with the shared precompiled GoogleTest header (cmake/SimBuildSpeed.cmake) unless NO_PCH.
 function(sim_add_test)
-  cmake_parse_arguments(T "" "NAME;TIMEOUT" "SOURCES;LIBS;LABELS;ARGS" ${ARGN})
+  cmake_parse_arguments(T "NO_PCH" "NAME;TIMEOUT" "SOURCES;LIBS;LABELS;ARGS" ${ARGN})
   add_executable(${T_NAME} ${T_SOURCES})
   sim_target_defaults(${T_NAME})
   target_link_libraries(${T_NAME} PRIVATE GTest::gtest GTest::gtest_main ${T_LIBS})
+  if(NOT T_NO_PCH)
+    sim_use_test_pch(${T_NAME})
+  endif()
   add_test(NAME ${T_NAME} COMMAND ${T_NAME} ${T_ARGS})
   if(NOT T_TIMEOUT)
     set(T_TIMEOUT 300)

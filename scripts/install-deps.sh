@@ -1,10 +1,19 @@
 #!/usr/bin/env bash
 # Installs every Debian package the project needs (the lists in scripts/deps/*.txt, plus any
 # list files given as arguments). Quick when nothing is missing; needs root (or sudo) otherwise.
+#
+#   scripts/install-deps.sh [LIST…]          scripts/deps/*.txt and the LISTs
+#   scripts/install-deps.sh --only LIST…     the LISTs alone (scripts/demo.sh: scripts/demo-deps.txt)
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 
-mapfile -t wanted < <(cat "$here"/deps/*.txt "$@" | sed 's/#.*//' | tr -s ' \t' '\n' | grep -v '^$' | sort -u)
+lists=("$here"/deps/*.txt)
+if [[ ${1:-} == --only ]]; then
+  shift
+  (($# > 0)) || { echo "usage: scripts/install-deps.sh --only LIST…" >&2; exit 2; }
+  lists=()
+fi
+mapfile -t wanted < <(cat "${lists[@]}" "$@" | sed 's/#.*//' | tr -s ' \t' '\n' | grep -v '^$' | sort -u)
 missing=()
 for pkg in "${wanted[@]}"; do
   # Node.js from NodeSource (as on these machines) carries its own npm, which Debian's npm

@@ -23,7 +23,11 @@ seconds=${SIM_SOAK_SECONDS:-120}
 "$root/scripts/install-deps.sh"
 if [[ ! -f $build/CMakeCache.txt ]]; then
   mkdir -p "$(dirname "$build")"
-  cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DCMAKE_INSTALL_PREFIX=/usr >"$build.configure.log" 2>&1 ||
+  # As scripts/test.sh configures build/release (Ninja, lld), so neither reconfigures the other's.
+  generator=()
+  command -v ninja >/dev/null && generator=(-G Ninja)
+  cmake -S . -B "$build" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release -DCMAKE_INSTALL_PREFIX=/usr -DSIM_USE_LLD=ON \
+    -DSIM_WERROR=ON >"$build.configure.log" 2>&1 ||
     { cat "$build.configure.log"; exit 1; }
 fi
 cmake --build "$build" -j"${SIM_JOBS:-2}" --target sim_soak_agent sim_soak_c_reader sim_soak_dds \

@@ -11,6 +11,12 @@
 # vehicle: scripts/soak.sh), deb (the Debian packages
 # from the release tree, installed with apt-get, checked and removed: scripts/test-debs.sh),
 # asan, tsan. Warnings are errors here (SIM_WERROR=ON), as in the CMake presets.
+#
+# The quick loop (the release build and suite alone, no soak; docs/build-times.md):
+#   SIM_TEST_STAGES=release SIM_SOAK_SECONDS=0 scripts/test.sh       (scripts/quick.sh)
+# SIM_CCACHE_DIR=/some/dir: compile through ccache with that cache (off unless set).
+# At the end (also after a failure) it prints the wall time of each stage's configure, build and
+# test; build/<stage>/.ninja_log has each target's (scripts/build-times.sh build/<stage>).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
@@ -20,15 +26,57 @@ stress=${SIM_STRESS_FRAMES:-1000000}
 sanitizer_stress=${SIM_SANITIZER_STRESS_FRAMES:-200000}
 fuzz_seconds=${SIM_FUZZ_SECONDS:-10}
 soak_seconds=${SIM_SOAK_SECONDS:-120}
+read -r -a ctest_args <<<"${SIM_CTEST_ARGS:-}"  # scripts/quick.sh -R name: some suites only
 
-"$root/scripts/install-deps.sh"
+# Wall time of each step, printed at the end whether the run passed or not.
+times=()
+started=$SECONDS
+timed() {  # timed LABEL command…: runs the command and records its wall time
+  local label=$1 t0=$SECONDS rc=0
+  shift
+  "$@" || rc=$?
+  times+=("$(printf '%-28s %5d s' "$label" $((SECONDS - t0)))")
+  return $rc
+}
+report_times() {
+  printf '\n=== wall time per step ===\n'
+  printf '%s\n' "${times[@]}"
+  printf '%-28s %5d s\n' "total" $((SECONDS - started))
+}
+trap report_times EXIT
+
+timed "install-deps" "$root/scripts/install-deps.sh"
 
 stage() { printf '\n=== %s ===\n' "$*"; }
+# Ninja when there (scripts/deps/core.txt: ninja-build): per-target times in .ninja_log and no
+# make recursion; lld links; ccache only when SIM_CCACHE_DIR names a cache that survives runs.
+generator=()
+command -v ninja >/dev/null && generator=(-G Ninja)
+launcher=(-DCMAKE_C_COMPILER_LAUNCHER= -DCMAKE_CXX_COMPILER_LAUNCHER=)  # none, even if a tree had one
+if [[ -n ${SIM_CCACHE_DIR:-} ]] && command -v ccache >/dev/null; then
+  export CCACHE_DIR=$SIM_CCACHE_DIR CCACHE_BASEDIR=$root CCACHE_NOHASHDIR=1
+  export CCACHE_SLOPPINESS=${CCACHE_SLOPPINESS:-pch_defines,time_macros,include_file_mtime,include_file_ctime}
+  launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+fi
 configure() {  # configure BUILD_DIR [cmake options…]
   local dir=$1
   shift
-  cmake -S "$root" -B "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSIM_WERROR=ON "$@" >"$dir.configure.log" 2>&1 ||
+  # A tree configured earlier with another generator (Unix Makefiles): start it afresh.
+  if [[ ${#generator[@]} -gt 0 && -f $dir/CMakeCache.txt ]] &&
+     ! grep -q '^CMAKE_GENERATOR:INTERNAL=Ninja$' "$dir/CMakeCache.txt"; then
+    rm -rf "$dir/CMakeCache.txt" "$dir/CMakeFiles"
+  fi
+  cmake -S "$root" -B "$dir" "${generator[@]}" "${launcher[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSIM_WERROR=ON \
+    -DSIM_USE_LLD=ON "$@" >"$dir.configure.log" 2>&1 ||
     { cat "$dir.configure.log"; return 1; }
+}
+
+# ctest starts the longest suites first when it knows their times (Testing/Temporary/
+# CTestCostData.txt, written by every run); a fresh clone takes them from scripts/ctest-cost/,
+# refreshed by copying a CI run's file there (docs/build-times.md).
+seed_costs() {  # seed_costs BUILD_DIR STAGE
+  local known=$root/scripts/ctest-cost/$2.txt dest=$1/Testing/Temporary/CTestCostData.txt
+  if [[ -f $known && ! -f $dest ]]; then mkdir -p "${dest%/*}" && cp "$known" "$dest"; fi
 }
 
 # Sanitizer reports end the test that triggered them, with a stack.
@@ -44,39 +92,43 @@ for s in $stages; do
       stage "release build (GCC, -O3) and full suite"
       # -O3 as a user's plain Release build (GCC 12 warns there, not at -O2); /usr: the prefix
       # of the Debian packages the deb stage makes from this tree.
-      configure build/release -DCMAKE_BUILD_TYPE=Release -DCMAKE_INSTALL_PREFIX=/usr
-      cmake --build build/release -j"$jobs"
-      SIM_STRESS_FRAMES=$stress ctest --test-dir build/release -j"$jobs" --output-on-failure
+      timed "release: configure" configure build/release -DCMAKE_BUILD_TYPE=Release -DCMAKE_INSTALL_PREFIX=/usr
+      timed "release: build" cmake --build build/release -j"$jobs"
+      seed_costs build/release release
+      SIM_STRESS_FRAMES=$stress timed "release: test" ctest --test-dir build/release -j"$jobs" --output-on-failure \
+        "${ctest_args[@]}"
       # The whole vehicle under chaos for SIM_SOAK_SECONDS (tests/soak/README.md); 0 skips it.
       if ((soak_seconds > 0)); then
         stage "soak of the whole vehicle (${soak_seconds} s)"
-        SIM_SOAK_BUILD=build/release SIM_SOAK_SECONDS=$soak_seconds "$root/scripts/soak.sh"
+        SIM_SOAK_BUILD=build/release SIM_SOAK_SECONDS=$soak_seconds timed "release: soak" "$root/scripts/soak.sh"
       fi
       ;;
     deb)
       stage "Debian packages: build, apt-get install, check, remove"
       [[ -f build/release/CPackConfig.cmake ]] || { echo "test.sh: the deb stage needs the release stage first" >&2; exit 2; }
-      "$root/scripts/test-debs.sh" build/release
+      timed "deb: build, install, check" "$root/scripts/test-debs.sh" build/release
       ;;
     asan)
       stage "AddressSanitizer + UndefinedBehaviorSanitizer, with libFuzzer targets (${fuzz_seconds} s each)"
       # -O1 and line tables only: what sanitizer reports need (stacks with file:line), at a
       # fraction of the compile and link time of -O2 -g on these 2 cores.
-      configure build/asan -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
+      timed "asan: configure" configure build/asan -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
         -DCMAKE_C_FLAGS_RELWITHDEBINFO="$sanitizer_flags" -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$sanitizer_flags" \
         -DSIM_SANITIZE=address,undefined -DSIM_FUZZ=ON -DSIM_FUZZ_SECONDS="$fuzz_seconds" \
         -DSIM_BUILD_BENCH=OFF
-      cmake --build build/asan -j"$jobs"
-      SIM_STRESS_FRAMES=$sanitizer_stress ctest --test-dir build/asan -j"$jobs" --output-on-failure
+      timed "asan: build" cmake --build build/asan -j"$jobs"
+      seed_costs build/asan asan
+      SIM_STRESS_FRAMES=$sanitizer_stress timed "asan: test" ctest --test-dir build/asan -j"$jobs" --output-on-failure
       ;;
     tsan)
       stage "ThreadSanitizer, concurrency suites"
-      configure build/tsan -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
+      timed "tsan: configure" configure build/tsan -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
         -DCMAKE_C_FLAGS_RELWITHDEBINFO="$sanitizer_flags" -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$sanitizer_flags" \
         -DSIM_SANITIZE=thread -DSIM_BUILD_DRIVERS=OFF -DSIM_BUILD_BENCH=OFF
       # Only the suites it runs and the programs they start (cmake/SimHelpers.cmake).
-      cmake --build build/tsan -j"$jobs" --target sim_concurrency_suites
-      SIM_STRESS_FRAMES=$sanitizer_stress ctest --test-dir build/tsan -j"$jobs" -L concurrency \
+      timed "tsan: build" cmake --build build/tsan -j"$jobs" --target sim_concurrency_suites
+      seed_costs build/tsan tsan
+      SIM_STRESS_FRAMES=$sanitizer_stress timed "tsan: test" ctest --test-dir build/tsan -j"$jobs" -L concurrency \
         --output-on-failure
       ;;
     *) echo "test.sh: unknown stage '$s' (release, deb, asan, tsan)" >&2; exit 2 ;;

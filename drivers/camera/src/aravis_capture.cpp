@@ -71,6 +71,8 @@ struct AravisCapture::Impl {
   std::string name;
   std::atomic<bool> lost{false};
   bool device_time = false;  // stamp with the camera's clock: asked for, or PTP is on
+  ReportedClock reported;    // the camera's clock as last read (main thread), for any reader
+  std::chrono::steady_clock::time_point clock_read{};  // when it was read
   std::optional<std::uint64_t> last_frame_id;  // touched by the stream thread only
   std::atomic<std::uint64_t> published{0};
   std::atomic<std::uint64_t> incomplete{0};
@@ -163,6 +165,57 @@ struct AravisCapture::Impl {
     return {};
   }
 
+  // The first of `names` the camera has as an integer, or nullopt.
+  static std::optional<std::int64_t> integer_feature(ArvDevice* device, std::initializer_list<const char*> names) {
+    for (const char* name : names) {
+      if (arv_device_get_feature(device, name) == nullptr) continue;
+      GError* error = nullptr;
+      const gint64 value = arv_device_get_integer_feature_value(device, name, &error);
+      if (error == nullptr) return value;
+      g_clear_error(&error);
+    }
+    return std::nullopt;
+  }
+
+  // The camera's PTP features, as far as it has them (SFNC names first, then GigE Vision's).
+  static PtpReading read_ptp(ArvDevice* device) {
+    PtpReading ptp;
+    for (const char* name : {"PtpEnable", "GevIEEE1588"}) {
+      if (arv_device_get_feature(device, name) == nullptr) continue;
+      GError* error = nullptr;
+      ptp.has_ptp = true;
+      ptp.enabled = arv_device_get_boolean_feature_value(device, name, &error) != FALSE && error == nullptr;
+      g_clear_error(&error);
+      break;
+    }
+    if (!ptp.enabled) return ptp;
+    // The latch makes status, offset and grandmaster one moment's values (SFNC: the Ptp* reads
+    // show the latched data set).
+    for (const char* latch : {"PtpDataSetLatch", "GevIEEE1588DataSetLatch"}) {
+      if (arv_device_get_feature(device, latch) == nullptr) continue;
+      GError* error = nullptr;
+      arv_device_execute_command(device, latch, &error);
+      g_clear_error(&error);
+      break;
+    }
+    ptp.status = first_feature(device, {"PtpStatus", "GevIEEE1588StatusLatched", "GevIEEE1588Status"});
+    ptp.servo = first_feature(device, {"PtpServoStatus"});
+    ptp.offset_from_master_ns = integer_feature(device, {"PtpOffsetFromMaster", "GevIEEE1588OffsetFromMaster"});
+    if (const auto id = integer_feature(device, {"PtpGrandmasterClockID"})) {
+      ptp.grandmaster = static_cast<std::uint64_t>(*id);
+    }
+    return ptp;
+  }
+
+  // Reads the camera's clock into `reported` (the control channel: main thread, off the frame path).
+  void report_clock(ArvDevice* device) {
+    const ClockStatus clock = genicam_clock_status(read_ptp(device), device_time, realtime_ns());
+    // Said once when it changes, not every second.
+    if (!clock.problem.empty() && clock.problem != reported().problem) log("warning: " + clock.problem);
+    reported.set(clock);
+    clock_read = std::chrono::steady_clock::now();
+  }
+
   // config.sensor completed with the device info and the clock of the stamps; the calibration's
   // size checked against the frames (an error on the first connect, dropped with a log line
   // after a reconnect in another size).
@@ -211,6 +264,7 @@ struct AravisCapture::Impl {
     ArvDevice* device = arv_camera_get_device(camera);
     if (auto e = apply_features(device)) return e;
     device_time = uses_device_time(device);
+    report_clock(device);
     if (auto e = create_decoder()) return e;
     if (auto e = prepare_writer(device, first)) return e;
     return start_acquisition(device);
@@ -434,6 +488,9 @@ void AravisCapture::run(const std::atomic<bool>& stop,
       s.disconnect();
       next_retry = Clock::now();
     }
+    if (s.camera != nullptr && !s.lost.load() && Clock::now() - s.clock_read >= std::chrono::seconds(1)) {
+      s.report_clock(arv_camera_get_device(s.camera));  // about once a second, off the frame path
+    }
     if (s.camera == nullptr && Clock::now() >= next_retry) {
       if (auto error = s.connect()) {
         next_retry = Clock::now() + s.config.retry_period;
@@ -466,6 +523,7 @@ const ImageLayout& AravisCapture::output_layout() const noexcept {
 }
 std::string AravisCapture::camera_name() const { return impl_->name; }
 bool AravisCapture::connected() const noexcept { return impl_->camera != nullptr; }
+ReportedClock AravisCapture::reported_clock() const { return impl_->reported; }
 
 std::vector<std::string> AravisCapture::list_cameras() {
   arv_update_device_list();

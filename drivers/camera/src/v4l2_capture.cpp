@@ -23,8 +23,50 @@ const char* to_string(StepResult result) noexcept {
   return "?";
 }
 
+ClockStatus v4l2_clock_status(TimestampSource timestamps, BufferClock clock, std::int64_t reported_ns) {
+  ClockStatus status;
+  status.source = ClockSource::host;  // the host's own synchronisation is judged apart
+  status.reported_ns = reported_ns;
+  status.stamps = StampClock::host_arrival;
+  if (timestamps == TimestampSource::receive) return status;
+  switch (clock) {
+    case BufferClock::monotonic:
+      status.stamps = StampClock::sensor;  // the buffer's own stamp, mapped to realtime per frame
+      return status;
+    case BufferClock::unknown:
+      status.problem =
+          "the V4L2 driver gives its buffers no stamp of a known clock (TIMESTAMP_UNKNOWN, or none), so the "
+          "frames carry the host receive time instead, late by the exposure and the transfer; say --timestamps "
+          "receive";
+      break;
+    case BufferClock::copy:
+      status.problem =
+          "the V4L2 buffers' stamps are copied from an output queue (TIMESTAMP_COPY, a memory-to-memory "
+          "device) and say nothing of this capture, so the frames carry the host receive time instead; say "
+          "--timestamps receive";
+      break;
+  }
+  status.verdict = ClockVerdict::warn;
+  return status;
+}
+
 V4l2Capture::V4l2Capture(V4l2Io& io, V4l2CaptureConfig config) noexcept
-    : io_(&io), config_(std::move(config)) {}
+    : io_(&io), config_(std::move(config)) {
+  ClockStatus before;
+  before.source = ClockSource::host;
+  if (config_.timestamps == TimestampSource::receive) before.stamps = StampClock::host_arrival;
+  reported_.set(before);
+}
+
+void V4l2Capture::report_clock(BufferClock clock, std::int64_t received) {
+  // Not per frame: when the buffers' clock changes, and once a second for reported_ns.
+  if (reported_for_ == clock && received - reported_at_ < 1'000'000'000) return;
+  const ClockStatus status = v4l2_clock_status(config_.timestamps, clock, received);
+  if (reported_for_ != clock && !status.problem.empty()) log("warning: " + status.problem);
+  reported_.set(status);
+  reported_for_ = clock;
+  reported_at_ = received;
+}
 
 Expected<V4l2Capture> V4l2Capture::start(V4l2Io& io, V4l2CaptureConfig config) {
   if (config.buffers < 2 || config.buffers > 32) {
@@ -183,12 +225,14 @@ StepResult V4l2Capture::handle(const DeviceFrame& frame) {
   }
 
   std::int64_t stamp = received;
-  if (config_.timestamps == TimestampSource::device && frame.monotonic_timestamp &&
-      frame.timestamp_ns > 0) {
-    clock_.resample();
+  // A monotonic stamp of 0 is no stamp: the receive time then, as for an unknown clock.
+  const BufferClock clock = frame.timestamp_ns > 0 ? frame.clock : BufferClock::unknown;
+  if (config_.timestamps == TimestampSource::device && clock == BufferClock::monotonic) {
+    clock_.resample();  // per frame: a realtime step or slew shows in the next stamp
     stamp = clock_.to_realtime(frame.timestamp_ns);
   }
   stamp += config_.time_offset_ns;
+  report_clock(clock, received);
 
   Loan loan = writer_->loan();
   const imaging::DecodeResult decoded = decoder_->decode(frame.bytes, loan.bytes());

@@ -520,6 +520,28 @@ std::optional<Error> V4l2Device::start(std::uint32_t buffer_count) {
   return std::nullopt;
 }
 
+const char* to_string(BufferClock clock) noexcept {
+  switch (clock) {
+    case BufferClock::unknown: return "unknown";
+    case BufferClock::monotonic: return "monotonic";
+    case BufferClock::copy: return "copy";
+  }
+  return "unknown";
+}
+
+BufferClock buffer_clock(std::uint32_t flags) noexcept {
+  switch (flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) {  // a value field, not bits
+    case V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC: return BufferClock::monotonic;
+    case V4L2_BUF_FLAG_TIMESTAMP_COPY: return BufferClock::copy;
+    default: return BufferClock::unknown;
+  }
+}
+
+StampPoint stamp_point(std::uint32_t flags) noexcept {
+  return (flags & V4L2_BUF_FLAG_TSTAMP_SRC_MASK) == V4L2_BUF_FLAG_TSTAMP_SRC_SOE ? StampPoint::start_of_exposure
+                                                                                : StampPoint::end_of_frame;
+}
+
 WaitResult V4l2Device::wait(int timeout_ms, DeviceFrame& frame) {
   pollfd fds{fd_, POLLIN, 0};
   const int ready = io_->poll(&fds, 1, timeout_ms);
@@ -543,8 +565,8 @@ WaitResult V4l2Device::wait(int timeout_ms, DeviceFrame& frame) {
   frame.sequence = buffer.sequence;
   frame.timestamp_ns = std::int64_t{buffer.timestamp.tv_sec} * 1'000'000'000 +
                        std::int64_t{buffer.timestamp.tv_usec} * 1'000;
-  frame.monotonic_timestamp = (buffer.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) ==
-                              V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
+  frame.clock = buffer_clock(buffer.flags);
+  frame.stamp_point = stamp_point(buffer.flags);
   frame.error = (buffer.flags & V4L2_BUF_FLAG_ERROR) != 0;
   return WaitResult::frame;
 }

@@ -28,7 +28,35 @@ std::optional<std::string> describe(const apps::SensorOptions& options, const st
   return std::nullopt;
 }
 
+void add_clock_options(CLI::App& app, ClockToleranceOptions& o) {
+  app.add_option("--clock-offset-ok-ms", o.offset_ok_ms,
+                 "how far a frame's stamp may lie from its arrival before the clock check warns: the "
+                 "exposure, readout and transfer time")
+      ->check(CLI::Range(0.0, 999.0));
+  app.add_option("--clock-spread-warn-ms", o.spread_warn_ms,
+                 "how much that may vary from frame to frame before the clock check warns")
+      ->check(CLI::Range(0.0, 999.0));
+}
+
+// The tolerance options into nanoseconds; the problem's sentence otherwise.
+std::optional<std::string> finish_clock_options(ClockToleranceOptions& o) {
+  o.tolerance = camera_clock_tolerance();
+  o.tolerance.offset_ok_ns = static_cast<std::int64_t>(o.offset_ok_ms * 1e6);
+  o.tolerance.spread_warn_ns = static_cast<std::int64_t>(o.spread_warn_ms * 1e6);
+  if (o.tolerance.offset_ok_ns >= o.tolerance.offset_error_ns) {
+    return "--clock-offset-ok-ms must be below 1000: a stamp a second from its arrival cannot be paired";
+  }
+  return std::nullopt;
+}
+
 }  // namespace
+
+timing::ClockTolerance camera_clock_tolerance() noexcept {
+  timing::ClockTolerance tolerance;
+  tolerance.offset_ok_ns = 250'000'000;
+  tolerance.spread_warn_ns = 50'000'000;
+  return tolerance;
+}
 
 void add_v4l2_options(apps::CommandLine& cli, V4l2Options& o) {
   auto& app = cli.app();
@@ -53,6 +81,7 @@ void add_v4l2_options(apps::CommandLine& cli, V4l2Options& o) {
   app.add_option("--retry-period-ms", o.retry_period_ms,
                  "between attempts to reopen a lost device");
   app.add_flag("--checksum", o.config.checksum, "publish an XXH3 checksum with every frame");
+  add_clock_options(app, o.clock);
   app.add_flag("--list-formats", o.list_formats, "list the device's formats, sizes and rates");
   app.add_flag("--list-controls", o.list_controls, "list the device's controls");
   apps::add_sensor_options(cli, o.sensor, apps::SensorKind::camera);
@@ -77,6 +106,7 @@ std::optional<std::string> finish_v4l2_options(V4l2Options& o) {
   if (auto problem = split_pairs(o.controls, "--ctrl", pairs)) return problem;
   o.config.controls.clear();
   for (auto& [key, value] : pairs) o.config.controls.push_back({key, value});
+  if (auto problem = finish_clock_options(o.clock)) return problem;
   return describe(o.sensor, o.config.stream, o.config.sensor);
 }
 
@@ -109,6 +139,7 @@ void add_aravis_options(apps::CommandLine& cli, AravisOptions& o) {
   app.add_flag("--device-timestamps", o.config.device_timestamps,
                "stamp frames with the camera's clock (enable PTP on the camera)");
   app.add_option("--retry-period-ms", o.retry_period_ms, "between attempts to find a lost camera");
+  add_clock_options(app, o.clock);
   app.add_flag("--checksum", o.config.checksum, "publish an XXH3 checksum with every frame");
   app.add_flag("--list", o.list, "list the cameras Aravis finds and exit");
   apps::add_sensor_options(cli, o.sensor, apps::SensorKind::camera);
@@ -129,6 +160,7 @@ std::optional<std::string> finish_aravis_options(AravisOptions& o) {
   o.config.retry_period = std::chrono::milliseconds(o.retry_period_ms);
   o.config.features.clear();
   if (auto problem = split_pairs(o.features, "--feature", o.config.features)) return problem;
+  if (auto problem = finish_clock_options(o.clock)) return problem;
   return describe(o.sensor, o.config.stream, o.config.sensor);
 }
 

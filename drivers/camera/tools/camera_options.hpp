@@ -12,8 +12,22 @@
 #include "sim/apps/sensor_options.hpp"
 #include "sim/camera/aravis_capture.hpp"
 #include "sim/camera/v4l2_capture.hpp"
+#include "sim/timing/clock_check.hpp"
 
 namespace sim::camera {
+
+// What the clock check accepts of a camera: its stamp (start of exposure, or the frame's end)
+// lies before the frame's arrival by the exposure, readout and transfer, tens of milliseconds
+// that vary with the exposure. That is a camera working, not a clock error; a LiDAR's defaults
+// (10 ms offset, 5 ms spread) would warn on every camera. 250 ms offset, 50 ms spread.
+timing::ClockTolerance camera_clock_tolerance() noexcept;
+
+// --clock-offset-ok-ms and --clock-spread-warn-ms: the camera's clock tolerance.
+struct ClockToleranceOptions {
+  timing::ClockTolerance tolerance = camera_clock_tolerance();
+  double offset_ok_ms = 250;
+  double spread_warn_ms = 50;
+};
 
 struct V4l2Options {
   V4l2CaptureConfig config;
@@ -28,6 +42,7 @@ struct V4l2Options {
   bool list_controls = false;
   bool quiet = false;
   apps::SensorOptions sensor;  // --frame-id … --camera-info
+  ClockToleranceOptions clock;
 };
 
 void add_v4l2_options(apps::CommandLine& cli, V4l2Options& options);
@@ -45,6 +60,7 @@ struct AravisOptions {
   bool list = false;
   bool quiet = false;
   apps::SensorOptions sensor;  // --frame-id … --camera-info
+  ClockToleranceOptions clock;
 };
 
 void add_aravis_options(apps::CommandLine& cli, AravisOptions& options);

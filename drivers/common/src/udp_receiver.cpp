@@ -2,6 +2,7 @@
 #include "sim/lidar/udp_receiver.hpp"
 
 #include <arpa/inet.h>
+#include <ifaddrs.h>
 #include <net/if.h>
 #include <netinet/in.h>
 #include <poll.h>
@@ -85,6 +86,43 @@ bool same_address(const sockaddr_storage& sender, const IpAddress& source) noexc
   return source.family == AF_INET6 && std::memcmp(&a, &source.v6, sizeof a) == 0;
 }
 
+// The sender's address as an IpAddress (an IPv4 sender of a dual-stack socket as IPv4).
+IpAddress sender_address(const sockaddr_storage& sender) noexcept {
+  IpAddress address;
+  if (sender.ss_family == AF_INET) {
+    address.v4 = reinterpret_cast<const sockaddr_in&>(sender).sin_addr;
+  } else if (sender.ss_family == AF_INET6) {
+    const in6_addr& a = reinterpret_cast<const sockaddr_in6&>(sender).sin6_addr;
+    if (IN6_IS_ADDR_V4MAPPED(&a)) {
+      std::memcpy(&address.v4, a.s6_addr + 12, sizeof address.v4);
+    } else {
+      address.family = AF_INET6;
+      address.v6 = a;
+    }
+  }
+  return address;
+}
+
+bool is_unspecified(const IpAddress& ip) noexcept {
+  return ip.family == AF_INET ? ip.v4.s_addr == htonl(INADDR_ANY) : IN6_IS_ADDR_UNSPECIFIED(&ip.v6);
+}
+
+// The index of the interface that holds `local` (an IPv6 --bind address); 0 when none does.
+unsigned interface_of(const IpAddress& local) {
+  if (local.scope_id != 0) return local.scope_id;
+  ifaddrs* all = nullptr;
+  if (::getifaddrs(&all) != 0) return 0;
+  unsigned index = 0;
+  for (const ifaddrs* i = all; i != nullptr && index == 0; i = i->ifa_next) {
+    if (i->ifa_addr == nullptr || i->ifa_addr->sa_family != AF_INET6) continue;
+    if (std::memcmp(&reinterpret_cast<const sockaddr_in6*>(i->ifa_addr)->sin6_addr, &local.v6, sizeof local.v6) == 0) {
+      index = ::if_nametoindex(i->ifa_name);
+    }
+  }
+  ::freeifaddrs(all);
+  return index;
+}
+
 socklen_t socket_address(const IpAddress& ip, std::uint16_t port, sockaddr_storage& out) {
   out = {};
   if (ip.family == AF_INET) {
@@ -116,15 +154,27 @@ int set_receive_buffer(int fd, int wanted) {
   return granted;
 }
 
-bool join_group(int fd, const IpAddress& group) {
+#ifndef IPV6_MULTICAST_ALL
+#define IPV6_MULTICAST_ALL 29  // Linux 4.20; older C libraries lack the name
+#endif
+
+// Joins the group on the interface of `local` (--bind: "on this NIC"; the wildcard: the one the
+// routing table picks) and receives only the groups this socket joined: Linux's default
+// (IP_MULTICAST_ALL 1) hands a socket bound to the wildcard every group any socket of the host
+// joined on its port, so two drivers on one port with two groups would each get both sensors.
+bool join_group(int fd, const IpAddress& group, const IpAddress& local) {
+  const int off = 0;
   if (group.family == AF_INET) {
+    ::setsockopt(fd, IPPROTO_IP, IP_MULTICAST_ALL, &off, sizeof off);
     ip_mreq membership{};
     membership.imr_multiaddr = group.v4;
-    membership.imr_interface.s_addr = htonl(INADDR_ANY);
+    membership.imr_interface = local.family == AF_INET ? local.v4 : in_addr{htonl(INADDR_ANY)};
     return ::setsockopt(fd, IPPROTO_IP, IP_ADD_MEMBERSHIP, &membership, sizeof membership) == 0;
   }
+  ::setsockopt(fd, IPPROTO_IPV6, IPV6_MULTICAST_ALL, &off, sizeof off);  // fails before 4.20: harmless
   ipv6_mreq membership{};
   membership.ipv6mr_multiaddr = group.v6;
+  membership.ipv6mr_interface = group.scope_id != 0 ? group.scope_id : is_unspecified(local) ? 0 : interface_of(local);
   return ::setsockopt(fd, IPPROTO_IPV6, IPV6_JOIN_GROUP, &membership, sizeof membership) == 0;
 }
 
@@ -231,6 +281,7 @@ std::string multicast_group_problem(const std::string& group, IpVersions version
 std::string describe_problems(const ReceiveCounters& c) {
   std::string text;
   if (c.other_source != 0) text += " other-source " + std::to_string(c.other_source);
+  if (c.other_senders != 0) text += " other-senders " + std::to_string(c.other_senders);
   if (c.unrecognised != 0) text += " unrecognised " + std::to_string(c.unrecognised);
   if (c.oversized != 0) text += " oversized " + std::to_string(c.oversized);
   return text;
@@ -263,6 +314,7 @@ struct UdpReceiver::Impl {
   ReceiveCounters counters;
   const ReceiverCallbacks* callbacks = nullptr;  // during run()
   std::int64_t last_arrival_ns = 0;              // kernel stamp of the last data packet
+  std::optional<IpAddress> first_sender;         // without --source: the first one heard
 
   Expected<void> open(std::span<const UdpPort> ports) {
     const auto local_ip = parse_address(listen.bind, listen.versions);
@@ -304,8 +356,16 @@ struct UdpReceiver::Impl {
     ::setsockopt(fd.get(), SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on);
     const int granted = set_receive_buffer(fd.get(), listen.receive_buffer);
     if (sockets.empty()) granted_buffer = granted;
+    // A group's datagrams are addressed to the group, never to a unicast --bind address: the
+    // socket takes the wildcard and --bind chooses the membership's interface instead.
+    IpAddress bound = local_ip;
+    if (group) {
+      bound.v4.s_addr = htonl(INADDR_ANY);
+      bound.v6 = in6addr_any;
+      bound.scope_id = 0;
+    }
     sockaddr_storage local{};
-    const socklen_t length = socket_address(local_ip, port.port, local);
+    const socklen_t length = socket_address(bound, port.port, local);
     if (::bind(fd.get(), reinterpret_cast<const sockaddr*>(&local), length) != 0) {
       const int error = errno;
       const std::string number = std::to_string(port.port);
@@ -317,9 +377,11 @@ struct UdpReceiver::Impl {
       return failed("cannot bind to " + listen.bind + ":" + number + ": " + std::strerror(error) +
                     "; check --bind and " + port.option + ".");
     }
-    if (group && !join_group(fd.get(), *group)) {
-      return failed("cannot join multicast group " + listen.multicast_group + ": " + std::strerror(errno) +
-                    "; check that an interface with a multicast route exists.");
+    if (group && !join_group(fd.get(), *group, local_ip)) {
+      const std::string where = is_unspecified(local_ip) ? "" : " on the interface of " + listen.bind;
+      return failed("cannot join multicast group " + listen.multicast_group + where + ": " +
+                    std::strerror(errno) + "; check that an interface with a multicast route exists" +
+                    (where.empty() ? "." : " and that --bind is an address of this host."));
     }
     return fd;
   }
@@ -357,6 +419,25 @@ struct UdpReceiver::Impl {
     return taken;
   }
 
+  // Without --source every sender is taken: a second one is two sensors on one port (or group),
+  // whose packets the family would decode as one sensor's. Counted, and said once.
+  void count_sender(const sockaddr_storage& sender) {
+    if (!first_sender) {
+      first_sender = sender_address(sender);
+      return;
+    }
+    if (same_address(sender, *first_sender)) return;
+    if (counters.other_senders++ != 0) return;
+    sockaddr_storage first{};
+    socket_address(*first_sender, 0, first);
+    const ReceiverCallbacks* c = callbacks;
+    if (c != nullptr && c->note) {
+      c->note("warning: datagrams from " + address_text(sender) + " arrive besides those from " +
+              address_text(first) + ": two sensors on one port are decoded as one; give each its own "
+              "port (or multicast group) and driver, or choose one with --source");
+    }
+  }
+
   bool take(std::size_t socket, DatagramHandler& handler, std::size_t& taken) {
     for (;;) {
       // 0: all taken (EAGAIN). Other errors on an unconnected UDP socket are transient (e.g. an
@@ -371,6 +452,7 @@ struct UdpReceiver::Impl {
           ++counters.other_source;
           continue;
         }
+        if (!source) count_sender(batch.sender(i));
         if (!handler.on_datagram(batch.datagram(i, socket, now))) return false;
       }
       if (count < batch.size()) return true;

@@ -637,6 +637,7 @@ PushResult FrameAssembler::push(std::span<const std::uint8_t> payload,
   }
   ++counters_.packets;
   ++packet_counter_;
+  result.packet_ns = packet.time_ns();
   last_rpm_ = packet.motor_rpm();
   last_safety_ = packet.functional_safety();
   count_loss(packet);

@@ -7,15 +7,19 @@
 
 #include <chrono>
 #include <cstdio>
+#include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 
+#include "sim/apps/clock_poll.hpp"
 #include "sim/apps/command_line.hpp"
 #include "sim/apps/hesai_options.hpp"
 #include "sim/apps/live_lidar.hpp"
 #include "sim/apps/stop_signal.hpp"
 #include "sim/hesai/live_receiver.hpp"
 #include "sim/hesai/ptc_client.hpp"
+#include "sim/hesai/ptc_clock.hpp"
 
 namespace {
 
@@ -26,6 +30,7 @@ struct SensorOptions {
   std::string sensor_ip;  // empty: --source, else Hesai's factory address
   int ptc_port = sim::hesai::ptc::default_port;
   double ptc_timeout = 3.0;
+  double clock_poll_seconds = 1.0;  // 0: the sensor's clock is not asked about
 };
 
 struct Options {
@@ -48,12 +53,15 @@ void add_options(sim::apps::CommandLine& cli, Options& o) {
                "check it and cache it in the --calibration file [~/.cache/sim/hesai-<ip>.csv]; "
                "when the sensor does not deliver it, the cached file is used with a warning");
   app.add_option("--sensor-ip", o.sensor.sensor_ip,
-                 "the sensor's address for --calibration-from-sensor [--source, else 192.168.1.201]")
+                 "the sensor's address for --calibration-from-sensor and its clock [--source, else "
+                 "192.168.1.201]")
       ->type_name("IP");
   app.add_option("--ptc-port", o.sensor.ptc_port, "the sensor's PTC port")->check(CLI::Range(1, 65535));
   app.add_option("--ptc-timeout", o.sensor.ptc_timeout,
-                 "seconds the whole calibration download may take")
+                 "seconds the whole calibration download, or one reading of the sensor's clock, "
+                 "may take")
       ->check(CLI::Range(0.01, 60.0));
+  sim::apps::add_clock_poll_option(cli, o.sensor.clock_poll_seconds);
   sim::apps::add_output_options(
       cli, o.receive, "print one line of counters on exit: summary frames=… packets=… lost=… malformed=…");
 }
@@ -105,6 +113,20 @@ std::optional<int> fetch_calibration(const sim::apps::CommandLine& cli, Options&
   return std::nullopt;
 }
 
+// The sensor's clock over PTC every --clock-poll-seconds, off the frame path, when its address
+// is known (--sensor-ip or --source); nullptr when not asked.
+std::unique_ptr<sim::apps::ClockPoll> poll_clock(const Options& o) {
+  const std::string host = !o.sensor.sensor_ip.empty() ? o.sensor.sensor_ip : o.receive.source;
+  if (o.sensor.clock_poll_seconds <= 0 || host.empty()) return nullptr;
+  sim::hesai::PtcEndpoint sensor;
+  sensor.host = host;
+  sensor.port = static_cast<std::uint16_t>(o.sensor.ptc_port);
+  sensor.timeout = std::chrono::milliseconds(static_cast<long>(o.sensor.ptc_timeout * 1000));
+  const auto period = std::chrono::milliseconds(static_cast<long>(o.sensor.clock_poll_seconds * 1000));
+  return std::make_unique<sim::apps::ClockPoll>(
+      sim::hesai::PtcClockReader(sensor, sim::apps::hesai_model(o.stream)), period);
+}
+
 int run(const sim::apps::CommandLine& cli, Options& o) {
   // Before any socket or stream exists: a stop request from here on ends the program cleanly.
   const auto& stop = sim::apps::StopSignal::install();
@@ -137,10 +159,22 @@ int run(const sim::apps::CommandLine& cli, Options& o) {
     return cli.fail(std::string_view(published.error().message));
   }
   if (auto code = cli.apply_placement(o.stream.placement)) return *code;
+  const sim::apps::HostClockSource host_clock(o.receive);
 
-  return sim::apps::run_model_receiver(
-      cli, *receiver, status, stop.fd(),
-      {"Hesai", o.stream.stream, receiver->port(), network.listen.silence_timeout.count()});
+  sim::apps::ModelReceiverWords words{"Hesai", o.stream.stream, receiver->port(),
+                                      network.listen.silence_timeout.count()};
+  const auto clock = poll_clock(o);
+  // The stream's clock check: its packets against their arrival, with the host's clock and what
+  // the sensor reports of its own.
+  sim::lidar::ClockSources sources = host_clock.sources();
+  if (clock) sources.reported = [&clock] { return clock->latest(); };
+  receiver->set_clock_sources(std::move(sources));
+  if (clock) {
+    words.clock_tick = [&clock, &status] {
+      for (const auto& note : clock->take_notes()) status.line().note(sim::apps::sentence(note));
+    };
+  }
+  return sim::apps::run_model_receiver(cli, *receiver, status, stop.fd(), words);
 }
 
 }  // namespace

@@ -123,8 +123,12 @@ std::size_t FrameAssembler::max_points() const noexcept {
 void FrameAssembler::set_output(std::span<LidarPoint> output) noexcept {
   output_ = output;
   attached_ = true;
-  // Mid-frame, the points decoded so far went elsewhere: what follows is a partial frame.
-  if (open_) open_ = false;
+  // Mid-frame, the points decoded so far went elsewhere: what follows is a partial frame (not
+  // late packets of a frame already closed).
+  if (open_) {
+    open_ = false;
+    have_frame_id_ = false;
+  }
   if (pending_size_ != 0) {
     LidarPacket packet;
     const std::span<const std::uint8_t> bytes(pending_.data(), pending_size_);
@@ -138,15 +142,43 @@ void FrameAssembler::set_output(std::span<LidarPoint> output) noexcept {
 
 void FrameAssembler::reset() noexcept {
   open_ = false;
+  have_frame_id_ = false;
   pending_size_ = 0;
+}
+
+// A frame_id's columns come in measurement id order from 0 up, so a window that wraps through
+// column 0 (as [370, 85]) arrives as its end (0 … 85) and then its start (370 … W − 1): in
+// arrival order it begins at column 0 and ends at column W − 1.
+unsigned FrameAssembler::first_column() const noexcept {
+  const auto& window = metadata_.column_window;
+  return window[0] > window[1] ? 0 : window[0];
+}
+
+unsigned FrameAssembler::last_column() const noexcept {
+  const auto& window = metadata_.column_window;
+  return window[0] > window[1] ? columns_ - 1 : window[1];
+}
+
+// A packet of the frame already closed, or of an earlier frame, arrived late (reordered on the
+// way): ouster-sdk drops it (FrameBatcher, frame_id_difference <= 0), and so does SIM, instead of
+// closing the frame in progress on it. Further back than a few frames is a sensor that restarted
+// its frame counter: a new frame.
+bool FrameAssembler::late(std::uint32_t frame_id) const noexcept {
+  if (!have_frame_id_) return false;
+  constexpr std::uint32_t late_frames = 4;
+  const std::uint32_t mask = metadata_.format.fusa_header ? 0xffffffffU : 0xffffU;
+  const std::uint32_t behind = (frame_id_ - frame_id) & mask;
+  if (behind == 0) return !open_;
+  return behind <= late_frames;
 }
 
 void FrameAssembler::begin(const LidarPacket& packet, std::int64_t host_ns) noexcept {
   open_ = true;
   frame_id_ = packet.frame_id();
+  have_frame_id_ = true;
   whole_ = false;
   for (unsigned c = 0; c < packet.columns(); ++c) {
-    if (packet.column(c).measurement_id == metadata_.column_window[0]) whole_ = true;
+    if (packet.column(c).measurement_id == first_column()) whole_ = true;
   }
   have_stamp_ = false;
   stamp_ns_ = 0;
@@ -169,6 +201,16 @@ PushResult FrameAssembler::push(std::span<const std::uint8_t> payload,
     return result;
   }
   ++counters_.packets;
+  for (unsigned c = 0; c < packet.columns(); ++c) {
+    const Column& column = packet.column(c);
+    if (!column.valid || column.timestamp_ns > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max())) continue;
+    result.packet_ns = static_cast<std::int64_t>(column.timestamp_ns);  // a late packet's too
+    break;
+  }
+  if (late(packet.frame_id())) {
+    ++counters_.late_packets;
+    return result;
+  }
   if (open_ && packet.frame_id() != frame_id_) {
     // The last packet of the frame in progress was lost: it ends here.
     result.frame = close();
@@ -182,8 +224,9 @@ PushResult FrameAssembler::push(std::span<const std::uint8_t> payload,
   }
   if (!open_) begin(packet, host_receive_ns);
   decode(packet);
+  const unsigned last = last_column();
   for (unsigned c = 0; c < packet.columns(); ++c) {
-    if (packet.column(c).measurement_id == metadata_.column_window[1]) {
+    if (packet.column(c).measurement_id == last) {
       result.frame = close();
       break;
     }

@@ -180,8 +180,15 @@ Expected<void> read_geometry(const Json& root, Metadata& m) {
     if (!d) return d.error();
     m.lidar_origin_to_beam_origin_mm = *d;
     if (find(root, beams_section, "beam_to_lidar_transform") == nullptr) m.beam_to_lidar[3] = *d;
-  } else {
+  } else if (find(root, beams_section, "beam_to_lidar_transform") != nullptr) {
     m.lidar_origin_to_beam_origin_mm = std::hypot(m.beam_to_lidar[3], m.beam_to_lidar[11]);
+  } else {
+    // Neither (FW 1.14 and older): ouster-sdk's defaults by product line (sensor_info.cpp).
+    const std::string line = text_of(root, info_section, "prod_line");
+    const auto starts = [&line](std::string_view p) { return line.rfind(p, 0) == 0; };
+    const double origin = starts("OS-0-") ? 27.67 : starts("OS-1-") ? 15.806 : starts("OS-2-") ? 13.762 : 12.163;
+    m.lidar_origin_to_beam_origin_mm = origin;
+    m.beam_to_lidar[3] = origin;
   }
   if (find(root, lidar_section, "lidar_to_sensor_transform") == nullptr) {
     return invalid("the metadata has no lidar_to_sensor_transform; points cannot be put in the "

@@ -3,11 +3,17 @@
 // frame per rotation. The work is the stream library's (sim/ouster/live_receiver.hpp: sockets,
 // batched receive, silence; LidarStream: decode straight into shared memory, the path
 // sim_replay_pcap takes too); this program is its command line, its messages and its exit code.
+#include <atomic>
 #include <chrono>
+#include <cmath>
+#include <functional>
+#include <memory>
 #include <cstdio>
 #include <optional>
 #include <string>
+#include <utility>
 
+#include "sim/apps/clock_poll.hpp"
 #include "sim/apps/command_line.hpp"
 #include "sim/apps/live_lidar.hpp"
 #include "sim/apps/ouster_options.hpp"
@@ -15,6 +21,7 @@
 #include "sim/lidar/frame_publisher.hpp"
 #include "sim/ouster/live_receiver.hpp"
 #include "sim/ouster/metadata_client.hpp"
+#include "sim/ouster/time_client.hpp"
 
 namespace {
 
@@ -29,6 +36,8 @@ struct Options {
   std::string sensor_ip;
   int http_port = 80;
   double http_timeout = 5.0;
+  double clock_poll_seconds = 1.0;  // 0: the sensor's clock is not asked about
+  std::string tai_correction;       // "", "auto" or seconds
 };
 
 void add_options(sim::apps::CommandLine& cli, Options& o) {
@@ -51,8 +60,28 @@ void add_options(sim::apps::CommandLine& cli, Options& o) {
       ->check(sim::apps::validator(
           [](const std::string& ip) { return sim::lidar::address_problem(ip, sim::lidar::IpVersions::v4); }, "ADDR"));
   app.add_option("--http-port", o.http_port, "the sensor's HTTP port")->check(CLI::Range(1, 65535));
-  app.add_option("--http-timeout", o.http_timeout, "seconds the metadata download may take")
+  app.add_option("--http-timeout", o.http_timeout,
+                 "seconds the metadata download, or one reading of the sensor's clock, may take")
       ->check(CLI::Range(0.01, 60.0));
+  sim::apps::add_clock_poll_option(cli, o.clock_poll_seconds);
+  app.add_option("--tai-correction", o.tai_correction,
+                 "subtract TAI - UTC from the sensor's stamps (a PTP master serving TAI): 'auto' "
+                 "takes the sensor's current_utc_offset while it reports the PTP timescale with a "
+                 "valid offset (needs the clock asked about), or give the seconds (37); the "
+                 "stream's clock record says it was done")
+      ->type_name("auto|SECONDS")
+      ->check(sim::apps::validator(
+          [](const std::string& v) -> std::string {
+            if (v == "auto") return {};
+            try {
+              std::size_t used = 0;
+              const double seconds = std::stod(v, &used);
+              if (used == v.size() && seconds >= -1000 && seconds <= 1000) return {};
+            } catch (...) {
+            }
+            return "'" + v + "' is neither auto nor seconds between -1000 and 1000 (37 for TAI today)";
+          },
+          "auto|SECONDS"));
   sim::apps::add_output_options(cli, o.receive, "print one line of counters on exit: summary frames=… packets=…");
 }
 
@@ -89,6 +118,43 @@ std::optional<int> load_metadata(const sim::apps::CommandLine& cli, Options& o, 
   return std::nullopt;
 }
 
+// The sensor's clock over HTTP every --clock-poll-seconds, off the frame path, when its address
+// is known (--sensor-ip or --source); nullptr when not asked.
+std::unique_ptr<sim::apps::ClockPoll> poll_clock(const Options& o) {
+  const std::string host = !o.sensor_ip.empty() ? o.sensor_ip : o.receive.source;
+  if (o.clock_poll_seconds <= 0 || host.empty()) return nullptr;
+  sim::ouster::HttpEndpoint sensor;
+  sensor.host = host;
+  sensor.port = static_cast<std::uint16_t>(o.http_port);
+  sensor.timeout = std::chrono::milliseconds(static_cast<long>(o.http_timeout * 1000));
+  const auto period = std::chrono::milliseconds(static_cast<long>(o.clock_poll_seconds * 1000));
+  return std::make_unique<sim::apps::ClockPoll>(sim::ouster::HttpClockReader(sensor), period);
+}
+
+// --tai-correction: what is subtracted from the stamps now (ns), applied on the receive thread,
+// read by the clock report from any thread.
+struct TaiCorrection {
+  bool automatic = false;
+  std::atomic<std::int64_t> applied_ns{0};
+
+  // With `auto`: the correction the latest clock report calls for; nullopt to keep the current
+  // one (no fresh report, or PTP timescale without a valid offset).
+  static std::optional<std::int64_t> wanted(const sim::ClockStatus& clock) {
+    if (clock.reported_ns == 0 || clock.source != sim::ClockSource::ptp) return std::nullopt;
+    if (!clock.ptp_timescale) return 0;  // the master serves UTC: nothing to correct
+    if (!clock.utc_offset_s) return std::nullopt;
+    return std::int64_t{*clock.utc_offset_s} * 1'000'000'000;
+  }
+};
+
+// The clock record's reported half: the sensor's report and what the driver does to its stamps.
+sim::ClockStatus reported_clock(const sim::apps::ClockPoll* poll, const TaiCorrection& tai) {
+  sim::ClockStatus clock = poll != nullptr ? poll->latest() : sim::ClockStatus{};
+  clock.tai_correction_ns = tai.applied_ns.load(std::memory_order_relaxed);
+  clock.stamps = clock.tai_correction_ns != 0 ? sim::StampClock::sensor_tai_corrected : sim::StampClock::sensor;
+  return clock;
+}
+
 int run(const sim::apps::CommandLine& cli, Options& o) {
   const auto& stop = sim::apps::StopSignal::install();
   sim::apps::LiveStatus status(tool, o.receive);
@@ -112,6 +178,38 @@ int run(const sim::apps::CommandLine& cli, Options& o) {
   auto stream = sim::ouster::LidarStream::create(*config, *metadata);
   if (!stream) return cli.fail(std::string_view(stream.error().message));
   if (auto code = cli.apply_placement(o.stream.placement)) return *code;
+  const sim::apps::HostClockSource host_clock(o.receive);
+
+  const auto clock = poll_clock(o);
+  TaiCorrection tai;
+  tai.automatic = o.tai_correction == "auto";
+  if (tai.automatic && !clock) {
+    return cli.usage_error("--tai-correction auto takes the offset from the sensor's clock: give --sensor-ip "
+                           "(or --source) and a --clock-poll-seconds above 0, or give the seconds (37)");
+  }
+  if (!o.tai_correction.empty() && !tai.automatic) {
+    tai.applied_ns = std::llround(std::stod(o.tai_correction) * 1e9);
+    stream->set_stamp_offset(-tai.applied_ns.load());
+  }
+  // The stream's clock check: its packets (as stamped, after the correction) against their
+  // arrival, with the host's clock and what the sensor reports and the driver corrects.
+  sim::lidar::ClockSources sources = host_clock.sources();
+  sources.reported = [&clock, &tai] { return reported_clock(clock.get(), tai); };
+  stream->clock().set_sources(std::move(sources));
+  const auto clock_tick = [&] {
+    if (!clock) return;
+    for (const auto& note : clock->take_notes()) status.line().note(sim::apps::sentence(note));
+    if (!tai.automatic) return;
+    const auto wanted = TaiCorrection::wanted(clock->latest());
+    if (!wanted || *wanted == tai.applied_ns.load()) return;
+    tai.applied_ns = *wanted;
+    stream->set_stamp_offset(-*wanted);
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  "the stamps are now the sensor's less %.0f s (TAI to UTC, the current_utc_offset its "
+                  "PTP master announces)", static_cast<double>(*wanted) / 1e9);
+    status.line().note(text);
+  };
 
   const std::int64_t silence_ns = network.listen.silence_timeout.count();
   const auto text = [&](bool final_line) {
@@ -120,7 +218,9 @@ int run(const sim::apps::CommandLine& cli, Options& o) {
            sim::apps::receive_status(receiver->counters(), receiver->last_packet_ns(), silence_ns, true,
                                      final_line);
   };
-  receiver->run(*stream, stop.fd(), status.callbacks(text));
+  receiver->run(*stream, stop.fd(),
+                sim::apps::with_clock_tick(status.callbacks(text), clock ? std::function<void()>(clock_tick) : nullptr,
+                                           std::chrono::seconds(1)));
   status.finish(stream->describe_counters(true), receiver->counters());
   return sim::apps::kExitOk;
 }

@@ -328,9 +328,12 @@ void FrameAssembler::move_packet_tail_to_next() noexcept {
   output_count_ = first;
 }
 
-void FrameAssembler::count_packet(std::int64_t packet_ns) noexcept {
-  const auto sequences = static_cast<unsigned>(blocks_per_packet * info_->sequences_per_block / info_->blocks_per_sequence);
-  const std::int64_t period = std::int64_t{info_->sequence_ns} * sequences / (last_mode_ == ReturnMode::dual ? 2 : 1);
+void FrameAssembler::count_packet(std::int64_t packet_ns, const Packet& packet) noexcept {
+  // The sequences this packet holds, as the decoder reads it: a VLS-128 dual packet's 8 blocks are
+  // one sequence (pairs per bank), not the 1.5 that half of a single packet's 3 would say.
+  const unsigned slot = info_->blocks_per_sequence * (packet.dual() ? 2U : 1U);
+  const unsigned sequences = packet.blocks() * unsigned{info_->sequences_per_block} / slot;
+  const std::int64_t period = std::int64_t{info_->sequence_ns} * sequences;
   if (have_packet_ && period > 0) {
     const std::int64_t gap = packet_ns - last_packet_ns_;
     if (gap > period * 3 / 2 && gap < 1'000'000'000) {
@@ -406,7 +409,8 @@ PushResult FrameAssembler::push(std::span<const std::uint8_t> payload, std::int6
   last_mode_ = packet.return_mode();
   const std::int64_t packet_ns =
       packet_time_ns(packet.timestamp_us(), time_reference_ns != 0 ? time_reference_ns : host_receive_ns);
-  count_packet(packet_ns);
+  count_packet(packet_ns, packet);
+  result.packet_ns = packet_ns;
 
   std::array<BlockAzimuth, blocks_per_packet> azimuths{};
   block_azimuths(packet, azimuths);  // also learns the step across packets

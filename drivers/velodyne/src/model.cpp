@@ -91,6 +91,16 @@ std::size_t frame_capacity(Model model, unsigned returns, unsigned rpm, double m
   return static_cast<std::size_t>(std::ceil(packets * (1.0 + margin))) * i.max_points_per_packet();
 }
 
+bool is_unnamed_hdl32e(std::span<const std::uint8_t> payload) noexcept {
+  if (payload.size() != packet_size || payload[product_id_offset] != 0 || payload[return_mode_offset] != 0) {
+    return false;
+  }
+  for (std::size_t b = 0; b < blocks_per_packet; ++b) {
+    if (payload[b * block_size] != 0xFF || payload[b * block_size + 1] != 0xEE) return false;
+  }
+  return true;
+}
+
 std::optional<Model> detect_model(std::span<const std::uint8_t> payload) noexcept {
   if (payload.size() != packet_size) return std::nullopt;
   if (payload[0] != 0xFF || payload[1] != 0xEE) return std::nullopt;

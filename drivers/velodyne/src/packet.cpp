@@ -65,13 +65,14 @@ PacketError Packet::parse(std::span<const std::uint8_t> payload, Model model, Pa
   if (const auto detected = detect_model(payload); detected && *detected != model) {
     return PacketError::wrong_model;
   }
-  // The HDL-64E sends no product ID (bytes 1204-1205 are its rotating status); every other
-  // model names itself.
-  if (model != Model::hdl64e && data[product_id_offset] != info(model).product_id) {
+  // The HDL-64E sends no product ID (bytes 1204-1205 are its rotating status), nor does an
+  // HDL-32E before firmware 2.2.20 (both bytes 0: strongest); every other model names itself.
+  const bool unnamed_hdl32e = model == Model::hdl32e && is_unnamed_hdl32e(payload);
+  if (model != Model::hdl64e && !unnamed_hdl32e && data[product_id_offset] != info(model).product_id) {
     return PacketError::wrong_model;
   }
   ReturnMode mode = ReturnMode::strongest;
-  if (model != Model::hdl64e) {
+  if (model != Model::hdl64e && !unnamed_hdl32e) {
     const std::uint8_t byte = data[return_mode_offset];
     if (byte < 0x37 || byte > 0x39) return PacketError::bad_return_mode;
     mode = static_cast<ReturnMode>(byte);
@@ -120,8 +121,19 @@ const char* to_string(PpsState state) noexcept {
     case PpsState::locked: return "locked";
     case PpsState::error: return "error";
     case PpsState::unknown: return "unknown";
+    case PpsState::invalid: return "invalid";
   }
   return "unknown";
+}
+
+const char* to_string(NmeaStatus status) noexcept {
+  switch (status) {
+    case NmeaStatus::none: return "none";
+    case NmeaStatus::unreadable: return "unreadable";
+    case NmeaStatus::no_fix: return "no fix";
+    case NmeaStatus::fix: return "fix";
+  }
+  return "unreadable";
 }
 
 namespace {
@@ -152,49 +164,90 @@ std::int64_t days_from_civil(int y, unsigned m, unsigned d) noexcept {
   return std::int64_t{era} * 146097 + static_cast<std::int64_t>(doe) - 719468;
 }
 
-// "$GPRMC,hhmmss[.ss],A,lat,N,lon,E,speed,course,ddmmyy,…*CS": status and UTC.
-void parse_rmc(std::string_view sentence, PositionReport& report) noexcept {
+// The sentence's body between '$' and '*' when its checksum is good.
+std::optional<std::string_view> checked_body(std::string_view sentence) noexcept {
   const std::size_t star = sentence.rfind('*');
-  if (sentence.size() < 7 || star == std::string_view::npos || star + 3 > sentence.size()) return;
-  if (sentence.substr(0, 1) != "$" || sentence.substr(3, 3) != "RMC") return;
+  if (sentence.size() < 7 || sentence[0] != '$' || star == std::string_view::npos || star + 3 > sentence.size()) {
+    return std::nullopt;
+  }
   unsigned sum = 0;
   for (std::size_t i = 1; i < star; ++i) sum ^= static_cast<unsigned char>(sentence[i]);
   const int hi = hex_digit(sentence[star + 1]);
   const int lo = hex_digit(sentence[star + 2]);
-  if (hi < 0 || lo < 0 || static_cast<unsigned>(hi * 16 + lo) != sum) return;
-  report.has_gprmc = true;
-  std::array<std::string_view, 10> fields{};
+  if (hi < 0 || lo < 0 || static_cast<unsigned>(hi * 16 + lo) != sum) return std::nullopt;
+  return sentence.substr(1, star - 1);
+}
+
+using NmeaFields = std::array<std::string_view, 10>;
+
+// The first fields of "GPRMC,a,b,…"; how many there are (at most 10).
+std::size_t split_fields(std::string_view body, NmeaFields& fields) noexcept {
   std::size_t count = 0;
-  std::string_view rest = sentence.substr(0, star);
   while (count < fields.size()) {
-    const std::size_t comma = rest.find(',');
-    fields[count++] = rest.substr(0, comma);
+    const std::size_t comma = body.find(',');
+    fields[count++] = body.substr(0, comma);
     if (comma == std::string_view::npos) break;
-    rest.remove_prefix(comma + 1);
+    body.remove_prefix(comma + 1);
   }
-  if (count < 10) return;
+  return count;
+}
+
+// "hhmmss[.ss]" as hours, minutes and seconds, each in range.
+bool time_of_day(std::string_view text, int& hh, int& mi, int& ss) noexcept {
+  return two_digits(text, 0, hh) && two_digits(text, 2, mi) && two_digits(text, 4, ss) && hh <= 23 &&
+         mi <= 59 && ss <= 60;
+}
+
+// "$GPRMC,hhmmss[.ss],A,lat,N,lon,E,speed,course,ddmmyy,…": status and UTC.
+void parse_rmc(const NmeaFields& fields, std::size_t count, PositionReport& report) noexcept {
+  report.has_gprmc = true;
+  if (count < 3) return;  // unreadable: no status
   report.gprmc_valid = fields[2] == "A";
+  report.nmea = report.gprmc_valid ? NmeaStatus::fix : NmeaStatus::no_fix;
   int hh = 0, mi = 0, ss = 0, dd = 0, mo = 0, yy = 0;
-  if (!two_digits(fields[1], 0, hh) || !two_digits(fields[1], 2, mi) || !two_digits(fields[1], 4, ss) ||
-      !two_digits(fields[9], 0, dd) || !two_digits(fields[9], 2, mo) || !two_digits(fields[9], 4, yy)) {
+  if (!time_of_day(fields[1], hh, mi, ss)) return;
+  report.nmea_second_of_hour = mi * 60 + ss;
+  if (count < 10 || !two_digits(fields[9], 0, dd) || !two_digits(fields[9], 2, mo) || !two_digits(fields[9], 4, yy)) {
     return;
   }
-  if (hh > 23 || mi > 59 || ss > 60 || dd < 1 || dd > 31 || mo < 1 || mo > 12) return;
+  if (dd < 1 || dd > 31 || mo < 1 || mo > 12) return;
   // Two-digit years: 80–99 are 1980–1999, the rest 2000–2079.
   const std::int64_t days = days_from_civil(yy >= 80 ? 1900 + yy : 2000 + yy, static_cast<unsigned>(mo), static_cast<unsigned>(dd));
   report.gprmc_utc_s = days * 86400 + hh * 3600 + mi * 60 + ss;
 }
 
+// "$GPGGA,hhmmss[.ss],lat,N,lon,E,quality,…": the fix quality (0 none) and the time of day.
+void parse_gga(const NmeaFields& fields, std::size_t count, PositionReport& report) noexcept {
+  if (count < 7 || fields[6].size() != 1 || fields[6][0] < '0' || fields[6][0] > '9') return;  // unreadable
+  report.nmea = fields[6][0] == '0' ? NmeaStatus::no_fix : NmeaStatus::fix;
+  int hh = 0, mi = 0, ss = 0;
+  if (time_of_day(fields[1], hh, mi, ss)) report.nmea_second_of_hour = mi * 60 + ss;
+}
+
+void parse_nmea(std::string_view sentence, PositionReport& report) noexcept {
+  if (sentence.empty()) return;  // NmeaStatus::none
+  report.nmea = NmeaStatus::unreadable;
+  const auto body = checked_body(sentence);
+  if (!body || body->size() < 5) return;
+  NmeaFields fields{};
+  const std::size_t count = split_fields(*body, fields);
+  // Any talker ("GP", "GN", …): the sentence type is the three letters after it.
+  const std::string_view type = fields[0].size() == 5 ? fields[0].substr(2) : std::string_view();
+  if (type == "RMC") parse_rmc(fields, count, report);
+  if (type == "GGA") parse_gga(fields, count, report);
+}
+
 }  // namespace
 
-std::optional<PositionReport> parse_position_packet(std::span<const std::uint8_t> payload) noexcept {
+std::optional<PositionReport> parse_position_packet(std::span<const std::uint8_t> payload,
+                                                    std::optional<Model> model) noexcept {
   constexpr std::size_t nmea_offset = 206;
   if (payload.size() != 512 && payload.size() != 554) return std::nullopt;
   PositionReport report;
   report.timestamp_us = Packet::read_u32(payload.data() + 198);
-  if (payload.size() == 554) {
-    const std::uint8_t pps = payload[202];
-    report.pps = pps <= 3 ? static_cast<PpsState>(pps) : PpsState::unknown;
+  report.pps_byte = payload[202];
+  if (model != Model::hdl32e && model != Model::hdl64e) {
+    report.pps = report.pps_byte <= 3 ? static_cast<PpsState>(report.pps_byte) : PpsState::invalid;
   }
   const std::size_t room = payload.size() - nmea_offset;
   const auto* text = reinterpret_cast<const char*>(payload.data() + nmea_offset);
@@ -202,7 +255,7 @@ std::optional<PositionReport> parse_position_packet(std::span<const std::uint8_t
   while (length < room && length < 128 && text[length] != '\0' && text[length] != '\r' && text[length] != '\n') {
     ++length;
   }
-  parse_rmc(std::string_view(text, length), report);
+  parse_nmea(std::string_view(text, length), report);
   return report;
 }
 

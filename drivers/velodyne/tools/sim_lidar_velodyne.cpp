@@ -65,6 +65,8 @@ int run(const sim::apps::CommandLine& cli, Options& o) {
     return cli.fail(std::string_view(published.error().message));
   }
   if (auto code = cli.apply_placement(o.stream.placement)) return *code;
+  const sim::apps::HostClockSource host_clock(o.receive);
+  receiver->set_clock_sources(host_clock.sources());
 
   return sim::apps::run_model_receiver(
       cli, *receiver, status, stop.fd(),

@@ -7,6 +7,7 @@
 #include <span>
 #include <string>
 
+#include "replay_clock.hpp"
 #include "replay_loop.hpp"
 #include "replays.hpp"
 #include "sim/apps/hesai_options.hpp"
@@ -69,16 +70,18 @@ Expected<Detected> detect(const ReplayArgs& r, std::optional<hesai::Model> force
                "none of the " + std::to_string(seen) + " UDP datagrams" + on_port + " in " +
                    r.file + " is a Hesai point-cloud packet (models: " +
                    std::string(hesai::model_names()) +
-                   ", unitree-l1, unitree-l2); check the file, or choose the sensor's port with "
-                   "--port"};
+                   ", unitree-l1, unitree-l2), nor a Velodyne or Ouster one; check the file, or "
+                   "choose the sensor's port with --port"};
 }
 
 class HesaiTarget final : public ReplayTarget {
  public:
   HesaiTarget(hesai::LidarStream stream, bool restamp)
-      : stream_(std::move(stream)), restamp_(restamp) {}
+      : stream_(std::move(stream)), restamp_(restamp) {
+    stream_.clock().set_base(restamp ? lidar::ClockBase::restamped : lidar::ClockBase::replayed);
+  }
 
-  bool push(std::span<const std::byte> payload, std::int64_t) override {
+  bool push(std::span<const std::byte> payload, std::int64_t capture_ns) override {
     if (restamp_ && !restamped_) {
       // Shift the sensor's clock so the first packet's time is now; loops add to it.
       hesai::Packet packet;
@@ -88,13 +91,22 @@ class HesaiTarget final : public ReplayTarget {
         restamped_ = true;
       }
     }
-    return stream_.push(as_u8(payload), realtime_ns()).frame.has_value();
+    const std::int64_t now = realtime_ns();
+    const hesai::PushResult result = stream_.push(as_u8(payload), now);
+    clock_replayed_packet(stream_, result.packet_ns, capture_ns, now);
+    return result.frame.has_value();
   }
-  void restart() override { stream_.reset(); }
+  void restart() override {
+    stream_.reset();
+    stream_.clock().restart();
+  }
   void shift_stamps(std::int64_t shift_ns) override {
     stream_.set_stamp_offset(stream_.stamp_offset() + shift_ns);
   }
-  void finish() override { stream_.finish(); }
+  void finish() override {
+    stream_.finish();
+    clock_at_end(stream_);
+  }
   std::uint64_t decoded_packets() const override { return stream_.counters().packets; }
   std::uint64_t frames() const override { return stream_.published().frames; }
   std::string status() const override { return stream_.describe_counters(); }

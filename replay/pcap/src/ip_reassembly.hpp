@@ -8,7 +8,13 @@
 //   - a datagram not complete `timeout_ns` of capture time after its first fragment is dropped
 //     (Linux's ipfrag_time is 30 s); so is whatever is pending at the end of the capture;
 //   - a fragment reaching past 65,535 bytes, or with a length that is not a multiple of 8 when
-//     more follow, is refused; so is a second "last" fragment that disagrees on the length.
+//     more follow, is refused; so is a second "last" fragment that disagrees on the length, and a
+//     last fragment that ends before bytes already received (the datagram is dropped);
+//   - a fragment overlapping bytes already received with other bytes drops the whole datagram
+//     (RFC 5722; Linux does so for IPv4 since 4.19); an identical resend is ignored;
+//   - a datagram that got no fragment while `max_distance` other fragments came is stale (an IP
+//     ID used again after 65,536 datagrams, within seconds at an OS-128's 2,600 datagrams/s):
+//     dropped, and a fragment with its ID starts a new one (Linux: ipfrag_max_dist).
 // Every drop is counted. Pure function of its input (no I/O), so it is fuzzed directly.
 #pragma once
 
@@ -25,6 +31,7 @@ namespace sim::pcap {
 struct ReassemblyLimits {
   std::size_t max_pending = 64;
   std::int64_t timeout_ns = 30'000'000'000;
+  std::uint64_t max_distance = 4096;  // fragments of any datagram
 };
 
 struct ReassemblyCounters {
@@ -34,7 +41,9 @@ struct ReassemblyCounters {
   std::uint64_t evicted = 0;          // dropped incomplete to make room (max_pending)
   std::uint64_t abandoned = 0;        // incomplete at the end of the capture
   std::uint64_t refused = 0;          // fragments refused: absurd size, offset or length
-  std::uint64_t incomplete() const noexcept { return timed_out + evicted + abandoned; }
+  std::uint64_t overlapping = 0;      // datagrams dropped for a fragment overlapping with other bytes
+  std::uint64_t stale = 0;            // dropped incomplete: no fragment for max_distance fragments
+  std::uint64_t incomplete() const noexcept { return timed_out + evicted + abandoned + stale; }
 };
 
 class Ipv4Reassembler {
@@ -62,6 +71,8 @@ class Ipv4Reassembler {
     std::uint8_t protocol = 0;
     std::int64_t first_ns = 0;
     std::size_t total = 0;  // 0 until the last fragment came
+    std::size_t max_end = 0;  // the furthest byte any fragment reached
+    std::uint64_t last_fragment = 0;  // fragments_seen_ when its last fragment came
     std::size_t covered_blocks = 0;
     std::uint32_t fragments = 0;
     std::vector<std::byte> data;          // max_payload bytes, allocated on first use
@@ -71,10 +82,12 @@ class Ipv4Reassembler {
   Pending* find_or_start(const Ipv4Fragment& fragment, std::int64_t capture_ns) noexcept;
   void expire(std::int64_t capture_ns) noexcept;
   void drop(Pending& entry) noexcept;
+  bool overlaps_with_other_bytes(const Pending& entry, const Ipv4Fragment& fragment) const noexcept;
 
   ReassemblyLimits limits_;
   std::vector<Pending> slots_;
   ReassemblyCounters counters_;
+  std::uint64_t fragments_seen_ = 0;
 };
 
 }  // namespace sim::pcap

@@ -6,6 +6,7 @@
 #include <span>
 #include <string>
 
+#include "replay_clock.hpp"
 #include "replay_loop.hpp"
 #include "replays.hpp"
 #include "sim/apps/ouster_options.hpp"
@@ -23,12 +24,30 @@ std::span<const std::uint8_t> as_u8(std::span<const std::byte> bytes) {
 
 class OusterTarget final : public ReplayTarget {
  public:
-  OusterTarget(ouster::LidarStream stream, bool restamp) : stream_(std::move(stream)), restamp_(restamp) {}
+  // by_port: datagrams are the sensor's by the metadata's ports, as ouster-sdk's pcap source
+  // dispatches them (without --port or --filter); otherwise the user chose them.
+  OusterTarget(ouster::LidarStream stream, bool restamp, bool by_port)
+      : stream_(std::move(stream)), restamp_(restamp), by_port_(by_port) {
+    stream_.clock().set_base(restamp ? lidar::ClockBase::restamped : lidar::ClockBase::replayed);
+  }
 
-  bool push(std::span<const std::byte> payload, std::int64_t) override {
+  bool takes(const Datagram& datagram) override {
+    if (!by_port_) return true;
+    const auto& m = stream_.metadata();
+    const std::uint16_t port = datagram.destination.port;
+    imu_next_ = m.udp_port_imu != m.udp_port_lidar && port == m.udp_port_imu;
+    if (port == m.udp_port_lidar || port == m.udp_port_imu) return true;
+    ++other_port_;
+    return false;
+  }
+
+  bool push(std::span<const std::byte> payload, std::int64_t capture_ns) override {
     const auto bytes = as_u8(payload);
-    // IMU packets are the 48-byte ones (port 7503); everything else is offered as lidar.
-    if (bytes.size() == ouster::imu_packet_bytes) {
+    // IMU packets: those to the metadata's IMU port, else the 48-byte ones; the rest is lidar.
+    const bool imu = by_port_ && stream_.metadata().udp_port_imu != stream_.metadata().udp_port_lidar
+                         ? imu_next_
+                         : bytes.size() == ouster::imu_packet_bytes;
+    if (imu) {
       stream_.push_imu(bytes);
       return false;
     }
@@ -42,22 +61,35 @@ class OusterTarget final : public ReplayTarget {
         restamped_ = true;
       }
     }
-    return stream_.push_lidar(bytes, realtime_ns()).frame.has_value();
+    const std::int64_t now = realtime_ns();
+    const ouster::PushResult result = stream_.push_lidar(bytes, now);
+    clock_replayed_packet(stream_, result.packet_ns, capture_ns, now);
+    return result.frame.has_value();
   }
-  void restart() override { stream_.reset(); }
+  void restart() override {
+    stream_.reset();
+    stream_.clock().restart();
+  }
   void shift_stamps(std::int64_t shift_ns) override {
     stream_.set_stamp_offset(saturating_add_ns(stream_.stamp_offset(), shift_ns));
   }
-  void finish() override { stream_.finish(); }
+  void finish() override {
+    stream_.finish();
+    clock_at_end(stream_);
+  }
   std::uint64_t decoded_packets() const override { return stream_.counters().packets; }
   std::uint64_t frames() const override { return stream_.published().frames; }
   std::string status() const override { return stream_.describe_counters(); }
   std::string summary() const override { return stream_.describe_counters(true); }
   std::string mismatch_problem() const { return stream_.mismatch_problem(); }
+  std::uint64_t other_port() const { return other_port_; }
 
  private:
   ouster::LidarStream stream_;
   bool restamp_;
+  bool by_port_;
+  bool imu_next_ = false;
+  std::uint64_t other_port_ = 0;
   bool restamped_ = false;
 };
 
@@ -81,7 +113,7 @@ bool is_ouster_capture(int argc, char** argv) {
     if (arg.front() != '-' && (ends_with(arg, ".pcap") || ends_with(arg, ".pcapng"))) capture = arg;
   }
   if (capture.empty()) return false;
-  auto reader = CaptureReader::open(capture);
+  auto reader = CaptureReader::open(capture, detection_options(argc, argv));
   if (!reader) return false;  // the Hesai replay explains the file
   // The first datagrams tell: Ouster-sized lidar packets and not one Hesai packet.
   Datagram datagram;
@@ -124,9 +156,15 @@ int run_ouster_replay(int argc, char** argv) {
   auto stream = ouster::LidarStream::create(*config, *metadata);
   if (!stream) return cli.fail(std::string_view(stream.error().message));
   if (auto code = cli.apply_placement(s.placement)) return *code;
-  OusterTarget target(std::move(*stream), r.restamp);
+  OusterTarget target(std::move(*stream), r.restamp, !r.port && r.filter.empty());
 
   const ReplayResult result = replay(r, target, stop, cli.tool());
+  if (target.decoded_packets() == 0 && target.other_port() != 0 && !stop.requested()) {
+    return cli.fail("none of the datagrams of " + r.file + " go to the lidar port " +
+                    std::to_string(metadata->udp_port_lidar) + " or the IMU port " +
+                    std::to_string(metadata->udp_port_imu) + " of " + s.calibration +
+                    "; give the capture's lidar port with --port");
+  }
   if (target.decoded_packets() == 0 && !target.mismatch_problem().empty() && !stop.requested()) {
     return cli.fail(target.mismatch_problem() + " (" + s.calibration + " does not fit " + r.file + ")");
   }

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <optional>
+#include <string>
 
 #include "sim/apps/pacer.hpp"
 #include "sim/apps/status_line.hpp"
@@ -47,6 +49,14 @@ void add_replay_options(apps::CommandLine& cli, ReplayArgs& r) {
 }
 
 namespace {
+
+// "192.168.1.201" of "192.168.1.201:2368", "fe80::1" of "[fe80::1]:2368".
+std::string host_of(const Endpoint& endpoint) {
+  std::string text = endpoint.to_string();
+  text = text.substr(0, text.rfind(':'));
+  if (!text.empty() && text.front() == '[') text = text.substr(1, text.size() - 2);
+  return text;
+}
 
 // Where frames end in the window, learnt on the first pass: the window index and capture time
 // of the datagram that completed the first frame and of the one that completed the last.
@@ -155,12 +165,32 @@ class Replayer {
       if (later_pass && index > ends_.last_index) break;
       if (index == 0) pass.window_first_ts = datagram.timestamp_ns;
       pass.last_ts = datagram.timestamp_ns;
+      if (!target_.takes(datagram)) {
+        ++result_.skipped;
+        continue;
+      }
       if (!pacer_.wait(datagram.timestamp_ns, stop_)) break;
+      const std::uint64_t decoded = target_.decoded_packets();
       const bool completed = target_.push(datagram.payload, datagram.timestamp_ns);
+      if (target_.decoded_packets() != decoded) count_sender(datagram.source);
       if (completed && result_.passes == 1) ends_.add(index, datagram.timestamp_ns);
       show_progress(reader, since_first);
     }
     return pass;
+  }
+
+  // A second sensor on the port is decoded with the first (one frame assembler for both):
+  // counted, and said once, as the live drivers do.
+  void count_sender(const Endpoint& source) {
+    if (!first_sender_) {
+      first_sender_ = source;
+      return;
+    }
+    if (source.ip_version == first_sender_->ip_version && source.address == first_sender_->address) return;
+    if (result_.other_senders++ != 0) return;
+    status_.note("warning: packets from " + host_of(source) + " are decoded besides those from " +
+                 host_of(*first_sender_) + ": two sensors on one port are decoded as one; choose one with "
+                 "--filter \"src host " + host_of(*first_sender_) + "\"");
   }
 
   void show_progress(const CaptureReader& reader, std::int64_t since_first) {
@@ -169,7 +199,8 @@ class Replayer {
                                               : reader.progress();
     status_.update(apps::fields({{"pass", std::to_string(result_.passes)},
                                  {"done", apps::number(std::min(fraction, 1.0) * 100, 0) + "%"}}) +
-                   "  " + target_.status());
+                   "  " + target_.status() +
+                   (result_.other_senders != 0 ? " other-senders " + std::to_string(result_.other_senders) : ""));
   }
 
   // How far the next pass is moved on, on the schedule and in the stamps.
@@ -196,6 +227,7 @@ class Replayer {
   apps::StatusLine status_;
   FrameEnds ends_;
   ReplayResult result_;
+  std::optional<Endpoint> first_sender_;
 };
 
 }  // namespace

@@ -38,6 +38,9 @@ void add_replay_options(apps::CommandLine& cli, ReplayArgs& args);
 class ReplayTarget {
  public:
   virtual ~ReplayTarget() = default;
+  // Whether the datagram is one of the target's (e.g. to the ports its metadata names); the
+  // others are skipped and counted. Asked before push().
+  virtual bool takes(const Datagram&) { return true; }
   // Decodes one datagram; true when it completed a frame (a revolution, a scan).
   virtual bool push(std::span<const std::byte> payload, std::int64_t capture_ns) = 0;
   // The replay starts over (a loop): forget the frame in progress, as a fresh decoder would.
@@ -56,6 +59,9 @@ class ReplayTarget {
 struct ReplayResult {
   std::uint64_t datagrams = 0;
   std::uint64_t skipped = 0;
+  // Decoded packets from another sender than the first decoded one: a second sensor on the
+  // port, decoded as if it were the first (--filter "src host …" keeps one).
+  std::uint64_t other_senders = 0;
   unsigned passes = 0;
   std::optional<std::string> read_error;  // the capture was damaged after this many frames
   bool empty_window = false;              // --start/--duration held no packet

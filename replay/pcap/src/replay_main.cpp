@@ -1,13 +1,46 @@
 // SPDX-License-Identifier: Apache-2.0
 // sim_replay_pcap: replays a LiDAR capture into a SIM stream through the decoder of the live
 // driver of its family (Hesai, Ouster, Unitree), paced by the capture's timestamps.
+#include <charconv>
 #include <cstdio>
+#include <string>
 #include <string_view>
+#include <system_error>
 
 #include "replays.hpp"
 #include "sim/unitree/decoder.hpp"
 
 namespace sim::pcap {
+
+CaptureOptions detection_options(int argc, char** argv) {
+  CaptureOptions options;
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view arg = argv[i];
+    std::string_view value;
+    bool port = false;
+    if ((arg == "--port" || arg == "--filter") && i + 1 < argc) {
+      port = arg == "--port";
+      value = argv[i + 1];
+    } else if (arg.rfind("--port=", 0) == 0) {
+      port = true;
+      value = arg.substr(7);
+    } else if (arg.rfind("--filter=", 0) == 0) {
+      value = arg.substr(9);
+    } else {
+      continue;
+    }
+    if (!port) {
+      options.filter = std::string(value);
+      continue;
+    }
+    unsigned number = 0;
+    const auto [end, failure] = std::from_chars(value.data(), value.data() + value.size(), number);
+    if (failure == std::errc{} && end == value.data() + value.size() && number <= 65535) {
+      options.port = static_cast<std::uint16_t>(number);
+    }
+  }
+  return options;
+}
 
 int finish_replay(const apps::CommandLine& cli, const ReplayArgs& r, const ReplayResult& result,
                   const ReplayTarget& target, const std::string& decoded_as,
@@ -21,9 +54,10 @@ int finish_replay(const apps::CommandLine& cli, const ReplayArgs& r, const Repla
     return cli.fail(message);
   }
   if (r.summary) {
-    std::printf("summary %s datagrams=%llu skipped=%llu passes=%u\n", target.summary().c_str(),
+    std::printf("summary %s datagrams=%llu skipped=%llu passes=%u other_senders=%llu\n", target.summary().c_str(),
                 static_cast<unsigned long long>(result.datagrams),
-                static_cast<unsigned long long>(result.skipped), result.passes);
+                static_cast<unsigned long long>(result.skipped), result.passes,
+                static_cast<unsigned long long>(result.other_senders));
     std::fflush(stdout);
   }
   if (result.read_error) {

@@ -21,6 +21,10 @@ bool is_velodyne_replay(int argc, char** argv);
 // (Ouster packets carry no family mark: their sizes and column indices tell).
 bool is_ouster_capture(int argc, char** argv);
 
+// --port and --filter as the command line gives them, before it is parsed: the family detection
+// reads the datagrams the user chose to reach the sensor (an unparsable port: none).
+CaptureOptions detection_options(int argc, char** argv);
+
 // The end every family shares: the summary line, and the exit code with its one sentence.
 int finish_replay(const apps::CommandLine& cli, const ReplayArgs& args, const ReplayResult& result,
                   const ReplayTarget& target, const std::string& decoded_as,

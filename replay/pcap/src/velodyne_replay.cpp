@@ -9,6 +9,7 @@
 #include <span>
 #include <string>
 
+#include "replay_clock.hpp"
 #include "replay_loop.hpp"
 #include "replays.hpp"
 #include "sim/apps/sensor_options.hpp"
@@ -42,12 +43,18 @@ Expected<Detected> detect(const ReplayArgs& r, std::optional<velodyne::Model> fo
   Datagram datagram;
   std::optional<velodyne::Model> other;
   std::uint64_t seen = 0;
+  std::uint64_t unnamed = 0;  // HDL-32E packets of firmware before 2.2.20
   for (;;) {
     const NextStatus status = reader->next(datagram);
     if (status == NextStatus::error) return reader->error();
     if (status == NextStatus::end) break;
     ++seen;
     const auto bytes = as_u8(datagram.payload);
+    if (velodyne::is_unnamed_hdl32e(bytes)) {
+      if (forced == velodyne::Model::hdl32e) return Detected{velodyne::Model::hdl32e, 1};
+      ++unnamed;
+      continue;
+    }
     const auto model = velodyne::detect_model(bytes);
     if (!model) continue;
     if (forced && *model != *forced) {
@@ -61,6 +68,12 @@ Expected<Detected> detect(const ReplayArgs& r, std::optional<velodyne::Model> fo
                  r.file + " holds " + std::string(velodyne::to_string(*other)) + " packets, not " +
                      std::string(velodyne::to_string(*forced)) + "; give the right --model or leave it out"};
   }
+  if (unnamed != 0) {
+    return Error{ErrorCode::invalid_argument,
+                 std::to_string(unnamed) + " of the " + std::to_string(seen) + " UDP datagrams in " + r.file +
+                     " are Velodyne data packets that do not name their model (product ID 0), as an "
+                     "HDL-32E with firmware before 2.2.20 sends them; give --model HDL-32E"};
+  }
   return Error{ErrorCode::invalid_argument,
                "none of the " + std::to_string(seen) + " UDP datagrams in " + r.file +
                    " is a Velodyne data packet (1206 bytes, models: " + std::string(velodyne::model_names()) +
@@ -69,7 +82,9 @@ Expected<Detected> detect(const ReplayArgs& r, std::optional<velodyne::Model> fo
 
 class VelodyneTarget final : public ReplayTarget {
  public:
-  VelodyneTarget(velodyne::LidarStream stream, bool restamp) : stream_(std::move(stream)), restamp_(restamp) {}
+  VelodyneTarget(velodyne::LidarStream stream, bool restamp) : stream_(std::move(stream)), restamp_(restamp) {
+    stream_.clock().set_base(restamp ? lidar::ClockBase::restamped : lidar::ClockBase::replayed);
+  }
 
   bool push(std::span<const std::byte> payload, std::int64_t capture_ns) override {
     const auto bytes = as_u8(payload);
@@ -83,11 +98,20 @@ class VelodyneTarget final : public ReplayTarget {
                                                    bytes.data() + velodyne::timestamp_offset), capture_ns));
       restamped_ = true;
     }
-    return stream_.push(bytes, realtime_ns(), capture_ns).frame.has_value();
+    const std::int64_t now = realtime_ns();
+    const velodyne::PushResult result = stream_.push(bytes, now, capture_ns);
+    clock_replayed_packet(stream_, result.packet_ns, capture_ns, now);
+    return result.frame.has_value();
   }
-  void restart() override { stream_.reset(); }
+  void restart() override {
+    stream_.reset();
+    stream_.clock().restart();
+  }
   void shift_stamps(std::int64_t shift_ns) override { stream_.set_stamp_offset(stream_.stamp_offset() + shift_ns); }
-  void finish() override { stream_.finish(); }
+  void finish() override {
+    stream_.finish();
+    clock_at_end(stream_);
+  }
   std::uint64_t decoded_packets() const override { return stream_.counters().packets; }
   std::uint64_t frames() const override { return stream_.published().frames; }
   std::string status() const override { return stream_.describe_counters(); }
@@ -110,14 +134,23 @@ bool is_velodyne_replay(int argc, char** argv) {
     if (arg == "--model" && i + 1 < argc) value = argv[i + 1];
     if (arg.rfind("--model=", 0) == 0) value = arg.substr(8);
     if (!value.empty()) return velodyne::parse_model(value).has_value();
+    // Velodyne calibrations are ros-drivers YAML or db.xml (Hesai's are CSV, Ouster's JSON):
+    // then the Velodyne replay explains a capture it cannot decode, not the Hesai one.
+    if (arg == "--calibration" && i + 1 < argc) value = argv[i + 1];
+    if (arg.rfind("--calibration=", 0) == 0) value = arg.substr(14);
+    const auto ends = [&](std::string_view end) {
+      return value.size() >= end.size() && value.substr(value.size() - end.size()) == end;
+    };
+    if (ends(".yaml") || ends(".yml") || ends(".xml")) return true;
     if (is_capture_name(arg)) capture = arg;
   }
   if (capture.empty()) return false;
-  auto reader = CaptureReader::open(capture);
+  auto reader = CaptureReader::open(capture, detection_options(argc, argv));
   if (!reader) return false;  // the Hesai replay explains the file
   Datagram datagram;
   for (unsigned seen = 0; seen < 256 && reader->next(datagram) == NextStatus::datagram; ++seen) {
-    if (velodyne::detect_model(as_u8(datagram.payload))) return true;
+    const auto bytes = as_u8(datagram.payload);
+    if (velodyne::detect_model(bytes) || velodyne::is_unnamed_hdl32e(bytes)) return true;
   }
   return false;
 }

@@ -176,9 +176,7 @@ int FakeV4l2Device::dequeue(void* arg) {
   buffer->sequence = sequence_++;
   buffer->timestamp.tv_sec = stamp / 1'000'000'000;
   buffer->timestamp.tv_usec = (stamp % 1'000'000'000) / 1'000;
-  buffer->flags = (frame.monotonic ? V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC
-                                   : V4L2_BUF_FLAG_TIMESTAMP_UNKNOWN) |
-                  V4L2_BUF_FLAG_TSTAMP_SRC_SOE | (frame.error_flag ? V4L2_BUF_FLAG_ERROR : 0u);
+  buffer->flags = frame.timestamp_flags | (frame.error_flag ? V4L2_BUF_FLAG_ERROR : 0u);
   return 0;
 }
 

@@ -5,6 +5,8 @@
 // frames in any format and size, EAGAIN, device errors, sequence gaps, unplug and replug.
 #pragma once
 
+#include <linux/videodev2.h>
+
 #include <cstddef>
 #include <cstdint>
 #include <deque>
@@ -43,7 +45,8 @@ struct FakeFrame {
   std::uint32_t sequence_gap = 0;     // frames the "device" lost before this one
   bool error_flag = false;            // V4L2_BUF_FLAG_ERROR
   std::int64_t timestamp_ns = -1;     // -1: CLOCK_MONOTONIC now
-  bool monotonic = true;              // V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC, else _UNKNOWN
+  // The buffer's clock and stamp point (V4L2_BUF_FLAG_TIMESTAMP_*, V4L2_BUF_FLAG_TSTAMP_SRC_*).
+  std::uint32_t timestamp_flags = V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC | V4L2_BUF_FLAG_TSTAMP_SRC_SOE;
 };
 
 class FakeV4l2Device final : public V4l2Io {

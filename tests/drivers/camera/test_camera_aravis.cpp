@@ -2,7 +2,10 @@
 // sim_camera_aravis in its own process against Aravis's GigE Vision fake camera hosted by this
 // test on 127.0.0.1: the real GVCP/GVSP path over UDP. Everything runs in a private network
 // namespace (discovery broadcasts never leave it). Checks size, format and pixel content of the
-// published frames, and that killing the camera leads to a reconnect, not an exit.
+// published frames, and that killing the camera leads to a reconnect, not an exit. The camera's
+// clock as the capture reports it: the stock fake camera has no PTP features (its clock is
+// reported as what it is), a fake with the SFNC PTP features added to its GenICam XML shows each
+// PTP state the camera goes through.
 #include <arv.h>
 #include <fcntl.h>
 #include <gtest/gtest.h>
@@ -11,13 +14,17 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
+#include <cstring>
 #include <fstream>
+#include <functional>
 #include <optional>
 #include <sstream>
 #include <thread>
 #include <vector>
 
+#include "sim/camera/aravis_capture.hpp"
 #include "sim/sim.hpp"
 #include "sim_test/network.hpp"
 
@@ -52,8 +59,10 @@ void fill(ArvBuffer* buffer, void* data, guint32, guint32, ArvPixelFormat format
 
 class FakeGvCamera {
  public:
-  explicit FakeGvCamera(const char* serial) {
-    camera_ = arv_gv_fake_camera_new("127.0.0.1", serial);
+  // `genicam`: the camera's GenICam XML file; empty: Aravis's own.
+  explicit FakeGvCamera(const char* serial, const std::string& genicam = {}) {
+    camera_ = genicam.empty() ? arv_gv_fake_camera_new("127.0.0.1", serial)
+                              : arv_gv_fake_camera_new_full("127.0.0.1", serial, genicam.c_str());
     if (camera_ != nullptr) {
       ArvFakeCamera* fake = arv_gv_fake_camera_get_fake_camera(camera_);
       arv_fake_camera_set_fill_pattern(fake, fill, fake);
@@ -63,6 +72,7 @@ class FakeGvCamera {
     if (camera_ != nullptr) g_object_unref(camera_);
   }
   bool running() const { return camera_ != nullptr && arv_gv_fake_camera_is_running(camera_); }
+  ArvFakeCamera* fake() const { return arv_gv_fake_camera_get_fake_camera(camera_); }
 
  private:
   ArvGvFakeCamera* camera_ = nullptr;
@@ -257,6 +267,218 @@ TEST_F(AravisDriver, AMissingCameraIsOneSentenceAndExitOne) {
   EXPECT_NE(output().find("no camera 'SIM-NO-SUCH-CAMERA'"), std::string::npos) << output();
   spawn({"--roi", "1", "2"});
   EXPECT_EQ(wait_exit(), 2);
+}
+
+
+// --- the camera's clock ----------------------------------------------------------------------
+
+// Where the PTP features added to the fake camera keep their values: a free part of its memory,
+// above the bootstrap and the fake's own registers.
+constexpr guint32 kPtpEnable = 0x8000;
+constexpr guint32 kPtpStatus = 0x8004;  // 1 Initializing … 9 Slave, the SFNC order
+constexpr guint32 kPtpServo = 0x8008;   // 0 Unknown, 1 Locked
+constexpr guint32 kPtpLatch = 0x800c;
+constexpr guint32 kPtpOffset = 0x8010;       // 8 bytes, signed, ns
+constexpr guint32 kPtpGrandmaster = 0x8018;  // 8 bytes
+
+std::string int_reg(const std::string& name, guint32 address, int length, const char* sign) {
+  char text[400];
+  std::snprintf(text, sizeof text,
+                "<IntReg Name=\"%s\" NameSpace=\"Custom\"><Address>0x%x</Address><Length>%d</Length>"
+                "<AccessMode>RW</AccessMode><pPort>Device</pPort><Cachable>NoCache</Cachable><Sign>%s</Sign>"
+                "<Endianess>BigEndian</Endianess></IntReg>\n",
+                name.c_str(), address, length, sign);
+  return text;
+}
+
+// The SFNC PTP features as a PTP camera's GenICam XML names them.
+std::string ptp_features() {
+  std::string xml =
+      "<Boolean Name=\"PtpEnable\" NameSpace=\"Standard\"><pValue>PtpEnableRegister</pValue>"
+      "<OnValue>1</OnValue><OffValue>0</OffValue></Boolean>\n"
+      "<Enumeration Name=\"PtpStatus\" NameSpace=\"Standard\">";
+  const char* states[] = {"Initializing", "Faulty",  "Disabled",     "Listening", "PreMaster",
+                          "Master",       "Passive", "Uncalibrated", "Slave"};
+  for (int i = 0; i < 9; ++i) {
+    xml += "<EnumEntry Name=\"" + std::string(states[i]) + "\" NameSpace=\"Standard\"><Value>" +
+           std::to_string(i + 1) + "</Value></EnumEntry>";
+  }
+  xml += "<pValue>PtpStatusRegister</pValue></Enumeration>\n"
+         "<Enumeration Name=\"PtpServoStatus\" NameSpace=\"Standard\">"
+         "<EnumEntry Name=\"Unknown\" NameSpace=\"Standard\"><Value>0</Value></EnumEntry>"
+         "<EnumEntry Name=\"Locked\" NameSpace=\"Standard\"><Value>1</Value></EnumEntry>"
+         "<pValue>PtpServoStatusRegister</pValue></Enumeration>\n"
+         "<Integer Name=\"PtpOffsetFromMaster\" NameSpace=\"Standard\"><pValue>PtpOffsetRegister</pValue></Integer>\n"
+         "<Integer Name=\"PtpGrandmasterClockID\" NameSpace=\"Standard\">"
+         "<pValue>PtpGrandmasterRegister</pValue></Integer>\n"
+         "<Command Name=\"PtpDataSetLatch\" NameSpace=\"Standard\"><pValue>PtpLatchRegister</pValue>"
+         "<CommandValue>1</CommandValue></Command>\n";
+  xml += int_reg("PtpEnableRegister", kPtpEnable, 4, "Unsigned");
+  xml += int_reg("PtpStatusRegister", kPtpStatus, 4, "Unsigned");
+  xml += int_reg("PtpServoStatusRegister", kPtpServo, 4, "Unsigned");
+  xml += int_reg("PtpLatchRegister", kPtpLatch, 4, "Unsigned");
+  xml += int_reg("PtpOffsetRegister", kPtpOffset, 8, "Signed");
+  xml += int_reg("PtpGrandmasterRegister", kPtpGrandmaster, 8, "Unsigned");
+  return xml;
+}
+
+// Aravis's own fake camera XML with the PTP features added, written to `path` (the project
+// keeps no copy of Aravis's XML).
+std::string write_ptp_genicam(const std::string& path) {
+  ArvFakeCamera* plain = arv_fake_camera_new("PLAIN");
+  size_t size = 0;
+  const char* text = arv_fake_camera_get_genicam_xml(plain, &size);
+  std::string xml(text != nullptr ? text : "", text != nullptr ? size : 0);
+  g_object_unref(plain);
+  const auto end = xml.rfind("</RegisterDescription>");
+  if (end == std::string::npos) return {};
+  xml.insert(end, ptp_features());
+  std::ofstream(path) << xml;
+  return path;
+}
+
+// A big-endian register of the fake camera, as the GenICam XML reads it.
+void set_register(ArvFakeCamera* camera, guint32 address, std::uint64_t value, int length = 4) {
+  std::uint8_t bytes[8];
+  for (int i = 0; i < length; ++i) bytes[i] = static_cast<std::uint8_t>(value >> (8 * (length - 1 - i)));
+  ASSERT_TRUE(arv_fake_camera_write_memory(camera, address, static_cast<guint32>(length), bytes));
+}
+
+// AravisCapture in this process (its clock accessor is what a clock reporter calls), run on a
+// thread until the test ends, with a reader of its stream.
+struct InProcessCapture {
+  std::optional<sim::camera::AravisCapture> capture;
+  std::atomic<bool> stop{false};
+  std::thread thread;
+
+  std::string start(sim::camera::AravisCaptureConfig config) {
+    auto started = sim::camera::AravisCapture::start(std::move(config));
+    if (!started) return started.error().message;
+    capture.emplace(std::move(started.value()));
+    thread = std::thread([this] { capture->run(stop); });
+    return {};
+  }
+  ~InProcessCapture() {
+    stop.store(true);
+    if (thread.joinable()) thread.join();
+  }
+};
+
+sim::camera::AravisCaptureConfig clock_test_config(const std::string& stream) {
+  sim::camera::AravisCaptureConfig config;
+  config.device_id = "127.0.0.1";
+  config.stream = stream;
+  config.pixel_format = "Mono8";
+  config.output = sim::imaging::OutputFormat::mono8;
+  config.width = 64;
+  config.height = 48;
+  config.fps = 20;
+  return config;
+}
+
+// Waits (bounded) until `clock` satisfies `reached`.
+bool clock_reaches(const std::function<sim::ClockStatus()>& clock,
+                   const std::function<bool(const sim::ClockStatus&)>& reached) {
+  const auto deadline = std::chrono::steady_clock::now() + 60s;
+  while (!reached(clock()) && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(20ms);
+  return reached(clock());
+}
+
+// Aravis's fake camera has no PTP feature: its frames carry the host receive time, and the
+// clock says exactly that, read again about once a second while frames keep coming.
+TEST_F(AravisDriver, TheFakeCamerasClockIsReportedAsTheHostReceiveTimeWhileFramesFlow) {
+  FakeGvCamera camera("SIMCLOCK");
+  ASSERT_TRUE(camera.running());
+  InProcessCapture run;
+  ASSERT_EQ(run.start(clock_test_config(stream)), "");
+  const std::function<sim::ClockStatus()> clock = run.capture->reported_clock();
+  const sim::ClockStatus first = clock();
+  EXPECT_EQ(first.source, sim::ClockSource::host);
+  EXPECT_EQ(first.state, sim::ClockState::unknown);  // the host's own synchronisation is judged apart
+  EXPECT_EQ(first.stamps, sim::StampClock::host_arrival);
+  EXPECT_EQ(first.verdict, sim::ClockVerdict::unknown) << first.problem;
+  EXPECT_GT(first.reported_ns, 0);  // read when the camera was opened
+  ASSERT_TRUE(clock_reaches(clock, [&](const sim::ClockStatus& c) { return c.reported_ns > first.reported_ns; }));
+  auto reader = open_reader();
+  ASSERT_TRUE(reader);
+  std::vector<std::byte> buffer(reader->capacity());
+  sim::FrameInfo info;
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(next_frame(*reader, buffer, info));
+  EXPECT_EQ(clock().source, sim::ClockSource::host);
+}
+
+// Asked for the camera's own clock, which no PTP disciplines: free-running, with the reason.
+TEST_F(AravisDriver, TheCamerasOwnClockWithoutPtpIsReportedFreeRunningWithTheReason) {
+  FakeGvCamera camera("SIMFREE");
+  ASSERT_TRUE(camera.running());
+  auto config = clock_test_config(stream);
+  config.device_timestamps = true;
+  InProcessCapture run;
+  ASSERT_EQ(run.start(config), "");
+  const sim::ClockStatus clock = run.capture->reported_clock()();
+  EXPECT_EQ(clock.source, sim::ClockSource::free_running);
+  EXPECT_EQ(clock.state, sim::ClockState::free_running);
+  EXPECT_EQ(clock.stamps, sim::StampClock::sensor);
+  EXPECT_EQ(clock.verdict, sim::ClockVerdict::warn);
+  EXPECT_NE(clock.problem.find("no PTP features"), std::string::npos) << clock.problem;
+  auto reader = open_reader();
+  ASSERT_TRUE(reader);
+  std::vector<std::byte> buffer(reader->capacity());
+  sim::FrameInfo info;
+  ASSERT_TRUE(next_frame(*reader, buffer, info));
+}
+
+// A camera with the SFNC PTP features: each state it goes through reaches the clock accessor
+// within about a second, read through the GenICam control channel while frames flow.
+TEST_F(AravisDriver, EachPtpStateOfTheCameraReachesTheClockAccessor) {
+  const std::string genicam = write_ptp_genicam(log + ".xml");
+  ASSERT_FALSE(genicam.empty());
+  FakeGvCamera camera("SIMPTP", genicam);
+  ASSERT_TRUE(camera.running());
+  set_register(camera.fake(), kPtpEnable, 1);
+  set_register(camera.fake(), kPtpStatus, 4);  // Listening
+  InProcessCapture run;
+  ASSERT_EQ(run.start(clock_test_config(stream)), "");
+  std::remove(genicam.c_str());
+  const std::function<sim::ClockStatus()> clock = run.capture->reported_clock();
+  sim::ClockStatus now = clock();
+  EXPECT_EQ(now.source, sim::ClockSource::ptp);
+  EXPECT_EQ(now.state, sim::ClockState::acquiring);
+  EXPECT_EQ(now.stamps, sim::StampClock::sensor);  // PTP on: the camera's clock stamps the frames
+  EXPECT_EQ(now.verdict, sim::ClockVerdict::warn);
+  EXPECT_NE(now.problem.find("Listening"), std::string::npos) << now.problem;
+
+  // Locked to a master: offset and grandmaster as the camera reports them.
+  set_register(camera.fake(), kPtpOffset, static_cast<std::uint64_t>(std::int64_t{-1234}), 8);
+  set_register(camera.fake(), kPtpGrandmaster, 0x001122fffe334455ULL, 8);
+  set_register(camera.fake(), kPtpServo, 1);
+  set_register(camera.fake(), kPtpStatus, 9);  // Slave
+  ASSERT_TRUE(clock_reaches(clock, [](const sim::ClockStatus& c) { return c.state == sim::ClockState::locked; }))
+      << clock().problem;
+  now = clock();
+  EXPECT_EQ(now.offset_from_master_ns, -1234);
+  EXPECT_EQ(now.grandmaster, "001122.fffe.334455");
+  EXPECT_EQ(now.verdict, sim::ClockVerdict::unknown) << now.problem;
+
+  // The servo loses its lock, then the port goes faulty, then the camera becomes the master.
+  set_register(camera.fake(), kPtpServo, 0);
+  ASSERT_TRUE(clock_reaches(clock, [](const sim::ClockStatus& c) { return c.state == sim::ClockState::acquiring; }));
+  set_register(camera.fake(), kPtpStatus, 2);  // Faulty
+  ASSERT_TRUE(clock_reaches(clock, [](const sim::ClockStatus& c) { return c.state == sim::ClockState::holdover; }));
+  set_register(camera.fake(), kPtpStatus, 6);  // Master
+  ASSERT_TRUE(clock_reaches(clock, [](const sim::ClockStatus& c) {
+    return c.state == sim::ClockState::free_running && c.problem.find("master") != std::string::npos;
+  })) << clock().problem;
+  guint32 latched = 0;
+  ASSERT_TRUE(arv_fake_camera_read_register(camera.fake(), kPtpLatch, &latched));
+  EXPECT_NE(latched, 0U);  // the data set was latched before it was read
+
+  // Frames kept flowing all along.
+  auto reader = open_reader();
+  ASSERT_TRUE(reader);
+  std::vector<std::byte> buffer(reader->capacity());
+  sim::FrameInfo info;
+  ASSERT_TRUE(next_frame(*reader, buffer, info));
 }
 
 }  // namespace

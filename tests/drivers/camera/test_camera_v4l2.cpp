@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <thread>
 
 #include "fake_v4l2_device.hpp"
@@ -287,6 +288,90 @@ TEST_F(V4l2CaptureTest, ReceiveTimestampsIgnoreTheDeviceClock) {
   EXPECT_LE(info.stamp_ns, realtime_ns());
 }
 
+// --- the clock of the stamps ----------------------------------------------------------------
+
+// UVC and most capture drivers stamp with CLOCK_MONOTONIC: the host's clock, mapped per frame.
+TEST_F(V4l2CaptureTest, TheReportedClockSaysTheStampsAreTheBuffersOnTheHostsClock) {
+  config.format.width = 64;
+  config.format.height = 48;
+  auto capture = start();
+  ASSERT_TRUE(capture);
+  // What a clock reporter takes, called from its own thread.
+  const std::function<ClockStatus()> clock = capture->reported_clock();
+  EXPECT_EQ(clock().source, ClockSource::host);
+  EXPECT_EQ(clock().reported_ns, 0);  // no frame yet
+  const std::int64_t before = realtime_ns();
+  fake.push_frame({testing::noise(64 * 48 * 2, 1), 0, false, -1});
+  ASSERT_EQ(capture->step(100ms), StepResult::published);
+  const ClockStatus now = clock();
+  EXPECT_EQ(now.source, ClockSource::host);
+  EXPECT_EQ(now.state, ClockState::unknown);  // the host's own synchronisation is judged apart
+  EXPECT_EQ(now.stamps, StampClock::sensor);
+  EXPECT_EQ(now.verdict, ClockVerdict::unknown) << now.problem;
+  EXPECT_GE(now.reported_ns, before);
+}
+
+// A buffer without a monotonic stamp cannot be mapped: the frame carries the receive time, and
+// the clock record says so, for UNKNOWN, COPY and a value V4L2 does not define; a monotonic
+// buffer afterwards clears the warning at once.
+TEST_F(V4l2CaptureTest, AnUnknownOrCopiedBufferClockIsAWarningAndTheFramesCarryTheReceiveTime) {
+  config.format.width = 64;
+  config.format.height = 48;
+  std::vector<std::string> logged;
+  config.log = [&logged](std::string_view line) { logged.emplace_back(line); };
+  auto capture = start();
+  ASSERT_TRUE(capture);
+  const ReportedClock clock = capture->reported_clock();
+  auto reader = open_reader();
+  Bytes got(reader.capacity());
+  struct Case {
+    std::uint32_t flags;
+    const char* named;
+  };
+  for (const Case c : {Case{V4L2_BUF_FLAG_TIMESTAMP_UNKNOWN, "TIMESTAMP_UNKNOWN"},
+                       Case{V4L2_BUF_FLAG_TIMESTAMP_COPY | V4L2_BUF_FLAG_TSTAMP_SRC_SOE, "TIMESTAMP_COPY"},
+                       Case{V4L2_BUF_FLAG_TIMESTAMP_MASK, "TIMESTAMP_UNKNOWN"}}) {
+    const std::int64_t before = realtime_ns();
+    FakeFrame frame{testing::noise(64 * 48 * 2, 1), 0, false, 12345};
+    frame.timestamp_flags = c.flags;
+    fake.push_frame(frame);
+    ASSERT_EQ(capture->step(100ms), StepResult::published);
+    FrameInfo info;
+    ASSERT_EQ(reader.read(got, info), ReadStatus::new_frame);
+    EXPECT_GE(info.stamp_ns, before);  // the receive time, not 12 µs after boot
+    EXPECT_LE(info.stamp_ns, realtime_ns());
+    const ClockStatus now = clock();
+    EXPECT_EQ(now.source, ClockSource::host);
+    EXPECT_EQ(now.stamps, StampClock::host_arrival);
+    EXPECT_EQ(now.verdict, ClockVerdict::warn);
+    EXPECT_NE(now.problem.find(c.named), std::string::npos) << now.problem;
+  }
+  fake.push_frame({testing::noise(64 * 48 * 2, 1), 0, false, -1});
+  ASSERT_EQ(capture->step(100ms), StepResult::published);
+  EXPECT_EQ(clock().stamps, StampClock::sensor);
+  EXPECT_EQ(clock().verdict, ClockVerdict::unknown) << clock().problem;
+  // Each change to a clock that cannot be mapped is said once in the log, not per frame.
+  ASSERT_EQ(logged.size(), 3U);
+  EXPECT_EQ(logged[1].rfind("warning: ", 0), 0U) << logged[1];
+  EXPECT_NE(logged[1].find("TIMESTAMP_COPY"), std::string::npos) << logged[1];
+}
+
+TEST_F(V4l2CaptureTest, ReceiveTimestampsReportTheHostsArrivalWhateverTheBuffersSay) {
+  config.format.width = 64;
+  config.format.height = 48;
+  config.timestamps = TimestampSource::receive;
+  auto capture = start();
+  ASSERT_TRUE(capture);
+  FakeFrame frame{testing::noise(64 * 48 * 2, 1), 0, false, 12345};
+  frame.timestamp_flags = V4L2_BUF_FLAG_TIMESTAMP_UNKNOWN;
+  fake.push_frame(frame);
+  ASSERT_EQ(capture->step(100ms), StepResult::published);
+  const ClockStatus now = capture->reported_clock()();
+  EXPECT_EQ(now.source, ClockSource::host);
+  EXPECT_EQ(now.stamps, StampClock::host_arrival);
+  EXPECT_EQ(now.verdict, ClockVerdict::unknown) << now.problem;  // asked for: nothing wrong
+}
+
 TEST_F(V4l2CaptureTest, SequenceGapsCountDroppedFrames) {
   config.format.width = 64;
   config.format.height = 48;
@@ -466,6 +551,26 @@ std::optional<int> parse_options(std::vector<std::string> words, Options& option
 
 std::optional<int> parse_v4l2(std::vector<std::string> words, V4l2Options& options) {
   return parse_options(std::move(words), options, add_v4l2_options, finish_v4l2_options);
+}
+
+// A camera's exposure and transfer put its stamps tens of milliseconds before their arrival:
+// the clock check's tolerance for cameras is wider than a LiDAR's, and an option.
+TEST(V4l2Config, TheClockToleranceIsACamerasByDefaultAndAnOption) {
+  const timing::ClockTolerance lidar;
+  V4l2Options defaults;
+  EXPECT_FALSE(parse_v4l2({"t"}, defaults));
+  EXPECT_EQ(defaults.clock.tolerance.offset_ok_ns, 250'000'000);
+  EXPECT_GT(defaults.clock.tolerance.offset_ok_ns, lidar.offset_ok_ns);
+  EXPECT_GT(defaults.clock.tolerance.spread_warn_ns, lidar.spread_warn_ns);
+  EXPECT_EQ(defaults.clock.tolerance.offset_error_ns, lidar.offset_error_ns);
+  V4l2Options wider;
+  EXPECT_FALSE(parse_v4l2({"t", "--clock-offset-ok-ms", "400", "--clock-spread-warn-ms", "80.5"}, wider));
+  EXPECT_EQ(wider.clock.tolerance.offset_ok_ns, 400'000'000);
+  EXPECT_EQ(wider.clock.tolerance.spread_warn_ns, 80'500'000);
+  V4l2Options too_wide;
+  ::testing::internal::CaptureStderr();
+  EXPECT_EQ(parse_v4l2({"t", "--clock-offset-ok-ms", "5000"}, too_wide), std::optional<int>(2));
+  EXPECT_NE(::testing::internal::GetCapturedStderr().find("--clock-offset-ok-ms"), std::string::npos);
 }
 
 TEST(V4l2Config, YamlFillsTheConfigUnderTheCommandLineAndRefusesBadKeys) {

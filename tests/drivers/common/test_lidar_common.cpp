@@ -4,10 +4,12 @@
 // with its deadline, the fetched-file cache and the frame publisher.
 #include <arpa/inet.h>
 #include <netinet/in.h>
+#include <sys/eventfd.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -74,6 +76,39 @@ struct Collector final : sim::lidar::DatagramHandler {
   std::vector<std::string> senders;
 };
 
+// Runs the receiver until the collector has what it wants, or (a receiver that hears nothing)
+// until `bound` has passed: the bound ends a broken run, it asserts nothing.
+void run_at_most(UdpReceiver& receiver, Collector& collector, std::chrono::seconds bound = std::chrono::seconds(20)) {
+  const int stop = ::eventfd(0, EFD_CLOEXEC);
+  const auto until = std::chrono::steady_clock::now() + bound;
+  sim::lidar::ReceiverCallbacks callbacks;
+  callbacks.tick_period = std::chrono::milliseconds(50);
+  callbacks.tick = [&] {
+    if (std::chrono::steady_clock::now() < until) return;
+    const std::uint64_t one = 1;
+    EXPECT_EQ(::write(stop, &one, sizeof one), 8);
+  };
+  receiver.run(stop, collector, callbacks);
+  ::close(stop);
+}
+
+// Sends to a multicast group through loopback (the private network routes 224.0.0.0/4 there).
+void send_to_group(const char* group, std::uint16_t port, std::size_t count, std::uint8_t fill) {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  in_addr lo{};
+  ::inet_pton(AF_INET, "127.0.0.1", &lo);
+  ::setsockopt(fd, IPPROTO_IP, IP_MULTICAST_IF, &lo, sizeof lo);
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(port);
+  ::inet_pton(AF_INET, group, &to.sin_addr);
+  const std::vector<std::uint8_t> payload(100, fill);
+  for (std::size_t i = 0; i < count; ++i) {
+    EXPECT_EQ(::sendto(fd, payload.data(), payload.size(), 0, reinterpret_cast<const sockaddr*>(&to), sizeof to), 100);
+  }
+  ::close(fd);
+}
+
 UdpListen loopback() {
   UdpListen listen;
   listen.bind = "127.0.0.1";
@@ -100,6 +135,79 @@ TEST(UdpReceiver, DatagramsFromAnotherSenderAreCountedAndNotHandled) {
   EXPECT_EQ(collector.senders[0], "127.0.0.2");
   EXPECT_EQ(receiver->counters().datagrams, 2u);
   EXPECT_EQ(receiver->counters().other_source, 1u);
+}
+
+TEST(UdpReceiver, ThreeSensorsMulticastingToThreeGroupsOnOnePortAreEachHeardOnlyByTheirOwnDriver) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  const std::array<const char*, 3> groups{"239.1.1.1", "239.1.1.2", "239.1.1.3"};
+  std::vector<UdpReceiver> receivers;
+  std::uint16_t port = 0;  // the first receiver's free port; the others share it
+  for (const char* group : groups) {
+    UdpListen listen;
+    listen.multicast_group = group;
+    listen.receive_buffer = 1 << 20;
+    const std::array ports{UdpPort{port, "UDP", "--port"}};
+    auto receiver = UdpReceiver::open(listen, ports, 2048);
+    ASSERT_TRUE(receiver) << receiver.error().message;
+    port = receiver->port();
+    receivers.push_back(std::move(*receiver));
+  }
+  // Every datagram is queued before any receiver runs: one that got another group's datagrams
+  // takes them in its first batch and counts them.
+  for (std::size_t g = 0; g < groups.size(); ++g) send_to_group(groups[g], port, 3 + g, static_cast<std::uint8_t>(g + 1));
+  for (std::size_t g = 0; g < groups.size(); ++g) {
+    Collector collector(3 + g);
+    run_at_most(receivers[g], collector);
+    ASSERT_EQ(collector.payloads.size(), 3 + g) << groups[g];
+    for (const auto& payload : collector.payloads) EXPECT_EQ(payload[0], g + 1) << groups[g];
+    EXPECT_EQ(receivers[g].counters().datagrams, 3 + g) << groups[g] << " heard another group";
+  }
+}
+
+TEST(UdpReceiver, ABindAddressWithAMulticastGroupIsTheInterfaceTheGroupIsJoinedOn) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  UdpListen listen = loopback();
+  listen.multicast_group = "239.1.1.4";
+  const std::array ports{UdpPort{0, "UDP", "--port"}};
+  auto receiver = UdpReceiver::open(listen, ports, 2048);
+  ASSERT_TRUE(receiver) << receiver.error().message;
+  send_to_group("239.1.1.4", receiver->port(), 5, 7);
+  Collector collector(5);
+  run_at_most(*receiver, collector);
+  EXPECT_EQ(collector.payloads.size(), 5u) << "a socket bound to 127.0.0.1 never matches a group destination";
+
+  listen.bind = "192.0.2.1";  // no interface holds it
+  auto refused = UdpReceiver::open(listen, ports, 2048);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().message.find("on the interface of 192.0.2.1"), std::string::npos)
+      << refused.error().message;
+}
+
+TEST(UdpReceiver, TwoAndThreeSensorsOnOnePortAreCountedAndWarnedOfOnce) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  const std::array ports{UdpPort{0, "UDP", "--port"}};
+  auto receiver = UdpReceiver::open(loopback(), ports, 2048);
+  ASSERT_TRUE(receiver) << receiver.error().message;
+  Sender first("127.0.0.2");
+  Sender second("127.0.0.3");
+  Sender third("127.0.0.4");
+  for (int i = 0; i < 2; ++i) {
+    first.send(receiver->port(), 100, 1);
+    second.send(receiver->port(), 100, 2);
+    third.send(receiver->port(), 100, 3);
+  }
+  std::vector<std::string> notes;
+  sim::lidar::ReceiverCallbacks callbacks;
+  callbacks.note = [&](std::string_view note) { notes.emplace_back(note); };
+  Collector collector(6);
+  receiver->run(-1, collector, callbacks);
+  ASSERT_EQ(collector.payloads.size(), 6u) << "without --source every sender is still handled";
+  EXPECT_EQ(receiver->counters().other_senders, 4u);
+  EXPECT_EQ(receiver->counters().other_source, 0u);
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find("127.0.0.3"), std::string::npos) << notes[0];
+  EXPECT_NE(notes[0].find("127.0.0.2"), std::string::npos) << notes[0];
+  EXPECT_NE(sim::lidar::describe_problems(receiver->counters()).find("other-senders 4"), std::string::npos);
 }
 
 TEST(UdpReceiver, ADatagramLargerThanTheBufferArrivesMarkedTruncated) {
@@ -309,7 +417,7 @@ TEST(Stamps, SumsAndDifferencesOfNanosecondsStopAtTheLimitsInsteadOfOverflowing)
 }  // namespace
 
 int main(int argc, char** argv) {
-  g_skip_reason = sim::testing::enter_private_network(sim::testing::Multicast::off);
+  g_skip_reason = sim::testing::enter_private_network(sim::testing::Multicast::on);
   ::testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
 }

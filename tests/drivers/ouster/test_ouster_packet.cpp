@@ -194,6 +194,23 @@ TEST(OusterMetadata, NestedFirmware3MetadataReadsLikeTheFlatFirmware2One) {
   EXPECT_EQ(flat.describe(), "OS-1-32-G (sn 992101000280, v2.1.1), LEGACY, 32 beams × 1024 columns at 10 Hz");
 }
 
+// FW 1.14 and older name neither lidar_origin_to_beam_origin_mm nor beam_to_lidar_transform:
+// ouster-sdk (metadata.cpp, sensor_info.cpp) then takes n by product line, not 0.
+TEST(OusterMetadata, MetadataWithoutTheBeamOriginTakesOusterSdksDefaultForItsProductLine) {
+  const std::vector<std::pair<std::string, double>> lines{
+      {"OS-0-128", 27.67}, {"OS-1-64", 15.806}, {"OS-2-32", 13.762}, {"OS1-64", 12.163}};
+  for (const auto& line : lines) {
+    auto j = nlohmann::json::parse(ouster_test::nested_metadata(Layout::rng19, 32, 1024, 16, 0x123456));
+    j["beam_intrinsics"].erase("lidar_origin_to_beam_origin_mm");
+    j["beam_intrinsics"].erase("beam_to_lidar_transform");
+    j["sensor_info"]["prod_line"] = line.first;
+    auto m = Metadata::parse(j.dump());
+    ASSERT_TRUE(m) << m.error().message;
+    EXPECT_DOUBLE_EQ(m->lidar_origin_to_beam_origin_mm, line.second) << line.first;
+    EXPECT_DOUBLE_EQ(m->beam_to_lidar[3], line.second) << line.first;
+  }
+}
+
 TEST(OusterMetadata, BrokenMetadataIsRefusedWithOneSentenceNamingTheKey) {
   EXPECT_NE(Metadata::parse("{not json").error().message.find("not valid JSON"), std::string::npos);
   EXPECT_NE(Metadata::parse("{}").error().message.find("data_format"), std::string::npos);
@@ -307,6 +324,97 @@ TEST(OusterFrames, ALostLastPacketEndsTheFrameAtTheNextFramesFirstPacketWhichSta
   EXPECT_EQ(frames[1].packets, 64u);
   EXPECT_EQ(assembler.counters().lost_packets, 1u);
   // The missing columns of frame 1 hold no return: checked on a frame of its own.
+}
+
+TEST(OusterFrames, AColumnWindowThatWrapsThroughColumnZeroIsOneWholeFramePerFrameId) {
+  // ouster-sdk's windowed_frame2.pcap: 512 columns, window [370, 85]. The sensor sends each
+  // frame_id as columns 0–95 (its end), then 368–511 (its start).
+  Metadata m = metadata_for(Layout::rng19, 32, 512);
+  m.column_window = {370, 85};
+  std::vector<std::vector<std::uint8_t>> packets;
+  for (std::uint32_t frame_id = 1; frame_id <= 3; ++frame_id) {
+    for (const auto& packet : rotation(Layout::rng19, 32, frame_id, 512)) {
+      const unsigned first = packet[32 + 8] | (packet[32 + 9] << 8);  // measurement_id of its first column
+      if (first < 96 || first >= 368) packets.push_back(packet);
+    }
+  }
+  auto assembler = FrameAssembler::create(m, {}).value();
+  std::vector<sim::LidarPoint> points(assembler.max_points());
+  auto frames = feed(assembler, packets, points);
+  ASSERT_EQ(frames.size(), 3u) << "one frame per frame_id, each complete at column 511";
+  for (std::uint32_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(frames[i].frame_id, i + 1);
+    EXPECT_TRUE(frames[i].whole);
+    EXPECT_EQ(frames[i].packets, 15u);
+    EXPECT_EQ(frames[i].missing_columns, 0u);
+  }
+  EXPECT_EQ(assembler.counters().lost_packets, 0u);
+  EXPECT_EQ(assembler.counters().partial_frames_dropped, 0u);
+  // Columns 0–85 are in the (last) frame: beam 0's pixel of column 10 (no pixel shift) has its return.
+  ASSERT_NE(pixel_value(Layout::rng19, 10, 0).range_mm, 0u);
+  const sim::LidarPoint& p = points[10];
+  EXPECT_NE(p.x * p.x + p.y * p.y + p.z * p.z, 0.0F);
+}
+
+TEST(OusterFrames, APacketArrivingAfterTheNextFramesFirstPacketIsDroppedAsLateNotMadeAFrame) {
+  // The last packet of frame 1 swapped with the first of frame 2 (the review's late_packet.pcap).
+  const Metadata m = metadata_for(Layout::rng19, 32);
+  std::vector<std::vector<std::uint8_t>> packets;
+  for (std::uint32_t frame_id = 1; frame_id <= 3; ++frame_id) {
+    const auto r = rotation(Layout::rng19, 32, frame_id);
+    packets.insert(packets.end(), r.begin(), r.end());
+  }
+  std::swap(packets[63], packets[64]);
+  auto assembler = FrameAssembler::create(m, {}).value();
+  std::vector<sim::LidarPoint> points(assembler.max_points());
+  const auto frames = feed(assembler, packets, points);
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[0].frame_id, 1u);
+  EXPECT_EQ(frames[0].missing_columns, 16u) << "its last packet came after frame 2 began";
+  EXPECT_EQ(frames[1].frame_id, 2u);
+  EXPECT_TRUE(frames[1].whole);
+  EXPECT_EQ(frames[1].packets, 64u);
+  EXPECT_EQ(frames[1].missing_columns, 0u);
+  EXPECT_EQ(frames[2].frame_id, 3u);
+  EXPECT_EQ(assembler.counters().late_packets, 1u);
+  EXPECT_EQ(assembler.counters().partial_frames_dropped, 0u);
+  EXPECT_EQ(assembler.counters().lost_packets, 1u);
+}
+
+TEST(OusterFrames, APacketOfAFrameAlreadyPublishedIsDroppedAndAFrameCounterThatRestartsIsFollowed) {
+  const Metadata m = metadata_for(Layout::rng19, 32);
+  std::vector<std::vector<std::uint8_t>> packets = rotation(Layout::rng19, 32, 1000);
+  packets.push_back(packets[10]);  // a straggler of frame 1000, already complete
+  for (std::uint32_t frame_id : {1001u, 5u}) {  // 5: the sensor restarted its counter
+    const auto r = rotation(Layout::rng19, 32, frame_id);
+    packets.insert(packets.end(), r.begin(), r.end());
+  }
+  auto assembler = FrameAssembler::create(m, {}).value();
+  std::vector<sim::LidarPoint> points(assembler.max_points());
+  const auto frames = feed(assembler, packets, points);
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[1].frame_id, 1001u);
+  EXPECT_EQ(frames[2].frame_id, 5u);
+  EXPECT_EQ(assembler.counters().late_packets, 1u);
+  EXPECT_EQ(assembler.counters().partial_frames_dropped, 0u);
+}
+
+TEST(OusterFrames, ANewSpanMidFrameMakesTheRestAPartialFrameNotLatePackets) {
+  const Metadata m = metadata_for(Layout::rng19, 32);
+  const auto packets = rotation(Layout::rng19, 32, 1);
+  AssemblerOptions options;
+  options.emit_partial_frames = true;
+  auto assembler = FrameAssembler::create(m, options).value();
+  std::vector<sim::LidarPoint> points(assembler.max_points());
+  assembler.set_output(points);
+  for (std::size_t i = 0; i < 10; ++i) EXPECT_FALSE(assembler.push(packets[i], 0).frame);
+  assembler.set_output(points);  // the points so far went elsewhere
+  std::optional<CompletedFrame> frame;
+  for (std::size_t i = 10; i < packets.size(); ++i) frame = assembler.push(packets[i], 0).frame;
+  ASSERT_TRUE(frame);
+  EXPECT_FALSE(frame->whole);
+  EXPECT_EQ(frame->packets, 54u);
+  EXPECT_EQ(assembler.counters().late_packets, 0u);
 }
 
 TEST(OusterFrames, AFrameJoinedMidRotationIsDroppedUnlessPartialFramesAreAsked) {

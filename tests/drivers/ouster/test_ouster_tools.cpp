@@ -11,16 +11,19 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "fake_sensor_http.hpp"
 #include "frames.hpp"  // tests/drivers/hesai/driver: hand-built frames and capture files
 #include "ouster_test_support.hpp"
 #include "sim/sim.hpp"
@@ -214,59 +217,69 @@ TEST(OusterReplay, AFragmentedCaptureReplaysLikeTheWholeOne) {
   EXPECT_NE(r.out.find("skipped=0"), std::string::npos) << r.out;
 }
 
-// A sensor's HTTP API on 127.0.0.1 (port 0): answers GET /api/v1/sensor/metadata with `body`.
-class FakeSensorHttp {
- public:
-  explicit FakeSensorHttp(std::string body) : body_(std::move(body)), listener_(::socket(AF_INET, SOCK_STREAM, 0)) {
-    sockaddr_in address{};
-    address.sin_family = AF_INET;
-    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ::bind(listener_, reinterpret_cast<const sockaddr*>(&address), sizeof address);
-    ::listen(listener_, 8);
-    socklen_t length = sizeof address;
-    ::getsockname(listener_, reinterpret_cast<sockaddr*>(&address), &length);
-    port_ = ntohs(address.sin_port);
-    thread_ = std::thread([this] { serve(); });
+// The capture's lidar packets sent by `senders` sensors (192.168.1.100, .101, …) to the ports
+// given, interleaved packet by packet, with its IMU packets from the first sensor on 7503.
+std::string several_sensors(const TempDir& dir, const std::string& name, const std::vector<std::uint16_t>& ports) {
+  const auto capture = ouster_test::load_capture(dual);
+  std::vector<sim::pcap::testing::Record> records;
+  std::int64_t t = 1'600'000'000'000'000'000;
+  const auto add = [&](std::uint8_t host, std::uint16_t port, const std::vector<std::uint8_t>& payload) {
+    const auto ip = sim::pcap::testing::ipv4({192, 168, 1, host}, {192, 168, 1, 1},
+                                             sim::pcap::testing::udp(port, port, payload), 17, {}, 0);
+    records.push_back({sim::pcap::testing::ethernet(0x0800, ip), t += 20'000});
+  };
+  for (const auto& payload : capture.lidar) {
+    for (std::size_t s = 0; s < ports.size(); ++s) add(static_cast<std::uint8_t>(100 + s), ports[s], payload);
   }
-  ~FakeSensorHttp() {
-    stop_ = true;
-    thread_.join();
-    ::close(listener_);
-  }
-  std::uint16_t port() const { return port_; }
-  int requests() const { return requests_; }
+  for (const auto& payload : capture.imu) add(100, 7503, payload);
+  const std::string file = (dir.path / name).string();
+  sim::pcap::testing::write_capture(file, DLT_EN10MB, records);
+  return file;
+}
 
- private:
-  void serve() {
-    while (!stop_) {
-      pollfd p{listener_, POLLIN, 0};
-      if (::poll(&p, 1, 20) <= 0) continue;
-      const int fd = ::accept(listener_, nullptr, nullptr);
-      if (fd < 0) continue;
-      std::string request;
-      char chunk[1024];
-      while (request.find("\r\n\r\n") == std::string::npos) {
-        const ssize_t n = ::recv(fd, chunk, sizeof chunk, 0);
-        if (n <= 0) break;
-        request.append(chunk, static_cast<std::size_t>(n));
-      }
-      ++requests_;
-      const bool right = request.rfind("GET /api/v1/sensor/metadata HTTP/1.", 0) == 0;
-      const std::string answer =
-          right ? "HTTP/1.0 200 OK\r\nContent-Type: application/json\r\n\r\n" + body_
-                : std::string("HTTP/1.0 404 Not Found\r\n\r\n");
-      (void)::send(fd, answer.data(), answer.size(), MSG_NOSIGNAL);
-      ::close(fd);
-    }
+TEST(OusterReplay, SensorsOnOtherPortsThanTheMetadatasAreLeftOutAsOusterSdkDispatchesThem) {
+  TempDir dir;
+  for (const auto& ports : {std::vector<std::uint16_t>{7502, 7504}, std::vector<std::uint16_t>{7502, 7504, 7506}}) {
+    const std::string file = several_sensors(dir, std::to_string(ports.size()) + "_ousters.pcap", ports);
+    const std::string stream = unique_name("ouster_ports");
+    StreamGuard guard(stream);
+    guard.names.push_back(stream + ".imu");
+    const auto r = sim::testing::run({replay_tool, file, "--calibration", data(dual + ".json"), "--stream", stream,
+                                      "--max-rate", "--summary", "-q"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("frames=1 packets=64 lost=0 malformed=0 imu=10"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("partial_frames_dropped=0"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("duplicate_columns=0"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("skipped=" + std::to_string(64 * (ports.size() - 1))), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("other_senders=0"), std::string::npos) << r.out;
   }
+}
 
-  std::string body_;
-  int listener_;
-  std::uint16_t port_ = 0;
-  std::thread thread_;
-  std::atomic<bool> stop_{false};
-  std::atomic<int> requests_{0};
-};
+TEST(OusterReplay, TwoAndThreeSensorsOnOnePortAreCountedAndWarnedOfOnce) {
+  TempDir dir;
+  for (std::size_t sensors : {2u, 3u}) {
+    const std::string file = several_sensors(dir, std::to_string(sensors) + "_on_one_port.pcap",
+                                             std::vector<std::uint16_t>(sensors, 7502));
+    const std::string stream = unique_name("ouster_one_port");
+    StreamGuard guard(stream);
+    guard.names.push_back(stream + ".imu");
+    const auto r = sim::testing::run({replay_tool, file, "--calibration", data(dual + ".json"), "--stream", stream,
+                                      "--max-rate", "--summary", "-q"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("other_senders=" + std::to_string(64 * (sensors - 1))), std::string::npos) << r.out;
+    const std::string warning = "warning: packets from 192.168.1.101 are decoded besides those from 192.168.1.100";
+    ASSERT_NE(r.err.find(warning), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find(warning), r.err.rfind(warning)) << "said once: " << r.err;
+    // The user's way out: keep one sensor.
+    const auto one = sim::testing::run({replay_tool, file, "--calibration", data(dual + ".json"), "--stream", stream,
+                                        "--max-rate", "--summary", "-q", "--filter", "src host 192.168.1.100"});
+    ASSERT_EQ(one.code, 0) << one.err;
+    EXPECT_NE(one.out.find("frames=1 packets=64 lost=0"), std::string::npos) << one.out;
+    EXPECT_NE(one.out.find("other_senders=0"), std::string::npos) << one.out;
+  }
+}
+
+using ouster_test::FakeSensorHttp;
 
 void send_to(std::uint16_t port, const std::vector<std::vector<std::uint8_t>>& payloads,
              const char* address = "127.0.0.1") {
@@ -310,7 +323,7 @@ TEST(OusterLive, MetadataComesFromTheSensorsHttpApiIsCachedAndTheFramesAndImuAre
                     "0", "--stream", stream, "--status-interval", "0", "--summary", "--frame-id", "os_sensor"});
     const auto ports = listening(driver);
     ASSERT_TRUE(ports) << driver.err();
-    EXPECT_EQ(sensor.requests(), 1);
+    EXPECT_EQ(sensor.requests_for("/api/v1/sensor/metadata"), 1);  // (the clock poll asks too)
     EXPECT_EQ(ouster_test::read_text(cache), ouster_test::read_text(ouster_test::data_path(dual + ".json")));
     auto reader = sim::testing::wait_for_stream(stream);
     ASSERT_TRUE(reader);
@@ -427,6 +440,41 @@ TEST(OusterLive, PacketsThatDoNotFitTheMetadataAreCountedAndToldOnceNeverPublish
   sim::FrameInfo info;
   std::vector<std::byte> buffer(reader->capacity());
   EXPECT_NE(reader->read_next(buffer, info, 0ms), sim::ReadStatus::new_frame);
+}
+
+// Two sensors multicasting to two groups on one port, a driver for each: each driver publishes
+// its own sensor's frames only (Linux would hand both groups to both sockets by default).
+TEST(OusterLive, TwoDriversOnOnePortWithTwoGroupsEachPublishOnlyTheirGroup) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  const auto capture = ouster_test::load_capture(dual);
+  const std::array<const char*, 2> groups{"239.201.201.1", "239.201.201.2"};
+  std::vector<std::string> streams{unique_name("ouster_group_a"), unique_name("ouster_group_b")};
+  StreamGuard guard_a(streams[0]);
+  StreamGuard guard_b(streams[1]);
+  std::vector<std::unique_ptr<Process>> drivers;
+  std::string port = "0";
+  for (std::size_t d = 0; d < 2; ++d) {
+    drivers.push_back(std::make_unique<Process>(std::vector<std::string>{
+        live_tool, "--calibration", data(dual + ".json"), "--lidar-port", port, "--imu-port", "0", "--no-imu",
+        "--multicast", groups[d], "--stream", streams[d], "--summary", "--status-interval", "0"}));
+    const auto ports = listening(*drivers[d]);
+    ASSERT_TRUE(ports) << drivers[d]->err();
+    port = std::to_string(ports->lidar);
+  }
+  auto reader_a = sim::testing::wait_for_stream(streams[0]);
+  auto reader_b = sim::testing::wait_for_stream(streams[1]);
+  ASSERT_TRUE(reader_a && reader_b);
+  send_to(static_cast<std::uint16_t>(std::stoi(port)), capture.lidar, groups[0]);
+  std::vector<std::byte> buffer(reader_a->capacity());
+  sim::FrameInfo info;
+  EXPECT_EQ(reader_a->read_next(buffer, info, 30s), sim::ReadStatus::new_frame) << drivers[0]->err();
+  for (auto& driver : drivers) {
+    ::kill(driver->pid(), SIGTERM);
+    EXPECT_EQ(driver->wait(), 0) << driver->err();
+  }
+  EXPECT_NE(drivers[0]->out().find("packets=64 "), std::string::npos) << drivers[0]->out();
+  EXPECT_NE(drivers[1]->out().find("frames=0 packets=0 "), std::string::npos) << drivers[1]->out();
+  EXPECT_NE(drivers[1]->out().find(" datagrams=0 "), std::string::npos) << drivers[1]->out();
 }
 
 TEST(OusterLive, AMulticastGroupIsJoinedAndPacketsOfAnotherSenderAreIgnored) {

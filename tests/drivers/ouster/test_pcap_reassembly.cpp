@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -145,6 +146,69 @@ TEST(PcapReassembly, PendingDatagramsAreBoundedAndExpireByCaptureTime) {
   reassembler.finish();
   EXPECT_EQ(reassembler.counters().abandoned, 1u);
   EXPECT_EQ(reassembler.counters().completed, 0u);
+}
+
+// Whether any byte of a returned datagram is `value`.
+bool holds(std::span<const std::byte> datagram, std::uint8_t value) {
+  return std::find(datagram.begin(), datagram.end(), std::byte{value}) != datagram.end();
+}
+
+TEST(PcapReassembly, AHoleBeforeTheLastFragmentNeverCompletesWithAnEarlierDatagramsBytes) {
+  Ipv4Reassembler reassembler;
+  // A first datagram leaves 0xAA in the slot's buffer.
+  EXPECT_TRUE(reassembler.add(piece(1, 0, true, bytes(1480, 0xAA)), 0).empty());
+  EXPECT_EQ(reassembler.add(piece(1, 1480, false, bytes(1000, 0xAA)), 0).size(), 2480u);
+  // A fragment at 2000 that says more follow, then a last fragment 800–2000 that ends before it,
+  // then 0–400: bytes 400–799 never came.
+  EXPECT_TRUE(reassembler.add(piece(2, 2000, true, bytes(400, 1)), 1).empty());
+  EXPECT_TRUE(reassembler.add(piece(2, 800, false, bytes(1200, 2)), 2).empty());
+  EXPECT_TRUE(reassembler.add(piece(2, 0, true, bytes(400, 3)), 3).empty());
+  EXPECT_EQ(reassembler.counters().completed, 1u);
+  EXPECT_EQ(reassembler.counters().refused, 1u) << "the last fragment ending before received bytes";
+  // The same pieces in the order where the end comes first: refused on the fragment past it.
+  EXPECT_TRUE(reassembler.add(piece(3, 800, false, bytes(1200, 2)), 4).empty());
+  EXPECT_TRUE(reassembler.add(piece(3, 2000, true, bytes(400, 1)), 5).empty());
+  EXPECT_TRUE(reassembler.add(piece(3, 0, true, bytes(400, 3)), 6).empty());
+  EXPECT_EQ(reassembler.counters().completed, 1u);
+}
+
+TEST(PcapReassembly, TwoDatagramsWithOneIpIdAreNeverMergedAndAnOverlapWithOtherBytesDropsTheDatagram) {
+  Ipv4Reassembler reassembler;
+  // Datagram A (ID 7) lost its middle fragment; 25 s later datagram B uses ID 7 again, with no
+  // other fragment in between (the overlap, not the distance, tells them apart).
+  EXPECT_TRUE(reassembler.add(piece(7, 0, true, bytes(1480, 0xA1)), 0).empty());
+  EXPECT_TRUE(reassembler.add(piece(7, 2960, false, bytes(100, 0xA2)), 1).empty());
+  const std::int64_t later = 25'000'000'000;
+  for (std::uint32_t offset : {0u, 1480u, 2960u}) {
+    const auto whole = reassembler.add(piece(7, offset, offset != 2960, bytes(offset == 2960 ? 100 : 1480, 0xB1)), later);
+    EXPECT_FALSE(holds(whole, 0xA1) || holds(whole, 0xA2)) << "A's bytes in a datagram returned at " << offset;
+  }
+  EXPECT_EQ(reassembler.counters().overlapping, 1u);
+  EXPECT_EQ(reassembler.counters().completed, 0u) << "B's first fragment went with A (as Linux drops it)";
+  // An identical resend is no overlap: the datagram completes.
+  EXPECT_TRUE(reassembler.add(piece(8, 0, true, bytes(1480, 5)), later).empty());
+  EXPECT_TRUE(reassembler.add(piece(8, 0, true, bytes(1480, 5)), later).empty());
+  EXPECT_EQ(reassembler.add(piece(8, 1480, false, bytes(8, 6)), later).size(), 1488u);
+  EXPECT_EQ(reassembler.counters().overlapping, 1u);
+}
+
+TEST(PcapReassembly, AnIpIdThatComesRoundAgainAfterThousandsOfFragmentsStartsANewDatagram) {
+  Ipv4Reassembler reassembler;
+  EXPECT_TRUE(reassembler.add(piece(7, 0, true, bytes(1480, 0xA1)), 0).empty());
+  EXPECT_TRUE(reassembler.add(piece(7, 2960, false, bytes(100, 0xA2)), 0).empty());
+  // A sensor's stream goes on: 5,000 datagrams of two fragments each.
+  for (std::uint16_t id = 100; id < 5100; ++id) {
+    EXPECT_TRUE(reassembler.add(piece(id, 0, true, bytes(8, 1)), id).empty());
+    EXPECT_EQ(reassembler.add(piece(id, 8, false, bytes(8, 1)), id).size(), 16u);
+  }
+  // B reuses ID 7 and comes whole, in a different order than A.
+  EXPECT_TRUE(reassembler.add(piece(7, 1480, true, bytes(1480, 0xB1)), 6000).empty());
+  EXPECT_TRUE(reassembler.add(piece(7, 2960, false, bytes(100, 0xB2)), 6000).empty());
+  const auto whole = reassembler.add(piece(7, 0, true, bytes(1480, 0xB0)), 6000);
+  ASSERT_EQ(whole.size(), 3060u);
+  EXPECT_FALSE(holds(whole, 0xA1) || holds(whole, 0xA2));
+  EXPECT_EQ(whole[3059], std::byte{0xB2});
+  EXPECT_EQ(reassembler.counters().stale, 1u);
 }
 
 TEST(PcapReassembly, AbsurdFragmentsAreRefusedAndNeverMakeADatagram) {

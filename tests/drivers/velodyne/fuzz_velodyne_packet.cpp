@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Fuzzes the packet parsers and the frame assembler with outside bytes. Input: [model index]
 // [option flags] then records of [u16 length][payload]; the same bytes also go to the position
-// packet parser and model detection. Every completed frame must fit its span.
+// packet parser (and its clock record) and model detection. Every completed frame must fit its span.
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -51,7 +51,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (length > size) length = size;
     const std::span<const std::uint8_t> payload(data, length);
     (void)detect_model(payload);
-    (void)parse_position_packet(payload);
+    if (const auto report = parse_position_packet(payload, model)) {
+      const sim::ClockStatus clock = clock_status_of(*report, host_ns);
+      if (clock.problem.size() > sim::ClockStatus::kMaxProblem) __builtin_trap();
+    }
     const PushResult r = assembler->push(payload, host_ns);
     if (r.frame) {
       if (r.frame->point_count > span.size()) __builtin_trap();

@@ -83,9 +83,10 @@ inline std::string nmea(const std::string& body) {
   return "$" + body + tail;
 }
 
-// A VLP-16-style position packet (554 bytes): timestamp at 198, PPS state at 202, NMEA at 206.
+// A position packet as a VLP-16 sends it (512 bytes of UDP payload, 554 on the wire): timestamp
+// at 198, PPS state at 202, NMEA at 206.
 inline std::vector<std::uint8_t> position_packet(std::uint32_t timestamp_us, std::uint8_t pps,
-                                                 const std::string& sentence, std::size_t size = 554) {
+                                                 const std::string& sentence, std::size_t size = 512) {
   std::vector<std::uint8_t> out(size, 0);
   for (int i = 0; i < 4; ++i) out[198 + i] = static_cast<std::uint8_t>(timestamp_us >> (8 * i));
   out[202] = pps;

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <vector>
 
@@ -119,6 +120,45 @@ TEST(VelodyneSynthetic, Hdl32ePointsFollowTheManualsGeometryAndFiringTimes) {
   }
   EXPECT_EQ(i, frame.size());
   EXPECT_EQ(r.info[0].stamp_ns, stamp);
+}
+
+// An HDL-32E with firmware before 2.2.20.0 (2016) leaves bytes 1204 (return mode) and 1205
+// (product ID) at 0 (velodyne_decoder's unpack_16_32_beam); ros-drivers/velodyne decodes it.
+TEST(VelodyneSynthetic, Hdl32eFirmwareBefore2_2_20WithoutProductIdDecodesAsHdl32eStrongestWhenChosen) {
+  const Calibration cal = shipped("HDL32.yaml");
+  std::vector<std::vector<std::uint8_t>> named, unnamed;
+  for (unsigned k = 0; k < 400; ++k) {
+    DataPacket p;
+    p.product_id = 0x21;
+    p.timestamp_us = static_cast<std::uint32_t>(std::llround(1'000'000 + k * 552.96));
+    for (unsigned b = 0; b < 12; ++b) {
+      const unsigned seq = k * 12 + b;
+      p.blocks[b].azimuth = static_cast<std::uint16_t>((30000 + seq * 16) % 36000);
+      for (unsigned l = 0; l < 32; ++l) p.blocks[b].units[l] = {raw_distance(seq, l), static_cast<std::uint8_t>(l)};
+    }
+    named.push_back(p.bytes());
+    p.product_id = 0;
+    p.return_mode = 0;
+    unnamed.push_back(p.bytes());
+  }
+  EXPECT_FALSE(detect_model(unnamed[0])) << "it does not name itself: chosen, never guessed";
+  EXPECT_TRUE(is_unnamed_hdl32e(unnamed[0]));
+  EXPECT_FALSE(is_unnamed_hdl32e(named[0]));
+  Packet packet;
+  ASSERT_EQ(Packet::parse(unnamed[0], Model::hdl32e, packet), PacketError::none);
+  EXPECT_EQ(packet.return_mode(), ReturnMode::strongest);
+  EXPECT_EQ(Packet::parse(unnamed[0], Model::vlp16, packet), PacketError::wrong_model);
+  AssemblerOptions o;
+  o.model = Model::hdl32e;
+  auto with_id = FrameAssembler::create(cal, o);
+  auto without_id = FrameAssembler::create(cal, o);
+  ASSERT_TRUE(with_id && without_id);
+  const Decoded a = run(*with_id, named);
+  const Decoded b = run(*without_id, unnamed);
+  ASSERT_EQ(b.frames.size(), 1U);
+  EXPECT_EQ(b.counters.malformed, 0U);
+  ASSERT_EQ(a.frames[0].size(), b.frames[0].size());
+  EXPECT_EQ(std::memcmp(a.frames[0].data(), b.frames[0].data(), a.frames[0].size() * sizeof(sim::LidarPoint)), 0);
 }
 
 // The full HDL-64E model of ros-drivers/velodyne, written out here in double precision.
@@ -415,6 +455,35 @@ TEST(VelodyneSynthetic, TheCutAzimuthStartsEachFrameThere) {
   }
 }
 
+// VLS-128 dual return: a packet is one firing sequence (53.3 µs): every other packet missing is
+// half of them lost, not none (the estimate once assumed 1.5 sequences per dual packet).
+TEST(VelodyneSynthetic, Vls128DualPacketsLostAreCountedOneSequenceEach) {
+  const Calibration cal = shipped("VLS128.yaml");
+  std::vector<std::vector<std::uint8_t>> all, every_other;
+  for (unsigned k = 0; k < 600; ++k) {
+    DataPacket p;
+    p.product_id = 0xA1;
+    p.return_mode = 0x39;  // dual
+    p.timestamp_us = static_cast<std::uint32_t>(std::llround(1'000'000 + k * 53.3));
+    for (unsigned b = 0; b < 8; ++b) {
+      p.blocks[b].flag = std::array<std::uint8_t, 4>{0xEE, 0xDD, 0xCC, 0xBB}[(b / 2) % 4];
+      p.blocks[b].azimuth = static_cast<std::uint16_t>((k * 19) % 36000);
+      for (unsigned l = 0; l < 32; ++l) p.blocks[b].units[l] = {static_cast<std::uint16_t>(3000 + l), 10};
+    }
+    all.push_back(p.bytes());
+    if (k % 2 == 0) every_other.push_back(p.bytes());
+  }
+  for (const bool half : {false, true}) {
+    AssemblerOptions o;
+    o.model = Model::vls128;
+    auto assembler = FrameAssembler::create(cal, o);
+    ASSERT_TRUE(assembler) << assembler.error().message;
+    const Decoded r = run(*assembler, half ? every_other : all);
+    EXPECT_EQ(r.counters.malformed, 0U);
+    EXPECT_EQ(r.counters.lost_packets, half ? 299U : 0U);
+  }
+}
+
 TEST(VelodyneSynthetic, BadPacketsAreCountedAndNeverMakeAFrame) {
   AssemblerOptions o;
   auto assembler = FrameAssembler::create(shipped("VLP16.yaml"), o);
@@ -459,7 +528,7 @@ TEST(VelodyneSynthetic, PositionPacketsReportPpsAndGprmc) {
   EXPECT_TRUE(report->gprmc_valid);
   ASSERT_TRUE(report->gprmc_utc_s);
   EXPECT_EQ(*report->gprmc_utc_s, 764426119);  // 1994-03-23 12:35:19 UTC
-  // No fix ('V'), a bad checksum, and a 512-byte HDL-32E packet without a PPS byte.
+  // No fix ('V'), a bad checksum, and an HDL-32E's packet, whose byte 202 is no PPS state.
   auto no_fix = parse_position_packet(velodyne_test::position_packet(
       0, 1, velodyne_test::nmea("GPRMC,123519,V,,,,,,,230394,,")));
   ASSERT_TRUE(no_fix);
@@ -468,11 +537,113 @@ TEST(VelodyneSynthetic, PositionPacketsReportPpsAndGprmc) {
   EXPECT_FALSE(no_fix->gprmc_valid);
   std::string corrupt = sentence;
   corrupt[10] = '9';
-  EXPECT_FALSE(parse_position_packet(velodyne_test::position_packet(0, 2, corrupt))->has_gprmc);
-  auto hdl = parse_position_packet(velodyne_test::position_packet(0, 2, sentence, 512));
+  const auto bad_checksum = parse_position_packet(velodyne_test::position_packet(0, 2, corrupt));
+  EXPECT_FALSE(bad_checksum->has_gprmc);
+  EXPECT_EQ(bad_checksum->nmea, NmeaStatus::unreadable);
+  auto hdl = parse_position_packet(velodyne_test::position_packet(0, 2, sentence), Model::hdl32e);
   ASSERT_TRUE(hdl);
   EXPECT_EQ(hdl->pps, PpsState::unknown);
   EXPECT_FALSE(parse_position_packet(std::vector<std::uint8_t>(100, 0)));
+}
+
+// A real VLP-16 sends 512 bytes of UDP payload (554 is the Ethernet frame): its PPS byte counts.
+TEST(VelodyneSynthetic, ThePpsStateIsReadFromTheSensorsRealPositionPacketSize) {
+  for (const std::size_t size : {std::size_t{512}, std::size_t{554}}) {
+    for (const Model model : {Model::vlp16, Model::vlp32c, Model::vls128}) {
+      const auto report = parse_position_packet(velodyne_test::position_packet(0, 1, "", size), model);
+      ASSERT_TRUE(report) << size;
+      EXPECT_EQ(report->pps, PpsState::synchronizing) << size << " " << to_string(model);
+      EXPECT_EQ(report->nmea, NmeaStatus::none);
+    }
+  }
+  EXPECT_EQ(parse_position_packet(velodyne_test::position_packet(0, 2, ""), Model::hdl64e)->pps, PpsState::unknown);
+}
+
+TEST(VelodyneSynthetic, AGpggaSentenceGivesTheFixAndTheTimeOfDay) {
+  const auto fix = parse_position_packet(velodyne_test::position_packet(
+      0, 2, velodyne_test::nmea("GPGGA,092750.000,5321.6802,N,00630.3372,W,1,8,1.03,61.7,M,55.2,M,,")));
+  ASSERT_TRUE(fix);
+  EXPECT_EQ(fix->nmea, NmeaStatus::fix);
+  EXPECT_FALSE(fix->has_gprmc);
+  EXPECT_EQ(fix->nmea_second_of_hour, 27 * 60 + 50);
+  const auto no_fix = parse_position_packet(
+      velodyne_test::position_packet(0, 2, velodyne_test::nmea("GNGGA,092750.000,,,,,0,0,,,M,,M,,")));
+  EXPECT_EQ(no_fix->nmea, NmeaStatus::no_fix);
+}
+
+TEST(VelodyneSynthetic, GarbageInThePositionPacketIsAnUnreadableSentenceOrAnInvalidPpsByte) {
+  std::vector<std::uint8_t> garbage(512);
+  for (std::size_t i = 0; i < garbage.size(); ++i) garbage[i] = static_cast<std::uint8_t>(i * 37 + 11);
+  garbage[202] = 0xC7;
+  const auto report = parse_position_packet(garbage, Model::vlp16);
+  ASSERT_TRUE(report);
+  EXPECT_EQ(report->pps, PpsState::invalid);
+  EXPECT_EQ(report->pps_byte, 0xC7);
+  EXPECT_EQ(report->nmea, NmeaStatus::unreadable);
+  EXPECT_FALSE(report->has_gprmc);
+  // A sentence of 128 bytes without its NUL, a '$' alone, a checksum with no digits.
+  EXPECT_EQ(parse_position_packet(velodyne_test::position_packet(0, 2, std::string(300, '$')))->nmea,
+            NmeaStatus::unreadable);
+  EXPECT_EQ(parse_position_packet(velodyne_test::position_packet(0, 2, "$"))->nmea, NmeaStatus::unreadable);
+  EXPECT_EQ(parse_position_packet(velodyne_test::position_packet(0, 2, "$GPRMC*"))->nmea, NmeaStatus::unreadable);
+  EXPECT_EQ(parse_position_packet(velodyne_test::position_packet(0, 2, velodyne_test::nmea("GPRMC")))->nmea,
+            NmeaStatus::unreadable);
+}
+
+// The clock record of each PPS state: what a launch script reads from the stream.
+TEST(VelodyneSynthetic, EachPpsStateBecomesTheClockStateItMeans) {
+  const auto gprmc = velodyne_test::nmea("GPRMC,123519,A,4807.038,N,01131.000,E,022.4,084.4,230394,003.1,W");
+  const std::uint32_t in_step = (35 * 60 + 20) * 1'000'000U;  // 12:35:20, a second after the sentence
+  struct Case {
+    std::uint8_t pps;
+    sim::ClockState state;
+    bool warns;
+  };
+  for (const Case c : {Case{0, sim::ClockState::free_running, true}, Case{1, sim::ClockState::acquiring, true},
+                       Case{2, sim::ClockState::locked, false}, Case{3, sim::ClockState::holdover, true}}) {
+    const auto report = parse_position_packet(velodyne_test::position_packet(in_step, c.pps, gprmc), Model::vlp16);
+    ASSERT_TRUE(report);
+    const sim::ClockStatus clock = clock_status_of(*report, 1'700'000'000'123'000'000);
+    EXPECT_EQ(clock.source, sim::ClockSource::pps_nmea);
+    EXPECT_EQ(clock.state, c.state) << int{c.pps};
+    EXPECT_EQ(clock.stamps, sim::StampClock::sensor);
+    EXPECT_EQ(clock.reported_ns, 1'700'000'000'123'000'000);
+    EXPECT_EQ(clock.verdict, c.warns ? sim::ClockVerdict::warn : sim::ClockVerdict::unknown) << clock.problem;
+    EXPECT_EQ(clock.problem.empty(), !c.warns) << clock.problem;
+    EXPECT_FALSE(clock.offset_to_host_ns);  // measured by the clock check, not reported
+  }
+  const auto absent = clock_status_of(*parse_position_packet(velodyne_test::position_packet(in_step, 0, gprmc)), 1);
+  EXPECT_NE(absent.problem.find("up to 30 minutes off"), std::string::npos) << absent.problem;
+}
+
+TEST(VelodyneSynthetic, ABadPositionPacketReportsAWarningNotALock) {
+  std::vector<std::uint8_t> packet = velodyne_test::position_packet(0, 9, "not NMEA at all");
+  const auto invalid = clock_status_of(*parse_position_packet(packet, Model::vlp16), 1);
+  EXPECT_EQ(invalid.state, sim::ClockState::unknown);
+  EXPECT_EQ(invalid.verdict, sim::ClockVerdict::warn);
+  EXPECT_NE(invalid.problem.find("PPS byte is 9"), std::string::npos) << invalid.problem;
+  EXPECT_LE(invalid.problem.size(), sim::ClockStatus::kMaxProblem);
+
+  // PPS locked, but the sentence is garbage, missing, or without a fix: still a warning.
+  for (const std::string& sentence : {std::string("$GPRMC,garbage*00"), std::string(),
+                                      velodyne_test::nmea("GPRMC,123519,V,,,,,,,230394,,")}) {
+    const auto clock = clock_status_of(*parse_position_packet(velodyne_test::position_packet(0, 2, sentence)), 1);
+    EXPECT_EQ(clock.state, sim::ClockState::locked) << sentence;
+    EXPECT_EQ(clock.verdict, sim::ClockVerdict::warn) << sentence;
+    EXPECT_NE(clock.problem.find("NMEA"), std::string::npos) << clock.problem;
+  }
+}
+
+// With PPS locked the counter's minutes and seconds are the NMEA time's; a counter minutes away
+// means stamps minutes off, which the hour fix against the host clock cannot see.
+TEST(VelodyneSynthetic, ATopOfHourCounterThatDisagreesWithTheNmeaTimeIsAWarning) {
+  const auto gprmc = velodyne_test::nmea("GPRMC,125959,A,4807.038,N,01131.000,E,022.4,084.4,230394,003.1,W");
+  const auto agrees = clock_status_of(*parse_position_packet(velodyne_test::position_packet(0, 2, gprmc)), 1);
+  EXPECT_EQ(agrees.verdict, sim::ClockVerdict::unknown) << agrees.problem;  // 59:59 → 00:00, across the hour
+  const std::uint32_t ten_minutes_late = 10 * 60 * 1'000'000U;
+  const auto late = clock_status_of(*parse_position_packet(velodyne_test::position_packet(ten_minutes_late, 2, gprmc)), 1);
+  EXPECT_EQ(late.verdict, sim::ClockVerdict::warn);
+  EXPECT_NE(late.problem.find("is 601 s from its NMEA time"), std::string::npos) << late.problem;
 }
 
 TEST(VelodyneSynthetic, PacketTimeTakesTheHourNearestTheReference) {

@@ -1,10 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/apps/live_lidar.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <string_view>
 #include <utility>
 
+#include "sim/apps/host_clock_options.hpp"
 #include "sim/clock.hpp"
 
 namespace sim::apps {
@@ -37,6 +39,7 @@ void add_receive_options(CommandLine& cli, LiveReceiveOptions& o, lidar::IpVersi
   app.add_option("--silence-timeout", o.silence_timeout,
                  "a gap this long (s) means the sensor stopped: the next packet starts a new frame")
       ->check(CLI::PositiveNumber);
+  add_host_clock_options(cli, o.host_clock);
 }
 
 void add_output_options(CommandLine& cli, LiveReceiveOptions& o, const std::string& summary_help) {
@@ -50,6 +53,25 @@ void set_listen(lidar::UdpListen& listen, const LiveReceiveOptions& o) {
   listen.source = o.source;
   listen.receive_buffer = o.receive_buffer;
   listen.silence_timeout = std::chrono::nanoseconds(static_cast<std::int64_t>(o.silence_timeout * 1e9));
+}
+
+namespace {
+
+timing::HostClockWatchOptions watch_options(const LiveReceiveOptions& o) {
+  timing::HostClockWatchOptions options;
+  options.clock = o.host_clock;
+  if (o.quiet) options.log = [](const std::string&) {};
+  return options;
+}
+
+}  // namespace
+
+HostClockSource::HostClockSource(const LiveReceiveOptions& options) : watch_(watch_options(options)) {}
+
+lidar::ClockSources HostClockSource::sources() const {
+  lidar::ClockSources sources;
+  sources.host = [this] { return watch_.latest(); };
+  return sources;
 }
 
 std::string sentence(std::string text) {
@@ -100,13 +122,47 @@ lidar::ReceiverCallbacks LiveStatus::callbacks(Text text) {
   return callbacks;
 }
 
+void add_clock_poll_option(CommandLine& cli, double& seconds) {
+  cli.app()
+      .add_option("--clock-poll-seconds", seconds,
+                  "how often to ask the sensor about its clock (source, lock, offset from master, "
+                  "grandmaster) off the frame path, when its address is known (--sensor-ip or "
+                  "--source); 0: never")
+      ->check(CLI::Range(0.0, 3600.0));
+}
+
+lidar::ReceiverCallbacks with_clock_tick(lidar::ReceiverCallbacks callbacks, std::function<void()> clock_tick,
+                                         std::chrono::nanoseconds period) {
+  if (!clock_tick) return callbacks;
+  if (!callbacks.tick || callbacks.tick_period.count() <= 0) {
+    callbacks.tick_period = period;
+    callbacks.tick = std::move(clock_tick);
+    return callbacks;
+  }
+  const std::int64_t status_ns = callbacks.tick_period.count();
+  callbacks.tick_period = std::min(callbacks.tick_period, period);
+  callbacks.tick = [status = std::move(callbacks.tick), clock = std::move(clock_tick), status_ns,
+                    next_ns = monotonic_ns() + status_ns]() mutable {
+    clock();
+    // The receiver calls at the shorter period; the status line keeps its own (a tick may come
+    // a little early, so "due" allows a millisecond).
+    const std::int64_t now = monotonic_ns();
+    if (now + 1'000'000 >= next_ns) {
+      next_ns = now + status_ns;
+      status();
+    }
+  };
+  return callbacks;
+}
+
 void LiveStatus::finish(const std::string& stream_summary, const lidar::ReceiveCounters& c) {
   line_.finish(text_ ? text_(true) : std::string());
   if (!options_.summary) return;
   const auto ull = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
-  std::printf("summary %s datagrams=%llu other_source=%llu unrecognised=%llu oversized=%llu resumes=%llu\n",
+  std::printf("summary %s datagrams=%llu other_source=%llu unrecognised=%llu oversized=%llu resumes=%llu "
+              "other_senders=%llu\n",
               stream_summary.c_str(), ull(c.datagrams), ull(c.other_source), ull(c.unrecognised),
-              ull(c.oversized), ull(c.resumes));
+              ull(c.oversized), ull(c.resumes), ull(c.other_senders));
   std::fflush(stdout);
 }
 

@@ -23,6 +23,8 @@ struct LiveReceiver::Impl final : lidar::DatagramHandler {
   lidar::UdpReceiver udp;
   lidar::DetectedStream<LidarStream, LidarStreamConfig, detect_model, returns_in> stream;
   std::int64_t last_packet_ns = 0;   // monotonic time the last packet was taken
+  lidar::ClockSources clock_sources;  // for the stream, once it exists
+  bool clock_sources_given = false;
 
   // Waking once per packet (6,000 a second for a dual-return Pandar64) costs more CPU than
   // decoding them. Far from the cut no packet can complete a revolution, so the receiver naps
@@ -44,11 +46,18 @@ struct LiveReceiver::Impl final : lidar::DatagramHandler {
   bool on_datagram(const lidar::Datagram& d) override {
     LidarStream* published = stream.for_packet(d, udp);
     if (published == nullptr) return !stream.error();
+    if (!clock_sources_given) {
+      published->clock().set_sources(clock_sources);
+      clock_sources_given = true;
+    }
     // The revolution in progress is stale after a silence. Readers kept the last frame
     // meanwhile (stale by its publish time); start over with fresh packets.
     if (udp.resumed_after_silence(d.arrival_ns)) published->reset();
     last_packet_ns = d.taken_ns;
-    published->push(d.payload, d.arrival_ns);
+    const PushResult result = published->push(d.payload, d.arrival_ns);
+    // The packet's own time against its arrival on this host; judged about once a second.
+    published->clock().add(result.packet_ns, published->stamp_offset(), d.arrival_ns);
+    published->tick_clock(d.arrival_ns);
     return true;
   }
 };
@@ -65,7 +74,13 @@ LiveReceiver::LiveReceiver(LiveReceiver&&) noexcept = default;
 LiveReceiver& LiveReceiver::operator=(LiveReceiver&&) noexcept = default;
 LiveReceiver::~LiveReceiver() = default;
 
+void LiveReceiver::set_clock_sources(lidar::ClockSources sources) {
+  impl_->clock_sources = std::move(sources);
+  impl_->clock_sources_given = false;
+}
+
 Expected<void> LiveReceiver::publish_to(LidarStreamConfig config, std::optional<Model> model) {
+  impl_->clock_sources_given = false;
   return impl_->stream.publish_to(std::move(config), model);
 }
 

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "sim/hesai/calibration.hpp"
+#include "sim/hesai/ptc_time.hpp"
 #include "sim/lidar/tcp_client.hpp"
 
 namespace sim::hesai {
@@ -42,7 +43,7 @@ Expected<std::vector<std::uint8_t>> read_answer(lidar::TcpConnection& connection
     answer.insert(answer.end(), chunk, chunk + got.size);
     if (!header_read && answer.size() == ptc::header_size) {
       auto header = ptc::parse_header(answer, command);
-      if (!header) return failed(who + ": " + header.error().message);
+      if (!header) return Error{header.error().code, who + ": " + header.error().message};
       header_read = true;
       wanted = ptc::header_size + header->payload_size;
     }
@@ -56,12 +57,14 @@ Expected<std::vector<std::uint8_t>> read_answer(lidar::TcpConnection& connection
   return std::vector<std::uint8_t>(payload->begin(), payload->end());
 }
 
-// One PTC exchange: connects, sends `command` and reads its answer, all within the timeout.
-Expected<std::vector<std::uint8_t>> exchange(const PtcEndpoint& sensor, std::uint8_t command,
-                                             const std::string& what) {
+}  // namespace
+
+Expected<std::vector<std::uint8_t>> ptc_exchange(const PtcEndpoint& sensor, std::uint8_t command,
+                                                 std::span<const std::uint8_t> payload,
+                                                 const std::string& what) {
   auto connection = lidar::TcpConnection::connect({sensor.host, sensor.port, sensor.timeout, "PTC"});
   if (!connection) return connection.error();
-  const auto request = ptc::request(command);
+  const auto request = ptc::request(command, payload);
   const lidar::TcpIo sent = connection->send_all(request);
   if (sent == lidar::TcpIo::timed_out) {
     return failed(connection->who() + " did not take the PTC request " + connection->within());
@@ -70,6 +73,13 @@ Expected<std::vector<std::uint8_t>> exchange(const PtcEndpoint& sensor, std::uin
     return failed(connection->who() + " closed the PTC connection before the request was sent");
   }
   return read_answer(*connection, command, what);
+}
+
+namespace {
+
+Expected<std::vector<std::uint8_t>> exchange(const PtcEndpoint& sensor, std::uint8_t command,
+                                             const std::string& what) {
+  return ptc_exchange(sensor, command, {}, what);
 }
 
 }  // namespace

@@ -167,6 +167,10 @@ std::optional<CompletedFrame> LidarStream::finish() noexcept {
 void LidarStream::reset() noexcept { impl_->assembler.reset(); }
 void LidarStream::set_stamp_offset(std::int64_t offset_ns) noexcept { impl_->frames.set_stamp_offset(offset_ns); }
 std::int64_t LidarStream::stamp_offset() const noexcept { return impl_->frames.stamp_offset(); }
+lidar::ClockReporter& LidarStream::clock() noexcept { return impl_->clock; }
+std::optional<ClockStatus> LidarStream::tick_clock(std::int64_t now_realtime_ns, bool at_once) {
+  return impl_->tick_clock(now_realtime_ns, at_once);
+}
 const Metadata& LidarStream::metadata() const noexcept { return impl_->assembler.metadata(); }
 const AssemblerCounters& LidarStream::counters() const noexcept { return impl_->assembler.counters(); }
 const PublishCounters& LidarStream::published() const noexcept { return impl_->published; }
@@ -200,7 +204,7 @@ std::string LidarStream::describe_counters(bool machine) const {
   out << (machine ? " imu=" : " imu ") << p.imu_samples;
   if (machine) {
     out << " points=" << p.points << " partial_frames=" << p.partial_frames
-        << " partial_frames_dropped=" << c.partial_frames_dropped
+        << " partial_frames_dropped=" << c.partial_frames_dropped << " late_packets=" << c.late_packets
         << " invalid_columns=" << c.invalid_columns << " duplicate_columns=" << c.duplicate_columns
         << " dropped_points=" << c.dropped_points << " publish_failures=" << p.failed
         << " imu_malformed=" << p.imu_malformed;

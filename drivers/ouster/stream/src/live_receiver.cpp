@@ -40,6 +40,9 @@ struct LiveReceiver::Impl final : lidar::DatagramHandler {
     if (udp.resumed_after_silence(d.arrival_ns)) stream->reset();  // the frame is stale
     const PushResult result = stream->push_lidar(d.payload, d.arrival_ns);
     if (result.error != PacketError::none && !mismatch_noted) note_mismatch();
+    // The packet's own time against its arrival on this host; judged about once a second.
+    stream->clock().add(result.packet_ns, stream->stamp_offset(), d.arrival_ns);
+    stream->tick_clock(d.arrival_ns);
     return true;
   }
 

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/ouster/metadata_client.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cstring>
 #include <utility>
 
@@ -14,30 +16,35 @@ constexpr char metadata_path[] = "/api/v1/sensor/metadata";
 
 Error failed(const std::string& message) { return Error{ErrorCode::system_error, message}; }
 
-// The body of a whole HTTP/1.x answer, or why it is not a 200 with a body.
-Expected<std::string> body_of(const std::string& answer, const std::string& who) {
+// The status and body of a whole HTTP/1.x answer, or why it is not HTTP.
+Expected<HttpAnswer> split_answer(const std::string& answer, const std::string& who) {
   const auto end_of_headers = answer.find("\r\n\r\n");
   if (answer.rfind("HTTP/1.", 0) != 0 || end_of_headers == std::string::npos) {
     return failed(who + " did not answer with HTTP; check --sensor-ip and --http-port");
   }
-  const std::string status_line = answer.substr(0, answer.find("\r\n"));
-  if (status_line.size() < 12 || status_line.compare(9, 3, "200") != 0) {
-    std::string shown = status_line.substr(0, 80);
-    for (char& c : shown) c = (c >= 32 && c < 127) ? c : '?';
-    return failed(who + " answered '" + shown + "' to GET " + metadata_path +
-                  "; its firmware may be older than 2.0");
+  HttpAnswer split;
+  split.status_line = answer.substr(0, std::min<std::size_t>(answer.find("\r\n"), 80));
+  for (char& c : split.status_line) c = (c >= 32 && c < 127) ? c : '?';
+  const std::string& line = split.status_line;
+  split.status = 0;
+  if (line.size() >= 12) {
+    for (std::size_t i = 9; i < 12 && std::isdigit(static_cast<unsigned char>(line[i])) != 0; ++i) {
+      split.status = split.status * 10 + (line[i] - '0');
+    }
   }
-  return answer.substr(end_of_headers + 4);
+  split.body = answer.substr(end_of_headers + 4);
+  return split;
 }
 
 }  // namespace
 
-Expected<std::string> fetch_metadata_text(const HttpEndpoint& sensor) {
+Expected<HttpAnswer> http_get(const HttpEndpoint& sensor, const std::string& path, std::size_t max_body,
+                              const std::string& what) {
   auto connection = lidar::TcpConnection::connect({sensor.host, sensor.port, sensor.timeout, "HTTP"});
   if (!connection) return connection.error();
   const std::string& who = connection->who();
-  const std::string request = std::string("GET ") + metadata_path + " HTTP/1.0\r\nHost: " +
-                              sensor.host + "\r\nAccept: application/json\r\n\r\n";
+  const std::string request = "GET " + path + " HTTP/1.0\r\nHost: " + sensor.host +
+                              "\r\nAccept: application/json\r\n\r\n";
   const lidar::TcpIo sent = connection->send_all(
       {reinterpret_cast<const std::uint8_t*>(request.data()), request.size()});
   if (sent == lidar::TcpIo::timed_out) return failed(who + " did not take the request " + connection->within());
@@ -52,15 +59,27 @@ Expected<std::string> fetch_metadata_text(const HttpEndpoint& sensor) {
       return failed(who + " accepted the connection but did not answer " + connection->within());
     }
     if (got.status == lidar::TcpIo::timed_out) {
-      return failed(who + " stopped sending its metadata halfway (nothing more " + connection->within() + ")");
+      return failed(who + " stopped sending its " + what + " halfway (nothing more " + connection->within() + ")");
     }
     if (got.status == lidar::TcpIo::failed) return failed(who + " broke the connection: " + std::strerror(got.error));
     answer.append(reinterpret_cast<const char*>(chunk), got.size);
-    if (answer.size() > max_answer_bytes) {
-      return failed(who + " sent more than 4 MB for its metadata; it is not an Ouster sensor");
+    if (answer.size() > max_body) {
+      const std::string limit = max_body >= (1u << 20) ? std::to_string(max_body >> 20) + " MB"
+                                                       : std::to_string(max_body >> 10) + " KB";
+      return failed(who + " sent more than " + limit + " for its " + what + "; it is not an Ouster sensor");
     }
   }
-  return body_of(answer, who);
+  return split_answer(answer, who);
+}
+
+Expected<std::string> fetch_metadata_text(const HttpEndpoint& sensor) {
+  auto answer = http_get(sensor, metadata_path, max_answer_bytes, "metadata");
+  if (!answer) return answer.error();
+  if (answer->status != 200) {
+    return failed("sensor " + sensor.host + ":" + std::to_string(sensor.port) + " answered '" +
+                  answer->status_line + "' to GET " + metadata_path + "; its firmware may be older than 2.0");
+  }
+  return std::move(answer->body);
 }
 
 Expected<FetchedMetadata> metadata_from_sensor(const HttpEndpoint& sensor,

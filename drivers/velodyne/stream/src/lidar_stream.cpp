@@ -1,18 +1,38 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/velodyne/lidar_stream.hpp"
 
+#include <mutex>
 #include <sstream>
 #include <utility>
 
+#include "sim/clock.hpp"
+#include "sim/velodyne/position_clock.hpp"
+
 namespace sim::velodyne {
+
+namespace {
+
+// "GPRMC valid", "GPRMC no fix", "GPGGA fix", "NMEA unreadable", "no GPRMC".
+std::string nmea_text(const PositionReport& report) {
+  if (report.has_gprmc) return report.gprmc_valid ? "GPRMC valid" : "GPRMC no fix";
+  switch (report.nmea) {
+    case NmeaStatus::fix: return "GPGGA fix";
+    case NmeaStatus::no_fix: return "GPGGA no fix";
+    case NmeaStatus::unreadable: return "NMEA unreadable";
+    case NmeaStatus::none: break;
+  }
+  return "no GPRMC";
+}
+
+}  // namespace
 
 TimeSync time_sync_of(const PositionReport& report) {
   TimeSync sync;
-  const std::string gprmc = !report.has_gprmc ? "no GPRMC" : report.gprmc_valid ? "GPRMC valid" : "GPRMC no fix";
+  const std::string gprmc = nmea_text(report);
   const bool pps_locked = report.pps == PpsState::locked;
   if (report.pps == PpsState::unknown) {
     sync.text = gprmc;  // HDL-32E/64E position packets carry no PPS state
-    sync.base = report.gprmc_valid ? TimeBase::sensor_synchronized : TimeBase::sensor_free_running;
+    sync.base = report.nmea == NmeaStatus::fix ? TimeBase::sensor_synchronized : TimeBase::sensor_free_running;
   } else {
     sync.text = std::string("PPS ") + to_string(report.pps) + ", " + gprmc;
     sync.base = pps_locked ? TimeBase::sensor_synchronized : TimeBase::sensor_free_running;
@@ -20,7 +40,57 @@ TimeSync time_sync_of(const PositionReport& report) {
   return sync;
 }
 
+struct ReportedClock::State {
+  mutable std::mutex mutex;
+  ClockStatus clock;
+};
+
+ReportedClock::ReportedClock() : state_(std::make_shared<State>()) {}
+ReportedClock::ReportedClock(const ClockStatus& initial) : ReportedClock() { state_->clock = initial; }
+
+ClockStatus ReportedClock::operator()() const {
+  const std::lock_guard lock(state_->mutex);
+  return state_->clock;
+}
+
+void ReportedClock::set(const ClockStatus& clock) {
+  const std::lock_guard lock(state_->mutex);
+  state_->clock = clock;
+}
+
 namespace {
+
+// The clock record of the stamps `clock` says the stream publishes, before any position packet.
+ClockStatus initial_clock(StampClock clock) {
+  ClockStatus status;
+  status.stamps = sim::StampClock::sensor;
+  if (clock == StampClock::restamped) {
+    status.source = ClockSource::host;
+    status.stamps = sim::StampClock::host_arrival;
+  }
+  return status;
+}
+
+// `reported` (a position packet's clock) as a stream whose stamps are `clock` reports it: live as
+// it is; a replay with the recorded stamps as a recording; a restamped replay as this host's
+// clock, whatever the recorded packets say.
+ClockStatus stream_clock(ClockStatus reported, StampClock clock) {
+  switch (clock) {
+    case StampClock::sensor_live: return reported;
+    case StampClock::sensor_recorded:
+      reported.source = ClockSource::replayed;
+      if (!reported.problem.empty()) {
+        reported.problem = ("as recorded: " + reported.problem).substr(0, ClockStatus::kMaxProblem);
+      }
+      return reported;
+    case StampClock::restamped: {
+      ClockStatus host = initial_clock(clock);
+      host.reported_ns = reported.reported_ns;
+      return host;
+    }
+  }
+  return reported;
+}
 
 // What the position packets' state `sync` makes of the description's clock, as `clock` says;
 // `caller_time_sync` is the time_sync the stream was created with.
@@ -46,6 +116,7 @@ struct LidarStream::Impl : lidar::PointPipeline<FrameAssembler, PublishCounters>
   using PointPipeline::PointPipeline;
   std::optional<SensorInfo> sensor;  // the description, re-set when the time sync changes
   TimeSync sync;
+  ReportedClock reported;  // what the position packets last said of the clock
   StampClock stamp_clock = StampClock::sensor_live;
   std::string caller_time_sync;  // LidarStreamConfig::sensor's, which sensor_recorded extends
 };
@@ -78,6 +149,7 @@ Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config) {
   auto impl = std::make_unique<Impl>(std::move(writer.value()), std::move(assembler.value()));
   impl->sensor = sensor;
   impl->stamp_clock = config.stamp_clock;
+  impl->reported.set(initial_clock(config.stamp_clock));
   if (config.sensor) impl->caller_time_sync = config.sensor->time_sync;
   return LidarStream(std::move(impl));
 }
@@ -92,13 +164,15 @@ PushResult LidarStream::push(std::span<const std::uint8_t> payload, std::int64_t
   return impl_->push(payload, host_receive_ns, time_reference_ns);
 }
 
-bool LidarStream::push_position(std::span<const std::uint8_t> payload) noexcept {
-  const auto report = parse_position_packet(payload);
+bool LidarStream::push_position(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns) noexcept {
+  const auto report = parse_position_packet(payload, model());
   if (!report) {
     ++impl_->published.position_malformed;
     return false;
   }
   ++impl_->published.position_packets;
+  const std::int64_t arrival = host_receive_ns != 0 ? host_receive_ns : realtime_ns();
+  impl_->reported.set(stream_clock(clock_status_of(*report, arrival), impl_->stamp_clock));
   TimeSync sync = time_sync_of(*report);
   if (sync.text == impl_->sync.text && sync.base == impl_->sync.base) return true;
   impl_->sync = std::move(sync);
@@ -125,7 +199,12 @@ Model LidarStream::model() const noexcept { return impl_->assembler.options().mo
 const AssemblerCounters& LidarStream::counters() const noexcept { return impl_->assembler.counters(); }
 const PublishCounters& LidarStream::published() const noexcept { return impl_->published; }
 const TimeSync& LidarStream::time_sync() const noexcept { return impl_->sync; }
+ReportedClock LidarStream::reported_clock() const { return impl_->reported; }
 Writer& LidarStream::writer() noexcept { return impl_->frames.writer(); }
+lidar::ClockReporter& LidarStream::clock() noexcept { return impl_->clock; }
+std::optional<ClockStatus> LidarStream::tick_clock(std::int64_t now_realtime_ns, bool at_once) {
+  return impl_->tick_clock(now_realtime_ns, at_once);
+}
 
 std::string LidarStream::describe_counters(bool machine) const {
   const AssemblerCounters& c = impl_->assembler.counters();

@@ -22,6 +22,7 @@
 #include <thread>
 #include <vector>
 
+#include "fake_ptc_sensor.hpp"
 #include "sim/hesai/ptc_client.hpp"
 #include "sim/sim.hpp"
 #include "sim_test/process.hpp"
@@ -45,139 +46,9 @@ std::string read_file(const fs::path& path) {
 const std::string qt128_csv = read_file(data_dir / "pandarqt128.calibration.csv");
 const std::string xt32_csv = read_file(data_dir / "pandarxt32.calibration.csv");
 
-enum class Behaviour { serve, truncate, garbage, stall, silent, refuse_request };
-
-// One listening socket on 127.0.0.1, a thread answering each connection as told. Stalled
-// connections stay open until the server is destroyed.
-class FakeSensor {
- public:
-  FakeSensor(Behaviour behaviour, std::string file = qt128_csv)
-      : behaviour_(behaviour), file_(std::move(file)), listener_(::socket(AF_INET, SOCK_STREAM, 0)) {
-    sockaddr_in address{};
-    address.sin_family = AF_INET;
-    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ::bind(listener_, reinterpret_cast<const sockaddr*>(&address), sizeof address);
-    ::listen(listener_, 8);
-    socklen_t length = sizeof address;
-    ::getsockname(listener_, reinterpret_cast<sockaddr*>(&address), &length);
-    port_ = ntohs(address.sin_port);
-    thread_ = std::thread([this] { serve(); });
-  }
-  ~FakeSensor() {
-    stop_ = true;
-    thread_.join();
-    for (int fd : held_) ::close(fd);
-    ::close(listener_);
-  }
-  std::uint16_t port() const { return port_; }
-  int requests() const { return requests_; }
-
- private:
-  void serve() {
-    while (!stop_) {
-      pollfd p{listener_, POLLIN, 0};
-      if (::poll(&p, 1, 20) <= 0) continue;
-      const int fd = ::accept(listener_, nullptr, nullptr);
-      if (fd < 0) continue;
-      answer(fd);
-    }
-  }
-
-  void send_all(int fd, const std::string& bytes) {
-    std::size_t sent = 0;
-    while (sent < bytes.size()) {
-      const ssize_t n = ::send(fd, bytes.data() + sent, bytes.size() - sent, MSG_NOSIGNAL);
-      if (n <= 0) return;
-      sent += static_cast<std::size_t>(n);
-    }
-  }
-
-  static std::string header(std::uint8_t code, std::size_t size, char command = '\x05') {
-    const auto n = static_cast<std::uint32_t>(size);
-    return {'\x47', '\x74', command, static_cast<char>(code), static_cast<char>(n >> 24),
-            static_cast<char>(n >> 16), static_cast<char>(n >> 8), static_cast<char>(n)};
-  }
-
- public:
-  // A QT128's inventory as the PTC manual lays it out: NUL-padded text fields (serial, date,
-  // MAC, software, hardware, control firmware, sensor firmware), then model and line count.
-  static std::string inventory() {
-    std::string payload(120, '\0');
-    auto put = [&](std::size_t at, const std::string& text) { payload.replace(at, text.size(), text); };
-    put(0, "QT12800TEST01");
-    put(18, "2024-03-01");
-    put(40, "3.1.8");
-    put(56, "HW-2.0");
-    put(72, "CTRL-1.4.2");
-    put(88, "SENS-3.2.9");
-    payload[106] = 32;   // QT128C2X
-    payload[108] = static_cast<char>(128);
-    return payload;
-  }
-
- private:
-
-  void answer(int fd) {
-    // The request: 47 74 05 00 00 00 00 00.
-    unsigned char request[8];
-    std::size_t got = 0;
-    while (got < sizeof request) {
-      const ssize_t n = ::recv(fd, request + got, sizeof request - got, 0);
-      if (n <= 0) break;
-      got += static_cast<std::size_t>(n);
-    }
-    if (got == 8 && request[0] == 0x47 && request[1] == 0x74 && request[2] == 0x05) ++requests_;
-    if (got == 8 && request[2] == 0x07) {  // the inventory, whatever the behaviour
-      if (behaviour_ == Behaviour::serve) send_all(fd, header(0, 120, '\x07') + inventory());
-      ::close(fd);
-      return;
-    }
-    switch (behaviour_) {
-      case Behaviour::serve:
-        send_all(fd, header(0, file_.size()) + file_);
-        break;
-      case Behaviour::truncate:
-        send_all(fd, header(0, file_.size()) + file_.substr(0, file_.size() / 2));
-        break;
-      case Behaviour::garbage:
-        send_all(fd, "HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n");
-        break;
-      case Behaviour::stall:
-        send_all(fd, header(0, file_.size()) + file_.substr(0, 100));
-        held_.push_back(fd);  // open, silent, until the test ends
-        return;
-      case Behaviour::silent:
-        held_.push_back(fd);
-        return;
-      case Behaviour::refuse_request:
-        send_all(fd, header(3, 0));
-        break;
-    }
-    ::close(fd);
-  }
-
-  Behaviour behaviour_;
-  std::string file_;
-  int listener_;
-  std::uint16_t port_ = 0;
-  std::thread thread_;
-  std::atomic<bool> stop_{false};
-  std::atomic<int> requests_{0};
-  std::vector<int> held_;  // only touched by the server thread until it is joined
-};
-
-// A loopback port nothing listens on: bound once to learn a free number, then closed.
-std::uint16_t closed_port() {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ::bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address);
-  socklen_t length = sizeof address;
-  ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length);
-  ::close(fd);
-  return ntohs(address.sin_port);
-}
+using hesai_test::Behaviour;
+using hesai_test::closed_port;
+using hesai_test::FakeSensor;
 
 sim::hesai::PtcEndpoint endpoint(std::uint16_t port) {
   sim::hesai::PtcEndpoint e;

@@ -373,6 +373,69 @@ TEST(VelodyneTools, ACalibrationOfAnotherLaserCountIsOneSentenceAndExitOne) {
                    "sensor (--calibration).\n");
 }
 
+// An HDL-32E with firmware before 2.2.20 (bytes 1204-1205 zero): the replay names Velodyne and
+// says to choose the model, never blames Hesai; with --model HDL-32E it publishes its frames.
+TEST(VelodyneTools, AnHdl32eOfFirmwareBefore2_2_20IsReplayedWithItsModelAndOtherwiseToldToGiveIt) {
+  namespace pt = sim::pcap::testing;
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("velodyne_hdl32_" + std::to_string(::getpid()) + ".pcap")).string();
+  std::vector<pt::Record> records;
+  for (unsigned k = 0; k < 2000; ++k) {
+    velodyne_test::DataPacket p;
+    p.product_id = 0;
+    p.return_mode = 0;
+    p.timestamp_us = static_cast<std::uint32_t>(1'000'000 + k * 553);
+    for (unsigned b = 0; b < 12; ++b) {
+      p.blocks[b].azimuth = static_cast<std::uint16_t>(((k * 12 + b) * 16) % 36000);
+      for (unsigned l = 0; l < 32; ++l) p.blocks[b].units[l] = {static_cast<std::uint16_t>(5000 + l), 10};
+    }
+    const auto ip = pt::ipv4({192, 168, 1, 201}, {255, 255, 255, 255}, pt::udp(2368, 2368, p.bytes()));
+    records.push_back({pt::ethernet(0x0800, ip), 1'700'000'000'000'000'000 + std::int64_t{k} * 553'000});
+  }
+  pt::write_capture(path, DLT_EN10MB, records);
+  const std::string hdl32 = std::string(VELODYNE_CALIBRATION_DIR) + "/HDL32.yaml";
+  StreamGuard stream;
+  const auto refused = sim::testing::run({SIM_REPLAY_PCAP, path, "--stream", stream.name, "--calibration", hdl32});
+  EXPECT_EQ(refused.code, 1);
+  EXPECT_EQ(refused.err.find("Hesai"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("HDL-32E with firmware before 2.2.20"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("give --model HDL-32E"), std::string::npos) << refused.err;
+  const auto replayed = sim::testing::run({SIM_REPLAY_PCAP, path, "--stream", stream.name, "--calibration", hdl32,
+                                           "--model", "HDL-32E", "--max-rate", "--summary", "-q"});
+  EXPECT_EQ(replayed.code, 0) << replayed.err;
+  EXPECT_GE(summary_value(replayed.out, "frames"), 5) << replayed.out;
+  EXPECT_EQ(summary_value(replayed.out, "malformed"), 0) << replayed.out;
+  std::filesystem::remove(path);
+}
+
+// 300 datagrams of another service before the sensor's: the family is found among the datagrams
+// --port chose (and a Velodyne calibration names the family anyway), never blamed on Hesai.
+TEST(VelodyneTools, TheFamilyIsDetectedAmongTheDatagramsOfTheGivenPort) {
+  namespace pt = sim::pcap::testing;
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("velodyne_noise_" + std::to_string(::getpid()) + ".pcap")).string();
+  const auto payloads = hesai_test::read_udp_payloads(capture);
+  std::vector<pt::Record> records;
+  const auto frame = [](std::uint16_t port, const pt::Bytes& payload) {
+    return pt::ethernet(0x0800, pt::ipv4({192, 168, 1, 7}, {224, 0, 0, 251}, pt::udp(port, port, payload)));
+  };
+  for (int i = 0; i < 300; ++i) {
+    records.push_back({frame(5353, pt::payload_of(120, static_cast<std::uint8_t>(i))),
+                       payloads.front().capture_ns - 1'000'000 + i});
+  }
+  for (const auto& p : payloads) {
+    records.push_back({pt::ethernet(0x0800, pt::ipv4({192, 168, 1, 201}, {255, 255, 255, 255},
+                                                     pt::udp(2368, 2368, p.bytes))), p.capture_ns});
+  }
+  pt::write_capture(path, DLT_EN10MB, records);
+  StreamGuard stream;
+  const auto r = sim::testing::run({SIM_REPLAY_PCAP, path, "--stream", stream.name, "--calibration", calibration,
+                                    "--port", "2368", "--max-rate", "--summary", "-q"});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_GE(summary_value(r.out, "frames"), 1) << r.out;
+  std::filesystem::remove(path);
+}
+
 TEST(VelodyneTools, UsageErrorsExitTwoWithOneSentence) {
   const auto no_calibration = sim::testing::run({SIM_LIDAR_VELODYNE, "--port", "0"});
   EXPECT_EQ(no_calibration.code, 2);

@@ -16,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include "sim/camera/camera_clock.hpp"
 #include "sim/imaging/image_format.hpp"
 #include "sim/layout.hpp"
 #include "sim/result.hpp"
@@ -84,6 +85,10 @@ class AravisCapture {
   const ImageLayout& output_layout() const noexcept;
   std::string camera_name() const;
   bool connected() const noexcept;
+  // The clock of the stream's stamps and the camera's PTP state (genicam_clock_status), read
+  // from the camera on connect and about once a second by run(), off the frame path; readable
+  // from any thread: hand it to the clock reporter.
+  ReportedClock reported_clock() const;
 
   // Ids of the cameras Aravis discovers ("Aravis-Fake-GV01 (127.0.0.1)", …).
   static std::vector<std::string> list_cameras();

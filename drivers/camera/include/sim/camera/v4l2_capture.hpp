@@ -13,6 +13,7 @@
 #include <string_view>
 #include <vector>
 
+#include "sim/camera/camera_clock.hpp"
 #include "sim/camera/clock_mapping.hpp"
 #include "sim/imaging/decoder.hpp"
 #include "sim/camera/v4l2_device.hpp"
@@ -76,6 +77,13 @@ enum class StepResult : std::uint8_t {
 
 const char* to_string(StepResult result) noexcept;
 
+// The clock of a V4L2 stream's stamps after a buffer stamped with `clock` (sim::ClockStatus):
+// source host (V4L2 stamps with the host's monotonic clock, mapped to realtime per frame), state
+// unknown (the host's own synchronisation is judged apart), stamps sensor for the buffer's stamp,
+// host_arrival for receive time. A buffer whose clock is UNKNOWN or COPY cannot be mapped: the
+// frames carry the receive time, and the record says so with a warning.
+ClockStatus v4l2_clock_status(TimestampSource timestamps, BufferClock clock, std::int64_t reported_ns);
+
 class V4l2Capture {
  public:
   // Opens the device, applies the controls, negotiates, creates the stream and starts
@@ -99,6 +107,10 @@ class V4l2Capture {
   const ImageLayout& output_layout() const noexcept { return decoder_->output_layout(); }
   const Writer& writer() const noexcept { return *writer_; }
   bool connected() const noexcept { return device_.has_value(); }
+  // The clock of the stream's stamps as the buffers' flags say (v4l2_clock_status), readable from
+  // any thread: hand it to the clock reporter. Refreshed when the buffers' clock changes and
+  // once a second; source host, stamps unknown before the first frame.
+  ReportedClock reported_clock() const { return reported_; }
 
  private:
   V4l2Capture(V4l2Io& io, V4l2CaptureConfig config) noexcept;
@@ -111,6 +123,8 @@ class V4l2Capture {
   void disconnect() noexcept;
   void log(const std::string& message) const;
   StepResult handle(const DeviceFrame& frame);
+  // The reported clock after a frame stamped with `clock` arrived at `received`.
+  void report_clock(BufferClock clock, std::int64_t received);
 
   V4l2Io* io_ = nullptr;
   V4l2CaptureConfig config_;
@@ -121,6 +135,9 @@ class V4l2Capture {
   StreamFormat format_{};
   CaptureStats stats_{};
   MonotonicToRealtime clock_;
+  ReportedClock reported_;
+  std::optional<BufferClock> reported_for_;  // the buffers' clock of the last report
+  std::int64_t reported_at_ = 0;             // CLOCK_REALTIME of the last report
   std::optional<std::uint32_t> last_sequence_;
   std::chrono::steady_clock::time_point last_frame_{};
   std::chrono::steady_clock::time_point next_retry_{};

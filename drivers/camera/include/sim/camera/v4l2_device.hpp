@@ -83,12 +83,31 @@ struct StreamFormat {
   double fps = 0;               // 0 when the device does not report it
 };
 
+// Which clock the driver stamped a buffer with (V4L2_BUF_FLAG_TIMESTAMP_*).
+enum class BufferClock : std::uint8_t {
+  unknown,    // TIMESTAMP_UNKNOWN (or a value V4L2 does not define)
+  monotonic,  // TIMESTAMP_MONOTONIC: the host's CLOCK_MONOTONIC
+  copy,       // TIMESTAMP_COPY: copied from the output buffer (a memory-to-memory device)
+};
+const char* to_string(BufferClock clock) noexcept;  // "unknown", "monotonic", "copy"
+
+// When in the frame the stamp was taken (V4L2_BUF_FLAG_TSTAMP_SRC_*).
+enum class StampPoint : std::uint8_t {
+  end_of_frame,       // TSTAMP_SRC_EOF: the last pixel (the kernel's default)
+  start_of_exposure,  // TSTAMP_SRC_SOE
+};
+
+// A buffer's flags as the two above.
+BufferClock buffer_clock(std::uint32_t flags) noexcept;
+StampPoint stamp_point(std::uint32_t flags) noexcept;
+
 struct DeviceFrame {
   std::uint32_t index = 0;
   std::span<const std::byte> bytes;  // bytesused bytes of the mmap'ed buffer
   std::uint32_t sequence = 0;
   std::int64_t timestamp_ns = 0;
-  bool monotonic_timestamp = false;  // V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC
+  BufferClock clock = BufferClock::unknown;
+  StampPoint stamp_point = StampPoint::end_of_frame;
   bool error = false;                // V4L2_BUF_FLAG_ERROR: the device says the data is bad
 };
 

@@ -17,6 +17,7 @@
 #include <string>
 #include <utility>
 
+#include "sim/lidar/clock_reporter.hpp"
 #include "sim/lidar_point.hpp"
 #include "sim/writer.hpp"
 
@@ -115,9 +116,15 @@ struct PointPipeline {
     return frame;
   }
 
+  // Judges the stream's clock about once a second (`now_realtime_ns`): see ClockReporter.
+  std::optional<ClockStatus> tick_clock(std::int64_t now_realtime_ns, bool at_once = false) {
+    return clock.tick(frames.writer(), now_realtime_ns, at_once);
+  }
+
   Counters published;  // before `frames`, which counts into it
   FramePublisher frames;
   Assembler assembler;
+  ClockReporter clock;  // the caller adds each packet's sensor time with its arrival
 
  private:
   template <class Frame>

@@ -38,8 +38,10 @@ std::string multicast_group_problem(const std::string& group, IpVersions version
 
 // Where a receiver listens and whom it hears; the same for each of its sockets.
 struct UdpListen {
-  std::string bind = "0.0.0.0";   // local address to receive on
-  std::string multicast_group{};  // empty: unicast or broadcast
+  // Local address to receive on; with a multicast group, the address of the interface to join
+  // the group on (the socket then takes the group's datagrams on any address).
+  std::string bind = "0.0.0.0";
+  std::string multicast_group{};  // empty: unicast or broadcast; given: only this group's datagrams
   std::string source{};           // empty: datagrams from any sender
   int receive_buffer = 8 << 20;   // SO_RCVBUF asked for per socket (SO_RCVBUFFORCE when root)
   IpVersions versions = IpVersions::v4;
@@ -60,6 +62,9 @@ struct UdpPort {
 struct ReceiveCounters {
   std::uint64_t datagrams = 0;     // every datagram taken from the sockets
   std::uint64_t other_source = 0;  // from another sender than UdpListen::source (dropped)
+  // Without a source: from another sender than the first one heard (a second sensor on the
+  // port, decoded with the first's; handled, counted, noted once as a warning).
+  std::uint64_t other_senders = 0;
   std::uint64_t unrecognised = 0;  // not a packet of the family, before the model was known
   std::uint64_t oversized = 0;     // larger than any packet of the family (cut by the buffer)
   std::uint64_t resumes = 0;       // datagrams came back after a silence

@@ -99,6 +99,9 @@ struct CompletedFrame {
 struct PushResult {
   PacketError error = PacketError::none;  // why the packet was rejected (counted), or none
   std::optional<CompletedFrame> frame;    // set when this packet completed a frame
+  // The packet's own sensor time (its tail's date and µs), for the clock check against its
+  // arrival; nullopt when it was rejected.
+  std::optional<std::int64_t> packet_ns;
 };
 
 struct AssemblerCounters {

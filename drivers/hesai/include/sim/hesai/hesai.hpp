@@ -7,3 +7,4 @@
 #include "sim/hesai/model.hpp"
 #include "sim/hesai/packet.hpp"
 #include "sim/hesai/ptc.hpp"
+#include "sim/hesai/ptc_time.hpp"

@@ -11,7 +11,9 @@
 //
 // A frame is the columns of one frame_id. It completes on the packet that holds the column
 // window's last column, or (when that packet was lost) on the first packet of the next frame,
-// which then waits in a one-packet buffer until set_output() gives the next span.
+// which then waits in a one-packet buffer until set_output() gives the next span. A window that
+// wraps through column 0 arrives as columns 0 … end, then start … W − 1: it begins at column 0
+// and completes at column W − 1. A packet of an older frame (late) is dropped and counted.
 //
 // Points are in the sensor frame as ouster-ros publishes them by default: the metadata's
 // beam angles and lidar_origin_to_beam_origin give each pixel's direction and origin in the
@@ -74,6 +76,9 @@ struct CompletedFrame {
 struct PushResult {
   PacketError error = PacketError::none;
   std::optional<CompletedFrame> frame;
+  // The sensor time of the packet's first valid column, for the clock check against its
+  // arrival; nullopt when it was rejected or has no valid column.
+  std::optional<std::int64_t> packet_ns;
 };
 
 struct AssemblerCounters {
@@ -84,6 +89,7 @@ struct AssemblerCounters {
   std::uint64_t invalid_columns = 0;
   std::uint64_t frames = 0;
   std::uint64_t partial_frames_dropped = 0;
+  std::uint64_t late_packets = 0;  // of a frame already closed or older: dropped (ouster-sdk too)
   std::uint64_t frames_without_output = 0;
   std::uint64_t dropped_points = 0;  // no output span, or the span was too small
   std::array<std::uint64_t, packet_error_count> rejected{};  // by PacketError
@@ -154,6 +160,9 @@ class FrameAssembler {
   template <Profile P, bool Dual, IntensityField F>
   void decode_beams_as(const PacketColumns& columns) noexcept;
   std::optional<CompletedFrame> close() noexcept;
+  unsigned first_column() const noexcept;
+  unsigned last_column() const noexcept;
+  bool late(std::uint32_t frame_id) const noexcept;
   void fill_missing_columns() noexcept;
 
   Metadata metadata_;
@@ -180,7 +189,8 @@ class FrameAssembler {
   // The frame in progress.
   bool open_ = false;
   bool whole_ = false;
-  std::uint32_t frame_id_ = 0;
+  std::uint32_t frame_id_ = 0;  // after close(): the frame just closed
+  bool have_frame_id_ = false;
   std::int64_t stamp_ns_ = 0;
   bool have_stamp_ = false;
   std::int64_t host_ns_ = 0;

@@ -5,3 +5,4 @@
 #include "sim/ouster/frame_assembler.hpp"
 #include "sim/ouster/metadata.hpp"
 #include "sim/ouster/packet.hpp"
+#include "sim/ouster/time_status.hpp"

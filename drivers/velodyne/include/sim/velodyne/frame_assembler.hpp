@@ -96,6 +96,9 @@ struct CompletedFrame {
 struct PushResult {
   PacketError error = PacketError::none;
   std::optional<CompletedFrame> frame;
+  // The packet's sensor time (its µs past the hour, in the hour nearest the reference), for the
+  // clock check against its arrival; nullopt when it was rejected.
+  std::optional<std::int64_t> packet_ns;
 };
 
 struct AssemblerCounters {
@@ -263,7 +266,7 @@ class FrameAssembler {
   void move_packet_tail_to_next() noexcept;
   bool in_window(std::int32_t azimuth_centi) const noexcept;
   void abandon_current() noexcept;
-  void count_packet(std::int64_t packet_ns) noexcept;
+  void count_packet(std::int64_t packet_ns, const Packet& packet) noexcept;
 
   static constexpr std::size_t max_lasers = 128;
   static constexpr std::size_t banks = 4;

@@ -76,4 +76,9 @@ std::size_t frame_capacity(Model model, unsigned returns = 2, unsigned rpm = 300
 // SIM does not decode, a datagram of another size.
 std::optional<Model> detect_model(std::span<const std::uint8_t> payload) noexcept;
 
+// A data packet that does not name its model: twelve FF EE blocks with product ID and return
+// mode 0, as an HDL-32E with firmware before 2.2.20.0 (2016) sends it (velodyne_decoder's
+// unpack_16_32_beam notes it). Decoded only as an HDL-32E chosen with --model, as strongest.
+bool is_unnamed_hdl32e(std::span<const std::uint8_t> payload) noexcept;
+
 }  // namespace sim::velodyne

@@ -96,22 +96,41 @@ class Packet {
 };
 
 // The PPS input's state as a position packet reports it (byte 202; VLP-16/32C, VLS-128).
-enum class PpsState : std::uint8_t { absent = 0, synchronizing = 1, locked = 2, error = 3, unknown = 4 };
-const char* to_string(PpsState state) noexcept;  // "absent", "synchronizing", "locked", "error"
+// unknown: the model reports none (HDL-32E/64E: byte 202 is unused there); invalid: a byte
+// outside 0–3 (a corrupt packet, or another device on the position port).
+enum class PpsState : std::uint8_t { absent = 0, synchronizing = 1, locked = 2, error = 3, unknown = 4, invalid = 5 };
+const char* to_string(PpsState state) noexcept;  // "absent", "synchronizing", "locked", "error", …
+
+// The NMEA sentence a position packet carries (the sensor forwards its GNSS receiver's $GPRMC
+// or, when so configured, $GPGGA).
+enum class NmeaStatus : std::uint8_t {
+  none,        // no sentence (no receiver connected)
+  unreadable,  // text that is no $--RMC or $--GGA with a good checksum
+  no_fix,      // RMC status 'V', or GGA fix quality 0
+  fix,         // RMC status 'A', or GGA fix quality above 0
+};
+const char* to_string(NmeaStatus status) noexcept;  // "none", "unreadable", "no fix", "fix"
 
 // What a position packet says about the sensor's clock.
 struct PositionReport {
   std::uint32_t timestamp_us = 0;   // µs past the hour, as in data packets
   PpsState pps = PpsState::unknown;
+  std::uint8_t pps_byte = 0;        // byte 202 as sent (for messages about an invalid one)
+  NmeaStatus nmea = NmeaStatus::none;
   bool has_gprmc = false;           // a $GPRMC (or $GNRMC) sentence with a good checksum
   bool gprmc_valid = false;         // its status is 'A' (a GPS fix), not 'V'
-  // UTC of the sentence, seconds since the Unix epoch, when it has a time and a date.
+  // UTC of the sentence, seconds since the Unix epoch, when it has a time and a date (RMC).
   std::optional<std::int64_t> gprmc_utc_s;
+  // Minutes and seconds of the sentence's UTC, as seconds past the hour (RMC or GGA): what the
+  // top-of-hour counter should agree with when PPS is locked.
+  std::optional<std::int32_t> nmea_second_of_hour;
 };
 
-// Position packets are 512 bytes (HDL-32E/64E) or 554 (VLP-16/32C, VLS-128); both hold the
-// timestamp at 198, the PPS state at 202 and the NMEA sentence from 206 (up to 128 bytes,
-// NUL-terminated). nullopt for anything else.
-std::optional<PositionReport> parse_position_packet(std::span<const std::uint8_t> payload) noexcept;
+// Position packets are 512 bytes of UDP payload (554 on the wire; a 554-byte payload is taken
+// too): the timestamp at 198, the PPS state at 202 and the NMEA sentence from 206 (up to 128
+// bytes, NUL-terminated). `model`, when known, says whether byte 202 is a PPS state (not on the
+// HDL-32E/64E). nullopt for anything else.
+std::optional<PositionReport> parse_position_packet(std::span<const std::uint8_t> payload,
+                                                    std::optional<Model> model = std::nullopt) noexcept;
 
 }  // namespace sim::velodyne

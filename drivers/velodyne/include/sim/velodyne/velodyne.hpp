@@ -6,3 +6,4 @@
 #include "sim/velodyne/frame_assembler.hpp"
 #include "sim/velodyne/model.hpp"
 #include "sim/velodyne/packet.hpp"
+#include "sim/velodyne/position_clock.hpp"

@@ -20,7 +20,9 @@
 
 #include "sim/apps/command_line.hpp"
 #include "sim/apps/status_line.hpp"
+#include "sim/lidar/clock_reporter.hpp"
 #include "sim/lidar/udp_receiver.hpp"
+#include "sim/timing/host_clock.hpp"
 
 namespace sim::apps {
 
@@ -33,10 +35,12 @@ struct LiveReceiveOptions {
   double silence_timeout = 0.5;           // s
   bool summary = false;
   bool quiet = false;
+  timing::HostClockOptions host_clock{};  // --ptp4l-socket: the host's clock for the clock check
 };
 
 // Adds --bind, the family's port options (`add_ports`), then --multicast, --source,
-// --receive-buffer, --status-interval and --silence-timeout; addresses are checked as `versions`.
+// --receive-buffer, --status-interval, --silence-timeout and --ptp4l-socket; addresses are
+// checked as `versions`.
 void add_receive_options(CommandLine& cli, LiveReceiveOptions& options, lidar::IpVersions versions,
                          const std::function<void(CLI::App&)>& add_ports);
 // Adds --summary (with `summary_help`) and -q,--quiet: the last options of each live program.
@@ -45,6 +49,28 @@ void add_output_options(CommandLine& cli, LiveReceiveOptions& options, const std
 // The receiver's side of the options: bind, multicast group, source, receive buffer and
 // silence timeout (the family keeps its IP versions).
 void set_listen(lidar::UdpListen& listen, const LiveReceiveOptions& options);
+
+// The host's clock for the stream's clock check, read once a second on its own thread (each
+// change logged once on stderr, unless --quiet). Outlives the receiver's run().
+class HostClockSource {
+ public:
+  explicit HostClockSource(const LiveReceiveOptions& options);
+  // sources.host: the watch's last reading (never waits).
+  lidar::ClockSources sources() const;
+
+ private:
+  timing::HostClockWatch watch_;
+};
+
+// Adds --clock-poll-seconds: how often the sensor's clock is asked about (its PTC or HTTP
+// service, off the frame path); 0 turns the asking off.
+void add_clock_poll_option(CommandLine& cli, double& seconds);
+
+// `callbacks` with `clock_tick` also called every `period` on the receive thread (before the
+// status tick when both are due), for what must happen there: the clock's notes on the status
+// line, a stamp correction the stream applies. An empty clock_tick leaves callbacks as they are.
+lidar::ReceiverCallbacks with_clock_tick(lidar::ReceiverCallbacks callbacks, std::function<void()> clock_tick,
+                                         std::chrono::nanoseconds period);
 
 // Messages joined from several parts end with exactly one full stop.
 std::string sentence(std::string text);
@@ -73,7 +99,7 @@ class LiveStatus {
   // The receiver's callbacks: its notes as sentences, and `text` every interval (unless quiet).
   lidar::ReceiverCallbacks callbacks(Text text);
   // The final line and, with --summary, on stdout: "summary <stream_summary> datagrams=…
-  // other_source=… unrecognised=… oversized=… resumes=…".
+  // other_source=… unrecognised=… oversized=… resumes=… other_senders=…".
   void finish(const std::string& stream_summary, const lidar::ReceiveCounters& counters);
 
  private:
@@ -91,6 +117,7 @@ struct ModelReceiverWords {
   std::string stream;  // "/lidar_top"
   std::uint16_t port = 0;
   std::int64_t silence_ns = 0;  // the silence timeout
+  std::function<void()> clock_tick{};  // once a second on the receive thread (with_clock_tick)
 };
 
 // Runs such a receiver (sim::hesai or sim::velodyne LiveReceiver) until `stop_fd` is readable,
@@ -108,7 +135,8 @@ int run_model_receiver(const CommandLine& cli, Receiver& receiver, LiveStatus& s
     return line + receive_status(receiver.counters(), receiver.last_packet_ns(), words.silence_ns,
                                  published != nullptr, final_line);
   };
-  if (auto ran = receiver.run(stop_fd, status.callbacks(text)); !ran) return cli.fail(std::string_view(ran.error().message));
+  auto callbacks = with_clock_tick(status.callbacks(text), words.clock_tick, std::chrono::seconds(1));
+  if (auto ran = receiver.run(stop_fd, std::move(callbacks)); !ran) return cli.fail(std::string_view(ran.error().message));
   const auto* published = receiver.stream();
   status.finish(published != nullptr ? published->describe_counters(true)
                                      : "frames=0 packets=0 lost=0 malformed=0 wrong_model=0",

@@ -22,6 +22,7 @@
 
 #include "sim/hesai/lidar_stream.hpp"
 #include "sim/hesai/model.hpp"
+#include "sim/lidar/clock_reporter.hpp"
 #include "sim/lidar/udp_receiver.hpp"
 #include "sim/result.hpp"
 
@@ -61,6 +62,11 @@ class LiveReceiver {
   // Receives until `stop_fd` becomes readable (an eventfd that a signal handler writes; -1:
   // never). Returns an error only when the stream could not be created for a detected model.
   Expected<void> run(int stop_fd, const ReceiverCallbacks& callbacks = {});
+
+  // What the stream's clock check asks besides its packets: the sensor's own report and the
+  // host's clock (lidar::ClockSources; each must return its last reading without waiting).
+  // Given to the stream when it is created; call before run().
+  void set_clock_sources(lidar::ClockSources sources);
 
   std::uint16_t port() const noexcept;             // the bound port
   std::string local_address() const;              // "127.0.0.1:2368"

@@ -13,6 +13,8 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <span>
+#include <vector>
 #include <string>
 
 #include "sim/hesai/model.hpp"
@@ -27,6 +29,15 @@ struct PtcEndpoint {
   std::uint16_t port = ptc::default_port;
   std::chrono::milliseconds timeout{3000};  // for the whole exchange
 };
+
+// One PTC exchange within sensor.timeout: connects, sends `command` with `payload`, reads the
+// whole answer and returns its payload. Errors, one sentence naming the sensor: system_error
+// when the connection failed (refused, no answer, closed early, stalled), invalid_argument when
+// the sensor answered but not with what was asked (a PTC return code: its firmware lacks the
+// command; not PTC). `what` names the answer in messages ("calibration", "PTP status").
+Expected<std::vector<std::uint8_t>> ptc_exchange(const PtcEndpoint& sensor, std::uint8_t command,
+                                                 std::span<const std::uint8_t> payload,
+                                                 const std::string& what);
 
 // Asks the sensor for its angle-correction file and returns its text, or one sentence naming
 // the sensor and what went wrong (refused, no answer, closed early, not PTC, stalled).

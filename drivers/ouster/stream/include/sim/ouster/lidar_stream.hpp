@@ -84,6 +84,12 @@ class LidarStream {
   void set_stamp_offset(std::int64_t offset_ns) noexcept;
   std::int64_t stamp_offset() const noexcept;
 
+  // The clock check: the caller adds each packet's sensor time (PushResult::packet_ns) with its
+  // arrival (live: the datagram's receive stamp; a replay: the record's capture time) and
+  // ticks it; it judges and writes the stream's clock about once a second (`at_once`: now).
+  lidar::ClockReporter& clock() noexcept;
+  std::optional<ClockStatus> tick_clock(std::int64_t now_realtime_ns, bool at_once = false);
+
   const Metadata& metadata() const noexcept;
   const AssemblerCounters& counters() const noexcept;
   const PublishCounters& published() const noexcept;

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // The sensor's metadata over its HTTP API (GET /api/v1/sensor/metadata), checked and cached:
 //
-//   auto got = sim::ouster::metadata_from_sensor({"os-122.local"}, cache_path);
+//   auto got = sim::ouster::metadata_from_sensor({"169.254.0.5"}, cache_path);  // IPv4 only: a
+//   name such as os-<serial>.local is not resolved (--sensor-ip refuses it in one sentence)
 //   if (!got) -> got.error().message: why, and that no cache exists to fall back on
 //   got->from_cache -> got->warning says why the sensor's answer could not be used
 //
@@ -10,6 +11,7 @@
 #pragma once
 
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -24,6 +26,20 @@ struct HttpEndpoint {
   std::uint16_t port = 80;
   std::chrono::milliseconds timeout{5000};  // for the whole exchange
 };
+
+// A whole HTTP/1.x answer: its status code (0 when the status line has none), the status line
+// (printable, at most 80 bytes) and the body.
+struct HttpAnswer {
+  int status = 0;
+  std::string status_line;
+  std::string body;
+};
+
+// GET `path` (HTTP/1.0, so the sensor closes when done) within sensor.timeout. Errors, one
+// sentence naming the sensor: refused, no answer, stopped halfway, more than `max_body` bytes,
+// not HTTP. `what` names the answer in messages ("metadata", "time").
+Expected<HttpAnswer> http_get(const HttpEndpoint& sensor, const std::string& path, std::size_t max_body,
+                              const std::string& what);
 
 // The body of the sensor's answer to GET /api/v1/sensor/metadata (HTTP/1.0, so the sensor
 // closes when done), or one sentence naming the sensor and what went wrong. Bodies above 4 MB

@@ -9,11 +9,13 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <span>
 #include <string>
 
+#include "sim/clock_status.hpp"
 #include "sim/lidar/frame_publisher.hpp"
 #include "sim/result.hpp"
 #include "sim/sensor_info.hpp"
@@ -63,6 +65,25 @@ struct TimeSync {
 };
 TimeSync time_sync_of(const PositionReport& report);
 
+// The clock a stream's position packets last reported (sim::ClockStatus, see
+// position_clock.hpp), shared with a reader on another thread: a clock reporter that judges and
+// writes the stream's clock record once a second takes it as its std::function<ClockStatus()>.
+// Copies share one state, so a copy stays valid when the stream moves or goes away.
+class ReportedClock {
+ public:
+  ReportedClock();
+  explicit ReportedClock(const ClockStatus& initial);
+  // Copies only (a move copies too), so no handle is ever left without its state.
+  ReportedClock(const ReportedClock&) = default;
+  ReportedClock& operator=(const ReportedClock&) = default;
+  ClockStatus operator()() const;
+  void set(const ClockStatus& clock);
+
+ private:
+  struct State;
+  std::shared_ptr<State> state_;
+};
+
 class LidarStream {
  public:
   // Loads the calibration, checks it against the model, creates the SIM stream sized for the
@@ -79,10 +100,11 @@ class LidarStream {
   // (0: host_receive_ns; a replay passes the capture's time).
   PushResult push(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns,
                   std::int64_t time_reference_ns = 0) noexcept;
-  // One position packet (port 8308): updates the time sync, and the stream's description when
-  // it changed (as LidarStreamConfig::stamp_clock says). False when the payload is no position
-  // packet (counted).
-  bool push_position(std::span<const std::uint8_t> payload) noexcept;
+  // One position packet (port 8308) that arrived at `host_receive_ns` (CLOCK_REALTIME; 0: now):
+  // updates the time sync, and the stream's description when it changed (as
+  // LidarStreamConfig::stamp_clock says), and the reported clock. False when the payload is no
+  // position packet (counted).
+  bool push_position(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns = 0) noexcept;
   std::optional<CompletedFrame> finish() noexcept;
   void reset() noexcept;
   void set_stamp_offset(std::int64_t offset_ns) noexcept;
@@ -92,7 +114,17 @@ class LidarStream {
   const AssemblerCounters& counters() const noexcept;
   const PublishCounters& published() const noexcept;
   const TimeSync& time_sync() const noexcept;
+  // What the position packets last said of the sensor's clock, readable from any thread (see
+  // ReportedClock). Before the first one: source unknown, reported_ns 0. A replay with the
+  // recorded stamps reports source replayed with the recorded state; a restamped one, source host
+  // (its stamps are this host's arrival times).
+  ReportedClock reported_clock() const;
   Writer& writer() noexcept;
+  // The clock check: the caller adds each packet's sensor time (PushResult::packet_ns) with its
+  // arrival (live: the datagram's receive stamp; a replay: the record's capture time) and
+  // ticks it; it judges and writes the stream's clock about once a second (`at_once`: now).
+  lidar::ClockReporter& clock() noexcept;
+  std::optional<ClockStatus> tick_clock(std::int64_t now_realtime_ns, bool at_once = false);
   // "frames 12 packets 9000 lost 0 malformed 0 wrong-model 0 points/frame 28800 time PPS locked…"
   // for status lines; key=value pairs with `machine` for summaries.
   std::string describe_counters(bool machine = false) const;

@@ -17,6 +17,7 @@
 #include <optional>
 #include <string>
 
+#include "sim/lidar/clock_reporter.hpp"
 #include "sim/lidar/udp_receiver.hpp"
 #include "sim/result.hpp"
 #include "sim/velodyne/lidar_stream.hpp"
@@ -54,12 +55,20 @@ class LiveReceiver {
   Expected<void> publish_to(LidarStreamConfig config, std::optional<Model> model);
   Expected<void> run(int stop_fd, const ReceiverCallbacks& callbacks = {});
 
+  // What the stream's clock check asks besides its packets: the sensor's own report and the
+  // host's clock (lidar::ClockSources; each must return its last reading without waiting).
+  // Given to the stream when it is created; call before run().
+  void set_clock_sources(lidar::ClockSources sources);
+
   std::uint16_t data_port() const noexcept;
   std::uint16_t position_port() const noexcept;  // 0 when not listened to
   std::string local_address() const;             // "127.0.0.1:2368"
   int receive_buffer() const noexcept;
   const ReceiveCounters& counters() const noexcept;
   const LidarStream* stream() const noexcept;
+  // What the position packets last said of the sensor's clock (LidarStream::reported_clock),
+  // valid before the stream exists and from any thread: hand it to the clock reporter.
+  ReportedClock reported_clock() const;
   std::int64_t last_packet_ns() const noexcept;  // CLOCK_MONOTONIC of the last data packet
 
   struct Impl;

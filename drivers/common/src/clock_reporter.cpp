@@ -1,0 +1,62 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "sim/lidar/clock_reporter.hpp"
+
+#include <utility>
+
+#include "sim/clock.hpp"
+
+namespace sim::lidar {
+
+void ClockReporter::set_tolerance(const timing::ClockTolerance& tolerance) noexcept {
+  check_ = timing::ClockCheck(tolerance);
+  first_tick_ns_ = 0;
+  last_judged_ns_ = 0;
+  last_.reset();
+}
+
+void ClockReporter::add(const std::optional<std::int64_t>& sensor_ns, std::int64_t stamp_offset_ns,
+                        std::int64_t arrival_ns) noexcept {
+  if (sensor_ns) check_.add(saturating_add_ns(*sensor_ns, stamp_offset_ns), arrival_ns);
+}
+
+ClockStatus ClockReporter::judge(std::int64_t now_realtime_ns) {
+  ClockStatus reported = sources_.reported ? sources_.reported() : ClockStatus{};
+  // A replay's stamps are the recording's, a restamped replay's this host's: no sensor report
+  // describes them, whatever the sensor said when it was recorded.
+  if (base_ == ClockBase::replayed) {
+    reported.source = ClockSource::replayed;
+    reported.stamps = StampClock::sensor;
+  } else if (base_ == ClockBase::restamped) {
+    reported = ClockStatus{};
+    reported.source = ClockSource::host;
+    reported.stamps = StampClock::host_arrival;
+  } else if (reported.stamps == StampClock::unknown) {
+    reported.stamps = StampClock::sensor;
+  }
+  const ClockStatus host = sources_.host ? sources_.host() : ClockStatus{};
+  ClockStatus clock = check_.judge(reported, host, now_realtime_ns);
+  last_judged_ns_ = now_realtime_ns;
+  last_ = clock;
+  return clock;
+}
+
+std::optional<ClockStatus> ClockReporter::tick(Writer& writer, std::int64_t now_realtime_ns,
+                                               bool at_once) {
+  if (check_.packets() == 0) return std::nullopt;
+  if (first_tick_ns_ == 0) first_tick_ns_ = now_realtime_ns;
+  const bool due = at_once || (last_ ? saturating_sub_ns(now_realtime_ns, last_judged_ns_) >= kPeriodNs ||
+                                           now_realtime_ns < last_judged_ns_  // the host's clock was set back
+                                     : saturating_sub_ns(now_realtime_ns, first_tick_ns_) >= kFirstNs);
+  if (!due) return std::nullopt;
+  ClockStatus clock = judge(now_realtime_ns);
+  write_clock(writer, clock);
+  return clock;
+}
+
+bool write_clock(Writer& writer, const ClockStatus& clock) {
+  // Refused only for a record that cannot be stored (ClockCheck keeps its sentences short and
+  // its numbers finite); the stream then keeps the last one written.
+  return writer.set_clock(clock).has_value();
+}
+
+}  // namespace sim::lidar
