@@ -203,6 +203,19 @@ def theil_sen(points):
     return slopes[len(slopes) // 2] if slopes else 0.0
 
 
+def memory_slope(points):
+    """The slope of private memory (KiB/s) and the noise it must rise above over the window: at
+    least MEMORY_NOISE_KIB, or twice the interquartile range of the samples around the slope (a
+    process whose memory swings by tens of MB as it churns frames, like sim_foxglove's, needs a
+    run long enough for a leak to outgrow its swings)."""
+    slope = theil_sen(points)
+    if len(points) < 4:
+        return slope, MEMORY_NOISE_KIB
+    residuals = sorted(kib - slope * t for t, kib in points)
+    quarter = len(residuals) // 4
+    return slope, max(MEMORY_NOISE_KIB, 2 * (residuals[-1 - quarter] - residuals[quarter]))
+
+
 class Soak:
     def __init__(self, args):
         self.args = args
@@ -710,8 +723,9 @@ class Soak:
         (an allocator that keeps a few freed frames is a step, a leak is a slope)."""
         points = self.memory.get(name, [])
         window = points[-1][0] - points[0][0] if len(points) > 1 else 0.0
-        slope = theil_sen(points) * 60  # KiB a minute
-        limit = max(MEMORY_NOISE_KIB / window * 60 if window > 0 else float("inf"), MEMORY_SLOPE_KIB_PER_H / 60)
+        slope, noise = memory_slope(points)
+        slope *= 60  # KiB a minute
+        limit = max(noise / window * 60 if window > 0 else float("inf"), MEMORY_SLOPE_KIB_PER_H / 60)
         # A leak also ends above every earlier peak; memory that rises and falls (a DDS stack's
         # buffers) can have a rising median slope and still end lower than it began.
         early = [kib for _, kib in points[:max(1, len(points) // 4)]]
@@ -719,7 +733,7 @@ class Soak:
         return {"process": name, "what": "rss_anon_kib", "start": a["rss_anon_kib"], "end": b["rss_anon_kib"],
                 "limit": f"slope {limit:.0f} KiB/min" if judged else "shown", "slope_kib_per_min": round(slope, 1),
                 "rise_over_first_quarter_kib": rise, "samples": len(points),
-                "ok": slope <= limit or rise <= MEMORY_NOISE_KIB or not judged}
+                "noise_kib": round(noise), "ok": slope <= limit or rise <= noise or not judged}
 
     def deliveries(self):
         """Frames each long-lived (or restarted C++) reader got per stream, against the frames the
