@@ -16,6 +16,7 @@
 #include <string>
 
 #include "sim/clock_status.hpp"
+#include "sim/timing/clock_check.hpp"
 
 namespace sim::camera {
 
@@ -46,6 +47,12 @@ class ReportedClock {
   };
   std::shared_ptr<State> state_;
 };
+
+// What the clock check accepts of a camera: its stamp (start of exposure, or the frame's end)
+// lies before the frame's arrival by the exposure, readout and transfer, tens of milliseconds
+// that vary with the exposure. That is a camera working, not a clock error; a LiDAR's defaults
+// (10 ms offset, 5 ms spread) would warn on every camera. 250 ms offset, 50 ms spread.
+timing::ClockTolerance camera_clock_tolerance() noexcept;
 
 // What a GenICam camera says of its PTP clock: the SFNC features (PtpEnable, PtpStatus,
 // PtpServoStatus, PtpOffsetFromMaster, PtpGrandmasterClockID) or their older GigE Vision names
