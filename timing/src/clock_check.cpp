@@ -432,6 +432,11 @@ ClockStatus ClockCheck::judge(const ClockStatus& reported, const ClockStatus& ho
   Findings findings;
   if (out.offset_to_host_ns) judge_offset(out, reported, host, against, findings);
   if (auto state = state_finding(reported)) findings.found(state->verdict, std::move(state->sentence));
+  // What the report itself warns of (an unreadable NMEA sentence, a clock the camera cannot
+  // name, a sensor that did not answer) stands beside what the stamps show.
+  if (reported.verdict >= ClockVerdict::warn && !reported.problem.empty()) {
+    findings.found(reported.verdict, reported.problem);
+  }
   if (out.offset_to_host_ns) {
     judge_stamps(out, reported, against, findings);
     if (!findings.first) {
