@@ -10,43 +10,17 @@
 #pragma once
 
 #include <cstdint>
-#include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
 
 #include "sim/clock_status.hpp"
 #include "sim/timing/clock_check.hpp"
+#include "sim/timing/reported_clock.hpp"
 
 namespace sim::camera {
 
-// The clock a capture last reported, shared with a reader on another thread: a clock reporter
-// that judges and writes the stream's clock record once a second takes it as its
-// std::function<ClockStatus()>. Copies share one state, so a copy stays valid when the capture
-// moves or goes away.
-class ReportedClock {
- public:
-  ReportedClock() : state_(std::make_shared<State>()) {}
-  // Copies only (a move copies too), so no handle is ever left without its state.
-  ReportedClock(const ReportedClock&) = default;
-  ReportedClock& operator=(const ReportedClock&) = default;
-
-  ClockStatus operator()() const {
-    const std::lock_guard lock(state_->mutex);
-    return state_->clock;
-  }
-  void set(const ClockStatus& clock) {
-    const std::lock_guard lock(state_->mutex);
-    state_->clock = clock;
-  }
-
- private:
-  struct State {
-    mutable std::mutex mutex;
-    ClockStatus clock;
-  };
-  std::shared_ptr<State> state_;
-};
+// The clock a capture last reported, for the clock check on another thread.
+using timing::ReportedClock;
 
 // What the clock check accepts of a camera: its stamp (start of exposure, or the frame's end)
 // lies before the frame's arrival by the exposure, readout and transfer, tens of milliseconds
