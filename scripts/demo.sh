@@ -21,7 +21,7 @@ if [[ ${1:-} == --help || ${1:-} == -h ]]; then sed -n '2,9p' "$0"; exit 0; fi
 "$root/scripts/install-deps.sh" --only "$root/scripts/demo-deps.txt"
 echo "demo: packages ready after ${SECONDS} s; building the demo's programs in build/demo"
 bin=build/demo
-folders="imaging;drivers/common;drivers/hesai;apps/hesai;drivers/ouster;apps/ouster;drivers/velodyne;apps/velodyne"
+folders="imaging;drivers/common;drivers/hesai;drivers/ouster;drivers/velodyne"
 folders+=";drivers/unitree;replay/pcap;replay/video;viewer/foxglove"
 mkdir -p build
 generator=()

@@ -9,6 +9,7 @@
 #   scripts/soak.sh --seconds 3600        one hour
 #   scripts/soak.sh --seconds 600 --json soak.json --seed 7
 #   SIM_SOAK_BUILD=build/release scripts/soak.sh   use (and build) another build folder
+#   scripts/soak.sh --seconds 60 --fault all      break every guarantee on purpose: must FAIL
 #
 # Needs root (or CAP_SYS_ADMIN) for the private network namespace, like the bridge's tests.
 # What is checked and why it is fair on a loaded machine: tests/soak/README.md.
@@ -30,7 +31,7 @@ if [[ ! -f $build/CMakeCache.txt ]]; then
     { cat "$build.configure.log"; exit 1; }
 fi
 cmake --build "$build" -j"${SIM_JOBS:-2}" --target sim_soak_agent sim_soak_c_reader sim_soak_dds \
-  sim_replay_video sim_replay_pcap sim_record sim_dds_bridge sim_rm sim_foxglove sim_python
+  sim_replay_video sim_replay_pcap sim_record sim_play sim_dds_bridge sim_rm sim_foxglove sim_python
 # The Foxglove client's npm packages (pinned; installed once, as for the viewer's tests).
 "$root/tests/viewer/foxglove/node/install.sh"
 # The Python the module was built for (with numpy), not whichever python3 is first on the PATH.

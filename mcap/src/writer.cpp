@@ -214,6 +214,53 @@ struct Writer::Impl {
     chunk_message_bytes.clear();
   }
 
+  static void put_statistics(detail::ByteWriter& w, const Statistics& totals) {
+    const auto at = w.open_record(Opcode::statistics);
+    w.put(totals.message_count);
+    w.put(totals.schema_count);
+    w.put(totals.channel_count);
+    w.put(totals.attachment_count);
+    w.put(totals.metadata_count);
+    w.put(totals.chunk_count);
+    w.put(totals.message_start_time);
+    w.put(totals.message_end_time);
+    const auto map = w.open_u32_block();
+    for (const auto& [channel_id, count] : totals.channel_message_counts) {
+      w.put(channel_id);
+      w.put(count);
+    }
+    w.close_u32_block(map);
+    w.close_record(at);
+  }
+  static void put_chunk_index(detail::ByteWriter& w, const ChunkIndex& c,
+                              std::string_view compression) {
+    const auto at = w.open_record(Opcode::chunk_index);
+    w.put(c.start_time);
+    w.put(c.end_time);
+    w.put(c.chunk_offset);
+    w.put(c.chunk_length);
+    const auto map = w.open_u32_block();
+    for (const auto& [channel_id, index_offset] : c.message_index_offsets) {
+      w.put(channel_id);
+      w.put(index_offset);
+    }
+    w.close_u32_block(map);
+    w.put(c.message_index_length);
+    w.string(compression);
+    w.put(c.compressed_size);
+    w.put(c.uncompressed_size);
+    w.close_record(at);
+  }
+
+  // Where each summary group starts in the file and how long it is (the summary offsets).
+  struct SummaryGroup {
+    Opcode op;
+    std::uint64_t start;
+    std::uint64_t length;
+  };
+
+  // The data end record, then the summary: schemas and channels (when repeated), statistics and
+  // the chunk indexes, each group emitted as one piece so its offset and length are known.
   void write_summary() {
     flush_chunk();
     std::vector<std::byte> r;
@@ -226,13 +273,8 @@ struct Writer::Impl {
     emit_record(r);
 
     const std::uint64_t summary_start = offset;
-    crc = 0;
-    struct Group {
-      Opcode op;
-      std::uint64_t start;
-      std::uint64_t length;
-    };
-    std::vector<Group> groups;
+    crc = 0;  // the summary CRC covers the summary section alone
+    std::vector<SummaryGroup> groups;
     auto group = [&](Opcode op, auto&& write_records) {
       const std::uint64_t start = offset;
       r.clear();
@@ -248,47 +290,18 @@ struct Writer::Impl {
     group(Opcode::channel, [&](detail::ByteWriter& w) {
       if (options.repeat_channels) for (const auto& c : channels) put_channel(w, c);
     });
-    group(Opcode::statistics, [&](detail::ByteWriter& w) {
-      const auto at = w.open_record(Opcode::statistics);
-      w.put(stats.message_count);
-      w.put(stats.schema_count);
-      w.put(stats.channel_count);
-      w.put(stats.attachment_count);
-      w.put(stats.metadata_count);
-      w.put(stats.chunk_count);
-      w.put(stats.message_start_time);
-      w.put(stats.message_end_time);
-      const auto map = w.open_u32_block();
-      for (const auto& [channel_id, count] : stats.channel_message_counts) {
-        w.put(channel_id);
-        w.put(count);
-      }
-      w.close_u32_block(map);
-      w.close_record(at);
-    });
+    group(Opcode::statistics, [&](detail::ByteWriter& w) { put_statistics(w, stats); });
     group(Opcode::chunk_index, [&](detail::ByteWriter& w) {
-      for (const auto& c : chunk_indexes) {
-        const auto at = w.open_record(Opcode::chunk_index);
-        w.put(c.start_time);
-        w.put(c.end_time);
-        w.put(c.chunk_offset);
-        w.put(c.chunk_length);
-        const auto map = w.open_u32_block();
-        for (const auto& [channel_id, index_offset] : c.message_index_offsets) {
-          w.put(channel_id);
-          w.put(index_offset);
-        }
-        w.close_u32_block(map);
-        w.put(c.message_index_length);
-        w.string(to_string(options.compression));
-        w.put(c.compressed_size);
-        w.put(c.uncompressed_size);
-        w.close_record(at);
-      }
+      for (const auto& c : chunk_indexes) put_chunk_index(w, c, to_string(options.compression));
     });
+    write_summary_offsets_and_footer(groups, summary_start);
+  }
 
+  // The summary offset records, the footer and the closing magic.
+  void write_summary_offsets_and_footer(const std::vector<SummaryGroup>& groups,
+                                        std::uint64_t summary_start) {
     const std::uint64_t summary_offset_start = offset;
-    r.clear();
+    std::vector<std::byte> r;
     detail::ByteWriter w(r);
     for (const auto& g : groups) {
       const auto at = w.open_record(Opcode::summary_offset);

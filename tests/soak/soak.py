@@ -16,6 +16,7 @@ import json
 import os
 import queue
 import random
+import re
 import shutil
 import signal
 import subprocess
@@ -28,11 +29,24 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 HESAI = os.path.join(ROOT, "tests", "drivers", "hesai", "data")
 CAMERA_PERIOD_MS = 1000 / 30
-FRAME_KIB = 1920 * 1200 * 3 // 1024  # the largest frame of the soak
 LIDAR_PERIOD_MS = 100.0
 STOP_GRACE_S = 15  # a process asked to stop with SIGTERM must be gone by then (else: a hang)
 SILENCE_S = 20     # a reader that prints nothing for this long hangs
 PROGRESS_EVERY_S = 60  # how often a running soak prints one line of progress
+# A long-lived reader must get at least this share of the frames it waited for: frames / (frames +
+# frames it slept through). Readers take the newest frame, so frames skipped while a reader was
+# busy or kept from running (run delay) are by design; a transport that loses every other wake-up
+# delivers half.
+DELIVERY_FLOOR = 0.80
+# Private memory must be flat: the slope over the run (Theil-Sen, robust to a few steps) may
+# not exceed a steady growth of MEMORY_NOISE_KIB over the judged window or MEMORY_SLOPE_KIB_PER_H,
+# whichever is larger (so a long run judges tighter: an hour allows ~3.5 MiB of steady growth).
+MEMORY_NOISE_KIB = 2048
+MEMORY_SLOPE_KIB_PER_H = 3600
+MEMORY_EVERY_S = 2.0
+# The faults soak.py --fault can put in (tests/soak/README.md, "Faults"), and the check each
+# must turn red.
+FAULTS = ("torn", "lost_wakeups", "half_frames", "leak", "stale_region", "broken_recording")
 
 _libc = ctypes.CDLL(None, use_errno=True)
 
@@ -100,6 +114,9 @@ class Child:
                 continue
             if record.get("kind") == "violation":
                 self.soak.violation(self.name, record)
+            elif record.get("kind") == "publish_gap":
+                with self.soak.lock:
+                    self.soak.publish_gaps.append(record)
             elif record.get("kind") == "stats":
                 self.stats = record
             else:
@@ -146,6 +163,59 @@ class Child:
             return f.read()[-400:].strip()
 
 
+def classify_stalls(violations, publish_gaps):
+    """Tells a writer's (or the whole machine's) stall from a reader's lost wake-up, by the soak
+    writer's own publish_gap lines. A "missed" stall is a "writer_stall" when, without the part of
+    it the writer spent paused, it would have been within its allowance, and the pause was
+      - inside the writer's commit (in_commit: the frame became readable in it, but its wake-up
+        comes only as the commit returns, so every sleeping reader waited for the writer), or
+      - between two commits, while another reader process stalled on the same stream at the same
+        moment (nothing ran: the whole machine paused).
+    A stall of one reader while the writer published on time, or of every reader while the writer
+    published on time (its wake-up failed them all), stays "missed". Changes the violations in
+    place; returns how many it reclassified."""
+    def window(v):
+        return v.get("readable_ns"), v.get("end_ns")
+    missed = [v for v in violations if v.get("what") == "missed" and None not in window(v)]
+    changed = 0
+    for v in missed:
+        start, end = window(v)
+        others = {w["process"] for w in missed if w is not v and w["stream"] == v["stream"] and
+                  w["process"] != v["process"] and w["readable_ns"] < end and w["end_ns"] > start}
+        paused_ms = max([(min(end, g["to_ns"]) - max(start, g["from_ns"])) / 1e6 for g in publish_gaps
+                         if g["stream"] == v["stream"] and (others or g.get("in_commit"))] + [0.0])
+        allowance_ms = min(2 * v.get("period_ms", 0), CAMERA_PERIOD_MS * 2)
+        if paused_ms > 0 and v.get("stall_ms", 0) - paused_ms <= allowance_ms:
+            changed += 1
+            v["what"] = "writer_stall"
+            v["why"] = (f"the writer was paused for {paused_ms:.1f} ms of it" +
+                        (f"; also stalled in {', '.join(sorted(others))}" if others else " (inside its commit)"))
+    return changed
+
+
+def theil_sen(points):
+    """The median of the slopes between every two points (robust to a few steps and outliers)."""
+    if len(points) > 240:  # enough for the median; keeps an hour's samples cheap
+        step = len(points) / 240
+        points = [points[int(i * step)] for i in range(240)]
+    slopes = sorted((b[1] - a[1]) / (b[0] - a[0]) for i, a in enumerate(points) for b in points[i + 1:]
+                    if b[0] > a[0])
+    return slopes[len(slopes) // 2] if slopes else 0.0
+
+
+def memory_slope(points):
+    """The slope of private memory (KiB/s) and the noise it must rise above over the window: at
+    least MEMORY_NOISE_KIB, or twice the interquartile range of the samples around the slope (a
+    process whose memory swings by tens of MB as it churns frames, like sim_foxglove's, needs a
+    run long enough for a leak to outgrow its swings)."""
+    slope = theil_sen(points)
+    if len(points) < 4:
+        return slope, MEMORY_NOISE_KIB
+    residuals = sorted(kib - slope * t for t, kib in points)
+    quarter = len(residuals) // 4
+    return slope, max(MEMORY_NOISE_KIB, 2 * (residuals[-1 - quarter] - residuals[quarter]))
+
+
 class Soak:
     def __init__(self, args):
         self.args = args
@@ -167,10 +237,26 @@ class Soak:
         self.chaos = {"SIGKILL": 0, "SIGTERM": 0, "layout_replaced": 0, "sim_rm_dead": 0,
                       "sim_rm_dead_removed": 0, "record_segments": 0}
         self.resources = {}
+        self.memory = {}     # process -> [(t, rss_anon_kib)] between the two resource samples
+        self.publish_gaps = []  # the soak writers' own publish gaps (their "publish_gap" lines)
+        self.recordings = {"played": 0, "broken": []}
+        self.faults = set(args.fault or [])
+        self.env = dict(os.environ)
+        if self.faults:  # the test mode: the soak's own processes break what is asked
+            self.env.update(SIM_SOAK_TEST_MODE="1", SIM_SOAK_FAULT=self.fault_spec())
 
     # ---- processes ---------------------------------------------------------------------------
+    def fault_spec(self):
+        """SIM_SOAK_FAULT for the soak's processes: which stream each fault hits."""
+        cam, lid = self.cameras, self.lidars
+        spec = {"lost_wakeups": f"lost_wakeups={lid[0]}+{cam[1]}",  # a LiDAR and a replayed camera
+                "half_frames": f"half_frames={cam[4]}",
+                "leak": "leak=256",                                     # KiB a second, read_block
+                "stale_region": f"stale_region={cam[5]}"}
+        return ",".join(spec[f] for f in sorted(self.faults) if f in spec)
+
     def start(self, name, argv, long_lived=False, env=None):
-        child = Child(self, name, argv, long_lived, env)
+        child = Child(self, name, argv, long_lived, env or self.env)
         self.children[name] = child
         self.history.setdefault(name, []).append(child)
         return child
@@ -198,8 +284,9 @@ class Soak:
         if i < self.args.video_cameras:
             return [self.bin("replay/video/sim_replay_video"), self.pictures, "--stream", stream, "--fps", "30",
                     "--loop", "--checksum", "--quiet"]
+        tear = ["--tear-every", "97"] if "torn" in self.faults and stream == self.cameras[3] else []
         return [self.bin("tests/soak/sim_soak_agent"), "writer", "--stream", stream, "--hz", "30",
-                "--image", "1920x1200"]
+                "--image", self.args.image, *tear]
 
     def arg(self, stream):
         return f"{stream}:{self.period[stream]:.3f}"
@@ -225,14 +312,16 @@ class Soak:
 
     def start_everything(self):
         os.makedirs(self.pictures, exist_ok=True)
+        width, height = self.args.image.split("x")
         subprocess.run([self.bin("tests/soak/sim_soak_agent"), "make-pictures", self.pictures, "--frames", "4",
-                        "--width", "1920", "--height", "1200"], check=True)
+                        "--width", width, "--height", height], check=True)
         for s in self.streams:
             self.start("writer" + s, self.writer_argv(s))
         for name, (argv, long_lived) in self.reader_argvs().items():
             self.start(name, argv, long_lived, self.python_env if "python" in name else None)
-        self.start_foxglove()
-        self.start_dds()
+        if not self.args.lean:
+            self.start_foxglove()
+            self.start_dds()
         self.start_record()
 
     def start_foxglove(self):
@@ -293,10 +382,32 @@ class Soak:
             s = self.sample(pid)
             if s:
                 self.resources.setdefault(name, {})[when] = s
-        self.resources.setdefault("/dev/shm", {})[when] = {"shm_regions": self.our_regions()}
+        self.resources.setdefault("/dev/shm", {})[when] = {"shm_regions": len(self.our_regions()),
+                                                           "unexpected": sorted(self.unexpected_regions())}
 
     def our_regions(self):
-        return sum(1 for s in self.streams if os.path.exists("/dev/shm/sim." + s[1:]))
+        """Every region under the soak's names (/dev/shm/sim.soak<pid>_*), expected or not."""
+        prefix = "sim." + self.streams[0][1:].rsplit("_", 1)[0] + "_"
+        try:
+            return {"/" + f[4:] for f in os.listdir("/dev/shm") if f.startswith(prefix)}
+        except OSError:
+            return set()
+
+    def unexpected_regions(self):
+        """The regions under the soak's names that are none of its nine streams, and the streams
+        whose region is missing (both samples are taken with every writer running)."""
+        found = self.our_regions()
+        return (found - set(self.streams)) | {f"{s} (missing)" for s in set(self.streams) - found}
+
+    def sample_memory(self):
+        """Private memory of every long-lived process every MEMORY_EVERY_S, between the samples."""
+        while self.sampling_memory:
+            t = time.monotonic()
+            for name, pid in self.long_lived_pids().items():
+                s = self.sample(pid)
+                if s:
+                    self.memory.setdefault(name, []).append((t, s["rss_anon_kib"]))
+            time.sleep(MEMORY_EVERY_S)
 
     # ---- the chaos loop ----------------------------------------------------------------------
     def check_stopped(self, child, sig, code):
@@ -383,15 +494,46 @@ class Soak:
         for t in threads:
             t.join()
 
+    def play_back(self, child, ended_by):
+        """Reads a finished segment back with sim_play (into a stream of another name) before it is
+        deleted: a segment that sim_record ended cleanly (--duration or SIGTERM) must play every
+        frame it says it wrote; one killed by SIGKILL may be cut short and is only played."""
+        path = os.path.join(self.workdir, "segment.mcap")
+        said = next((r for r in child.other if "streams" in r), None)
+        if not os.path.exists(path):
+            if ended_by != "SIGKILL":
+                self.recordings["broken"].append(f"{ended_by}: no file")
+            return
+        if "broken_recording" in self.faults:  # the fault: a recorder that wrote half a file
+            with open(path, "r+b") as f:
+                f.truncate(os.path.getsize(path) // 2)
+        tag = self.streams[0][1:].rsplit("_", 1)[0]
+        play = subprocess.run([self.bin("tools/sim_play/sim_play"), path, "--max-rate", "--remap",
+                               f"{self.lidars[1]}=/{tag}play_lidar1"], capture_output=True, text=True)
+        out = play.stdout + play.stderr
+        counts = re.findall(r"\bframes (\d+)", out)  # its summary line: "frames N  passes 1  …"
+        played = int(counts[-1]) if counts else -1
+        self.recordings["played"] += 1
+        if ended_by == "SIGKILL" or child.proc.returncode != 0:  # (a SIGTERM before its handler: killed)
+            return
+        wrote = sum(st.get("frames", 0) for st in said["streams"]) if said else None
+        if play.returncode != 0 or wrote is None or played != wrote or (ended_by == "duration" and wrote == 0 and self.running):
+            self.recordings["broken"].append(
+                f"{ended_by}: sim_record said {wrote} frames, sim_play exit {play.returncode} played {played}: "
+                f"{out.strip()[-200:]}")
+
     def record_loop(self):
-        """sim_record in segments of 10 s (the files stay small), now and then stopped early."""
+        """sim_record in segments of 10 s (the files stay small), now and then stopped early; every
+        segment is played back before it is deleted."""
         while self.running:
             child = self.children["sim_record"]
+            ended_by = "duration"
             if self.rng.random() < 0.3:
                 time.sleep(self.rng.uniform(1, 8))
                 sig = self.rng.choice([signal.SIGKILL, signal.SIGTERM])
                 self.check_stopped(child, sig, child.stop(sig))
                 self.chaos[sig.name] += 1
+                ended_by = sig.name
             else:
                 try:
                     code = child.proc.wait(10 + 60)
@@ -401,6 +543,8 @@ class Soak:
                 if code != 0:
                     self.fail("sim_record", f"exit {code} at the end of its --duration: {child.stderr_tail()}")
                 self.chaos["record_segments"] += 1
+                child.reader.join(5)  # its JSON line
+            self.play_back(child, ended_by)
             for f in os.listdir(self.workdir):
                 if f.endswith(".mcap"):
                     os.remove(os.path.join(self.workdir, f))
@@ -452,11 +596,11 @@ class Soak:
     # ---- the run -----------------------------------------------------------------------------
     def run(self):
         seconds = self.args.seconds
-        warmup = max(20.0, 0.15 * seconds)  # with chaos: caches and pools reach their size
+        warmup = self.args.warmup or max(20.0, 0.15 * seconds)  # with chaos: caches and pools reach their size
         calm = 8.0                            # no chaos, every writer back: the start sample
         settle = max(12.0, min(30.0, 0.05 * seconds))
         self.pictures = os.path.join(self.workdir, "pictures")
-        self.python_env = dict(os.environ, PYTHONPATH=self.bin("python"), PYTHONDONTWRITEBYTECODE="1")
+        self.python_env = dict(self.env, PYTHONPATH=self.bin("python"), PYTHONDONTWRITEBYTECODE="1")
         self.running = True
         self.t0 = time.monotonic()
         self.start_everything()
@@ -468,6 +612,9 @@ class Soak:
         self.chaos_loop(self.t0 + warmup)
         time.sleep(calm)
         self.sample_all("start")
+        self.sampling_memory = True
+        memory = threading.Thread(target=self.sample_memory, daemon=True)
+        memory.start()
         print(f"soak: warmed up; chaos until {seconds - settle:.0f} s", flush=True)
         self.chaos_loop(self.t0 + seconds - settle)
         # Settled: every writer is back. Every long-lived consumer must still get frames.
@@ -483,6 +630,8 @@ class Soak:
                 if (name, stream) not in after:
                     self.fail(name, f"never reported {stream}")
         self.sample_all("end")
+        self.sampling_memory = False
+        memory.join(MEMORY_EVERY_S + 5)
         self.running = False
         record = self.children["sim_record"]
         if record.alive():
@@ -503,8 +652,13 @@ class Soak:
         dds = self.children.get("dds")
         if dds and dds.stats and dds.stats.get("bridge_exit") not in (None, "exit 0"):
             self.fail("sim_dds_bridge", f"{dds.stats['bridge_exit']} after SIGTERM")
+        # Every writer ended: only the nine streams' regions may remain (a writer leaves its region
+        # for late readers; sim_rm --dead removes it). Anything else under the soak's names was
+        # left behind by one of its programs.
+        self.stale = sorted(self.our_regions() - set(self.streams))
         subprocess.run([self.bin("tools/sim_rm"), "--dead", *self.streams], capture_output=True)
-        self.left_behind = self.our_regions()
+        self.left_behind = len(self.our_regions() - set(self.stale)) + len(self.stale)
+        subprocess.run([self.bin("tools/sim_rm"), "--force", *self.stale], capture_output=True)
         shutil.rmtree(self.workdir, ignore_errors=True)
 
     # ---- the report --------------------------------------------------------------------------
@@ -512,6 +666,8 @@ class Soak:
         """Counters of every incarnation of every reader, by kind of reader."""
         kinds = {}
         for name, incarnations in self.history.items():
+            if name.startswith("writer"):
+                continue
             for child in incarnations:
                 stats = child.stats or {}
                 per = stats.get("streams") or stats.get("topics") or {}
@@ -543,8 +699,15 @@ class Soak:
             # raises its mmap threshold to the largest block freed), so a process that handles
             # 6.9 MB frames may hold a few more at the end without leaking; a leak of anything per
             # frame or per chaos event would be far more over thousands of frames and events.
-            limits = {"rss_anon_kib": max(16384, 0.25 * a.get("rss_anon_kib", 0), 4 * FRAME_KIB),
-                      "fds": 2, "threads": 2, "shm_regions": 0 if name == "/dev/shm" else 1}
+            if name == "/dev/shm":  # exactly the nine streams' regions, at both samples
+                unexpected = sorted(set(a["unexpected"]) | set(b["unexpected"]))
+                rows.append({"process": name, "what": "shm_regions", "start": a["shm_regions"],
+                             "end": b["shm_regions"], "limit": f"the {len(self.streams)} streams' only",
+                             "ok": not unexpected, "unexpected": unexpected})
+                continue
+            limits = {"fds": 2, "threads": 2, "shm_regions": 1}
+            if "rss_anon_kib" in a:
+                rows.append(self.memory_row(name, a, b, judged))
             for key, limit in limits.items():
                 if key in a:
                     rows.append({"process": name, "what": key, "start": a[key], "end": b[key],
@@ -555,38 +718,84 @@ class Soak:
                              "end": b["rss_kib"], "limit": "shown", "ok": True})
         return rows
 
+    def memory_row(self, name, a, b, judged):
+        """Private memory must be flat: its slope over the judged window, not its total growth
+        (an allocator that keeps a few freed frames is a step, a leak is a slope)."""
+        points = self.memory.get(name, [])
+        window = points[-1][0] - points[0][0] if len(points) > 1 else 0.0
+        slope, noise = memory_slope(points)
+        slope *= 60  # KiB a minute
+        limit = max(noise / window * 60 if window > 0 else float("inf"), MEMORY_SLOPE_KIB_PER_H / 60)
+        # A leak also ends above every earlier peak; memory that rises and falls (a DDS stack's
+        # buffers) can have a rising median slope and still end lower than it began.
+        early = [kib for _, kib in points[:max(1, len(points) // 4)]]
+        rise = points[-1][1] - max(early) if points else 0
+        return {"process": name, "what": "rss_anon_kib", "start": a["rss_anon_kib"], "end": b["rss_anon_kib"],
+                "limit": f"slope {limit:.0f} KiB/min" if judged else "shown", "slope_kib_per_min": round(slope, 1),
+                "rise_over_first_quarter_kib": rise, "samples": len(points),
+                "noise_kib": round(noise), "ok": slope <= limit or rise <= noise or not judged}
+
+    def deliveries(self):
+        """Frames each long-lived (or restarted C++) reader got per stream, against the frames the
+        writer published while it read them (got + skipped), over all its incarnations."""
+        rows = {}
+        for name in ("read_block", "read_borrow", "read_waitset", "read_adaptive"):
+            for child in self.history.get(name, []):
+                for stream, c in ((child.stats or {}).get("streams") or {}).items():
+                    r = rows.setdefault((name, stream), {"reader": name, "stream": stream, "frames": 0,
+                                                         "skipped": 0, "lost": 0})
+                    for key in ("frames", "skipped", "lost"):
+                        r[key] += c.get(key, 0)
+        for r in rows.values():
+            published = r["frames"] + r["lost"]
+            r["share"] = round(r["frames"] / published, 3) if published else 1.0
+            r["ok"] = published < 30 or r["share"] >= DELIVERY_FLOOR
+        return sorted(rows.values(), key=lambda r: r["share"])
+
     def report(self):
+        writer_stalls = classify_stalls(self.violations, self.publish_gaps)
         kinds = self.totals()
         count = lambda what: sum(1 for v in self.violations if v.get("what") == what)
+        deliveries = self.deliveries()
+        short = [r for r in deliveries if not r["ok"]]
+        worst = deliveries[0] if deliveries else None
         timed = sum(k.get("timed", 0) for k in kinds.values())
         untimed = sum(k.get("untimed", 0) for k in kinds.values())
-        worst = max([k.get("worst_stall_ms", 0) for k in kinds.values()] or [0])
+        worst_stall = max([k.get("worst_stall_ms", 0) for k in kinds.values()] or [0])
         frames = sum(k.get("frames", 0) for k in kinds.values())
         resources = self.resource_checks()
-        other = [v for v in self.violations if v.get("what") not in ("torn", "out_of_order", "missed", "backwards")]
+        other = [v for v in self.violations
+                 if v.get("what") not in ("torn", "out_of_order", "missed", "backwards", "writer_stall")]
         checks = [
             ("torn frames (pattern, structure or checksum)", count("torn"), f"{frames} frames read"),
             ("out-of-order frames (SIM sequence, DDS and Foxglove stamps)",
              count("out_of_order") + count("backwards") + sum(k.get("out_of_order", 0) for n, k in kinds.items() if n == "dds"),
              ""),
             ("blocked reader missed the newest frame > 2 periods", count("missed"),
-             f"{timed} waits timed, {untimed} not timeable, worst net stall {worst:.1f} ms"),
+             f"{timed} waits timed, {untimed} not timeable, worst net stall {worst_stall:.1f} ms"),
+            (f"long-lived readers given under {DELIVERY_FLOOR:.0%} of the frames published (slept through)", len(short),
+             f"worst {worst['share']:.1%} ({worst['reader']} {worst['stream']})" if worst else ""),
             ("crashes or hangs", len(self.failures), ""),
             ("other violations (DDS malformed, Foxglove undecodable, page errors)",
              len(other) + sum(k.get("malformed", 0) for k in kinds.values()), ""),
             ("resources of long-lived processes outside tolerance", sum(1 for r in resources if not r["ok"]),
              f"{len({r['process'] for r in resources})} processes"),
-            ("our /dev/shm regions left behind", self.left_behind, ""),
+            ("our /dev/shm regions left behind", self.left_behind, ", ".join(self.stale)),
+            ("recordings that do not play back whole (sim_play)", len(self.recordings["broken"]),
+             f"{self.recordings['played']} segments played back"),
         ]
         ok = all(value == 0 for _, value, _ in checks)
+        # Shown, never failed: the writer (or the whole machine) paused, not the transport.
+        checks.append(("writer or machine stalls (the writer paused inside its commit, or with every reader; shown)",
+                       writer_stalls, f"{len(self.publish_gaps)} publish gaps of the soak writers"))
         lines = [f"SIM soak: {self.elapsed:.0f} s, seed {self.args.seed}, {len(self.streams)} streams",
                  "", "| check | result | detail |", "|---|---|---|"]
         lines += [f"| {what} | {value} | {detail} |" for what, value, detail in checks]
-        lines += ["", "| reader | processes | frames | torn | out of order | missed | overwritten (borrow) |",
-                  "|---|---|---|---|---|---|---|"]
+        lines += ["", "| reader | processes | frames | skipped (slept through) | torn | out of order | "
+                      "missed (writer stalls included) | overwritten (borrow) |", "|---|---|---|---|---|---|---|---|"]
         for name, k in sorted(kinds.items()):
             if name.startswith("read"):
-                lines.append(f"| {name} | {k['processes']} | {k.get('frames', 0)} | {k.get('torn', 0)} | "
+                lines.append(f"| {name} | {k['processes']} | {k.get('frames', 0)} | {k.get('skipped', '-')} ({k.get('lost', '-')}) | {k.get('torn', 0)} | "
                              f"{k.get('out_of_order', 0)} | {k.get('missed', '-')} | {k.get('overwritten', '-')} |")
         fox, dds = kinds.get("foxglove_client", {}), kinds.get("dds", {})
         lines += ["", f"Foxglove client: {fox.get('messages', 0)} messages, {fox.get('page_fetches', 0)} page fetches "
@@ -600,13 +809,26 @@ class Soak:
         lines += ["", "PASS" if ok else "FAIL"]
         for f in self.failures:
             lines.append(f"  failure: {f['process']}: {f['what']}")
+        for r in short:
+            lines.append(f"  delivery: {r['reader']} got {r['frames']} frames of {r['stream']} and slept through "
+                         f"{r['lost']} ({r['share']:.1%}; {r['skipped']} skipped in all)")
+        for r in resources:
+            if not r["ok"]:
+                lines.append(f"  resource: {json.dumps(r)}")
+        for b in self.recordings["broken"]:
+            lines.append(f"  recording: {b}")
         for v in self.violations[:20]:
             lines.append(f"  violation: {json.dumps(v)}")
         print("\n".join(lines), flush=True)
         result = {"seconds": round(self.elapsed, 1), "seed": self.args.seed, "pass": ok,
                   "checks": [{"check": w, "value": v, "detail": d} for w, v, d in checks],
                   "readers": kinds, "chaos": self.chaos, "resources": resources,
-                  "failures": self.failures, "violations": self.violations}
+                  "failures": self.failures, "violations": self.violations, "deliveries": deliveries,
+                  "publish_gaps": self.publish_gaps, "recordings": self.recordings,
+                  "faults": sorted(self.faults), "judged": [c[0] for c in checks[:-1]],
+                  # private memory over the run, for people judging a slope: [seconds, KiB], ≤ 120 a process
+                  "memory": {name: [[round(t - self.t0, 1), kib] for t, kib in points[::max(1, len(points) // 120)]]
+                             for name, points in self.memory.items()}}
         if self.args.json:
             with open(self.args.json, "w") as f:
                 json.dump(result, f, indent=1)
@@ -621,9 +843,20 @@ def main():
     parser.add_argument("--json", help="also write the result as JSON to this file")
     parser.add_argument("--video-cameras", type=int, default=2,
                         help="cameras written by sim_replay_video (the rest by the soak writer)")
+    parser.add_argument("--image", default="1920x1200", help="the cameras' size, WxH")
+    parser.add_argument("--lean", action="store_true",
+                        help="without sim_foxglove and the DDS bridge (no root needed; the fault test)")
+    parser.add_argument("--warmup", type=float, help="seconds of warm-up before the first resource sample "
+                        "(default: 15 %% of the run, at least 20)")
+    parser.add_argument("--fault", type=lambda t: FAULTS if t == "all" else t.split(","),
+                        help="break something on purpose (the test of the soak itself): a comma list of "
+                             + ", ".join(FAULTS) + ", or all; the soak must then fail")
     args = parser.parse_args()
     if args.seconds < 40:
         parser.error("--seconds must be at least 40 (warm-up, chaos and the settled end)")
+    for f in args.fault or []:
+        if f not in FAULTS:
+            parser.error(f"--fault {f} is not one of {', '.join(FAULTS)}")
     soak = Soak(args)
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: sys.exit(130))
@@ -635,7 +868,7 @@ def main():
         for child in list(soak.children.values()):  # (a chaos thread may still add one)
             if child.alive():
                 child.proc.kill()
-        subprocess.run([soak.bin("tools/sim_rm"), "--force", *soak.streams], capture_output=True)
+        subprocess.run([soak.bin("tools/sim_rm"), "--force", *soak.streams, *soak.our_regions()], capture_output=True)
         shutil.rmtree(soak.workdir, ignore_errors=True)
     return 0 if ok else 1
 

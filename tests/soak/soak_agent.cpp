@@ -52,6 +52,37 @@ void install_stop() {
   sigaction(SIGINT, &action, nullptr);
 }
 
+// Break-it-on-purpose (tests/soak/README.md, "Faults"): SIM_SOAK_FAULT is a comma list of
+// `fault` or `fault=argument`, honoured only with SIM_SOAK_TEST_MODE=1 (soak.py --fault sets both;
+// a normal soak never breaks anything). The argument of a reader's fault is a '+' list of streams.
+std::string fault_argument(const char* fault, bool* present = nullptr) {
+  if (present != nullptr) *present = false;
+  const char* mode = std::getenv("SIM_SOAK_TEST_MODE");
+  const char* text = std::getenv("SIM_SOAK_FAULT");
+  if (mode == nullptr || std::strcmp(mode, "1") != 0 || text == nullptr) return {};
+  const std::string all = std::string(",") + text + ",";
+  const std::string key = std::string(",") + fault;
+  for (std::size_t at = all.find(key); at != std::string::npos; at = all.find(key, at + 1)) {
+    const std::size_t after = at + key.size();
+    if (all[after] != ',' && all[after] != '=') continue;
+    if (present != nullptr) *present = true;
+    if (all[after] == ',') return {};
+    return all.substr(after + 1, all.find(',', after) - after - 1);
+  }
+  return {};
+}
+
+// Whether `fault` is on for this stream (its argument lists the stream).
+bool fault_on(const char* fault, const std::string& stream) {
+  const std::string streams = fault_argument(fault);
+  for (std::size_t at = 0; at <= streams.size();) {
+    const std::size_t end = std::min(streams.find('+', at), streams.size());
+    if (streams.compare(at, end - at, stream) == 0 && end > at) return true;
+    at = end + 1;
+  }
+  return false;
+}
+
 [[noreturn]] void usage(const char* why) {
   std::fprintf(stderr,
                "sim_soak_agent: %s.\nusage: sim_soak_agent writer --stream NAME --hz H "
@@ -85,6 +116,53 @@ std::size_t frame_bytes(const WriterOptions& o, std::uint64_t capacity, std::uin
   return n * 24;
 }
 
+// The writer's own account of what it published: a line for every publish gap (two commits more
+// than 1.5 periods apart: the writer itself paused, so every reader of the stream sees nothing
+// new meanwhile) and a stats line a second. The soak tells a writer's (or the machine's) stall
+// from a reader's lost wake-up by them.
+class PublishLog {
+ public:
+  PublishLog(std::string stream, std::int64_t period_ns) : stream_(std::move(stream)), period_ns_(period_ns) {}
+  void published(std::uint64_t seq, std::int64_t at_ns) {
+    ++published_;
+    if (last_ns_ != 0) {
+      const std::int64_t gap = at_ns - last_ns_;
+      max_interval_ns_ = std::max(max_interval_ns_, gap);
+      if (2 * gap > 3 * period_ns_) {
+        std::printf("{\"kind\":\"publish_gap\",\"stream\":\"%s\",\"seq\":%" PRIu64 ",\"from_ns\":%" PRId64
+                    ",\"to_ns\":%" PRId64 ",\"gap_ms\":%.3f}\n",
+                    stream_.c_str(), seq, last_ns_, at_ns, static_cast<double>(gap) / 1e6);
+        std::fflush(stdout);
+      }
+    }
+    last_ns_ = at_ns;
+    if (at_ns - printed_ns_ > 1'000'000'000) print_stats(at_ns);
+  }
+  // A commit that took more than half a period: the frame became readable inside it, but its
+  // wake-up came only as it returned, so every sleeping reader waited for the writer meanwhile.
+  void committed(std::uint64_t seq, std::int64_t began_ns, std::int64_t returned_ns) {
+    if (2 * (returned_ns - began_ns) <= period_ns_) return;
+    std::printf("{\"kind\":\"publish_gap\",\"in_commit\":true,\"stream\":\"%s\",\"seq\":%" PRIu64
+                ",\"from_ns\":%" PRId64 ",\"to_ns\":%" PRId64 ",\"gap_ms\":%.3f}\n",
+                stream_.c_str(), seq, began_ns, returned_ns, static_cast<double>(returned_ns - began_ns) / 1e6);
+    std::fflush(stdout);
+  }
+
+ private:
+  void print_stats(std::int64_t at_ns) {
+    printed_ns_ = at_ns;
+    std::printf("{\"kind\":\"stats\",\"role\":\"writer\",\"stream\":\"%s\",\"published\":%" PRIu64
+                ",\"max_publish_interval_ms\":%.3f}\n",
+                stream_.c_str(), published_, static_cast<double>(max_interval_ns_) / 1e6);
+    std::fflush(stdout);
+  }
+
+  std::string stream_;
+  std::int64_t period_ns_;
+  std::uint64_t published_ = 0;
+  std::int64_t last_ns_ = 0, printed_ns_ = 0, max_interval_ns_ = 0;
+};
+
 int run_writer(const WriterOptions& o) {
   auto writer = sim::Writer::create({.name = o.stream, .layout = layout_of(o), .checksum = true});
   if (!writer) {
@@ -95,6 +173,15 @@ int run_writer(const WriterOptions& o) {
   for (std::size_t i = 0; i < index_words.size(); ++i) index_words[i] = soak::index_word(i);
   std::deque<std::int64_t> history;  // commit-return times, newest first
   const auto period = std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 / o.hz));
+  // The fault "stale_region": a second region under the soak's names, left behind on exit.
+  std::optional<sim::Writer> stale;
+  if (fault_on("stale_region", o.stream)) {
+    WriterOptions small;
+    small.points = 16;
+    auto w = sim::Writer::create({.name = o.stream + "_stale", .layout = layout_of(small)});
+    if (w) stale.emplace(std::move(*w));
+  }
+  PublishLog log(o.stream, period.count());
   auto next = std::chrono::steady_clock::now();
   while (!g_stop) {
     const std::uint64_t seq = writer->last_seq() + 1;
@@ -108,6 +195,7 @@ int run_writer(const WriterOptions& o) {
     next += period;
     std::this_thread::sleep_until(next);
     const auto stamp = std::chrono::system_clock::now().time_since_epoch();
+    const std::int64_t commit_began = monotonic_ns();
     if (std::move(loan).commit(size, std::chrono::duration_cast<std::chrono::nanoseconds>(stamp).count()) !=
         sim::WriteStatus::ok) {
       std::fprintf(stderr, "sim_soak_agent: the commit of frame %" PRIu64 " failed\n", seq);
@@ -116,6 +204,8 @@ int run_writer(const WriterOptions& o) {
     // Taken after commit returned (wake-ups included): never earlier than a reader could see it.
     history.push_front(monotonic_ns());
     if (history.size() > soak::kHistory) history.pop_back();
+    log.committed(seq, commit_began, history.front());
+    log.published(seq, history.front());
     if (std::chrono::steady_clock::now() > next + 10 * period) next = std::chrono::steady_clock::now();
   }
   return 0;
@@ -258,8 +348,35 @@ std::chrono::milliseconds oversleep() {
   return std::chrono::milliseconds(text ? std::atoi(text) : 0);
 }
 
+// The faults of a reader, as a transport that loses wake-ups would look to it (soak.py --fault):
+// "lost_wakeups": never woken, it finds frames only when it looks again once per 100 ms region
+// check slice; "half_frames": every other wake-up lost, the next frame's wake-up rescues it (it
+// returns one period late with the newer frame).
+struct ReaderFaults {
+  bool never_woken = false;
+  bool every_other_lost = false;
+};
+
+sim::ReadStatus faulty_wait(sim::Reader& reader, const ReaderFaults& faults, std::uint64_t& woken,
+                            std::int64_t period_ns) {
+  if (faults.never_woken) {
+    // The slice begins when the wait does, at any moment of the writer's period.
+    thread_local std::uint64_t state = static_cast<std::uint64_t>(monotonic_ns());
+    state = soak::mix(state);
+    std::this_thread::sleep_for(std::chrono::nanoseconds(static_cast<std::int64_t>(state % soak::kRegionCheckSliceNs)));
+    return reader.wait(0ms);
+  }
+  const auto status = reader.wait(1s);
+  if (faults.every_other_lost && status == sim::ReadStatus::new_frame && ++woken % 2 == 0) {
+    std::this_thread::sleep_for(std::chrono::nanoseconds(period_ns + period_ns / 4));
+  }
+  return status;
+}
+
 void read_stream(StreamCheck& check, sim::WaitMode mode, bool borrow) {
   static const auto inject = oversleep();
+  const ReaderFaults faults{fault_on("lost_wakeups", check.name()), fault_on("half_frames", check.name())};
+  std::uint64_t woken = 0;
   std::vector<std::byte> buffer;
   WaitClock clock;
   while (!g_stop) {
@@ -273,7 +390,7 @@ void read_stream(StreamCheck& check, sim::WaitMode mode, bool borrow) {
       const std::uint64_t reopens_before = reader->stats().reopens;
       clock.begin(*reader, check, writer);
       if (inject.count() > 0) std::this_thread::sleep_for(inject);
-      const auto status = reader->wait(1s);
+      const auto status = faulty_wait(*reader, faults, woken, check.period_ns());
       const Wait& wait = clock.end(*reader, writer);
       if (status == sim::ReadStatus::new_frame) {
         take_frame(*reader, check, borrow, buffer, wait, reopens_before);
@@ -379,10 +496,10 @@ void print_stats(const char* role, std::deque<StreamCheck>& checks, bool final) 
     std::snprintf(text, sizeof text,
                   "%s\"%s\":{\"frames\":%" PRIu64 ",\"torn\":%" PRIu64 ",\"out_of_order\":%" PRIu64
                   ",\"missed\":%" PRIu64 ",\"timed\":%" PRIu64 ",\"untimed\":%" PRIu64
-                  ",\"overwritten\":%" PRIu64 ",\"opens\":%" PRIu64 ",\"replaced\":%" PRIu64
+                  ",\"skipped\":%" PRIu64 ",\"lost\":%" PRIu64 ",\"overwritten\":%" PRIu64 ",\"opens\":%" PRIu64 ",\"replaced\":%" PRIu64
                   ",\"worst_stall_ms\":%.3f}",
                   first ? "" : ",", check.name().c_str(), c.frames, c.torn, c.out_of_order, c.missed,
-                  c.timed, c.untimed, c.overwritten, c.reopens, c.replacements, static_cast<double>(c.worst_stall_ns) / 1e6);
+                  c.timed, c.untimed, c.skipped, c.lost, c.overwritten, c.reopens, c.replacements, static_cast<double>(c.worst_stall_ns) / 1e6);
     line += text;
     first = false;
   }
@@ -398,6 +515,18 @@ int run_readers(const std::string& mode, const std::vector<std::string>& streams
     checks.emplace_back(arg.name, arg.period_ns);
   }
   std::vector<std::thread> threads;
+  bool leak = false;
+  const std::string leak_kib = fault_argument("leak", &leak);
+  if (leak && mode == "block") {  // the fault "leak": a small steady leak, touched (so resident)
+    const long kib = leak_kib.empty() ? 64 : std::atol(leak_kib.c_str());
+    std::thread([kib] {
+      while (!g_stop) {
+        auto* lost = static_cast<char*>(std::malloc(static_cast<std::size_t>(kib) * 1024));
+        if (lost != nullptr) std::memset(lost, 0x5A, static_cast<std::size_t>(kib) * 1024);
+        std::this_thread::sleep_for(1s);
+      }
+    }).detach();
+  }
   if (mode == "waitset") {
     threads.emplace_back([&] { read_wait_set(checks); });
   } else {

@@ -122,6 +122,12 @@ struct StreamCounters {
   std::uint64_t untimed = 0;        // deliveries it could not: the publish time of the first
                                     // unseen frame unknown (a replay's frames skipped while
                                     // asleep), or the writer's process changed during the wait
+  std::uint64_t skipped = 0;        // frames the writer published that this reader never got
+                                    // (gaps in the numbering of one region's run; frames
+                                    // published while the reader was not open are not counted)
+  std::uint64_t lost = 0;           // of those, frames it slept through: skipped during a wait
+                                    // that began before they were there, not explained by the
+                                    // run delays (the rest: it was busy or kept from running)
   std::uint64_t overwritten = 0;    // borrowed frames the writer reused meanwhile (discarded)
   std::uint64_t reopens = 0;        // opened by name (first open included)
   std::uint64_t replacements = 0;   // regions replaced under the reader and followed
@@ -144,6 +150,8 @@ struct Wait {
 // of its wait (docs/protocol.md, "Waiting"): the first frame of a new region may come that much
 // later, by design.
 inline constexpr std::int64_t kRegionCheckSliceNs = 100'000'000;
+// The longest a woken reader may take, net of run delays: two periods of a 30 Hz camera.
+inline constexpr std::int64_t kLongestAllowanceNs = 66'666'667;
 
 // The order and missed-newest bookkeeping of one stream (one region incarnation at a time).
 class StreamCheck {
@@ -181,7 +189,10 @@ class StreamCheck {
     // follows it to the new region.
     const bool new_stream = info.seq <= last_seq_ && info.publish_ns > last_publish_ns_;
     if (last_seq_ != 0 && info.seq <= last_seq_ && !new_stream) report("out_of_order", info.seq, 0);
-    if (last_seq_ != 0 && info.seq > last_seq_) time_delivery(info, wait, carried_first_unseen);
+    if (last_seq_ != 0 && info.seq > last_seq_) {
+      count_skipped(info, wait);
+      time_delivery(info, wait, carried_first_unseen);
+    }
     last_seq_ = info.seq;
     last_publish_ns_ = info.publish_ns;
   }
@@ -209,6 +220,19 @@ class StreamCheck {
   }
 
  private:
+  // Frames skipped by design (the reader takes the newest: it was busy, or a loaded machine kept
+  // it or the writer from running) or slept through (lost). Lost: the wait began with nothing
+  // newer there, the delivered frame was published before the wait ended (not while the reader
+  // was already awake), the reader did not follow the stream to a new region, and the run
+  // delays and steal during the wait cover less than three quarters of the skipped frames'
+  // periods.
+  void count_skipped(const sim::FrameInfo& info, const Wait& wait) {
+    const std::uint64_t skipped = info.seq - last_seq_ - 1;
+    counters_.skipped += skipped;
+    if (skipped == 0 || wait.newer_at_start || wait.new_region || info.publish_ns > wait.end_ns) return;
+    const std::int64_t kept_from_running = wait.own_delay_ns + wait.writer_delay_ns + wait.steal_ns;
+    if (4 * kept_from_running < 3 * static_cast<std::int64_t>(skipped) * period_ns_) counters_.lost += skipped;
+  }
   void time_delivery(const sim::FrameInfo& info, const Wait& wait, std::int64_t carried) {
     std::int64_t became_readable = 0;  // when frame last_seq+1 was published
     if (wait.newer_at_start) {
@@ -229,25 +253,32 @@ class StreamCheck {
     const std::int64_t stall = wait.end_ns - std::max(wait.start_ns, became_readable) -
                                wait.own_delay_ns - wait.writer_delay_ns - wait.steal_ns;
     counters_.worst_stall_ns = std::max(counters_.worst_stall_ns, stall);
-    if (stall > allowed(wait.new_region)) report("missed", info.seq, stall, &wait);
+    if (stall > allowed(wait.new_region)) report("missed", info.seq, stall, &wait, became_readable);
   }
+  // Two periods, but never more than two camera periods: a LiDAR's 200 ms would hide a reader
+  // that is never woken and finds frames only at its 100 ms region checks.
   std::int64_t allowed(bool new_region) const {
-    return 2 * period_ns_ + (new_region ? kRegionCheckSliceNs : 0);
+    return std::min(2 * period_ns_, kLongestAllowanceNs) + (new_region ? kRegionCheckSliceNs : 0);
   }
   // One line at once (a reader killed later has told it already); for a stall, the wait's parts.
-  void report(const char* what, std::uint64_t seq, std::int64_t stall_ns, const Wait* wait = nullptr) {
+  void report(const char* what, std::uint64_t seq, std::int64_t stall_ns, const Wait* wait = nullptr,
+              std::int64_t readable_ns = 0) {
     if (what[0] == 't') ++counters_.torn;
     if (what[0] == 'o') ++counters_.out_of_order;
     if (what[0] == 'm') ++counters_.missed;
     auto ms = [](std::int64_t ns) { return static_cast<double>(ns) / 1e6; };
-    char parts[256] = "";
+    // For a stall, its moments on CLOCK_MONOTONIC (shared by every process of the machine): the
+    // soak compares them with the other readers' stalls and the writer's publish gaps.
+    char parts[384] = "";
     if (wait != nullptr) {
       std::snprintf(parts, sizeof parts,
                     ",\"wait_ms\":%.3f,\"own_run_delay_ms\":%.3f,\"writer_run_delay_ms\":%.3f,"
-                    "\"steal_ms\":%.3f,\"writer_delay_known\":%s,\"new_region\":%s",
+                    "\"steal_ms\":%.3f,\"writer_delay_known\":%s,\"new_region\":%s,\"readable_ns\":%" PRId64
+                    ",\"end_ns\":%" PRId64,
                     ms(wait->end_ns - wait->start_ns), ms(wait->own_delay_ns), ms(wait->writer_delay_ns),
                     ms(wait->steal_ns),
-                    wait->writer_delay_known ? "true" : "false", wait->new_region ? "true" : "false");
+                    wait->writer_delay_known ? "true" : "false", wait->new_region ? "true" : "false",
+                    std::max(wait->start_ns, readable_ns), wait->end_ns);
     }
     std::printf("{\"kind\":\"violation\",\"what\":\"%s\",\"stream\":\"%s\",\"seq\":%" PRIu64
                 ",\"last_seq\":%" PRIu64 ",\"stall_ms\":%.3f,\"period_ms\":%.3f%s}\n",

@@ -5,7 +5,8 @@
 
 Checks every frame it gets like the C++ readers (tests/soak/soak_frames.hpp): the pattern
 of the soak writer and the generated video, or a whole number of finite LiDAR points; sequence
-numbers always rising. One JSON line per second; SIGTERM ends it with exit 0.
+numbers always rising; a frame whose checksum fails (read_next then returns None, and the
+reader's stats count it) is torn. One JSON line per second; SIGTERM ends it with exit 0.
 """
 import json
 import signal
@@ -75,9 +76,14 @@ def read_until_gone(reader, c, stop, next_print):
             c.print(False)
             next_print[0] += 1.0
         try:
+            failures = reader.stats.checksum_failures
             frame = reader.read_next(timeout=1.0)
+            failed = reader.stats.checksum_failures - failures
         except Exception:  # region removed or invalid: reopen by name
             return
+        if failed > 0:  # read_next gives None for a frame whose checksum fails: it was torn
+            c.torn += failed
+            c.violation("torn", 0)
         if frame is None:
             if not reader.writer_alive():
                 gone_since = gone_since or time.monotonic()

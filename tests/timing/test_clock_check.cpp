@@ -327,3 +327,18 @@ TEST(ClockCheck, tolerances_are_per_stream) {
 }
 
 }  // namespace
+
+TEST(ClockCheck, a_warning_in_the_sensors_own_report_stands_beside_good_stamps) {
+  ClockCheck check;
+  Feed{}.run(check);
+  ClockStatus reported;
+  reported.source = ClockSource::pps_nmea;
+  reported.state = ClockState::locked;
+  reported.verdict = ClockVerdict::warn;
+  reported.problem = "The position packets' NMEA sentence is unreadable.";
+  const ClockStatus clock = judged(check, reported);
+  EXPECT_EQ(clock.verdict, ClockVerdict::warn);
+  EXPECT_EQ(clock.problem, reported.problem);
+  reported.verdict = ClockVerdict::ok;  // an ok report with stale words says nothing
+  EXPECT_EQ(judged(check, reported).verdict, ClockVerdict::ok);
+}

@@ -323,6 +323,100 @@ ClockStatus ClockCheck::measure(const ClockStatus& reported) const {
   return out;
 }
 
+struct ClockCheck::Findings {
+  std::optional<Finding> first;
+  ClockVerdict worst = ClockVerdict::unknown;
+  void found(ClockVerdict verdict, std::string sentence) {
+    worst = std::max(worst, verdict);
+    if (!first) first = Finding{verdict, std::move(sentence)};
+  }
+};
+
+bool ClockCheck::recent(const Event& e) const noexcept {
+  return e.recent && saturating_sub(last_arrival_ns_, e.arrival_ns) <= kRecentNs;
+}
+
+void ClockCheck::judge_offset(const ClockStatus& out, const ClockStatus& reported, const ClockStatus& host,
+                              const std::string& against, Findings& findings) const {
+  const bool host_stamps = reported.stamps == StampClock::host_arrival;
+  const std::int64_t latest_sensor = sample_count_ != 0 || !have_held_ ? last_sensor_ns_ : held_sensor_ns_;
+  const std::int64_t offset = *out.offset_to_host_ns;
+  const std::string off = ahead_or_behind(offset) + " " + against;
+  const Whole tai = nearest_whole(offset, kTaiUtcNs);
+  const bool is_tai = (tai.count == 1 || tai.count == -1) && tai.off_by <= 500'000'000;
+  if (is_tai && tai.count == 1) {
+    findings.found(ClockVerdict::error,
+                   "The sensor's clock is 37 s ahead of " + against + " (" + duration_text(magnitude(offset)) +
+                       "): TAI (the PTP timescale) against UTC; set the UTC offset on the grandmaster or in "
+                       "the driver, or use --tai-correction.");
+  } else if (is_tai) {
+    findings.found(ClockVerdict::error,
+                   "The sensor's clock is 37 s behind " + against + " (" + duration_text(magnitude(offset)) +
+                       "): a TAI-to-UTC correction applied to a clock already in UTC, or a host keeping "
+                       "TAI; drop the correction, or set the host's UTC offset (phc2sys -O).");
+  } else if (latest_sensor < kYear2000Ns && beyond(offset, tolerance_.offset_error_ns)) {
+    findings.found(ClockVerdict::error,
+                   "The sensor's stamps are in 1970 (time since power-on, " +
+                       duration_text(magnitude(latest_sensor)) +
+                       "): its clock was never set; synchronise it (PTP, or GPS and PPS) or stamp with "
+                       "host time.");
+  } else if (reported.state == ClockState::locked && host.state == ClockState::locked &&
+             beyond(offset, tolerance_.offset_error_ns)) {
+    findings.found(ClockVerdict::error,
+                   "The sensor says its clock is locked but its stamps are " + off +
+                       ", which is synchronised too: they follow different grandmasters or PTP domains; "
+                       "put both on the same grandmaster and domain.");
+  }
+  if (recent(steps_)) {
+    std::string sentence = "The sensor's clock stepped by " + signed_duration(steps_.size_ns) + " at " +
+                           utc_text(steps_.arrival_ns);
+    if (beyond(offset, tolerance_.offset_ok_ns)) sentence += " and its stamps are now " + off;
+    findings.found(ClockVerdict::warn, sentence + "; look for a resynchronisation (PTP, GPS), a clock set "
+                                                  "by hand or a sensor restart.");
+  }
+  if (beyond(offset, tolerance_.offset_error_ns)) {
+    findings.found(ClockVerdict::error, offset_sentence(offset, against));
+  } else if (beyond(offset, tolerance_.offset_ok_ns)) {
+    findings.found(ClockVerdict::warn,
+                   "The sensor's stamps are " + off + ", more than the " +
+                       duration_text(magnitude(tolerance_.offset_ok_ns)) +
+                       " tolerated; synchronise its clock, or widen the tolerance if this is the sensor's "
+                       "own latency.");
+  }
+  if (!host_stamps && std::fabs(out.drift_ppm) > tolerance_.drift_warn_ppm) {
+    findings.found(ClockVerdict::warn,
+                   "The sensor's clock drifts " + std::string(out.drift_ppm < 0 ? "-" : "+") +
+                       fixed(std::fabs(out.drift_ppm), 0) + " ppm against " + against + " (" +
+                       duration_text(static_cast<std::uint64_t>(std::fabs(out.drift_ppm) * 3.6e6)) +
+                       " an hour): a free-running clock; synchronise it (PTP, or GPS and PPS).");
+  }
+}
+
+void ClockCheck::judge_stamps(const ClockStatus& out, const ClockStatus& reported, const std::string& against,
+                              Findings& findings) const {
+  const bool host_stamps = reported.stamps == StampClock::host_arrival;
+  if (!host_stamps && beyond(out.spread_ns, tolerance_.spread_warn_ns)) {
+    findings.found(ClockVerdict::warn,
+                   "The sensor's stamps scatter by " + duration_text(magnitude(out.spread_ns)) +
+                       " around their offset to " + against + ", more than the " +
+                       duration_text(magnitude(tolerance_.spread_warn_ns)) +
+                       " tolerated; look for a congested network or a busy host, or widen the tolerance.");
+  }
+  if (recent(future_)) {
+    findings.found(ClockVerdict::warn,
+                   "Some of the sensor's stamps lie in the future, up to " +
+                       duration_text(magnitude(future_.worst_ns)) + " ahead of their arrival on " + against +
+                       ": its clock jumps ahead now and then; check its synchronisation.");
+  }
+  if (recent(backwards_)) {
+    findings.found(ClockVerdict::warn,
+                   "The sensor's stamps went backwards (" + std::to_string(backwards_.count) +
+                       " times, by up to " + duration_text(magnitude(backwards_.worst_ns)) +
+                       "): its clock was set back or its packets come from two clocks; check its "
+                       "synchronisation.");
+  }
+}
+
 ClockStatus ClockCheck::judge(const ClockStatus& reported, const ClockStatus& host,
                               std::int64_t now_realtime_ns) {
   ClockStatus out = measure(reported);
@@ -333,103 +427,26 @@ ClockStatus ClockCheck::judge(const ClockStatus& reported, const ClockStatus& ho
   out.verdict = ClockVerdict::unknown;
   out.problem.clear();
 
-  const bool replayed = reported.source == ClockSource::replayed;
-  const bool host_stamps = reported.stamps == StampClock::host_arrival;
-  const std::string against = replayed ? "the recording host" : "this host";
-  const std::int64_t latest_sensor = sample_count_ != 0 || !have_held_ ? last_sensor_ns_ : held_sensor_ns_;
-  const auto recent = [&](const Event& e) {
-    return e.recent && saturating_sub(last_arrival_ns_, e.arrival_ns) <= kRecentNs;
-  };
-
-  std::optional<Finding> first;
-  ClockVerdict worst = ClockVerdict::unknown;
-  const auto found = [&](ClockVerdict verdict, std::string sentence) {
-    worst = std::max(worst, verdict);
-    if (!first) first = Finding{verdict, std::move(sentence)};
-  };
-
-  if (out.offset_to_host_ns) {
-    const std::int64_t offset = *out.offset_to_host_ns;
-    const std::string off = ahead_or_behind(offset) + " " + against;
-    const Whole tai = nearest_whole(offset, kTaiUtcNs);
-    const bool is_tai = (tai.count == 1 || tai.count == -1) && tai.off_by <= 500'000'000;
-    if (is_tai && tai.count == 1) {
-      found(ClockVerdict::error,
-            "The sensor's clock is 37 s ahead of " + against + " (" + duration_text(magnitude(offset)) +
-                "): TAI (the PTP timescale) against UTC; set the UTC offset on the grandmaster or in "
-                "the driver, or use --tai-correction.");
-    } else if (is_tai) {
-      found(ClockVerdict::error,
-            "The sensor's clock is 37 s behind " + against + " (" + duration_text(magnitude(offset)) +
-                "): a TAI-to-UTC correction applied to a clock already in UTC, or a host keeping "
-                "TAI; drop the correction, or set the host's UTC offset (phc2sys -O).");
-    } else if (latest_sensor < kYear2000Ns && beyond(offset, tolerance_.offset_error_ns)) {
-      found(ClockVerdict::error,
-            "The sensor's stamps are in 1970 (time since power-on, " +
-                duration_text(magnitude(latest_sensor)) +
-                "): its clock was never set; synchronise it (PTP, or GPS and PPS) or stamp with "
-                "host time.");
-    } else if (reported.state == ClockState::locked && host.state == ClockState::locked &&
-               beyond(offset, tolerance_.offset_error_ns)) {
-      found(ClockVerdict::error,
-            "The sensor says its clock is locked but its stamps are " + off +
-                ", which is synchronised too: they follow different grandmasters or PTP domains; "
-                "put both on the same grandmaster and domain.");
-    }
-    if (recent(steps_)) {
-      std::string sentence = "The sensor's clock stepped by " + signed_duration(steps_.size_ns) +
-                             " at " + utc_text(steps_.arrival_ns);
-      if (beyond(offset, tolerance_.offset_ok_ns)) sentence += " and its stamps are now " + off;
-      found(ClockVerdict::warn, sentence + "; look for a resynchronisation (PTP, GPS), a clock set "
-                                           "by hand or a sensor restart.");
-    }
-    if (beyond(offset, tolerance_.offset_error_ns)) {
-      found(ClockVerdict::error, offset_sentence(offset, against));
-    } else if (beyond(offset, tolerance_.offset_ok_ns)) {
-      found(ClockVerdict::warn,
-            "The sensor's stamps are " + off + ", more than the " +
-                duration_text(magnitude(tolerance_.offset_ok_ns)) +
-                " tolerated; synchronise its clock, or widen the tolerance if this is the sensor's "
-                "own latency.");
-    }
-    if (!host_stamps && std::fabs(out.drift_ppm) > tolerance_.drift_warn_ppm) {
-      found(ClockVerdict::warn,
-            "The sensor's clock drifts " + std::string(out.drift_ppm < 0 ? "-" : "+") +
-                fixed(std::fabs(out.drift_ppm), 0) + " ppm against " + against + " (" +
-                duration_text(static_cast<std::uint64_t>(std::fabs(out.drift_ppm) * 3.6e6)) +
-                " an hour): a free-running clock; synchronise it (PTP, or GPS and PPS).");
-    }
+  // The order of the findings is the order of the sentences: the first one found is the problem.
+  const std::string against = reported.source == ClockSource::replayed ? "the recording host" : "this host";
+  Findings findings;
+  if (out.offset_to_host_ns) judge_offset(out, reported, host, against, findings);
+  if (auto state = state_finding(reported)) findings.found(state->verdict, std::move(state->sentence));
+  // What the report itself warns of (an unreadable NMEA sentence, a clock the camera cannot
+  // name, a sensor that did not answer) stands beside what the stamps show.
+  if (reported.verdict >= ClockVerdict::warn && !reported.problem.empty()) {
+    findings.found(reported.verdict, reported.problem);
   }
-  if (auto state = state_finding(reported)) found(state->verdict, std::move(state->sentence));
   if (out.offset_to_host_ns) {
-    if (!host_stamps && beyond(out.spread_ns, tolerance_.spread_warn_ns)) {
-      found(ClockVerdict::warn,
-            "The sensor's stamps scatter by " + duration_text(magnitude(out.spread_ns)) +
-                " around their offset to " + against + ", more than the " +
-                duration_text(magnitude(tolerance_.spread_warn_ns)) +
-                " tolerated; look for a congested network or a busy host, or widen the tolerance.");
-    }
-    if (recent(future_)) {
-      found(ClockVerdict::warn,
-            "Some of the sensor's stamps lie in the future, up to " +
-                duration_text(magnitude(future_.worst_ns)) + " ahead of their arrival on " +
-                against + ": its clock jumps ahead now and then; check its synchronisation.");
-    }
-    if (recent(backwards_)) {
-      found(ClockVerdict::warn,
-            "The sensor's stamps went backwards (" + std::to_string(backwards_.count) +
-                " times, by up to " + duration_text(magnitude(backwards_.worst_ns)) +
-                "): its clock was set back or its packets come from two clocks; check its "
-                "synchronisation.");
-    }
-    if (!first) {
+    judge_stamps(out, reported, against, findings);
+    if (!findings.first) {
       out.verdict = ClockVerdict::ok;
       return out;
     }
   }
-  if (first) {
-    out.verdict = worst;
-    out.problem = first->sentence;
+  if (findings.first) {
+    out.verdict = findings.worst;
+    out.problem = findings.first->sentence;
     cut_utf8(out.problem, ClockStatus::kMaxProblem);
   }
   return out;

@@ -9,6 +9,7 @@
 #include "sim/apps/camera_info_file.hpp"
 #include "sim/imaging/decoder.hpp"
 #include "sim/clock.hpp"
+#include "sim/lidar/clock_reporter.hpp"
 #include "sim/writer.hpp"
 
 namespace sim::camera {
@@ -72,6 +73,7 @@ struct AravisCapture::Impl {
   std::atomic<bool> lost{false};
   bool device_time = false;  // stamp with the camera's clock: asked for, or PTP is on
   ReportedClock reported;    // the camera's clock as last read (main thread), for any reader
+  std::optional<lidar::ClockReporter> clock_check;  // fed and ticked by the stream thread only
   std::chrono::steady_clock::time_point clock_read{};  // when it was read
   std::optional<std::uint64_t> last_frame_id;  // touched by the stream thread only
   std::atomic<std::uint64_t> published{0};
@@ -138,8 +140,11 @@ struct AravisCapture::Impl {
       bad_size.fetch_add(1, std::memory_order_relaxed);
       return;
     }
-    if (std::move(loan).commit(decoded.size, stamp > 0 ? stamp : realtime_ns(), received) == WriteStatus::ok) {
+    const std::int64_t published_stamp = stamp > 0 ? stamp : realtime_ns();
+    if (std::move(loan).commit(decoded.size, published_stamp, received) == WriteStatus::ok) {
       published.fetch_add(1, std::memory_order_relaxed);
+      clock_check->add(published_stamp, received);  // what readers get against the frame's arrival
+      clock_check->tick(*writer, received);
     }
   }
 
@@ -267,6 +272,7 @@ struct AravisCapture::Impl {
     report_clock(device);
     if (auto e = create_decoder()) return e;
     if (auto e = prepare_writer(device, first)) return e;
+    clock_check->restart();  // a camera back after a loss is a new measurement, not a step
     return start_acquisition(device);
   }
 
@@ -467,6 +473,8 @@ Expected<AravisCapture> AravisCapture::start(AravisCaptureConfig config) {
   }
   auto impl = std::make_unique<Impl>();
   impl->config = std::move(config);
+  impl->clock_check.emplace(impl->config.clock_tolerance);
+  impl->clock_check->set_sources({impl->reported, impl->config.host_clock});
   if (auto error = impl->connect()) return *error;
   return AravisCapture(std::move(impl));
 }

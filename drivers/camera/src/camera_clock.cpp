@@ -91,6 +91,13 @@ void ptp_state(const PtpReading& ptp, ClockStatus& clock) {
 
 }  // namespace
 
+timing::ClockTolerance camera_clock_tolerance() noexcept {
+  timing::ClockTolerance tolerance;
+  tolerance.offset_ok_ns = 250'000'000;
+  tolerance.spread_warn_ns = 50'000'000;
+  return tolerance;
+}
+
 std::string clock_identity_text(std::uint64_t identity) {
   std::array<unsigned, 8> b{};
   for (std::size_t i = 0; i < b.size(); ++i) b[i] = static_cast<unsigned>((identity >> (8 * (7 - i))) & 0xff);

@@ -51,11 +51,12 @@ ClockStatus v4l2_clock_status(TimestampSource timestamps, BufferClock clock, std
 }
 
 V4l2Capture::V4l2Capture(V4l2Io& io, V4l2CaptureConfig config) noexcept
-    : io_(&io), config_(std::move(config)) {
+    : io_(&io), config_(std::move(config)), clock_check_(config_.clock_tolerance) {
   ClockStatus before;
   before.source = ClockSource::host;
   if (config_.timestamps == TimestampSource::receive) before.stamps = StampClock::host_arrival;
   reported_.set(before);
+  clock_check_.set_sources({reported_, config_.host_clock});
 }
 
 void V4l2Capture::report_clock(BufferClock clock, std::int64_t received) {
@@ -127,6 +128,7 @@ std::optional<Error> V4l2Capture::connect(bool first) {
   decoder_.emplace(std::move(decoder.value()));
   format_ = *format;
   last_sequence_.reset();  // sequence numbers restart with the stream
+  clock_check_.restart();   // and the clock check's measurement: a reconnect is not a step
   last_frame_ = std::chrono::steady_clock::now();
   return std::nullopt;
 }
@@ -241,6 +243,8 @@ StepResult V4l2Capture::handle(const DeviceFrame& frame) {
       // An uncommitted loan publishes nothing, so every failure below simply returns.
       if (std::move(loan).commit(decoded.size, stamp, received) != WriteStatus::ok) return StepResult::skipped;
       ++stats_.published;
+      clock_check_.add(stamp, received);  // what readers get against the frame's arrival
+      clock_check_.tick(*writer_, received);
       return StepResult::published;
     case imaging::DecodeStatus::corrupt_input:
     case imaging::DecodeStatus::failed:

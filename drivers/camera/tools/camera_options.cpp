@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "camera_options.hpp"
 
+#include "sim/apps/host_clock_options.hpp"
 #include "sim/imaging/image_format.hpp"
 
 namespace sim::camera {
@@ -28,7 +29,8 @@ std::optional<std::string> describe(const apps::SensorOptions& options, const st
   return std::nullopt;
 }
 
-void add_clock_options(CLI::App& app, ClockToleranceOptions& o) {
+void add_clock_options(apps::CommandLine& cli, ClockToleranceOptions& o) {
+  auto& app = cli.app();
   app.add_option("--clock-offset-ok-ms", o.offset_ok_ms,
                  "how far a frame's stamp may lie from its arrival before the clock check warns: the "
                  "exposure, readout and transfer time")
@@ -36,6 +38,7 @@ void add_clock_options(CLI::App& app, ClockToleranceOptions& o) {
   app.add_option("--clock-spread-warn-ms", o.spread_warn_ms,
                  "how much that may vary from frame to frame before the clock check warns")
       ->check(CLI::Range(0.0, 999.0));
+  apps::add_host_clock_options(cli, o.host);
 }
 
 // The tolerance options into nanoseconds; the problem's sentence otherwise.
@@ -50,13 +53,6 @@ std::optional<std::string> finish_clock_options(ClockToleranceOptions& o) {
 }
 
 }  // namespace
-
-timing::ClockTolerance camera_clock_tolerance() noexcept {
-  timing::ClockTolerance tolerance;
-  tolerance.offset_ok_ns = 250'000'000;
-  tolerance.spread_warn_ns = 50'000'000;
-  return tolerance;
-}
 
 void add_v4l2_options(apps::CommandLine& cli, V4l2Options& o) {
   auto& app = cli.app();
@@ -81,7 +77,7 @@ void add_v4l2_options(apps::CommandLine& cli, V4l2Options& o) {
   app.add_option("--retry-period-ms", o.retry_period_ms,
                  "between attempts to reopen a lost device");
   app.add_flag("--checksum", o.config.checksum, "publish an XXH3 checksum with every frame");
-  add_clock_options(app, o.clock);
+  add_clock_options(cli, o.clock);
   app.add_flag("--list-formats", o.list_formats, "list the device's formats, sizes and rates");
   app.add_flag("--list-controls", o.list_controls, "list the device's controls");
   apps::add_sensor_options(cli, o.sensor, apps::SensorKind::camera);
@@ -107,6 +103,7 @@ std::optional<std::string> finish_v4l2_options(V4l2Options& o) {
   o.config.controls.clear();
   for (auto& [key, value] : pairs) o.config.controls.push_back({key, value});
   if (auto problem = finish_clock_options(o.clock)) return problem;
+  o.config.clock_tolerance = o.clock.tolerance;
   return describe(o.sensor, o.config.stream, o.config.sensor);
 }
 
@@ -139,7 +136,7 @@ void add_aravis_options(apps::CommandLine& cli, AravisOptions& o) {
   app.add_flag("--device-timestamps", o.config.device_timestamps,
                "stamp frames with the camera's clock (enable PTP on the camera)");
   app.add_option("--retry-period-ms", o.retry_period_ms, "between attempts to find a lost camera");
-  add_clock_options(app, o.clock);
+  add_clock_options(cli, o.clock);
   app.add_flag("--checksum", o.config.checksum, "publish an XXH3 checksum with every frame");
   app.add_flag("--list", o.list, "list the cameras Aravis finds and exit");
   apps::add_sensor_options(cli, o.sensor, apps::SensorKind::camera);
@@ -161,6 +158,7 @@ std::optional<std::string> finish_aravis_options(AravisOptions& o) {
   o.config.features.clear();
   if (auto problem = split_pairs(o.features, "--feature", o.config.features)) return problem;
   if (auto problem = finish_clock_options(o.clock)) return problem;
+  o.config.clock_tolerance = o.clock.tolerance;
   return describe(o.sensor, o.config.stream, o.config.sensor);
 }
 

@@ -13,20 +13,17 @@
 #include "sim/camera/aravis_capture.hpp"
 #include "sim/camera/v4l2_capture.hpp"
 #include "sim/timing/clock_check.hpp"
+#include "sim/timing/host_clock.hpp"
 
 namespace sim::camera {
 
-// What the clock check accepts of a camera: its stamp (start of exposure, or the frame's end)
-// lies before the frame's arrival by the exposure, readout and transfer, tens of milliseconds
-// that vary with the exposure. That is a camera working, not a clock error; a LiDAR's defaults
-// (10 ms offset, 5 ms spread) would warn on every camera. 250 ms offset, 50 ms spread.
-timing::ClockTolerance camera_clock_tolerance() noexcept;
-
-// --clock-offset-ok-ms and --clock-spread-warn-ms: the camera's clock tolerance.
+// --clock-offset-ok-ms and --clock-spread-warn-ms: the camera's clock tolerance
+// (camera_clock_tolerance()), and --ptp4l-socket: the host's clock the check judges against.
 struct ClockToleranceOptions {
   timing::ClockTolerance tolerance = camera_clock_tolerance();
   double offset_ok_ms = 250;
   double spread_warn_ms = 50;
+  timing::HostClockOptions host{};
 };
 
 struct V4l2Options {

@@ -1,11 +1,14 @@
 // SPDX-License-Identifier: Apache-2.0
 // sim_camera_aravis: a GigE Vision or USB3 Vision camera (through Aravis) into a SIM stream.
+#include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <memory>
 #include <string>
 
 #include "camera_options.hpp"
 #include "sim/apps/status_line.hpp"
+#include "sim/timing/host_clock.hpp"
 #include "sim/apps/stop_signal.hpp"
 #include "sim/camera/aravis_capture.hpp"
 
@@ -32,8 +35,22 @@ int main(int argc, char** argv) {
   if (auto code = cli.apply_placement(o.placement)) return *code;
   auto status = sim::apps::StatusLine::for_stderr("sim_camera_aravis", o.quiet);
   config.log = [&status](std::string_view message) { status.note(message); };
+  // The host's clock for the stream's clock check, read once a second on its own thread; started
+  // once the camera is, so a failing start says one sentence only. The check asks it from the
+  // capture's thread: through an atomic pointer.
+  std::unique_ptr<const sim::timing::HostClockWatch> host_watch;
+  std::atomic<const sim::timing::HostClockWatch*> host_clock{nullptr};
+  config.host_clock = [&host_clock] {
+    const auto* watch = host_clock.load();
+    return watch != nullptr ? watch->latest() : sim::ClockStatus{};
+  };
   auto capture = AravisCapture::start(config);
   if (!capture) return cli.fail(capture.error());
+  sim::timing::HostClockWatchOptions host_options;
+  host_options.clock = o.clock.host;
+  if (o.quiet) host_options.log = [](const std::string&) {};  // else its own lines on stderr
+  host_watch = std::make_unique<const sim::timing::HostClockWatch>(host_options);
+  host_clock.store(host_watch.get());
   if (!o.quiet) {
     status.note(capture->camera_name() + " -> " + config.stream + " (" +
                 sim::Layout::of(capture->output_layout()).describe() + ")");

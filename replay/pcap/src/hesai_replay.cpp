@@ -9,7 +9,8 @@
 
 #include "replay_clock.hpp"
 #include "replay_loop.hpp"
-#include "replays.hpp"
+#include "hesai_replay.hpp"
+#include "replay_common.hpp"
 #include "sim/apps/hesai_options.hpp"
 #include "sim/apps/sensor_options.hpp"
 #include "sim/clock.hpp"

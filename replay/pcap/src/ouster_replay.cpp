@@ -8,7 +8,8 @@
 
 #include "replay_clock.hpp"
 #include "replay_loop.hpp"
-#include "replays.hpp"
+#include "ouster_replay.hpp"
+#include "replay_common.hpp"
 #include "sim/apps/ouster_options.hpp"
 #include "sim/apps/sensor_options.hpp"
 #include "sim/clock.hpp"

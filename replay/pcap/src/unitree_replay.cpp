@@ -4,7 +4,8 @@
 #include <string>
 
 #include "replay_loop.hpp"
-#include "replays.hpp"
+#include "unitree_replay.hpp"
+#include "replay_common.hpp"
 #include "sim/apps/sensor_options.hpp"
 #include "sim/clock.hpp"
 #include "sim/unitree/sim_sink.hpp"

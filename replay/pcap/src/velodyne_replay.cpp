@@ -11,7 +11,8 @@
 
 #include "replay_clock.hpp"
 #include "replay_loop.hpp"
-#include "replays.hpp"
+#include "velodyne_replay.hpp"
+#include "replay_common.hpp"
 #include "sim/apps/sensor_options.hpp"
 #include "sim/apps/velodyne_options.hpp"
 #include "sim/clock.hpp"

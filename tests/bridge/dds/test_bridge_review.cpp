@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// The defects of the bridge's adversarial review (shared/reference/reviews/review-bridge.md),
+// The defects an adversarial review of the bridge found (the review itself is not in this repository),
 // each reproduced the way the review found it: the real bridge process, a Cyclone DDS peer with
 // the ROS 2 types from idlc, in a private network namespace.
 #include <gtest/gtest.h>

@@ -459,6 +459,18 @@ TEST_F(AravisDriver, EachPtpStateOfTheCameraReachesTheClockAccessor) {
   EXPECT_EQ(now.offset_from_master_ns, -1234);
   EXPECT_EQ(now.grandmaster, "001122.fffe.334455");
   EXPECT_EQ(now.verdict, sim::ClockVerdict::unknown) << now.problem;
+  // The stream's clock record, as the clock check writes it about once a second, says the same.
+  auto reader = open_reader();
+  ASSERT_TRUE(reader);
+  const std::function<sim::ClockStatus()> record = [&reader] {
+    auto c = reader->clock();
+    return c && c->has_value() ? **c : sim::ClockStatus{};
+  };
+  ASSERT_TRUE(clock_reaches(record, [](const sim::ClockStatus& c) { return c.state == sim::ClockState::locked; }))
+      << sim::summary(record());
+  EXPECT_EQ(record().source, sim::ClockSource::ptp);
+  EXPECT_EQ(record().grandmaster, "001122.fffe.334455");
+  EXPECT_GT(record().packets_measured, 0U);
 
   // The servo loses its lock, then the port goes faulty, then the camera becomes the master.
   set_register(camera.fake(), kPtpServo, 0);
@@ -474,8 +486,6 @@ TEST_F(AravisDriver, EachPtpStateOfTheCameraReachesTheClockAccessor) {
   EXPECT_NE(latched, 0U);  // the data set was latched before it was read
 
   // Frames kept flowing all along.
-  auto reader = open_reader();
-  ASSERT_TRUE(reader);
   std::vector<std::byte> buffer(reader->capacity());
   sim::FrameInfo info;
   ASSERT_TRUE(next_frame(*reader, buffer, info));

@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
+#include <optional>
 #include <thread>
 
 #include "fake_v4l2_device.hpp"
@@ -354,6 +355,34 @@ TEST_F(V4l2CaptureTest, AnUnknownOrCopiedBufferClockIsAWarningAndTheFramesCarryT
   ASSERT_EQ(logged.size(), 3U);
   EXPECT_EQ(logged[1].rfind("warning: ", 0), 0U) << logged[1];
   EXPECT_NE(logged[1].find("TIMESTAMP_COPY"), std::string::npos) << logged[1];
+}
+
+// The clock check writes the stream's clock record about once a second while frames come: a
+// reader sees the V4L2 clock (host, the buffers' stamps) with the frames measured against their
+// arrival, judged with the camera's tolerance.
+TEST_F(V4l2CaptureTest, TheStreamsClockRecordFollowsTheFramesAsTheyCome) {
+  config.format.width = 64;
+  config.format.height = 48;
+  auto capture = start();
+  ASSERT_TRUE(capture);
+  auto reader = open_reader();
+  std::optional<ClockStatus> record;
+  const auto deadline = std::chrono::steady_clock::now() + 60s;
+  while (!record && std::chrono::steady_clock::now() < deadline) {
+    fake.push_frame({testing::noise(64 * 48 * 2, 1), 0, false, -1});
+    ASSERT_EQ(capture->step(100ms), StepResult::published);
+    std::this_thread::sleep_for(20ms);
+    auto clock = reader.clock();
+    ASSERT_TRUE(clock) << clock.error().message;
+    record = *clock;
+  }
+  ASSERT_TRUE(record) << "no clock record within a minute of frames";
+  EXPECT_EQ(record->source, ClockSource::host);
+  EXPECT_EQ(record->stamps, StampClock::sensor);
+  EXPECT_GT(record->packets_measured, 0U);
+  ASSERT_TRUE(record->offset_to_host_ns);
+  // A buffer stamped at its dequeue (the fake's "now") lies well within a camera's tolerance.
+  EXPECT_LT(std::llabs(*record->offset_to_host_ns), camera_clock_tolerance().offset_ok_ns);
 }
 
 TEST_F(V4l2CaptureTest, ReceiveTimestampsReportTheHostsArrivalWhateverTheBuffersSay) {

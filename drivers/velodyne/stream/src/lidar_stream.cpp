@@ -40,24 +40,6 @@ TimeSync time_sync_of(const PositionReport& report) {
   return sync;
 }
 
-struct ReportedClock::State {
-  mutable std::mutex mutex;
-  ClockStatus clock;
-};
-
-ReportedClock::ReportedClock() : state_(std::make_shared<State>()) {}
-ReportedClock::ReportedClock(const ClockStatus& initial) : ReportedClock() { state_->clock = initial; }
-
-ClockStatus ReportedClock::operator()() const {
-  const std::lock_guard lock(state_->mutex);
-  return state_->clock;
-}
-
-void ReportedClock::set(const ClockStatus& clock) {
-  const std::lock_guard lock(state_->mutex);
-  state_->clock = clock;
-}
-
 namespace {
 
 // The clock record of the stamps `clock` says the stream publishes, before any position packet.

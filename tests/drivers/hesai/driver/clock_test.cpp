@@ -93,7 +93,7 @@ std::int64_t median_offset(const std::vector<Packet>& packets) {
 }
 
 // The Pandar64 tail's time: six date bytes (year − 1900, or the year of 1970 for a clock that
-// counts from power-on) and the µs (docs/hesai.md; time-sync.md §1.5).
+// counts from power-on) and the µs (docs/hesai.md).
 constexpr std::size_t p64_tail = 8 + 6 * 194;
 void write_p64_time(std::vector<std::uint8_t>& bytes, std::int64_t ns) {
   const std::time_t seconds = static_cast<std::time_t>(ns / kS);

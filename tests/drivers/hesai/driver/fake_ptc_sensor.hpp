@@ -4,7 +4,7 @@
 // misbehaves the ways a network and a sensor can (refuses, closes halfway, answers garbage,
 // stalls, says no), and answers the clock questions (0x26 PTP config, 0x09 LiDAR status, 0x06
 // PTP diagnostics 1–4) from a FakeClock the test changes while it runs. The answers are encoded
-// here from the documented layouts (big-endian; ../shared/reference/time-sync.md §1), not with
+// here from the documented layouts (big-endian, as Hesai's PTC manual gives them; docs/hesai.md), not with
 // the driver's code.
 #pragma once
 

@@ -2,7 +2,8 @@
 // A Velodyne's clock as data: a sensor stand-in sends position packets (port 8308) over loopback
 // in a private network namespace to the live receiver, and every PPS state it reports reaches
 // the receiver's clock accessor (what the clock reporter calls once a second to write the
-// stream's clock record); hostile position packets give a warning, never a crash or a lock.
+// stream's clock record) and, while data packets flow, the stream's clock record a reader sees;
+// hostile position packets give a warning, never a crash or a lock.
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
@@ -10,6 +11,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
 #include <functional>
 #include <optional>
@@ -166,6 +168,47 @@ TEST_F(VelodyneClock, HostilePositionPacketsGiveAWarningAndTheReceiverGoesOn) {
     return c.state == sim::ClockState::locked && c.verdict == sim::ClockVerdict::unknown;
   })) << clock().problem;
   EXPECT_GE(receiver->stream()->published().position_malformed, 1U);
+}
+
+// What a reader of the stream sees: the clock record, which the clock check writes about once a
+// second while data packets arrive, follows every PPS state the position packets report.
+TEST_F(VelodyneClock, EveryPpsStateReachesTheStreamsClockRecord) {
+  // The sensor's data packets, stamped with this host's µs past the hour, one a millisecond.
+  std::atomic<bool> feeding{true};
+  std::thread feeder([&] {
+    velodyne_test::DataPacket packet;
+    std::uint16_t azimuth = 0;
+    while (feeding.load()) {
+      for (auto& block : packet.blocks) {
+        block.azimuth = azimuth;
+        azimuth = static_cast<std::uint16_t>((azimuth + 20) % 36000);
+      }
+      packet.timestamp_us = static_cast<std::uint32_t>((sim::realtime_ns() / 1000) % 3'600'000'000);
+      send_to(receiver->data_port(), packet.bytes());
+      std::this_thread::sleep_for(1ms);
+    }
+  });
+  auto reader = sim::Reader::open(stream);
+  ASSERT_TRUE(reader) << reader.error().message;
+  const std::function<sim::ClockStatus()> record = [&reader] {
+    auto clock = reader->clock();
+    return clock && clock->has_value() ? **clock : sim::ClockStatus{};
+  };
+  struct Step {
+    std::uint8_t pps;
+    sim::ClockState state;
+  };
+  for (const Step step : {Step{1, sim::ClockState::acquiring}, Step{2, sim::ClockState::locked},
+                          Step{0, sim::ClockState::free_running}, Step{3, sim::ClockState::holdover},
+                          Step{2, sim::ClockState::locked}}) {
+    const auto packet = velodyne_test::position_packet(at_35_20, step.pps, gprmc);
+    EXPECT_TRUE(send_until(packet, record, [&](const sim::ClockStatus& c) { return c.state == step.state; }))
+        << "PPS " << int{step.pps} << " never reached the stream's record: " << sim::summary(record());
+    EXPECT_EQ(record().source, sim::ClockSource::pps_nmea);
+    EXPECT_EQ(record().stamps, sim::StampClock::sensor);
+  }
+  feeding.store(false);
+  feeder.join();
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <string>
 
 #include "sim/clock_status.hpp"
 
@@ -74,8 +75,17 @@ class ClockCheck {
     void add(std::int64_t size, std::int64_t arrival, std::int64_t sensor) noexcept;
   };
 
+  struct Findings;  // the sentences found while judging, and the worst verdict among them
+
   void close_second() noexcept;
   ClockStatus measure(const ClockStatus& reported) const;
+  // judge()'s two halves: what the offset, its steps and drift say (against `against`, "this
+  // host" or "the recording host"), and what the single stamps say (spread, future, backwards).
+  void judge_offset(const ClockStatus& measured, const ClockStatus& reported, const ClockStatus& host,
+                    const std::string& against, Findings& findings) const;
+  void judge_stamps(const ClockStatus& measured, const ClockStatus& reported, const std::string& against,
+                    Findings& findings) const;
+  bool recent(const Event& event) const noexcept;
 
   ClockTolerance tolerance_;
   std::uint64_t packets_ = 0;

@@ -50,6 +50,11 @@ struct AravisCaptureConfig {
   std::optional<SensorInfo> sensor;
   std::chrono::milliseconds retry_period{1000};
   std::function<void(std::string_view)> log;
+  // The clock check: each frame's stamp against its arrival (Aravis's host stamp of its first
+  // packet), judged with the reported clock (reported_clock()) and the host's (`host_clock`;
+  // empty: unknown) and written to the stream's clock record about once a second.
+  timing::ClockTolerance clock_tolerance = camera_clock_tolerance();
+  std::function<ClockStatus()> host_clock;
 };
 
 struct AravisStats {

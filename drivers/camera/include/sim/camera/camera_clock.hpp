@@ -10,42 +10,23 @@
 #pragma once
 
 #include <cstdint>
-#include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
 
 #include "sim/clock_status.hpp"
+#include "sim/timing/clock_check.hpp"
+#include "sim/timing/reported_clock.hpp"
 
 namespace sim::camera {
 
-// The clock a capture last reported, shared with a reader on another thread: a clock reporter
-// that judges and writes the stream's clock record once a second takes it as its
-// std::function<ClockStatus()>. Copies share one state, so a copy stays valid when the capture
-// moves or goes away.
-class ReportedClock {
- public:
-  ReportedClock() : state_(std::make_shared<State>()) {}
-  // Copies only (a move copies too), so no handle is ever left without its state.
-  ReportedClock(const ReportedClock&) = default;
-  ReportedClock& operator=(const ReportedClock&) = default;
+// The clock a capture last reported, for the clock check on another thread.
+using timing::ReportedClock;
 
-  ClockStatus operator()() const {
-    const std::lock_guard lock(state_->mutex);
-    return state_->clock;
-  }
-  void set(const ClockStatus& clock) {
-    const std::lock_guard lock(state_->mutex);
-    state_->clock = clock;
-  }
-
- private:
-  struct State {
-    mutable std::mutex mutex;
-    ClockStatus clock;
-  };
-  std::shared_ptr<State> state_;
-};
+// What the clock check accepts of a camera: its stamp (start of exposure, or the frame's end)
+// lies before the frame's arrival by the exposure, readout and transfer, tens of milliseconds
+// that vary with the exposure. That is a camera working, not a clock error; a LiDAR's defaults
+// (10 ms offset, 5 ms spread) would warn on every camera. 250 ms offset, 50 ms spread.
+timing::ClockTolerance camera_clock_tolerance() noexcept;
 
 // What a GenICam camera says of its PTP clock: the SFNC features (PtpEnable, PtpStatus,
 // PtpServoStatus, PtpOffsetFromMaster, PtpGrandmasterClockID) or their older GigE Vision names

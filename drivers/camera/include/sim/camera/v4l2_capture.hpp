@@ -16,6 +16,7 @@
 #include "sim/camera/camera_clock.hpp"
 #include "sim/camera/clock_mapping.hpp"
 #include "sim/imaging/decoder.hpp"
+#include "sim/lidar/clock_reporter.hpp"
 #include "sim/camera/v4l2_device.hpp"
 #include "sim/camera/v4l2_io.hpp"
 #include "sim/result.hpp"
@@ -53,6 +54,11 @@ struct V4l2CaptureConfig {
   std::optional<SensorInfo> sensor;
   // Status messages (device lost, reconnected, …); none when empty.
   std::function<void(std::string_view)> log;
+  // The clock check: each frame's stamp against its arrival, judged with the reported clock
+  // (reported_clock()) and the host's (`host_clock`; empty: unknown) and written to the stream's
+  // clock record about once a second, within a camera's tolerance.
+  timing::ClockTolerance clock_tolerance = camera_clock_tolerance();
+  std::function<ClockStatus()> host_clock;
 };
 
 struct CaptureStats {
@@ -136,6 +142,7 @@ class V4l2Capture {
   CaptureStats stats_{};
   MonotonicToRealtime clock_;
   ReportedClock reported_;
+  lidar::ClockReporter clock_check_;
   std::optional<BufferClock> reported_for_;  // the buffers' clock of the last report
   std::int64_t reported_at_ = 0;             // CLOCK_REALTIME of the last report
   std::optional<std::uint32_t> last_sequence_;

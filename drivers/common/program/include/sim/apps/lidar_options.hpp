@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-// The options every LiDAR stream ends with, in each family's options (apps/hesai,
-// apps/velodyne, apps/ouster) and so in both of its programs (the live driver and
+// The options every LiDAR stream ends with, in each family's options (drivers/hesai,
+// drivers/velodyne, drivers/ouster: program/) and so in both of its programs (the live driver and
 // sim_replay_pcap): --checksum, --lock-memory, the sensor description options and
 // --cpu/--rt-priority, declared and applied once.
 #pragma once

@@ -19,6 +19,7 @@
 #include "sim/lidar/frame_publisher.hpp"
 #include "sim/result.hpp"
 #include "sim/sensor_info.hpp"
+#include "sim/timing/reported_clock.hpp"
 #include "sim/velodyne/velodyne.hpp"
 #include "sim/writer.hpp"
 
@@ -65,24 +66,8 @@ struct TimeSync {
 };
 TimeSync time_sync_of(const PositionReport& report);
 
-// The clock a stream's position packets last reported (sim::ClockStatus, see
-// position_clock.hpp), shared with a reader on another thread: a clock reporter that judges and
-// writes the stream's clock record once a second takes it as its std::function<ClockStatus()>.
-// Copies share one state, so a copy stays valid when the stream moves or goes away.
-class ReportedClock {
- public:
-  ReportedClock();
-  explicit ReportedClock(const ClockStatus& initial);
-  // Copies only (a move copies too), so no handle is ever left without its state.
-  ReportedClock(const ReportedClock&) = default;
-  ReportedClock& operator=(const ReportedClock&) = default;
-  ClockStatus operator()() const;
-  void set(const ClockStatus& clock);
-
- private:
-  struct State;
-  std::shared_ptr<State> state_;
-};
+// What the position packets last said of the sensor's clock, for the clock check on another thread.
+using timing::ReportedClock;
 
 class LidarStream {
  public:

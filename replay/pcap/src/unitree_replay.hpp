@@ -1,0 +1,9 @@
+// SPDX-License-Identifier: Apache-2.0
+// sim_replay_pcap's Unitree family: what replay_main.cpp calls.
+#pragma once
+
+namespace sim::pcap {
+
+int run_unitree_replay(int argc, char** argv);
+
+}  // namespace sim::pcap
