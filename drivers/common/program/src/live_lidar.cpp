@@ -43,8 +43,7 @@ void add_receive_options(CommandLine& cli, LiveReceiveOptions& o, lidar::IpVersi
   app.add_option("--stamp-fallback", o.stamp_fallback,
                  "host: while the sensor's clock is judged in error (or not judged yet), stamp frames "
                  "with their arrival on this host instead, and say so in the clock record and each "
-                 "frame; back to the sensor's stamps when it is not [off]")
-      ->type_name("off|host")
+                 "frame; back to the sensor's stamps when it is not")
       ->check(CLI::IsMember({"off", "host"}));
 }
 
