@@ -22,6 +22,7 @@
 #include <fstream>
 #include <iterator>
 
+#include "sim/clock.hpp"
 #include "sim/clock_status.hpp"
 #include "sim/reader.hpp"
 #include "sim/unitree/decoder.hpp"
@@ -236,6 +237,49 @@ TEST(UnitreeDriver, L2OverLoopbackUdp) {
   EXPECT_EQ(driver.wait(kTimeout), 0);
   EXPECT_EQ(read_file(record), sender.sent);  // exactly what came off the wire
   std::filesystem::remove(record);
+}
+
+// --sensor-time live: each packet's L2 time against its arrival on this host. Stamps an hour
+// behind the host's clock are found and said, on both streams.
+TEST(UnitreeDriver, SensorTimeIsMeasuredAgainstTheArrival) {
+  StreamGuard guard;
+  const std::string stream = unique_name("sensortime");
+  guard.names = {stream, stream + ".imu"};
+  Process driver({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", "0", "--bind-address",
+                  "127.0.0.1", "--stream", stream, "--scan-packets", "3", "--sensor-time", "-q"});
+  const auto line = driver.next_line(kTimeout);
+  ASSERT_TRUE(line.has_value()) << driver.err();
+  unsigned port = 0;
+  ASSERT_EQ(std::sscanf(line->c_str(), "listening on udp port %u", &port), 1) << *line;
+  auto points = open_reader(stream);
+  auto imu = open_reader(stream + ".imu");
+  ASSERT_TRUE(points && imu);
+
+  constexpr std::int64_t kHourNs = 3600LL * 1'000'000'000;
+  UdpSender sender(static_cast<std::uint16_t>(port));
+  for (std::uint32_t i = 0; i < 6; ++i) {
+    const std::int64_t sensor = sim::realtime_ns() - kHourNs;
+    L2PointSpec spec = l2_packet_spec(i);
+    spec.stamp_sec = static_cast<std::uint32_t>(sensor / 1'000'000'000);
+    spec.stamp_nsec = static_cast<std::uint32_t>(sensor % 1'000'000'000);
+    L2ImuSpec imu_packet = imu_spec();
+    imu_packet.stamp_sec = spec.stamp_sec;
+    imu_packet.stamp_nsec = spec.stamp_nsec;
+    sender.send(concat({l2_point_packet(spec), l2_imu_packet(imu_packet)}));
+  }
+  for (const sim::Reader* reader : {&*points, &*imu}) {
+    const auto clock = wait_for_clock(*reader);
+    ASSERT_TRUE(clock) << "no clock record";
+    EXPECT_EQ(clock->stamps, sim::StampClock::sensor);
+    EXPECT_NE(clock->source, sim::ClockSource::host);
+    ASSERT_TRUE(clock->offset_to_host_ns);
+    // An hour behind, give or take the time a datagram takes over loopback on a busy machine.
+    EXPECT_NEAR(static_cast<double>(*clock->offset_to_host_ns), static_cast<double>(-kHourNs), 1e9);
+    EXPECT_EQ(clock->verdict, sim::ClockVerdict::error);
+    EXPECT_NE(clock->problem.find("1 h behind"), std::string::npos) << clock->problem;
+  }
+  driver.signal(SIGTERM);
+  EXPECT_EQ(driver.wait(kTimeout), 0) << driver.err();
 }
 
 // A pseudo-terminal pair stands in for the serial port: the driver opens the slave side by name.
@@ -654,6 +698,37 @@ TEST(UnitreeReplayPcap, SensorTimeIsMeasuredAgainstTheCaptureTimes) {
   sim::FrameInfo info;
   ASSERT_EQ(points->read_next(buffer, info, kTimeout), sim::ReadStatus::new_frame);
   EXPECT_GE((info.stamp_ns - kCaptureStartNs) % kCapturePeriodNs, 2'000'000);
+  std::filesystem::remove(file);
+}
+
+// --sensor-time --restamp: the L2's times moved to the present, judged as this host's time.
+TEST(UnitreeReplayPcap, RestampedSensorTimeIsJudgedAsHostTime) {
+  const std::string file = temp_path("restampsensor") + ".pcap";
+  std::vector<Bytes> payloads;
+  for (std::uint32_t i = 0; i < 30; ++i) {
+    // The L2 counted from power-on: 1970 stamps, which --restamp moves to the present.
+    L2PointSpec spec = l2_packet_spec(i);
+    spec.stamp_sec = 100;
+    spec.stamp_nsec = i * static_cast<std::uint32_t>(kCapturePeriodNs);
+    payloads.push_back(l2_point_packet(spec));
+  }
+  write_udp_capture(file, payloads);
+  StreamGuard guard;
+  const std::string stream = unique_name("pcaprestamp");
+  guard.names = {stream, stream + ".imu"};
+  Process replay({SIM_REPLAY_PCAP_PATH, file, "--model", "unitree-l2", "--stream", stream,
+                  "--scan-packets", "3", "--sensor-time", "--restamp", "-q"});
+  ASSERT_EQ(replay.wait(kTimeout), 0) << replay.err();
+  auto reader = open_reader(stream);
+  ASSERT_TRUE(reader);
+  const auto clock = wait_for_clock(*reader);
+  ASSERT_TRUE(clock);
+  EXPECT_EQ(clock->source, sim::ClockSource::host);
+  EXPECT_EQ(clock->stamps, sim::StampClock::host_arrival);
+  ASSERT_TRUE(clock->offset_to_host_ns);
+  // Paced as captured, measured against the present: off by the pacing only, not by 56 years.
+  EXPECT_LT(std::abs(*clock->offset_to_host_ns), 1'000'000'000);
+  EXPECT_EQ(clock->problem.find("1970"), std::string::npos) << clock->problem;
   std::filesystem::remove(file);
 }
 
