@@ -37,6 +37,8 @@ class PacedSink final : public sim::unitree::ScanSink {
     s.stamp_ns = sim::realtime_ns();
     inner_.imu(s);
   }
+  // Stamped with this host's clock when published: host time, judged as such.
+  void packet_time(std::int64_t, std::int64_t host_ns) override { inner_.packet_time(host_ns, host_ns); }
 
  private:
   sim::unitree::ScanSink& inner_;
@@ -87,13 +89,14 @@ sim::unitree::SimSinkOptions sink_options(const Options& o, const sim::SensorInf
   sink.max_points = sim::unitree::Decoder::max_points_per_scan(decoder);
   sink.sensor = sim::unitree::describe_sensor(described, decoder);
   sim::apps::describe_stamped_on_publish(*sink.sensor);
+  sink.clock_base = sim::lidar::ClockBase::restamped;  // host time: source host, stamps host_arrival
   return sink;
 }
 
 // Feeds the recording to the decoder in chunks until its end or a stop, with the share read on
 // the status line.
 void replay_bytes(std::ifstream& in, std::uintmax_t total, sim::unitree::Decoder& decoder,
-                  const sim::unitree::SimScanSink& sink, sim::apps::StatusLine& status,
+                  sim::unitree::SimScanSink& sink, sim::apps::StatusLine& status,
                   const sim::apps::StopSignal& stop) {
   std::vector<char> chunk(16384);
   std::uint64_t done = 0;
@@ -102,6 +105,7 @@ void replay_bytes(std::ifstream& in, std::uintmax_t total, sim::unitree::Decoder
     const auto n = static_cast<std::size_t>(in.gcount());
     if (n == 0) break;
     decoder.push(std::as_bytes(std::span(chunk).first(n)), sim::realtime_ns());
+    sink.tick_clock(sim::realtime_ns());
     done += n;
     status.update(sim::apps::number(total ? 100.0 * static_cast<double>(done) /
                                                 static_cast<double>(total)
@@ -142,6 +146,7 @@ int main(int argc, char** argv) {
   auto status = sim::apps::StatusLine::for_stderr("sim_replay_serial", o.quiet);
   replay_bytes(in, total, decoder, **sink, status, stop);
   if (!stop.requested()) decoder.finish();
+  (*sink)->tick_clock(sim::realtime_ns(), true);  // even a short recording leaves its verdict
   const auto counters = decoder.counters();
   status.finish(sim::unitree::format_status(counters, (*sink)->counters()));
   if (counters.framing.packets == 0 && !stop.requested()) {

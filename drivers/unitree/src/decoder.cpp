@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cctype>
 
+#include "sim/clock.hpp"
 #include "sim/unitree/bytes.hpp"
 #include "sim/unitree/l2_protocol.hpp"
 
@@ -132,6 +133,10 @@ DecoderCounters Decoder::counters() const noexcept {
   return c;
 }
 
+std::int64_t Decoder::stamp_of(std::int64_t sensor_ns, std::int64_t host_ns) const noexcept {
+  return options_.time_source == TimeSource::host ? host_ns : saturating_add_ns(sensor_ns, stamp_offset_ns_);
+}
+
 void Decoder::on_l2_packet(std::span<const std::byte> packet, std::int64_t host_ns) noexcept {
   const std::uint32_t type = le::u32(packet, 4);
   if (type == l2::imu) {
@@ -140,7 +145,8 @@ void Decoder::on_l2_packet(std::span<const std::byte> packet, std::int64_t host_
       ++counters_.malformed;
       return;
     }
-    if (options_.time_source == TimeSource::host) sample->stamp_ns = host_ns;
+    sample->stamp_ns = stamp_of(sample->stamp_ns, host_ns);
+    sink_.packet_time(sample->stamp_ns, host_ns);
     ++counters_.imu_samples;
     sink_.imu(*sample);
     return;
@@ -164,7 +170,8 @@ void Decoder::on_l2_packet(std::span<const std::byte> packet, std::int64_t host_
   }
   last_seq_ = header->seq;
 
-  const std::int64_t stamp = options_.time_source == TimeSource::host ? host_ns : header->stamp_ns;
+  const std::int64_t stamp = stamp_of(header->stamp_ns, host_ns);
+  sink_.packet_time(stamp, host_ns);
   // Offsets within a scan always come from the sensor's clock: host receive times of packets in
   // one burst of datagrams say nothing about when they were measured.
   const std::span<LidarPoint> room = assembler_.begin_packet(stamp, header->stamp_ns, host_ns);
@@ -185,7 +192,8 @@ void Decoder::on_l2_2d_packet(std::span<const std::byte> packet, std::int64_t ho
   // One 2D packet is one whole planar scan: it never joins a 3D scan (a work-mode change
   // drops a half-assembled 3D scan).
   assembler_.abandon();
-  const std::int64_t stamp = options_.time_source == TimeSource::host ? host_ns : header->stamp_ns;
+  const std::int64_t stamp = stamp_of(header->stamp_ns, host_ns);
+  sink_.packet_time(stamp, host_ns);
   const std::span<LidarPoint> room = assembler_.begin_packet(stamp, header->stamp_ns, host_ns);
   const l2::DecodeLimits limits{options_.range_min_m, options_.range_max_m};
   const l2::DecodeResult result = l2::decode_2d_points(packet, *header, limits, 0, room);
@@ -212,6 +220,7 @@ void Decoder::on_l1_message(const MavlinkMessage& message, std::int64_t host_ns)
       std::optional<ImuSample> sample = l1::parse_imu(message.payload);
       if (sample) {
         sample->stamp_ns = host_ns;  // the L1 sends no time with its IMU
+        sink_.packet_time(host_ns, host_ns);
         ++counters_.imu_samples;
         sink_.imu(*sample);
       }
@@ -237,6 +246,7 @@ void Decoder::on_l1_message(const MavlinkMessage& message, std::int64_t host_ns)
 }
 
 void Decoder::decode_l1_pair(std::int64_t host_ns) noexcept {
+  sink_.packet_time(host_ns, host_ns);  // the L1 sends no time: its stamps are host time
   const std::span<LidarPoint> room = assembler_.begin_packet(host_ns, 0, host_ns);
   const std::uint32_t base = clamp_offset(std::int64_t{assembler_.packets_in_scan()} *
                                           l1::kPointsPerPacket * kL1PointPeriodNs);

@@ -13,6 +13,11 @@ std::string default_imu_stream(std::string_view points_stream) {
   return std::string(points_stream) + ".imu";
 }
 
+lidar::ClockBase stream_clock_base(const DecoderOptions& options, lidar::ClockBase sensor_base) noexcept {
+  const bool sensor_stamps = options.model == Model::l2 && options.time_source == TimeSource::sensor;
+  return sensor_stamps ? sensor_base : lidar::ClockBase::restamped;
+}
+
 SensorInfo describe_sensor(SensorInfo info, const DecoderOptions& options) {
   info.identity.vendor = "Unitree";
   info.identity.model = options.model == Model::l1 ? "L1" : "L2";
@@ -55,8 +60,17 @@ Expected<std::unique_ptr<SimScanSink>> SimScanSink::create(const SimSinkOptions&
     if (!imu_writer) return imu_writer.error();
     imu.emplace(std::move(imu_writer.value()));
   }
-  return std::unique_ptr<SimScanSink>(
+  auto sink = std::unique_ptr<SimScanSink>(
       new SimScanSink(std::move(points.value()), std::move(imu), options.max_points));
+  sink->clock_.set_base(options.clock_base);
+  return sink;
+}
+
+std::optional<ClockStatus> SimScanSink::tick_clock(std::int64_t now_realtime_ns, bool at_once) {
+  std::optional<ClockStatus> clock = clock_.tick(points_, now_realtime_ns, at_once);
+  // The IMU packets come from the same clock: the same record.
+  if (clock && imu_) lidar::write_clock(*imu_, *clock);
+  return clock;
 }
 
 SimScanSink::SimScanSink(Writer points, std::optional<Writer> imu,
@@ -101,6 +115,7 @@ Expected<std::unique_ptr<UnitreeStream>> UnitreeStream::create(
   }
   sink_options.max_points = Decoder::max_points_per_scan(options.decoder);
   sink_options.checksum = options.checksum;
+  sink_options.clock_base = stream_clock_base(options.decoder, options.sensor_clock_base);
   if (options.sensor) sink_options.sensor = describe_sensor(*options.sensor, options.decoder);
   auto sink = SimScanSink::create(sink_options);
   if (!sink) return sink.error();

@@ -18,11 +18,13 @@
 #include <string>
 
 #include "sim/apps/command_line.hpp"
+#include "sim/apps/host_clock_options.hpp"
 #include "sim/apps/sensor_options.hpp"
 #include "sim/apps/status_line.hpp"
 #include "sim/apps/stop_signal.hpp"
 #include "sim/clock.hpp"
 #include "sim/result.hpp"
+#include "sim/timing/host_clock.hpp"
 #include "sim/unitree/decoder.hpp"
 #include "sim/unitree/sim_sink.hpp"
 
@@ -49,6 +51,7 @@ struct Options {
   bool quiet = false;
   bool udp_port_given = false;
   sim::ThreadPlacement placement;
+  sim::timing::HostClockOptions host_clock;  // --ptp4l-socket
   sim::apps::SensorOptions sensor;   // --frame-id, --parent-frame, --x … --yaw
   sim::SensorInfo sensor_info;       // what they describe, checked before anything is opened
 };
@@ -67,7 +70,11 @@ class Pipeline {
       record_->write(reinterpret_cast<const char*>(bytes.data()),
                      static_cast<std::streamsize>(bytes.size()));
     }
-    stream_->push(bytes, sim::realtime_ns());
+    // The arrival of the bytes: the stamp of host-time scans, and what the L2's own clock is
+    // measured against; the clock record is written about once a second.
+    const std::int64_t arrival = sim::realtime_ns();
+    stream_->push(bytes, arrival);
+    stream_->tick_clock(arrival);
   }
 
  private:
@@ -272,11 +279,12 @@ void start_reading(const Options& opt, const sim::apps::CommandLine& cli, asio::
   }
 }
 
-// Runs the sources until a stop (or a failed serial port stops `io`), redrawing the status line
-// and flushing the recording once a second.
+// Runs the sources until a stop (or a failed serial port stops `io`), redrawing the status line,
+// writing the clock record (also when packets stop coming) and flushing the recording once a
+// second.
 void run_until_stopped(asio::io_context& io, const sim::apps::StopSignal& stop,
                        sim::apps::StatusLine& status, const std::function<std::string()>& status_text,
-                       std::ofstream& record) {
+                       sim::unitree::UnitreeStream& stream, std::ofstream& record) {
   // The stop signal's descriptor ends io.run() like any other event.
   asio::posix::stream_descriptor stop_events(io, ::dup(stop.fd()));
   stop_events.async_wait(asio::posix::stream_descriptor::wait_read,
@@ -289,6 +297,7 @@ void run_until_stopped(asio::io_context& io, const sim::apps::StopSignal& stop,
     status_timer.async_wait([&](const boost::system::error_code& ec) {
       if (ec) return;
       status.update(status_text());
+      stream.tick_clock(sim::realtime_ns());
       if (record.is_open()) record.flush();
       tick();
     });
@@ -317,6 +326,15 @@ int run(const Options& opt, const sim::apps::CommandLine& cli) {
   if (auto opened = open_recording(opt.record_path, record); !opened) {
     return cli.fail(opened.error());
   }
+  // The host's synchronisation (ptp4l, the kernel), read on its own thread: the clock record
+  // judges the stamps against it.
+  sim::timing::HostClockWatchOptions watch_options;
+  watch_options.clock = opt.host_clock;
+  if (opt.quiet) watch_options.log = [](const std::string&) {};
+  sim::timing::HostClockWatch host_clock(watch_options);
+  sim::lidar::ClockSources clock_sources;
+  clock_sources.host = [&host_clock] { return host_clock.latest(); };
+  (*stream)->clock().set_sources(std::move(clock_sources));
   pipeline.attach(**stream, record.is_open() ? &record : nullptr);
 
   int exit_code = sim::apps::kExitOk;
@@ -329,7 +347,7 @@ int run(const Options& opt, const sim::apps::CommandLine& cli) {
     }
     return line;
   };
-  run_until_stopped(io, stop, status, status_text, record);
+  run_until_stopped(io, stop, status, status_text, **stream, record);
   (*stream)->finish();
   if (record.is_open()) record.flush();
   status.finish(status_text());
@@ -373,6 +391,7 @@ int main(int argc, char** argv) {
   app.add_flag("--checksum", opt.checksum, "publish frames with an XXH3 checksum");
   app.add_flag("-q,--quiet", opt.quiet, "no status line and no summary");
   sim::apps::add_sensor_options(cli, opt.sensor, sim::apps::SensorKind::lidar);
+  sim::apps::add_host_clock_options(cli, opt.host_clock);
   cli.add_placement(opt.placement);
   if (auto code = cli.parse(argc, argv)) return *code;
   opt.udp_port_given = udp_port->count() > 0;

@@ -215,6 +215,33 @@ TEST(UnitreeL2Decoder, SensorTimeStamps) {
   EXPECT_EQ(sink.scans[0].receive_ns, 5) << "host time of the scan's first packet, beside the sensor's";
 }
 
+// What the clock check gets: each packet's stamp (the L2's time, moved on by a replay's stamp
+// offset) with the host time its bytes came with; in host mode the stamp is that host time.
+TEST(UnitreeL2Decoder, EveryTimedPacketGivesItsStampAndArrivalToTheSink) {
+  for (const TimeSource source : {TimeSource::sensor, TimeSource::host}) {
+    DecoderOptions options;
+    options.packets_per_scan = 2;
+    options.time_source = source;
+    VectorSink sink(Decoder::max_points_per_scan(options));
+    Decoder decoder(options, sink);
+    decoder.set_stamp_offset(1'000);
+    L2ImuSpec imu;
+    imu.stamp_sec = 1700000000;
+    imu.stamp_nsec = 500;
+    decoder.push(concat({l2_point_packet(full_packet(0, 1700000000, 250)), l2_imu_packet(imu)}), 5);
+    decoder.push(l2_point_packet(full_packet(1, 1700000000, 900)), 6);
+    using Times = std::vector<std::pair<std::int64_t, std::int64_t>>;
+    const std::int64_t s = 1'700'000'000'000'000'000LL;
+    if (source == TimeSource::sensor) {
+      EXPECT_EQ(sink.packet_times, (Times{{s + 1'250, 5}, {s + 1'500, 5}, {s + 1'900, 6}}));
+      EXPECT_EQ(sink.scans.at(0).stamp_ns, s + 1'250);
+      EXPECT_EQ(sink.imu_samples.at(0).stamp_ns, s + 1'500);
+    } else {
+      EXPECT_EQ(sink.packet_times, (Times{{5, 5}, {5, 5}, {6, 6}}));
+    }
+  }
+}
+
 TEST(UnitreeL2Decoder, SequenceGapsAreCounted) {
   DecoderOptions options;
   VectorSink sink(Decoder::max_points_per_scan(options));

@@ -13,13 +13,17 @@
 #include <termios.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <thread>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 
+#include "sim/clock.hpp"
+#include "sim/clock_status.hpp"
 #include "sim/reader.hpp"
 #include "sim/unitree/decoder.hpp"
 #include "sim_test/process.hpp"
@@ -125,6 +129,32 @@ std::optional<sim::Reader> open_reader(const std::string& name) {
   return std::move(reader.value());
 }
 
+// The stream's clock record, once the writer has written one (about a second after its first
+// packet); nullopt when none came within the generous bound.
+std::optional<sim::ClockStatus> wait_for_clock(const sim::Reader& reader) {
+  const auto deadline = std::chrono::steady_clock::now() + kTimeout;
+  while (std::chrono::steady_clock::now() < deadline) {
+    auto clock = reader.clock();
+    if (!clock) {
+      ADD_FAILURE() << clock.error().message;
+      return std::nullopt;
+    }
+    if (*clock) return **clock;
+    std::this_thread::sleep_for(20ms);
+  }
+  return std::nullopt;
+}
+
+// Host-time stamps: the record says so, and finds nothing wrong with them.
+void expect_host_time_clock(const sim::Reader& reader) {
+  const auto clock = wait_for_clock(reader);
+  ASSERT_TRUE(clock) << "no clock record";
+  EXPECT_EQ(clock->source, sim::ClockSource::host);
+  EXPECT_EQ(clock->stamps, sim::StampClock::host_arrival);
+  EXPECT_EQ(clock->verdict, sim::ClockVerdict::ok) << clock->problem;
+  EXPECT_GT(clock->packets_measured, 0U);
+}
+
 class UdpSender {
  public:
   explicit UdpSender(std::uint16_t port) : fd_(socket(AF_INET, SOCK_DGRAM, 0)) {
@@ -199,11 +229,57 @@ TEST(UnitreeDriver, L2OverLoopbackUdp) {
   // Scan 2: three packets merged into one datagram.
   sender.send(concat({packets[3], packets[4], packets[5]}));
   expect_frame(*points, expected[1], 2);
+  // Host-time stamps (no --sensor-time): written on the driver's once-a-second tick.
+  expect_host_time_clock(*points);
+  expect_host_time_clock(*imu);
 
   driver.signal(SIGTERM);
   EXPECT_EQ(driver.wait(kTimeout), 0);
   EXPECT_EQ(read_file(record), sender.sent);  // exactly what came off the wire
   std::filesystem::remove(record);
+}
+
+// --sensor-time live: each packet's L2 time against its arrival on this host. Stamps an hour
+// behind the host's clock are found and said, on both streams.
+TEST(UnitreeDriver, SensorTimeIsMeasuredAgainstTheArrival) {
+  StreamGuard guard;
+  const std::string stream = unique_name("sensortime");
+  guard.names = {stream, stream + ".imu"};
+  Process driver({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", "0", "--bind-address",
+                  "127.0.0.1", "--stream", stream, "--scan-packets", "3", "--sensor-time", "-q"});
+  const auto line = driver.next_line(kTimeout);
+  ASSERT_TRUE(line.has_value()) << driver.err();
+  unsigned port = 0;
+  ASSERT_EQ(std::sscanf(line->c_str(), "listening on udp port %u", &port), 1) << *line;
+  auto points = open_reader(stream);
+  auto imu = open_reader(stream + ".imu");
+  ASSERT_TRUE(points && imu);
+
+  constexpr std::int64_t kHourNs = 3600LL * 1'000'000'000;
+  UdpSender sender(static_cast<std::uint16_t>(port));
+  for (std::uint32_t i = 0; i < 6; ++i) {
+    const std::int64_t sensor = sim::realtime_ns() - kHourNs;
+    L2PointSpec spec = l2_packet_spec(i);
+    spec.stamp_sec = static_cast<std::uint32_t>(sensor / 1'000'000'000);
+    spec.stamp_nsec = static_cast<std::uint32_t>(sensor % 1'000'000'000);
+    L2ImuSpec imu_packet = imu_spec();
+    imu_packet.stamp_sec = spec.stamp_sec;
+    imu_packet.stamp_nsec = spec.stamp_nsec;
+    sender.send(concat({l2_point_packet(spec), l2_imu_packet(imu_packet)}));
+  }
+  for (const sim::Reader* reader : {&*points, &*imu}) {
+    const auto clock = wait_for_clock(*reader);
+    ASSERT_TRUE(clock) << "no clock record";
+    EXPECT_EQ(clock->stamps, sim::StampClock::sensor);
+    EXPECT_NE(clock->source, sim::ClockSource::host);
+    ASSERT_TRUE(clock->offset_to_host_ns);
+    // An hour behind, give or take the time a datagram takes over loopback on a busy machine.
+    EXPECT_NEAR(static_cast<double>(*clock->offset_to_host_ns), static_cast<double>(-kHourNs), 1e9);
+    EXPECT_EQ(clock->verdict, sim::ClockVerdict::error);
+    EXPECT_NE(clock->problem.find("1 h behind"), std::string::npos) << clock->problem;
+  }
+  driver.signal(SIGTERM);
+  EXPECT_EQ(driver.wait(kTimeout), 0) << driver.err();
 }
 
 // A pseudo-terminal pair stands in for the serial port: the driver opens the slave side by name.
@@ -402,6 +478,7 @@ TEST(UnitreeReplaySerial, ReplaysARecordingThroughTheSameDecoder) {
   ASSERT_TRUE(described && *described);
   EXPECT_EQ((*described)->time_base, sim::TimeBase::host);
   EXPECT_EQ((*described)->time_sync, "replayed, stamped with this host's clock when published");
+  expect_host_time_clock(*points);
   auto imu_status = sim::inspect(stream + ".imu");
   ASSERT_TRUE(imu_status.has_value());
   EXPECT_EQ(imu_status->frames_published, 1U);
@@ -559,6 +636,156 @@ TEST(UnitreeReplayPcap, TheStreamsSayWhichClockTheirStampsAreWithAndWithoutResta
       ASSERT_TRUE(described && *described) << name;
       EXPECT_EQ((*described)->time_base, sim::TimeBase::host) << name;
       EXPECT_EQ((*described)->time_sync, expected.time_sync) << name << ", restamp " << expected.restamp;
+    }
+  }
+  std::filesystem::remove(file);
+}
+
+constexpr std::int64_t kCaptureStartNs = 1'700'000'000LL * 1'000'000'000;  // write_udp_capture's
+constexpr std::int64_t kCapturePeriodNs = 4'000'000;
+
+// With --sensor-time the L2's own clock is measured against the capture's time of each record:
+// the record's offset is what the test computes from the packets' times and the capture's.
+TEST(UnitreeReplayPcap, SensorTimeIsMeasuredAgainstTheCaptureTimes) {
+  const std::string file = temp_path("sensorclock") + ".pcap";
+  std::vector<Bytes> payloads;
+  std::vector<std::int64_t> offsets;  // sensor − capture of each packet
+  for (std::uint32_t i = 0; i < 30; ++i) {
+    const std::int64_t offset = 2'000'000 + (i % 3) * 100'000;  // 2.0 … 2.2 ms ahead
+    const std::int64_t sensor = kCaptureStartNs + i * kCapturePeriodNs + offset;
+    offsets.push_back(offset);
+    if (i % 10 == 9) {
+      L2ImuSpec imu = imu_spec();
+      imu.stamp_sec = static_cast<std::uint32_t>(sensor / 1'000'000'000);
+      imu.stamp_nsec = static_cast<std::uint32_t>(sensor % 1'000'000'000);
+      payloads.push_back(l2_imu_packet(imu));
+      continue;
+    }
+    L2PointSpec spec = l2_packet_spec(i);
+    spec.stamp_sec = static_cast<std::uint32_t>(sensor / 1'000'000'000);
+    spec.stamp_nsec = static_cast<std::uint32_t>(sensor % 1'000'000'000);
+    payloads.push_back(l2_point_packet(spec));
+  }
+  write_udp_capture(file, payloads);
+  std::vector<std::int64_t> sorted = offsets;
+  std::sort(sorted.begin(), sorted.end());
+  const std::int64_t median = sorted[sorted.size() / 2];
+
+  StreamGuard guard;
+  const std::string stream = unique_name("pcapsensor");
+  guard.names = {stream, stream + ".imu"};
+  Process replay({SIM_REPLAY_PCAP_PATH, file, "--model", "unitree-l2", "--stream", stream,
+                  "--scan-packets", "3", "--max-rate", "--sensor-time", "-q"});
+  ASSERT_EQ(replay.wait(kTimeout), 0) << replay.err();
+  for (const std::string& name : guard.names) {
+    auto reader = open_reader(name);
+    ASSERT_TRUE(reader) << name;
+    const auto clock = wait_for_clock(*reader);
+    ASSERT_TRUE(clock) << name << ": no clock record";
+    EXPECT_EQ(clock->source, sim::ClockSource::replayed) << name;
+    EXPECT_EQ(clock->stamps, sim::StampClock::sensor) << name;
+    ASSERT_TRUE(clock->offset_to_host_ns) << name;
+    // The check keeps a decimated sample: within the packets' own spread of the median.
+    EXPECT_NEAR(static_cast<double>(*clock->offset_to_host_ns), static_cast<double>(median), 100'000.0)
+        << name;
+    EXPECT_EQ(clock->verdict, sim::ClockVerdict::ok) << name << ": " << clock->problem;
+    EXPECT_EQ(clock->packets_measured, payloads.size()) << name;
+  }
+  // The frames carry the sensor's time (2.0 … 2.2 ms past a capture time), not the capture's.
+  auto points = open_reader(stream);
+  ASSERT_TRUE(points);
+  std::vector<std::byte> buffer(points->capacity());
+  sim::FrameInfo info;
+  ASSERT_EQ(points->read_next(buffer, info, kTimeout), sim::ReadStatus::new_frame);
+  EXPECT_GE((info.stamp_ns - kCaptureStartNs) % kCapturePeriodNs, 2'000'000);
+  std::filesystem::remove(file);
+}
+
+// --sensor-time --restamp: the L2's times moved to the present, judged as this host's time.
+TEST(UnitreeReplayPcap, RestampedSensorTimeIsJudgedAsHostTime) {
+  const std::string file = temp_path("restampsensor") + ".pcap";
+  std::vector<Bytes> payloads;
+  for (std::uint32_t i = 0; i < 30; ++i) {
+    // The L2 counted from power-on: 1970 stamps, which --restamp moves to the present.
+    L2PointSpec spec = l2_packet_spec(i);
+    spec.stamp_sec = 100;
+    spec.stamp_nsec = i * static_cast<std::uint32_t>(kCapturePeriodNs);
+    payloads.push_back(l2_point_packet(spec));
+  }
+  write_udp_capture(file, payloads);
+  StreamGuard guard;
+  const std::string stream = unique_name("pcaprestamp");
+  guard.names = {stream, stream + ".imu"};
+  Process replay({SIM_REPLAY_PCAP_PATH, file, "--model", "unitree-l2", "--stream", stream,
+                  "--scan-packets", "3", "--sensor-time", "--restamp", "-q"});
+  ASSERT_EQ(replay.wait(kTimeout), 0) << replay.err();
+  auto reader = open_reader(stream);
+  ASSERT_TRUE(reader);
+  const auto clock = wait_for_clock(*reader);
+  ASSERT_TRUE(clock);
+  EXPECT_EQ(clock->source, sim::ClockSource::host);
+  EXPECT_EQ(clock->stamps, sim::StampClock::host_arrival);
+  ASSERT_TRUE(clock->offset_to_host_ns);
+  // Paced as captured, measured against the present: off by the pacing only, not by 56 years.
+  EXPECT_LT(std::abs(*clock->offset_to_host_ns), 1'000'000'000);
+  EXPECT_EQ(clock->problem.find("1970"), std::string::npos) << clock->problem;
+  std::filesystem::remove(file);
+}
+
+// A sensor clock an hour behind the capture: the record says so (an error), in sensor-time mode.
+TEST(UnitreeReplayPcap, ASensorClockAnHourOffIsAnError) {
+  const std::string file = temp_path("hourclock") + ".pcap";
+  std::vector<Bytes> payloads;
+  for (std::uint32_t i = 0; i < 9; ++i) {
+    const std::int64_t sensor = kCaptureStartNs + i * kCapturePeriodNs - 3600LL * 1'000'000'000;
+    L2PointSpec spec = l2_packet_spec(i);
+    spec.stamp_sec = static_cast<std::uint32_t>(sensor / 1'000'000'000);
+    spec.stamp_nsec = static_cast<std::uint32_t>(sensor % 1'000'000'000);
+    payloads.push_back(l2_point_packet(spec));
+  }
+  write_udp_capture(file, payloads);
+  StreamGuard guard;
+  const std::string stream = unique_name("pcaphour");
+  guard.names = {stream, stream + ".imu"};
+  Process replay({SIM_REPLAY_PCAP_PATH, file, "--model", "unitree-l2", "--stream", stream,
+                  "--scan-packets", "3", "--max-rate", "--sensor-time", "-q"});
+  ASSERT_EQ(replay.wait(kTimeout), 0) << replay.err();
+  auto reader = open_reader(stream);
+  ASSERT_TRUE(reader);
+  const auto clock = wait_for_clock(*reader);
+  ASSERT_TRUE(clock);
+  ASSERT_TRUE(clock->offset_to_host_ns);
+  EXPECT_EQ(*clock->offset_to_host_ns, -3600LL * 1'000'000'000);
+  EXPECT_EQ(clock->verdict, sim::ClockVerdict::error);
+  EXPECT_NE(clock->problem.find("1 h behind"), std::string::npos) << clock->problem;
+  std::filesystem::remove(file);
+}
+
+// Host-time stamps (the capture's times, or this host's with --restamp): source host, stamps
+// host_arrival, nothing wrong with them; on the IMU stream too.
+TEST(UnitreeReplayPcap, HostTimeStampsHaveAHostClockRecord) {
+  const std::string file = temp_path("hostclock") + ".pcap";
+  std::vector<Bytes> payloads;
+  for (std::uint32_t i = 0; i < 9; ++i) payloads.push_back(l2_point_packet(l2_packet_spec(i)));
+  payloads.push_back(l2_imu_packet(imu_spec()));
+  write_udp_capture(file, payloads);
+  for (const bool restamp : {false, true}) {
+    StreamGuard guard;
+    const std::string stream = unique_name("pcaphost");
+    guard.names = {stream, stream + ".imu"};
+    std::vector<std::string> argv{SIM_REPLAY_PCAP_PATH, file, "--model", "unitree-l2", "--stream", stream,
+                                  "--scan-packets", "3", "-q"};
+    if (restamp) argv.push_back("--restamp");
+    Process replay(argv);
+    ASSERT_EQ(replay.wait(kTimeout), 0) << replay.err();
+    for (const std::string& name : guard.names) {
+      SCOPED_TRACE(name + (restamp ? " --restamp" : ""));
+      auto reader = open_reader(name);
+      ASSERT_TRUE(reader);
+      expect_host_time_clock(*reader);
+      const auto clock = wait_for_clock(*reader);
+      ASSERT_TRUE(clock && clock->offset_to_host_ns);
+      EXPECT_EQ(*clock->offset_to_host_ns, 0);  // each stamp is its arrival
     }
   }
   std::filesystem::remove(file);

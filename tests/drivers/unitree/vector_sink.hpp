@@ -7,6 +7,8 @@
 #include <span>
 #include <vector>
 
+#include <utility>
+
 #include "sim/unitree/decoder.hpp"
 
 namespace unitree_test {
@@ -29,8 +31,12 @@ class VectorSink : public sim::unitree::ScanSink {
                      stamp_ns, receive_ns});
   }
   void imu(const sim::unitree::ImuSample& sample) override { imu_samples.push_back(sample); }
+  void packet_time(std::int64_t stamp_ns, std::int64_t host_ns) override {
+    packet_times.emplace_back(stamp_ns, host_ns);
+  }
 
   std::vector<Scan> scans;
+  std::vector<std::pair<std::int64_t, std::int64_t>> packet_times;  // (stamp, host) per packet
   std::vector<sim::unitree::ImuSample> imu_samples;
   int begun = 0;
 

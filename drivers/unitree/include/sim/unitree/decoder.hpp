@@ -36,6 +36,13 @@ class ScanSink {
   // receive_ns: host receive time (CLOCK_REALTIME) of the scan's first packet.
   virtual void end_scan(std::size_t points, std::int64_t stamp_ns, std::int64_t receive_ns) = 0;
   virtual void imu(const ImuSample& sample) = 0;
+  // Every packet that carries a time (L2 points, 2D points and IMU; L1 point pairs and IMU): the
+  // time it is stamped with (the L2's own clock with TimeSource::sensor, else `host_ns`) and the
+  // host time its bytes arrived with. For the stream's clock check; ignored by default.
+  virtual void packet_time(std::int64_t stamp_ns, std::int64_t host_ns) {
+    static_cast<void>(stamp_ns);
+    static_cast<void>(host_ns);
+  }
 };
 
 enum class TimeSource {
@@ -113,12 +120,19 @@ class Decoder {
   DecoderCounters counters() const noexcept;
   const DecoderOptions& options() const noexcept { return options_; }
 
+  // Added to the L2's own stamps (TimeSource::sensor): a replay moves them on by each --loop, or
+  // to the present with --restamp. Host stamps are given with the bytes and never moved here.
+  void set_stamp_offset(std::int64_t offset_ns) noexcept { stamp_offset_ns_ = offset_ns; }
+  std::int64_t stamp_offset() const noexcept { return stamp_offset_ns_; }
+
  private:
   void drain(std::int64_t host_ns) noexcept;
   void on_l2_packet(std::span<const std::byte> packet, std::int64_t host_ns) noexcept;
   void on_l2_2d_packet(std::span<const std::byte> packet, std::int64_t host_ns) noexcept;
   void on_l1_message(const MavlinkMessage& message, std::int64_t host_ns) noexcept;
   void decode_l1_pair(std::int64_t host_ns) noexcept;
+  // The stamp of a packet with the sensor time `sensor_ns`, as TimeSource says.
+  std::int64_t stamp_of(std::int64_t sensor_ns, std::int64_t host_ns) const noexcept;
 
   DecoderOptions options_;
   ScanSink& sink_;
@@ -126,6 +140,7 @@ class Decoder {
   L2Framer l2_framer_;
   MavlinkFramer l1_framer_;
   DecoderCounters counters_;
+  std::int64_t stamp_offset_ns_ = 0;
   std::optional<std::uint32_t> last_seq_;
   std::optional<l1::DistancePacket> l1_distance_;
   std::optional<l1::AuxiliaryPacket> l1_aux_;
