@@ -347,8 +347,9 @@ void ClockCheck::judge_offset(const ClockStatus& out, const ClockStatus& reporte
   if (is_tai && tai.count == 1) {
     findings.found(ClockVerdict::error,
                    "The sensor's clock is 37 s ahead of " + against + " (" + duration_text(magnitude(offset)) +
-                       "): TAI (the PTP timescale) against UTC; set the UTC offset on the grandmaster or in "
-                       "the driver, or use --tai-correction.");
+                       "): TAI (the PTP timescale) against UTC; set the UTC offset on the grandmaster, or "
+                       "correct it in the driver (sim_lidar_ouster --tai-correction auto) or stamp with "
+                       "host time (--stamp-fallback host).");
   } else if (is_tai) {
     findings.found(ClockVerdict::error,
                    "The sensor's clock is 37 s behind " + against + " (" + duration_text(magnitude(offset)) +
