@@ -15,8 +15,8 @@ namespace {
 
 // type_description_interfaces/msg/FieldType ids. A fixed array adds 48, an unbounded sequence 144.
 enum FieldTypeId : int {
-  nested = 1, uint8 = 3, int32 = 6, uint32 = 7, float64 = 11, boolean = 15, string = 17,
-  bounded_string = 21,
+  nested = 1, uint8 = 3, int32 = 6, uint32 = 7, float64 = 11, boolean = 15, byte_ = 16,
+  string = 17, bounded_string = 21,
 };
 constexpr int array_of(int id) { return id + 48; }
 constexpr int sequence_of(int id) { return id + 144; }
@@ -44,6 +44,8 @@ constexpr std::string_view transform_t = "geometry_msgs/msg/Transform";
 constexpr std::string_view transform_stamped_t = "geometry_msgs/msg/TransformStamped";
 constexpr std::string_view gid_t = "rmw_dds_common/msg/Gid";
 constexpr std::string_view node_entities_t = "rmw_dds_common/msg/NodeEntitiesInfo";
+constexpr std::string_view key_value_t = "diagnostic_msgs/msg/KeyValue";
+constexpr std::string_view diagnostic_status_t = "diagnostic_msgs/msg/DiagnosticStatus";
 
 // The fields of each type as its .msg file declares them (common_interfaces, geometry2,
 // rmw_dds_common); default values do not enter the hash.
@@ -89,6 +91,14 @@ constexpr FieldDescription node_entities_fields[] = {
 constexpr FieldDescription participant_entities_fields[] = {
     {"gid", nested, 0, 0, gid_t},
     {"node_entities_info_seq", sequence_of(nested), 0, 0, node_entities_t}};
+// diagnostic_msgs: DiagnosticStatus's constants (OK … STALE) do not enter the hash.
+constexpr FieldDescription key_value_fields[] = {{"key", string}, {"value", string}};
+constexpr FieldDescription diagnostic_status_fields[] = {
+    {"level", byte_}, {"name", string}, {"message", string}, {"hardware_id", string},
+    {"values", sequence_of(nested), 0, 0, key_value_t}};
+constexpr FieldDescription diagnostic_array_fields[] = {
+    {"header", nested, 0, 0, header_t},
+    {"status", sequence_of(nested), 0, 0, diagnostic_status_t}};
 
 constexpr TypeDescription types[] = {
     {time_t_, time_fields},
@@ -107,6 +117,9 @@ constexpr TypeDescription types[] = {
     {gid_t, gid_fields},
     {node_entities_t, node_entities_fields},
     {"rmw_dds_common/msg/ParticipantEntitiesInfo", participant_entities_fields},
+    {key_value_t, key_value_fields},
+    {diagnostic_status_t, diagnostic_status_fields},
+    {"diagnostic_msgs/msg/DiagnosticArray", diagnostic_array_fields},
 };
 
 const TypeDescription* find_type(std::string_view name) {

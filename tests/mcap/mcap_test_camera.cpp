@@ -33,6 +33,10 @@ int main(int argc, char** argv) {
   app.add_flag("--calibrated", calibrated,
                "describe the sensor: frame test_camera_optical on base_link, the calibration of "
                "test_frames.hpp (test_calibration)");
+  bool clock = false;
+  app.add_flag("--clock", clock,
+               "report a clock: test_camera_clock(false) from the start, test_camera_clock(true) "
+               "from the middle frame on (test_frames.hpp)");
   CLI11_PARSE(app, argc, argv);
 
   const auto layout = sim::ImageLayout::packed(width, height, sim::PixelFormat::bgr8);
@@ -43,6 +47,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "mcap_test_camera: %s\n", writer.error().message.c_str());
     return 1;
   }
+  if (clock && !writer->set_clock(sim::testing::test_camera_clock(false))) return 1;
   std::printf("ready\n");
   std::fflush(stdout);
   while (wait_for_reader) {
@@ -57,6 +62,9 @@ int main(int argc, char** argv) {
     const std::int64_t due = start + static_cast<std::int64_t>(i) * period;
     const timespec ts{static_cast<time_t>(due / 1'000'000'000), static_cast<long>(due % 1'000'000'000)};
     clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+    if (clock && frames > 0 && i == frames / 2 && !writer->set_clock(sim::testing::test_camera_clock(true))) {
+      return 1;
+    }
     sim::Loan loan = writer->loan();
     if (noise) {
       sim::testing::fill_noise(loan.bytes().first(layout.frame_bytes()), i);

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <span>
 
+#include "sim/clock_status.hpp"
 #include "sim/sensor_info.hpp"
 
 namespace sim::testing {
@@ -57,6 +58,34 @@ inline SensorInfo test_camera_sensor(std::uint32_t width, std::uint32_t height) 
   c.p = {405.25, 0, width / 2.0, 0, 0, 406.75, height / 2.0, 0, 0, 0, 1, 0};
   info.calibration = c;
   return info;
+}
+
+// The clocks mcap_test_camera --clock sets: `fixed` false before its middle frame (a TAI clock
+// 37 s ahead, an error), true from it on (the driver's TAI correction applied, ok). Every field
+// is set, so a restored record that lost one differs.
+inline ClockStatus test_camera_clock(bool fixed) {
+  ClockStatus c;
+  c.source = ClockSource::ptp;
+  c.state = ClockState::locked;
+  c.ptp_domain = 0;
+  c.offset_from_master_ns = -42;
+  c.path_delay_ns = 1'500;
+  c.grandmaster = "00a069.fffe.0b552d";
+  c.utc_offset_s = 37;
+  c.ptp_timescale = true;
+  c.reported_ns = 1'700'000'000'123'456'789;
+  c.spread_ns = 3'000;
+  c.drift_ppm = 0.1 + 0.2;
+  c.steps = 1;
+  c.last_step_ns = -1'000;
+  c.packets_measured = 4'321;
+  c.measured_ns = 1'700'000'000'987'654'321;
+  c.tai_correction_ns = fixed ? 37'000'000'000 : 0;
+  c.offset_to_host_ns = fixed ? 12'000 : 37'000'012'000;
+  c.stamps = fixed ? StampClock::sensor_tai_corrected : StampClock::sensor;
+  c.verdict = fixed ? ClockVerdict::ok : ClockVerdict::error;
+  c.problem = fixed ? "" : "stamps are 37 s ahead of this host: the sensor serves TAI";
+  return c;
 }
 
 }  // namespace sim::testing

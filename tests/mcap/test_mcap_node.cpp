@@ -235,6 +235,58 @@ TEST(SensorMetadataInMcap, FoxgloveReadsTheCalibrationBesideEveryImageLatchedTra
   EXPECT_EQ(sensor->calibration->width, 64u);
 }
 
+// Issue 30: each change of a stream's clock is one DiagnosticArray on /diagnostics, which
+// Foxglove's libraries read, and sim_play gives the played stream the clock record back.
+TEST(ClockInMcap, FoxgloveReadsEachClockChangeOnDiagnosticsAndSimPlayRestoresTheRecord) {
+  sim::testing::TempFile file;
+  sim::testing::StreamCleanup cleanup;
+  const std::string camera = sim::testing::unique_stream("clockcam");
+  cleanup.names = {camera};
+  sim::testing::Process source({MCAP_TEST_CAMERA, "--stream", camera, "--width", "64", "--height", "48",
+                                "--frames", "12", "--fps", "30", "--wait-for-reader", "--clock"});
+  ASSERT_TRUE(source.wait_for_line("ready"));
+  sim::testing::Process recorder({SIM_RECORD, "-o", file.path(), camera, "--quiet"});
+  ASSERT_TRUE(recorder.wait_for_line("recording")) << recorder.err();
+  EXPECT_EQ(source.wait(), 0) << source.err();
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  recorder.signal(SIGINT);
+  ASSERT_EQ(recorder.wait(), 0) << recorder.err();
+
+  const auto node = sim::testing::run({NODE, READ_SENSOR_SCRIPT, file.path()});
+  ASSERT_EQ(node.code, 0) << node.err;
+  EXPECT_EQ(line_starting(node.out, "channel /diagnostics "),
+            "channel /diagnostics diagnostic_msgs/msg/DiagnosticArray hash=" +
+                std::string(sim::ros2::rihs01_type_hash("diagnostic_msgs/msg/DiagnosticArray")) +
+                " durability=2");
+  // The error first, then the fixed clock: one status each, in the order they happened.
+  const auto statuses = lines_starting(node.out, "diagnostic /diagnostics ");
+  ASSERT_EQ(statuses.size(), 2u) << node.out;
+  const std::string name = "\"sim: " + camera + " clock\"";
+  EXPECT_NE(statuses[0].find(" level=2 hw=" + camera + " clock_source=ptp sync_state=locked "
+                             "offset_from_master_ns=-42 grandmaster_id=00a069.fffe.0b552d "
+                             "offset_to_host_ns=37000012000 "),
+            std::string::npos) << statuses[0];
+  EXPECT_NE(statuses[0].find(name + " \"" + sim::testing::test_camera_clock(false).problem + "\""),
+            std::string::npos) << statuses[0];
+  EXPECT_NE(statuses[1].find(" level=0 "), std::string::npos) << statuses[1];
+  EXPECT_NE(statuses[1].find(" tai_correction_ns=37000000000 stamps=sensor_tai_corrected "),
+            std::string::npos) << statuses[1];
+
+  // sim_play: the played stream reports the clock as it was recorded last.
+  const std::string out = sim::testing::unique_stream("clockplay");
+  cleanup.names.push_back(out);
+  const auto played = sim::testing::run({SIM_PLAY, file.path(), "--remap", camera + "=" + out, "--max-rate",
+                                         "--keep-streams"});
+  EXPECT_EQ(played.code, 0) << played.err;
+  auto reader = sim::Reader::open(out);
+  ASSERT_TRUE(reader) << reader.error().message << "\n" << played.err;
+  auto clock = reader->clock();
+  ASSERT_TRUE(clock) << clock.error().message;
+  ASSERT_TRUE(clock->has_value()) << played.err;
+  EXPECT_TRUE(**clock == sim::testing::test_camera_clock(true))
+      << sim::summary(**clock) << "\n" << played.err;
+}
+
 TEST(SensorMetadataInMcap, ARosbag2RecordingPlaysBackWithItsCalibrationAndMounting) {
   sim::testing::TempFile file;
   sim::testing::StreamCleanup cleanup;

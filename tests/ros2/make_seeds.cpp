@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "sim/lidar_point.hpp"
+#include "sim/ros2/diagnostics.hpp"
 #include "sim/ros2/encode.hpp"
 #include "sim/ros2/graph.hpp"
 #include "sim/ros2/metadata.hpp"
@@ -80,5 +81,15 @@ int main(int argc, char** argv) {
   const NodeEntities node{"/", "sim_dds_bridge", {&reader, 1}, {&writer, 1}};
   save_bytes(root / "participant_entities_info", "one_node.cdr",
              encode_participant_entities_info(participant, {&node, 1}));
+  ClockStatus clock;
+  clock.source = ClockSource::ptp;
+  clock.state = ClockState::locked;
+  clock.grandmaster = "00a069.fffe.0b552d";
+  clock.offset_to_host_ns = 12'000;
+  clock.verdict = ClockVerdict::ok;
+  const DiagnosticArray diagnostics{Time{1700000000, 5}, "",
+                                    {clock_diagnostic("/lidar_top", "SN1", clock, true),
+                                     clock_diagnostic("/camera", "/camera", std::nullopt, true)}};
+  save_bytes(root / "diagnostic_array", "two_clocks.cdr", encode_diagnostic_array(diagnostics).value());
   return 0;
 }

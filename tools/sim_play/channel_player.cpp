@@ -95,7 +95,10 @@ Expected<ChannelPlayer> ChannelPlayer::for_channel(const mcap::Channel& channel,
                ", which SIM cannot play (PointCloud2, Image or CompressedImage); it is skipped");
   }
   auto shape = mcap::stream_shape(channel.metadata);
-  return ChannelPlayer(*type, topic, std::move(stream), shape, max_capacity, budget);
+  const auto recorded = channel.metadata.find("sim.stream");
+  std::string recorded_stream = recorded == channel.metadata.end() ? channel.topic : recorded->second;
+  return ChannelPlayer(*type, topic, std::move(stream), std::move(recorded_stream), shape,
+                       max_capacity, budget);
 }
 
 std::optional<Error> ChannelPlayer::create_stream() {
@@ -128,6 +131,7 @@ std::optional<Error> ChannelPlayer::ensure_writer(const mcap::StreamShape& wante
     return created.error();
   }
   writer_.emplace(std::move(*created));
+  apply_clock();
   made_stream_ = true;
   shape_ = wanted;
   return std::nullopt;
@@ -243,6 +247,20 @@ void ChannelPlayer::set_calibration(const CameraCalibration& calibration) {
   sensor_dirty_ = true;
   // rosbag2 logs a CameraInfo after its image: the stream has it now, not one frame later.
   if (writer_ && !frame_id_.empty()) update_sensor(frame_id_);
+}
+
+void ChannelPlayer::set_clock(const ClockStatus& clock) {
+  if (clock_ && *clock_ == clock) return;
+  clock_ = clock;
+  apply_clock();
+}
+
+void ChannelPlayer::apply_clock() {
+  if (!writer_ || !clock_) return;
+  auto set = writer_->set_clock(*clock_);
+  if (!set && sensor_problem_.empty()) {
+    sensor_problem_ = "the clock record of " + stream_ + " is not restored: " + set.error().message;
+  }
 }
 
 void ChannelPlayer::update_sensor(std::string_view frame_id) {

@@ -14,6 +14,7 @@
 #include <span>
 #include <string>
 
+#include "sim/clock_status.hpp"
 #include "sim/layout.hpp"
 #include "sim/mcap/format.hpp"
 #include "sim/mcap/layout_metadata.hpp"
@@ -59,6 +60,9 @@ class ChannelPlayer {
 
   const std::string& stream() const noexcept { return stream_; }
   const std::string& topic() const noexcept { return topic_; }
+  // The SIM stream the channel was recorded from (its "sim.stream" metadata), else its topic:
+  // the name a recorded clock status gives (before --remap).
+  const std::string& recorded_stream() const noexcept { return recorded_stream_; }
   // Whether the stream's shape is known before the first message (SIM recordings).
   bool shape_known() const noexcept { return shape_.has_value(); }
   // Creates the stream now (only when shape_known()).
@@ -79,15 +83,21 @@ class ChannelPlayer {
   // Both are applied before the next frame is published (the frame carries them).
   void set_calibration(const CameraCalibration& calibration);
   void use_mountings(const Mountings* mountings) noexcept { mountings_ = mountings; }
+  // The stream's clock as recorded (sim_record's /diagnostics): set on the stream now, or as soon
+  // as it exists, and again on a region that replaces it.
+  void set_clock(const ClockStatus& clock);
   // Why the recording's description could not be given to the stream (empty: it could, or
   // there was none).
   const std::string& sensor_problem() const noexcept { return sensor_problem_; }
 
  private:
   ChannelPlayer(ros2::MessageType type, std::string topic, std::string stream,
-                std::optional<mcap::StreamShape> shape, std::uint64_t max_capacity, ShmBudget& budget)
-      : type_(type), topic_(std::move(topic)), stream_(std::move(stream)), shape_(shape),
-        max_capacity_(max_capacity), budget_(&budget) {}
+                std::string recorded_stream, std::optional<mcap::StreamShape> shape,
+                std::uint64_t max_capacity, ShmBudget& budget)
+      : type_(type), topic_(std::move(topic)), stream_(std::move(stream)),
+        recorded_stream_(std::move(recorded_stream)), shape_(shape), max_capacity_(max_capacity),
+        budget_(&budget) {}
+  void apply_clock();
   std::optional<Error> ensure_writer(const mcap::StreamShape& wanted);
   std::optional<Error> commit(Loan&& loan, std::uint64_t size, std::int64_t stamp_ns);
   // Sets the stream's description when the frame id, calibration or mountings changed.
@@ -96,6 +106,7 @@ class ChannelPlayer {
   ros2::MessageType type_;
   std::string topic_;
   std::string stream_;
+  std::string recorded_stream_;
   std::optional<mcap::StreamShape> shape_;
   std::uint64_t max_capacity_;
   ShmBudget* budget_;
@@ -110,6 +121,7 @@ class ChannelPlayer {
   bool sensor_dirty_ = false;
   std::optional<SensorInfo> sensor_;   // the description the stream carries
   std::string sensor_problem_;         // the first reason a description could not be set
+  std::optional<ClockStatus> clock_;   // as recorded; set on every region this player makes
 };
 
 using Players = std::map<std::uint16_t, ChannelPlayer>;  // by MCAP channel id

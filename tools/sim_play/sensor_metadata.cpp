@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sensor_metadata.hpp"
 
+#include "sim/ros2/diagnostics.hpp"
 #include "sim/ros2/metadata.hpp"
 
 namespace sim::play {
@@ -36,6 +37,9 @@ SensorMetadata::SensorMetadata(const mcap::Reader& reader) {
     } else if (is_type(schema, ros2::tf_message_type_name) && channel.topic == "/tf_static") {
       kinds_[id] = Kind::tf_static;
       topics_[id] = channel.topic;
+    } else if (is_type(schema, ros2::diagnostic_array_type_name)) {
+      kinds_[id] = Kind::diagnostics;
+      topics_[id] = channel.topic;
     }
   }
 }
@@ -60,12 +64,31 @@ std::optional<Error> SensorMetadata::take(std::uint16_t channel, std::span<const
     for (const std::uint16_t image : targets->second) players.at(image).set_calibration(info->calibration);
     return std::nullopt;
   }
+  if (kinds_.at(channel) == Kind::diagnostics) return take_diagnostics(channel, message, players);
   auto transforms = ros2::decode_tf_message(message);
   if (!transforms) return Error{transforms.error().code, "/tf_static: " + transforms.error().message};
   for (const auto& t : *transforms) {
     mountings_.by_child[std::string(t.child_frame_id)] = {std::string(t.header.frame_id), t.transform};
   }
   ++mountings_.generation;
+  return std::nullopt;
+}
+
+std::optional<Error> SensorMetadata::take_diagnostics(std::uint16_t channel,
+                                                      std::span<const std::byte> message,
+                                                      Players& players) {
+  auto array = ros2::decode_diagnostic_array(message);
+  if (!array) return Error{array.error().code, topics_[channel] + ": " + array.error().message};
+  for (const ros2::DiagnosticStatus& status : array->status) {
+    const auto stream = ros2::stream_of_clock_diagnostic(status.name);
+    // Other nodes' diagnostics, and a stream that reported no clock, carry no record.
+    if (!stream || status.value("clock_source") == nullptr) continue;
+    auto clock = ros2::clock_from_diagnostic(status);
+    if (!clock) return Error{clock.error().code, topics_[channel] + ": " + clock.error().message};
+    for (auto& [id, player] : players) {
+      if (player.recorded_stream() == *stream) player.set_clock(*clock);
+    }
+  }
   return std::nullopt;
 }
 

@@ -13,6 +13,7 @@
 #include "sim/clock.hpp"
 #include "sim/mcap/layout_metadata.hpp"
 #include "sim/reader.hpp"
+#include "sim/ros2/diagnostics.hpp"
 #include "sim/ros2/encode.hpp"
 #include "sim/ros2/message.hpp"
 #include "sim/ros2/metadata.hpp"
@@ -23,8 +24,8 @@ namespace sim::record {
 namespace {
 
 // What a message is: a frame (of its ROS 2 type), or what travels beside the frames: the
-// calibration beside each image, the mountings on /tf_static.
-enum class Kind { frame, camera_info, tf_static };
+// calibration beside each image, the mountings on /tf_static, each stream's clock on /diagnostics.
+enum class Kind { frame, camera_info, tf_static, clock };
 
 // One serialized message on its way to the writer thread.
 struct Pending {
@@ -117,6 +118,9 @@ struct StreamState {
   Reader reader;
   std::uint64_t sensor_generation = UINT64_MAX;  // of the description below; MAX: not looked yet
   std::vector<std::byte> camera_info;            // CameraInfo to restamp per image; empty: none
+  std::string hardware_id;                       // the sensor's serial, else the stream name
+  std::uint64_t clock_generation = UINT64_MAX;   // of the clock recorded last; MAX: not looked yet
+  std::optional<ClockStatus> clock;              // as recorded last
   std::atomic<std::uint64_t> frames{0};
   std::atomic<std::uint64_t> bytes{0};
   std::atomic<std::uint64_t> skipped{0};  // the reader's count of frames it never saw
@@ -125,6 +129,7 @@ struct StreamState {
 
   StreamState(std::string n, Reader r) : name(std::move(n)), reader(std::move(r)) {
     frame_id = default_frame_id();
+    hardware_id = name;
   }
   std::string default_frame_id() const {
     return name.substr(name.find_first_not_of('/') == std::string::npos ? 0 : 1);
@@ -149,6 +154,21 @@ std::string frame_topic(const std::string& stream, ros2::MessageType type) {
     case ros2::MessageType::point_cloud2: break;
   }
   return stream;
+}
+
+// /diagnostics as diagnostic_updater offers it: keep last 10, reliable, volatile.
+const std::string& diagnostics_qos_yaml() {
+  static const std::string yaml =
+      "- history: 1\n"
+      "  depth: 10\n"
+      "  reliability: 1\n"
+      "  durability: 2\n"
+      "  deadline:\n    sec: 0\n    nsec: 0\n"
+      "  lifespan:\n    sec: 0\n    nsec: 0\n"
+      "  liveliness: 1\n"
+      "  liveliness_lease_duration:\n    sec: 0\n    nsec: 0\n"
+      "  avoid_ros_namespace_conventions: false\n";
+  return yaml;
 }
 
 // /tf_static as tf2's static broadcaster offers it: keep last 1, reliable, transient local, so
@@ -201,6 +221,9 @@ struct Recorder::Impl {
   }
 
   void run_stream(StreamState& s, std::size_t index) {
+    // The clock as it is when recording starts, before any frame (the stream may be idle).
+    if (auto sensor = s.reader.sensor_info()) s.hardware_id = ros2::clock_hardware_id(s.name, *sensor);
+    if (!clock_changed(s, index, 0, static_cast<std::uint64_t>(realtime_ns()))) return;
     while (!stop_streams.load(std::memory_order_relaxed)) {
       const ReadStatus waited = s.reader.wait(std::chrono::milliseconds(100));
       if (waited == ReadStatus::region_invalid) {
@@ -230,6 +253,12 @@ struct Recorder::Impl {
         continue;
       }
       const auto log_time = static_cast<std::uint64_t>(info.publish_ns + realtime_minus_monotonic_ns);
+      // A new clock record goes first, with the frame's log time: a player restores it before
+      // the frame it came with.
+      if (info.clock_generation != s.clock_generation &&
+          !clock_changed(s, index, info.clock_generation, log_time)) {
+        break;
+      }
       // The calibration goes first, with the image's stamp and the same log time: a player
       // restores it before the image it belongs to.
       if (!s.camera_info.empty() && !push_camera_info(s, index, info, log_time)) break;
@@ -261,6 +290,7 @@ struct Recorder::Impl {
       return;
     }
     const std::optional<SensorInfo>& info = *sensor;
+    s.hardware_id = ros2::clock_hardware_id(s.name, info);
     if (!info) return set_mounting(index, std::nullopt);
     if (!info->frame_id.empty()) s.frame_id = info->frame_id;
     if (info->calibration && s.reader.layout().kind == LayoutKind::image) {
@@ -276,6 +306,34 @@ struct Recorder::Impl {
     } else {
       set_mounting(index, std::nullopt);
     }
+  }
+
+  // Records the stream's clock when it differs from the one recorded last (a record the writer
+  // rewrote unchanged is not recorded again). False once the recording stops.
+  bool clock_changed(StreamState& s, std::size_t index, std::uint64_t generation, std::uint64_t log_time) {
+    s.clock_generation = generation;
+    auto clock = s.reader.clock();
+    if (!clock) {
+      note("the clock of " + s.name + " cannot be recorded: " + clock.error().message);
+      return true;
+    }
+    if (!*clock || (s.clock && *s.clock == **clock)) return true;
+    s.clock = **clock;
+    ros2::DiagnosticArray array;
+    array.stamp = ros2::Time::from_ns(static_cast<std::int64_t>(log_time));
+    array.status.push_back(ros2::clock_diagnostic(s.name, s.hardware_id, *s.clock, true));
+    auto message = ros2::encode_diagnostic_array(array);
+    if (!message) {
+      note("the clock of " + s.name + " cannot be recorded: " + message.error().message);
+      return true;
+    }
+    Pending item;
+    item.stream = index;
+    item.kind = Kind::clock;
+    item.header.log_time = log_time;
+    item.header.publish_time = log_time;
+    item.data = std::move(*message);
+    return queue.push(std::move(item), stop_streams);
   }
 
   bool push_camera_info(StreamState& s, std::size_t index, const FrameInfo& info, std::uint64_t log_time) {
@@ -347,6 +405,13 @@ struct Recorder::Impl {
         topic = "/tf_static";
         metadata = {{"offered_qos_profiles", latched_qos_yaml()}};
         key = {SIZE_MAX, "tf_static", 0};
+        break;
+      case Kind::clock:
+        schema_name = ros2::diagnostic_array_type_name;
+        schema_text = ros2::diagnostic_array_schema();
+        topic = ros2::diagnostics_topic;
+        metadata = {{"offered_qos_profiles", diagnostics_qos_yaml()}};
+        key = {SIZE_MAX, "diagnostics", 0};
         break;
     }
     if (const auto found = channels.find(key); found != channels.end()) return found->second;

@@ -12,6 +12,7 @@
 
 #include "ros_message_type.hpp"
 #include "udp_transport.hpp"
+#include "sim/ros2/diagnostics.hpp"
 #include "sim/ros2/graph.hpp"
 #include "sim/ros2/metadata.hpp"
 #include "sim/ros2/type_hash.hpp"
@@ -36,6 +37,7 @@ constexpr KnownType serialized_types[] = {
     {ros2::camera_info_dds_type_name, ros2::camera_info_type_name},
     {ros2::tf_message_dds_type_name, ros2::tf_message_type_name},
     {ros2::participant_entities_info_dds_type_name, ros2::participant_entities_info_type_name},
+    {ros2::diagnostic_array_dds_type_name, ros2::diagnostic_array_type_name},
 };
 
 std::string_view ros_name_of(std::string_view dds_type) {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "bridge_options.hpp"
+#include "clock_diagnostics.hpp"
 #include "dds_session.hpp"
 #include "inbound.hpp"
 #include "outbound.hpp"
@@ -50,6 +51,7 @@ struct Report {
   std::vector<std::unique_ptr<Outbound>>& outbound;
   std::vector<std::unique_ptr<Inbound>>& inbound;
   StaticTransforms& transforms;
+  ClockDiagnostics& clocks;
 
   // One JSON object: every topic's counters (camera_info and /tf_static once they exist).
   std::string json() const {
@@ -73,6 +75,7 @@ struct Report {
     if (transforms.counters().connected.load()) {
       add("publish", "", tf_static_topic, transforms.counters());
     }
+    if (clocks.counters().connected.load()) add("publish", "", diagnostics_topic, clocks.counters());
     for (const auto& i : inbound) {
       add("subscribe", i->options().stream, i->options().topic, i->counters());
     }
@@ -111,6 +114,7 @@ struct Report {
       tell(o->camera_info());
     }
     tell(transforms.counters());
+    tell(clocks.counters());
     for (const auto& i : inbound) tell(i->counters());
   }
 };
@@ -180,11 +184,12 @@ void pair_as_with_subscribes(const CLI::App& app, Options& o) {
 // Every topic's thread: one Outbound per --publish, one Inbound per --subscribe, and the
 // mountings each direction shares (/tf_static).
 struct Topics {
-  Topics(DdsSession& session, BridgePlan& plan, const Trust& trust) : transforms(session) {
+  Topics(DdsSession& session, BridgePlan& plan, const Trust& trust)
+      : transforms(session), clocks(session) {
     if (!plan.inbound.empty()) remote_transforms.emplace(session);
     for (auto& o : plan.outbound) {
       o.trust = trust;
-      outbound.push_back(std::make_unique<Outbound>(session, transforms, o));
+      outbound.push_back(std::make_unique<Outbound>(session, transforms, clocks, o));
     }
     for (auto& i : plan.inbound) {
       inbound.push_back(std::make_unique<Inbound>(session, *remote_transforms, i));
@@ -196,11 +201,12 @@ struct Topics {
     for (auto& i : inbound) i->stop();
   }
   ~Topics() {
-    outbound.clear();  // before the transforms they publish into
+    outbound.clear();  // before the transforms and clocks they publish into
     inbound.clear();
   }
 
   StaticTransforms transforms;
+  ClockDiagnostics clocks;
   std::optional<RemoteTransforms> remote_transforms;
   std::vector<std::unique_ptr<Outbound>> outbound;
   std::vector<std::unique_ptr<Inbound>> inbound;
@@ -252,7 +258,7 @@ int main(int argc, char** argv) {
   auto session = DdsSession::create(options.domain);
   if (!session) return cli.fail(session.error());
   Topics topics(**session, *plan, options.trust);
-  const Report report{topics.outbound, topics.inbound, topics.transforms};
+  const Report report{topics.outbound, topics.inbound, topics.transforms, topics.clocks};
 
   auto status = apps::StatusLine::for_stderr("sim_dds_bridge", options.quiet);
   if (!options.quiet) announce(status, topics, options.domain);

@@ -16,6 +16,7 @@
 #include "sim/clock.hpp"
 #include "sim/imaging/jpeg_encoder.hpp"
 #include "sim/reader.hpp"
+#include "sim/ros2/diagnostics.hpp"
 #include "sim/ros2/metadata.hpp"
 
 namespace sim::bridge {
@@ -28,6 +29,7 @@ namespace {
 constexpr auto reopen_period = 200ms;  // how often a missing stream is looked for again
 constexpr auto wait_slice = 100ms;     // how long one wait for a frame lasts, so stop is prompt
 constexpr auto idle_poll = 200ms;      // how often a stream nobody listens to is looked at
+constexpr std::int64_t clock_period_ns = 1'000'000'000;  // how often the clock record is read
 
 std::string image_topic(const std::string& base) { return base + "/image_raw"; }
 std::string jpeg_topic(const std::string& base) { return base + "/image_raw/compressed"; }
@@ -186,9 +188,10 @@ std::vector<std::string> published_topics(const OutboundOptions& options) {
 // The state of one publication while it runs: the writers, the encoder, the stream's sensor.
 class Publication {
  public:
-  Publication(DdsSession& session, StaticTransforms& transforms, const OutboundOptions& options,
-              Counters& raw, Counters& compressed, Counters& camera_info)
-      : transforms_(transforms), options_(options), raw_counters_(raw),
+  Publication(DdsSession& session, StaticTransforms& transforms, ClockDiagnostics& clocks,
+              const OutboundOptions& options, Counters& raw, Counters& compressed,
+              Counters& camera_info)
+      : transforms_(transforms), clocks_(clocks), options_(options), raw_counters_(raw),
         compressed_counters_(compressed), raw_(session, options.qos, raw),
         compressed_(session, options.qos, compressed), camera_info_(session, options.qos, camera_info),
         rate_(options.max_rate_hz), frame_id_(default_frame_id()) {
@@ -215,12 +218,15 @@ class Publication {
     return options_.frame_id.empty() ? options_.stream.substr(1) : options_.frame_id;
   }
   void sensor_changed(const Reader& reader, std::uint64_t generation);
+  // Once a second: the stream's clock record and whether its writer lives, for /diagnostics.
+  void watch_clock(Reader& reader, bool now = false);
   void count_frames(const FrameInfo& info, bool sent);
   void send_raw(const Borrow& borrow);
   void send_jpeg(const Borrow& borrow);
   void send_camera_info(std::int64_t stamp_ns);
 
   StaticTransforms& transforms_;
+  ClockDiagnostics& clocks_;
   const OutboundOptions& options_;
   Counters& raw_counters_;
   Counters& compressed_counters_;
@@ -235,7 +241,9 @@ class Publication {
   std::uint64_t last_seq_ = 0;
   std::optional<std::uint64_t> generation_;
   std::string frame_id_;
+  std::string hardware_id_;                     // the sensor's serial, else the stream name
   std::vector<std::byte> camera_info_message_;  // empty: no calibration
+  std::int64_t clock_read_ns_ = 0;              // monotonic time the clock was last read
 };
 
 bool Publication::opened(Reader& reader, std::string& raw_topic) {
@@ -262,7 +270,20 @@ bool Publication::opened(Reader& reader, std::string& raw_topic) {
   }
   generation_.reset();
   sensor_changed(reader, 0);
+  watch_clock(reader, true);
   return true;
+}
+
+void Publication::watch_clock(Reader& reader, bool now) {
+  const std::int64_t t = monotonic_ns();
+  if (!now && t - clock_read_ns_ < clock_period_ns) return;
+  clock_read_ns_ = t;
+  auto clock = reader.clock();
+  if (!clock) {
+    raw_counters_.problem(options_.stream + ": " + clock.error().message);
+    return;
+  }
+  clocks_.set(options_.stream, hardware_id_, *clock, reader.writer_alive());
 }
 
 // A new sensor description (or the first look at one): the frame id, the CameraInfo message and
@@ -276,6 +297,7 @@ void Publication::sensor_changed(const Reader& reader, std::uint64_t generation)
     return;
   }
   const std::optional<SensorInfo>& info = *sensor;
+  hardware_id_ = ros2::clock_hardware_id(options_.stream, info);
   frame_id_ = options_.frame_id.empty() && info && !info->frame_id.empty() ? info->frame_id
                                                                             : default_frame_id();
   camera_info_message_.clear();
@@ -303,6 +325,7 @@ bool Publication::idle(Reader& reader) {
   raw_.tell_mismatches();
   if (can_compress_) compressed_.tell_mismatches();
   std::this_thread::sleep_for(idle_poll);
+  watch_clock(reader);
   const Borrow borrow = reader.borrow();  // no copy: only the frame's number and description
   if (borrow.status() == ReadStatus::region_invalid) return false;
   if (borrow.status() == ReadStatus::new_frame) {
@@ -315,6 +338,7 @@ bool Publication::idle(Reader& reader) {
 bool Publication::serve(Reader& reader) {
   const ReadStatus waited = reader.wait(wait_slice);
   if (waited == ReadStatus::region_invalid) return false;
+  watch_clock(reader);
   if (waited != ReadStatus::new_frame) return true;
   const Borrow borrow = reader.borrow();
   if (borrow.status() != ReadStatus::new_frame) return true;
@@ -391,8 +415,9 @@ std::string announced_topic(const OutboundOptions& options) {
   return base + "[/image_raw]";
 }
 
-Outbound::Outbound(DdsSession& session, StaticTransforms& transforms, OutboundOptions options)
-    : session_(session), transforms_(transforms), options_(std::move(options)) {
+Outbound::Outbound(DdsSession& session, StaticTransforms& transforms, ClockDiagnostics& clocks,
+                   OutboundOptions options)
+    : session_(session), transforms_(transforms), clocks_(clocks), options_(std::move(options)) {
   if (options_.topic.empty()) options_.topic = options_.stream;
   raw_topic_ = options_.topic;
   thread_ = std::thread([this] { run(); });
@@ -420,13 +445,14 @@ void Outbound::set_raw_topic(std::string topic) {
 }
 
 void Outbound::run() {
-  Publication publication(session_, transforms_, options_, raw_, compressed_, camera_info_);
+  Publication publication(session_, transforms_, clocks_, options_, raw_, compressed_, camera_info_);
   std::optional<Reader> reader;
   while (!stop_.load(std::memory_order_relaxed)) {
     if (!reader) {
       auto opened = Reader::open(options_.stream, {.trust = options_.trust});
       if (!opened) {
         raw_.connected.store(false);
+        clocks_.writer_gone(options_.stream);
         if (opened.error().code != ErrorCode::not_found) raw_.problem(opened.error().message);
         std::this_thread::sleep_for(reopen_period);
         continue;
@@ -442,6 +468,7 @@ void Outbound::run() {
     const bool ok = publication.wanted() ? publication.serve(*reader) : publication.idle(*reader);
     if (!ok) {
       raw_.problem("the stream " + options_.stream + " became invalid; opening it again");
+      clocks_.writer_gone(options_.stream);
       reader.reset();
     }
   }

@@ -8,7 +8,8 @@
 // <stream>/image_raw/compressed (mjpeg streams, and --compress), the calibration as
 // sensor_msgs/CameraInfo on <stream>/camera_info beside every image with the image's stamp and
 // frame_id: the layout image_transport's CameraSubscriber and Foxglove pair without remapping.
-// The stream's sensor mounting goes to /tf_static (StaticTransforms).
+// The stream's sensor mounting goes to /tf_static (StaticTransforms), its clock to /diagnostics
+// (ClockDiagnostics, read once a second whether or not anyone reads the frames).
 #pragma once
 
 #include <atomic>
@@ -18,6 +19,7 @@
 #include <thread>
 #include <vector>
 
+#include "clock_diagnostics.hpp"
 #include "counters.hpp"
 #include "dds_session.hpp"
 #include "sim/reader.hpp"
@@ -46,7 +48,8 @@ std::string announced_topic(const OutboundOptions& options);
 
 class Outbound {
  public:
-  Outbound(DdsSession& session, StaticTransforms& transforms, OutboundOptions options);
+  Outbound(DdsSession& session, StaticTransforms& transforms, ClockDiagnostics& clocks,
+           OutboundOptions options);
   ~Outbound();  // stop()
   Outbound(const Outbound&) = delete;
   Outbound& operator=(const Outbound&) = delete;
@@ -69,6 +72,7 @@ class Outbound {
 
   DdsSession& session_;
   StaticTransforms& transforms_;
+  ClockDiagnostics& clocks_;
   OutboundOptions options_;
   Counters raw_;
   Counters compressed_;

@@ -5,6 +5,7 @@
 //   image <topic> <sec>.<nanosec> <frame_id>
 //   camera_info <topic> <sec>.<nanosec> <frame_id> <width>x<height> <distortion model> d=<…> k=<…> p=<…>
 //   tf <parent> <child> t=<x,y,z> r=<x,y,z,w>
+//   diagnostic <topic> <sec>.<nanosec> level=<n> hw=<hardware_id> <key>=<value>… "<name>" "<message>"
 // Any error ends the script with exit code 1.
 import { open } from "node:fs/promises";
 import { McapIndexedReader } from "@mcap/core";
@@ -45,6 +46,13 @@ try {
       const m = r.reader.readMessage(message.data);
       console.log(`camera_info ${r.topic} ${stamp(m.header)} ${m.header.frame_id} ${m.width}x${m.height} ` +
                   `${m.distortion_model} d=${list(m.d)} k=${list(m.k)} p=${list(m.p)}`);
+    } else if (r.name === "diagnostic_msgs/msg/DiagnosticArray") {
+      const m = r.reader.readMessage(message.data);
+      for (const s of m.status) {
+        const values = s.values.map((kv) => `${kv.key}=${kv.value.replaceAll(" ", "_")}`).join(" ");
+        console.log(`diagnostic ${r.topic} ${stamp(m.header)} level=${s.level} hw=${s.hardware_id} ` +
+                    `${values} "${s.name}" "${s.message}"`);
+      }
     } else if (r.name === "tf2_msgs/msg/TFMessage") {
       const m = r.reader.readMessage(message.data);
       for (const t of m.transforms) {

@@ -14,6 +14,9 @@
 // Usage: sensor_writer CAMERA LIDAR [RECALIBRATE_AT_FRAME]. Prints "ready" once both streams
 // exist; runs until killed. At frame RECALIBRATE_AT_FRAME (if given) the camera is recalibrated
 // (cx = 170) through Writer::set_sensor_info and "recalibrated" is printed.
+//
+// Clocks (Writer::set_clock): the camera's PTP clock is still acquiring (verdict warn, with the
+// problem sentence of harness.mjs's scene.cameraClockProblem); the LiDAR's is locked (ok).
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -21,6 +24,7 @@
 #include <thread>
 #include <vector>
 
+#include "sim/clock_status.hpp"
 #include "sim/sim.hpp"
 
 namespace {
@@ -44,6 +48,35 @@ sim::SensorInfo camera_sensor(double cx) {
   info.calibration_source = "tests/viewer/foxglove/sensor_writer.cpp";
   info.time_base = sim::TimeBase::host;
   return info;
+}
+
+sim::ClockStatus camera_clock() {
+  sim::ClockStatus c;
+  c.source = sim::ClockSource::ptp;
+  c.state = sim::ClockState::acquiring;
+  c.ptp_domain = 0;
+  c.offset_from_master_ns = 250'000;
+  c.grandmaster = "00a069.fffe.0b552d";
+  c.offset_to_host_ns = 300'000;
+  c.spread_ns = 20'000;
+  c.verdict = sim::ClockVerdict::warn;
+  c.problem = "the camera's PTP clock is still acquiring; wait until ptp4l reports it locked";
+  c.stamps = sim::StampClock::sensor;
+  return c;
+}
+
+sim::ClockStatus lidar_clock() {
+  sim::ClockStatus c;
+  c.source = sim::ClockSource::ptp;
+  c.state = sim::ClockState::locked;
+  c.ptp_domain = 0;
+  c.offset_from_master_ns = -42;
+  c.grandmaster = "00a069.fffe.0b552d";
+  c.offset_to_host_ns = 12'000;
+  c.spread_ns = 3'000;
+  c.verdict = sim::ClockVerdict::ok;
+  c.stamps = sim::StampClock::sensor;
+  return c;
 }
 
 sim::SensorInfo lidar_sensor() {
@@ -99,6 +132,10 @@ int main(int argc, char** argv) {
        .sensor = lidar_sensor()});
   if (!lidar) {
     std::fprintf(stderr, "sensor_writer: %s\n", lidar.error().message.c_str());
+    return 1;
+  }
+  if (!camera->set_clock(camera_clock()) || !lidar->set_clock(lidar_clock())) {
+    std::fprintf(stderr, "sensor_writer: a clock record was refused\n");
     return 1;
   }
   std::printf("ready\n");

@@ -4,6 +4,7 @@
 #include <algorithm>
 
 #include "sim/clock.hpp"
+#include "sim/ros2/diagnostics.hpp"
 
 namespace sim::foxglove {
 namespace {
@@ -102,6 +103,7 @@ void Catalog::poll() {
       t.entry.status = s;
     }
     track_transforms(changes);
+    track_clocks(changes);
   }
   if (!changes.empty() && on_change_) on_change_(changes);
   if (after_poll_) after_poll_();
@@ -208,6 +210,47 @@ void Catalog::track_transforms(CatalogChanges& changes) {
       encode_transforms(transforms, static_cast<std::int64_t>(message->timestamp_ns));
   if (added) {
     changes.added.push_back({*transforms_channel_, "", Layout{}, std::move(message)});
+  } else {
+    changes.updated.push_back(std::move(message));
+  }
+}
+
+// One latched DiagnosticArray with every inspected stream's clock, sent anew when any changes (a
+// driver's clock watch rewrites the record about once a second).
+void Catalog::track_clocks(CatalogChanges& changes) {
+  std::map<std::string, ClockEntry> clocks;
+  for (const auto& [name, t] : streams_) {
+    if (!t.entry.status) continue;
+    const StreamStatus& s = *t.entry.status;
+    clocks[name] = ClockEntry{ros2::clock_hardware_id(name, s.sensor), s.clock, s.writer_alive};
+  }
+  if (clocks == clocks_) return;
+  clocks_ = clocks;
+  if (clocks.empty()) {
+    if (diagnostics_channel_) changes.removed.push_back(diagnostics_channel_->id);
+    diagnostics_channel_.reset();
+    return;
+  }
+  const std::int64_t now = realtime_ns();
+  ros2::DiagnosticArray array;
+  array.stamp = ros2::Time::from_ns(now);
+  for (const auto& [name, c] : clocks) {
+    array.status.push_back(ros2::clock_diagnostic(name, c.hardware_id, c.clock, c.writer_alive));
+  }
+  auto bytes = ros2::encode_diagnostic_array(array);
+  if (!bytes) return;  // a record too long for a status: the last message stays
+  const bool added = !diagnostics_channel_;
+  if (added) {
+    diagnostics_channel_ = new_channel(std::string(ros2::diagnostics_topic),
+                                       {"cdr", std::string(ros2::diagnostic_array_type_name),
+                                        "ros2msg", std::string(ros2::diagnostic_array_schema())});
+  }
+  auto message = std::make_shared<Message>();
+  message->channel_id = diagnostics_channel_->id;
+  message->timestamp_ns = static_cast<std::uint64_t>(now);
+  message->payload = std::move(*bytes);
+  if (added) {
+    changes.added.push_back({*diagnostics_channel_, "", Layout{}, std::move(message)});
   } else {
     changes.updated.push_back(std::move(message));
   }

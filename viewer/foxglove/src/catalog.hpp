@@ -2,7 +2,9 @@
 // Which SIM streams exist, what they look like and how they are doing: polls sim::list_streams()
 // and sim::inspect() on its own thread, gives each showable stream a channel id (a new id when a
 // stream's layout changes, as Foxglove ids must keep their schema) and reports what appeared and
-// what went away. The page's stream table is a snapshot of it.
+// what went away. The page's stream table is a snapshot of it. Beside the streams' channels it
+// keeps two latched ones: /tf_static (every mounting) and /diagnostics (every stream's clock as a
+// diagnostic_msgs/msg/DiagnosticArray, one status per stream, for Foxglove's Diagnostics panels).
 #pragma once
 
 #include <chrono>
@@ -20,6 +22,7 @@
 #include "foxglove_messages.hpp"
 #include "pump.hpp"
 #include "sim/foxglove/protocol.hpp"
+#include "sim/clock_status.hpp"
 #include "sim/reader.hpp"
 
 namespace sim::foxglove {
@@ -86,6 +89,7 @@ class Catalog {
   void track_calibration(Tracked& t, const std::optional<SensorInfo>& sensor,
                          CatalogChanges& changes);
   void track_transforms(CatalogChanges& changes);
+  void track_clocks(CatalogChanges& changes);
   Channel new_channel(std::string topic, const MessageSchema& schema);
 
   const std::vector<std::string> only_;
@@ -99,6 +103,17 @@ class Catalog {
   std::uint32_t next_channel_id_ = 1;
   std::optional<Channel> transforms_channel_;
   std::vector<FrameTransform> transforms_;
+  // What the /diagnostics message says now: by stream, its hardware id, clock and writer's life.
+  struct ClockEntry {
+    std::string hardware_id;
+    std::optional<ClockStatus> clock;
+    bool writer_alive = false;
+    friend bool operator==(const ClockEntry& a, const ClockEntry& b) {
+      return a.hardware_id == b.hardware_id && a.clock == b.clock && a.writer_alive == b.writer_alive;
+    }
+  };
+  std::optional<Channel> diagnostics_channel_;
+  std::map<std::string, ClockEntry> clocks_;
 
   std::mutex poll_mutex_;  // one poll at a time
   std::mutex wake_mutex_;

@@ -130,6 +130,11 @@ std::string streams_json(const std::vector<StreamEntry>& streams,
       s["schema"] = e.channel->schema_name;
     }
     add_sensor(s, e, streams, mountings);
+    if (st.clock) {
+      s["clock"] = {{"summary", summary(*st.clock)},
+                    {"verdict", to_string(st.clock->verdict)},
+                    {"problem", st.clock->problem}};
+    }
     list.push_back(std::move(s));
   }
   return list.dump(-1, ' ', false, json::error_handler_t::replace);

@@ -24,7 +24,8 @@ std::optional<Target> parse_target(std::string_view target);
 
 // The page's stream table: one object per stream with its health, how it is shown, its sensor's
 // frame and calibration, and for a calibrated camera the LiDAR streams whose points can be drawn
-// into its image (a chain of `mountings` joins their frames).
+// into its image (a chain of `mountings` joins their frames), and its clock ("clock": summary,
+// verdict, problem; absent when the writer reports none).
 std::string streams_json(const std::vector<StreamEntry>& streams,
                          const std::vector<FrameTransform>& mountings);
 

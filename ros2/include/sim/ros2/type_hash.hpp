@@ -21,7 +21,8 @@ namespace sim::ros2 {
 // layer does not describe. Described: builtin_interfaces/msg/Time, std_msgs/msg/Header,
 // sensor_msgs/msg/{Image, CompressedImage, PointCloud2, PointField, CameraInfo,
 // RegionOfInterest}, geometry_msgs/msg/{Vector3, Quaternion, Transform, TransformStamped},
-// tf2_msgs/msg/TFMessage, rmw_dds_common/msg/{Gid, NodeEntitiesInfo, ParticipantEntitiesInfo}.
+// tf2_msgs/msg/TFMessage, rmw_dds_common/msg/{Gid, NodeEntitiesInfo, ParticipantEntitiesInfo},
+// diagnostic_msgs/msg/{DiagnosticArray, DiagnosticStatus, KeyValue}.
 // Computed once, then a lookup.
 std::string_view rihs01_type_hash(std::string_view ros_type_name) noexcept;
 std::string_view rihs01_type_hash(MessageType type) noexcept;

@@ -160,6 +160,8 @@ export const scene = {
   cameraFrame: "test_camera_optical", lidarFrame: "test_lidar",
   // Where the wall of points ahead lands in the camera image.
   wall: { left: 120, right: 200, top: 80, bottom: 160 },
+  // The clocks: the camera's acquiring (warn, this problem), the LiDAR's locked (ok).
+  cameraClockProblem: "the camera's PTP clock is still acquiring; wait until ptp4l reports it locked",
 };
 export async function startSensorWriter(camera, lidar, recalibrateAt) {
   const args = [camera, lidar];

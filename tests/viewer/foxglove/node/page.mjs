@@ -98,6 +98,23 @@ try {
   assert.ok(calibratedRow.includes("fx=200"), calibratedRow);
   assert.ok(calibratedRow.includes(`${calibrated}/camera_info`), calibratedRow);
 
+  // Each stream's clock: the server's summary line, in the colour of its verdict.
+  const clockCell = (n) => page.$$eval("#streams tbody tr", (trs, name) => {
+    const cell = trs.find((r) => r.dataset.stream === name)?.querySelector("td.clock");
+    return cell ? { text: cell.textContent, cls: cell.className, title: cell.title } : null;
+  }, n);
+  const served = await page.evaluate(() => fetch("/api/streams").then((r) => r.json()));
+  const clockOf = (n) => served.find((s) => s.name === n)?.clock;
+  assert.equal(clockOf(calibrated)?.verdict, "warn", JSON.stringify(served));
+  assert.equal(clockOf(calibrated)?.problem, h.scene.cameraClockProblem);
+  const cameraClock = await clockCell(calibrated);
+  assert.equal(cameraClock?.text, clockOf(calibrated).summary);
+  assert.equal(cameraClock.cls, "clock warn");
+  assert.equal(cameraClock.title, h.scene.cameraClockProblem);
+  const lidarClock = await clockCell(mountedLidar);
+  assert.equal(lidarClock?.text, clockOf(mountedLidar).summary);
+  assert.equal(lidarClock.cls, "clock ok");
+
   const cameraPicture = await measure(page, camera);
   assert.equal(cameraPicture.width, h.image.width);
   assert.equal(cameraPicture.height, h.image.height);

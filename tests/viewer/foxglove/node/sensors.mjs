@@ -4,7 +4,8 @@
 // streams started and finds each camera's calibration beside its image (the namespace Foxglove's
 // image panel pairs them by) and every mounting on /tf_static; it subscribes after they were
 // sent to nobody and still gets them (latched), decodes them with Foxglove's CDR reader, and
-// gets the new calibration when the writer recalibrates. A second client gets them too.
+// gets the new calibration when the writer recalibrates. A second client gets them too. Each
+// stream's clock is a status of the DiagnosticArray on /diagnostics (Foxglove's Diagnostics panels).
 import assert from "node:assert/strict";
 import wsProtocol from "@foxglove/ws-protocol";
 import rosmsg from "@foxglove/rosmsg";
@@ -115,6 +116,27 @@ assert.equal(image.header.frame_id, calibration.frame_id);
 const cloud = decode(lidarChannel, received(s, subs.lidar)[0]);
 assert.equal(cloud.header.frame_id, h.scene.lidarFrame);
 console.log("ok: foxglove.sdk.v1 client got the calibration, both mountings and frames in the sensors' frames");
+
+// The clocks: one DiagnosticArray on /diagnostics, a status per stream with its verdict's level.
+const diagnosticsChannel = await s.until(() => s.topic("/diagnostics"));
+assert.equal(diagnosticsChannel.schemaName, "diagnostic_msgs/msg/DiagnosticArray");
+const diagnosticsSub = first.client.subscribe(diagnosticsChannel.id);
+const clockStatus = (stream) => s.until(() => received(s, diagnosticsSub)
+    .flatMap((m) => decode(diagnosticsChannel, m).status)
+    .find((status) => status.name === `sim: ${stream} clock`));
+const cameraClock = await clockStatus(camera);
+assert.equal(cameraClock.level, 1, "the acquiring camera clock is not WARN");
+assert.equal(cameraClock.message, h.scene.cameraClockProblem);
+assert.equal(cameraClock.hardware_id, camera);
+const cameraValues = new Map(cameraClock.values.map((kv) => [kv.key, kv.value]));
+assert.equal(cameraValues.get("clock_source"), "ptp");
+assert.equal(cameraValues.get("sync_state"), "acquiring");
+assert.equal(cameraValues.get("grandmaster_id"), "00a069.fffe.0b552d");
+assert.equal(cameraValues.get("offset_to_host_ns"), "300000");
+const lidarClock = await clockStatus(lidar);
+assert.equal(lidarClock.level, 0, `the locked LiDAR clock is not OK: ${lidarClock.message}`);
+assert.equal(new Map(lidarClock.values.map((kv) => [kv.key, kv.value])).get("sync_state"), "locked");
+console.log("ok: /diagnostics carries each stream's clock with the level of its verdict");
 
 // A client that connects and subscribes later still gets the latched messages.
 const second = await connect(server.port, "foxglove.websocket.v1");
