@@ -279,6 +279,36 @@ TEST(BridgeGraph, ALateRos2NodeGetsCalibrationMountingsUserDataAndTheBridgeAsANo
   EXPECT_EQ(bridge.wait(), 0) << bridge.err();
 }
 
+// Review turn 4 L9: `ros2 topic echo <ns>/camera_info` alone (nobody reads the images) gets the
+// calibration, one per frame, with the frame's stamp.
+TEST(BridgeGraph, AReaderOfCameraInfoAloneGetsTheCalibration) {
+  SKIP_WITHOUT_NETWORK();
+  StreamGuard camera(unique_name("cam_info_only"));
+  sim::StreamSpec spec{.name = camera.name};
+  spec.layout = sim::Layout::of(sim::ImageLayout::packed(16, 12, sim::PixelFormat::bgr8));
+  spec.sensor = camera_sensor();
+  FramePump frames(spec);
+  ASSERT_TRUE(frames.ok()) << frames.error();
+  Process bridge = start_bridge({"--publish", camera.name});
+  ASSERT_FALSE(wait_counter(bridge, "/tf_static", "bridged", 1).empty()) << bridge.err();
+
+  CycloneParticipant node;
+  CycloneReader<CameraInfo> infos(node, &sensor_msgs_msg_dds__CameraInfo__desc,
+                                  "rt" + camera.name + "/camera_info", deep);
+  std::set<std::int64_t> stamps;
+  for (int n = 0; n < 3; ++n) {
+    ASSERT_TRUE(infos.take([&](const CameraInfo& info) {
+      EXPECT_STREQ(info.header.frame_id, "camera_front_optical");
+      EXPECT_EQ(info.width, 16u);
+      EXPECT_EQ(info.k[0], 500.5);
+      stamps.insert(stamp_of(info.header));
+    })) << "no CameraInfo without an image reader: " << bridge.err();
+  }
+  EXPECT_EQ(stamps.size(), 3u) << "one CameraInfo per frame, each with its frame's stamp";
+  bridge.signal(SIGTERM);
+  EXPECT_EQ(bridge.wait(), 0) << bridge.err();
+}
+
 TEST(BridgeGraph, CameraInfoAndTfStaticFromRos2BecomeTheStreamsSensorDescription) {
   SKIP_WITHOUT_NETWORK();
   const std::string ns = unique_name("remote_cam");
