@@ -318,7 +318,11 @@ void Publication::sensor_changed(const Reader& reader, std::uint64_t generation)
                           ros2::camera_info_dds_type_name);
     }
   }
-  transforms_.set(options_.stream, info);
+  // The mounting goes under the frame the messages carry, --frame-id's when given (review turn 4
+  // L2: else the images' frame was not in the tree).
+  std::optional<SensorInfo> mounted = info;
+  if (mounted) mounted->frame_id = frame_id_;
+  transforms_.set(options_.stream, mounted);
 }
 
 void Publication::count_frames(const FrameInfo& info, bool sent) {

@@ -309,6 +309,27 @@ TEST(BridgeGraph, AReaderOfCameraInfoAloneGetsTheCalibration) {
   EXPECT_EQ(bridge.wait(), 0) << bridge.err();
 }
 
+// Review turn 4 L2: with --frame-id S=F the images say F, so /tf_static mounts F (not the
+// description's frame, which then was in no message).
+TEST(BridgeGraph, AFrameIdOverrideIsTheChildOnTfStaticToo) {
+  SKIP_WITHOUT_NETWORK();
+  StreamGuard camera(unique_name("cam_renamed"));
+  sim::StreamSpec spec{.name = camera.name};
+  spec.layout = sim::Layout::of(sim::ImageLayout::packed(16, 12, sim::PixelFormat::bgr8));
+  spec.sensor = camera_sensor();
+  FramePump frames(spec);
+  ASSERT_TRUE(frames.ok()) << frames.error();
+  Process bridge = start_bridge({"--publish", camera.name, "--frame-id", camera.name + "=renamed_optical"});
+  CycloneParticipant node;
+  CycloneReader<TfMessage> tf(node, &tf2_msgs_msg_dds__TFMessage__desc, "rt/tf_static", latched);
+  const auto mounted = take_mountings(tf);
+  ASSERT_TRUE(mounted) << bridge.err();
+  EXPECT_EQ(mounted->count("renamed_optical"), 1u) << bridge.err();
+  EXPECT_EQ(mounted->count("camera_front_optical"), 0u);
+  bridge.signal(SIGTERM);
+  EXPECT_EQ(bridge.wait(), 0) << bridge.err();
+}
+
 TEST(BridgeGraph, CameraInfoAndTfStaticFromRos2BecomeTheStreamsSensorDescription) {
   SKIP_WITHOUT_NETWORK();
   const std::string ns = unique_name("remote_cam");
