@@ -42,12 +42,47 @@ std::string frame_fault(std::string_view what, std::string_view frame) {
   return {};
 }
 
+// The length of the well-formed UTF-8 character at the start of `text` (1-4), or 0 when its
+// first byte starts none (a stray continuation byte, an overlong form, a surrogate, past U+10FFFF,
+// or cut short).
+std::size_t utf8_length(std::string_view text) {
+  const auto at = [&](std::size_t i) { return static_cast<unsigned char>(text[i]); };
+  const unsigned char lead = at(0);
+  if (lead < 0x80) return 1;
+  std::size_t n = 0;
+  unsigned char low = 0x80, high = 0xBF;  // the range of the second byte
+  if (lead >= 0xC2 && lead <= 0xDF) {
+    n = 2;
+  } else if (lead >= 0xE0 && lead <= 0xEF) {
+    n = 3;
+    if (lead == 0xE0) low = 0xA0;
+    if (lead == 0xED) high = 0x9F;
+  } else if (lead >= 0xF0 && lead <= 0xF4) {
+    n = 4;
+    if (lead == 0xF0) low = 0x90;
+    if (lead == 0xF4) high = 0x8F;
+  } else {
+    return 0;
+  }
+  if (text.size() < n || at(1) < low || at(1) > high) return 0;
+  for (std::size_t i = 2; i < n; ++i) {
+    if ((at(i) & 0xC0) != 0x80) return 0;
+  }
+  return n;
+}
+
 // The fault of a free-text field (identity, calibration source, time sync), or empty.
 std::string text_fault(std::string_view what, const std::string& text, std::size_t max) {
   if (text.size() > max) return std::string(what) + " is longer than " + std::to_string(max) + " bytes";
   for (const char c : text) {
     const auto byte = static_cast<unsigned char>(c);
     if (byte < 0x20 || byte == 0x7f) return std::string(what) + " holds a control character";
+  }
+  // Review turn 4 L6: every tool prints these, sim_ls --json too; JSON is UTF-8.
+  for (std::size_t i = 0; i < text.size();) {
+    const std::size_t n = utf8_length(std::string_view(text).substr(i));
+    if (n == 0) return std::string(what) + " holds bytes that are not UTF-8";
+    i += n;
   }
   return {};
 }
@@ -163,9 +198,15 @@ std::string sensor_text(std::string_view text, std::size_t max_bytes) {
       if (out.size() - (end - 1) < length) out.resize(end - 1);
     }
   }
-  for (char& c : out) {
-    const auto byte = static_cast<unsigned char>(c);
-    if (byte < 0x20 || byte == 0x7f) c = '?';
+  for (std::size_t i = 0; i < out.size();) {
+    const auto byte = static_cast<unsigned char>(out[i]);
+    const std::size_t n = utf8_length(std::string_view(out).substr(i));
+    if (n == 0 || byte < 0x20 || byte == 0x7f) {
+      out[i] = '?';  // a control character, or a byte of no UTF-8 character (review turn 4 L6)
+      ++i;
+    } else {
+      i += n;
+    }
   }
   return out;
 }

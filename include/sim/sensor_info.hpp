@@ -122,7 +122,7 @@ std::string drop_unusable_parts(SensorInfo& info);
 std::string frame_id_problem(std::string_view frame);
 
 // Text from outside (a sensor's metadata, a device name, a file path) made fit for a free-text
-// field of SensorInfo: control characters become '?' and it is cut to `max_bytes` (kMaxName or
+// field of SensorInfo: control characters and bytes of no UTF-8 character become '?' and it is cut to `max_bytes` (kMaxName or
 // kMaxSource) without splitting a UTF-8 character. A driver copies outside text through this, so
 // an odd byte from a sensor never makes the description invalid (which would stop the driver).
 std::string sensor_text(std::string_view text, std::size_t max_bytes);

@@ -147,6 +147,22 @@ TEST(SensorInfoValues, FrameNamesFollowTf2RulesSoFramesFromBagsAndPeersAreAccept
   EXPECT_EQ(frame_id_problem(std::string(63, 'a')), "");
 }
 
+TEST(SensorInfoValues, TextThatIsNotUtf8IsRefusedAndOutsideTextIsMadeUtf8) {
+  // Review turn 4 L6: sim_ls --json printed "Acme\xff\xfe\xc3" and JSON readers failed.
+  SensorInfo info = lidar_info();
+  info.identity.vendor = "Acme\xff\xfe\xc3";
+  EXPECT_NE(sensor_info_problem(info).find("the vendor holds bytes that are not UTF-8"), std::string::npos)
+      << sensor_info_problem(info);
+  for (const char* bad : {"\xc0\xaf", "\xed\xa0\x80", "\xf4\x90\x80\x80", "a\x80" "b"}) {
+    info.identity.vendor = bad;
+    EXPECT_NE(sensor_info_problem(info), "") << "overlong, surrogate, past U+10FFFF, stray byte";
+  }
+  info.identity.vendor = "Caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x93\xb7";
+  EXPECT_EQ(sensor_info_problem(info), "");
+  EXPECT_EQ(sensor_text("Acme\xff\xfe\xc3", SensorInfo::kMaxName), "Acme???");
+  EXPECT_EQ(sensor_text("a\xc3\xa9\x80", SensorInfo::kMaxName), "a\xc3\xa9?");
+}
+
 TEST(SensorInfoValues, AnUncalibratedCameraKeepsItsFrameAndMountingWhenItsCalibrationIsDropped) {
   // Review turn 4 M2: camera drivers without a calibration file send K all zero and often no
   // distortion_model; only the calibration goes, silently.
