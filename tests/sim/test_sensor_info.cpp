@@ -458,9 +458,15 @@ TEST(SensorInfoDamage, DamagedDescriptionIsReportedAndFramesKeepFlowing) {
     auto info = r->sensor_info();
     ASSERT_FALSE(info) << "a damaged description was accepted";
     const std::string& message = info.error().message;
-    EXPECT_EQ(message.rfind("the stream's sensor description is damaged: ", 0), 0u) << message;
     EXPECT_NE(message.find(damage.words), std::string::npos) << message;
-    EXPECT_NE(message.find("; restart its writer"), std::string::npos) << message;
+    if (std::string_view(damage.words) == "stopped in the middle") {
+      // Review turn 4 L8: the writer may only be paused or starved: no "damaged", no "restart".
+      EXPECT_EQ(message.rfind("the stream's sensor description cannot be read: ", 0), 0u) << message;
+      EXPECT_NE(message.find("read it again later"), std::string::npos) << message;
+    } else {
+      EXPECT_EQ(message.rfind("the stream's sensor description is damaged: ", 0), 0u) << message;
+      EXPECT_NE(message.find("; restart its writer"), std::string::npos) << message;
+    }
 
     publish(w);
     std::vector<std::byte> buf(r->capacity());
