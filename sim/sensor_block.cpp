@@ -2,6 +2,8 @@
 #include "sensor_block.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstring>
 #include <string_view>
 
@@ -80,6 +82,16 @@ std::string decode(const SensorRecord& r, SensorInfo& info) {
   return {};
 }
 
+// `q` divided by its norm, unless it is a unit quaternion to 1e-12 already: then it is kept bit
+// for bit, so a stored rotation reads back equal and re-encodes to the same record (the readers'
+// canonical check), and what a writer set reads back as set.
+std::array<double, 4> normalised(const std::array<double, 4>& q) noexcept {
+  const double norm2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+  if (!(norm2 > 0.0) || std::fabs(norm2 - 1.0) <= 1e-12 || !std::isfinite(norm2)) return q;
+  const double norm = std::sqrt(norm2);
+  return {q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm};
+}
+
 // A fault phrase as the error read_block() turns into its "damaged" sentence.
 Error fault_error(std::string fault) { return Error{ErrorCode::region_invalid, std::move(fault)}; }
 
@@ -101,7 +113,8 @@ SensorRecord to_record(const SensorInfo& info) noexcept {
   if (info.mounting) {
     r.flags |= kSensorHasMounting;
     std::copy(info.mounting->translation.begin(), info.mounting->translation.end(), r.translation);
-    std::copy(info.mounting->rotation.begin(), info.mounting->rotation.end(), r.rotation);
+    const std::array<double, 4> q = normalised(info.mounting->rotation);
+    std::copy(q.begin(), q.end(), r.rotation);
   }
   if (const auto& c = info.calibration) {
     r.flags |= kSensorHasCalibration;
@@ -130,7 +143,8 @@ void start_sensor_block(SensorBlock& block, std::uint64_t previous_word) noexcep
 }
 
 void write_sensor_block(SensorBlock& block, const std::optional<SensorInfo>& info) noexcept {
-  const SensorRecord record = info ? to_record(*info) : SensorRecord{};  // before: keep the window short
+  // Built before the update: keep the window short. The rotation is stored normalised.
+  const SensorRecord record = info ? to_record(*info) : SensorRecord{};
   write_block(block.word, block.record, record, info.has_value());
 }
 

@@ -56,7 +56,7 @@ Expected<std::optional<Value>> read_block(const std::atomic<std::uint64_t>& word
                                           const Record& shared, const char* what,
                                           std::uint64_t* generation, Decode decode) {
   // A rewrite is a copy of about 1 KiB: a block that stays in the middle of the same one this
-  // long belongs to a writer that stopped (died) there.
+  // long belongs to a writer that stopped there (died, or paused: it may still go on).
   constexpr std::int64_t kStuckUpdateNs = 50'000'000;
   // A reader gives up after this long if every copy overlapped another update.
   constexpr std::int64_t kMaxReadNs = 1'000'000'000;
@@ -76,7 +76,13 @@ Expected<std::optional<Value>> read_block(const std::atomic<std::uint64_t>& word
         odd_word = before;
         odd_since = now;
       } else if (now - odd_since > kStuckUpdateNs) {
-        return damaged("its writer stopped in the middle of changing it");
+        // Review turn 4 L8: a live writer stopped (SIGSTOP, a debugger) or starved on a loaded
+        // host looks the same from here, so the advice covers both.
+        return Error{ErrorCode::region_invalid,
+                     std::string("the stream's ") + what +
+                         " cannot be read: its writer stopped in the middle of changing it over 50 ms "
+                         "ago; read it again later (a writer that is paused or starved finishes the "
+                         "change when it runs again; one that died must be restarted)"};
       }
       sched_yield();
       continue;

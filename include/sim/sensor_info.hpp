@@ -104,16 +104,25 @@ bool operator==(const SensorInfo& a, const SensorInfo& b) noexcept;
 inline bool operator!=(const SensorInfo& a, const SensorInfo& b) noexcept { return !(a == b); }
 
 // One sentence saying what is wrong with `info` (a frame name that is not a ROS 2 frame name, a
-// string too long for the region, a non-finite number, a rotation that is not a unit quaternion,
+// string too long for the region, a non-finite number, a rotation that is not a unit quaternion
+// within tf2's tolerance (|q|^2 within 1e-2 of 1; stored normalised),
 // too many distortion coefficients, a K with zero focal length…), or empty when it can be stored.
 std::string sensor_info_problem(const SensorInfo& info);
 
-// Empty if `frame` is a valid frame name: 1–63 bytes of [A-Za-z0-9_/], not starting with a
-// digit or a slash (tf2 refuses the leading slash), with no empty part between slashes.
+// For a description built from someone else's data (a bag's CameraInfo and /tf_static, a ROS 2
+// peer): removes the parts sensor_info_problem would refuse, so one bad part does not take the
+// others with it. A calibration ROS calls uncalibrated (K[0] = 0, as camera drivers publish
+// without a calibration file) goes without a word; a calibration or mounting that is wrong goes
+// and is named in the returned sentence (empty when nothing wrong was removed). What is left
+// may still be refused (a frame name): check it with sensor_info_problem.
+std::string drop_unusable_parts(SensorInfo& info);
+
+// Empty if `frame` is a valid frame name: what tf2 accepts (not empty, not starting with '/'),
+// in 1–63 bytes of printable ASCII without spaces ("camera-front", "os1.lidar", "3d_lidar").
 std::string frame_id_problem(std::string_view frame);
 
 // Text from outside (a sensor's metadata, a device name, a file path) made fit for a free-text
-// field of SensorInfo: control characters become '?' and it is cut to `max_bytes` (kMaxName or
+// field of SensorInfo: control characters and bytes of no UTF-8 character become '?' and it is cut to `max_bytes` (kMaxName or
 // kMaxSource) without splitting a UTF-8 character. A driver copies outside text through this, so
 // an odd byte from a sensor never makes the description invalid (which would stop the driver).
 std::string sensor_text(std::string_view text, std::size_t max_bytes);

@@ -101,6 +101,12 @@ std::string_view camera_info_schema() noexcept { return camera_info_msg; }
 std::string_view tf_message_schema() noexcept { return tf_message_msg; }
 
 std::string camera_info_topic_for(std::string_view image_topic) {
+  // image_transport's compressed topic is a sub-topic of the image: "/cam/image_raw/compressed"
+  // pairs with "/cam/camera_info" too (review turn 4 L1).
+  constexpr std::string_view compressed = "/compressed";
+  if (image_topic.size() > compressed.size() && image_topic.ends_with(compressed)) {
+    image_topic.remove_suffix(compressed.size());
+  }
   const std::size_t slash = image_topic.rfind('/');
   const std::string_view ns = slash == std::string_view::npos ? std::string_view{}
                                                               : image_topic.substr(0, slash);

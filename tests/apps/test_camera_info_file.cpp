@@ -121,10 +121,15 @@ TEST(CameraInfoFile, AMatrixOfTheWrongSizeIsRefusedWithOneSentence) {
   ASSERT_FALSE(short_data);
   expect_one_sentence(short_data.error(), "'projection_matrix' has 6 numbers for 3x4");
 
+  // Review turn 4 L7: D as a column is read as camera_calibration_parsers reads it.
   auto d_column = parse_camera_info(front_with(
-      "distortion_coefficients", "distortion_coefficients: {rows: 5, cols: 1, data: [0,0,0,0,0]}"));
-  ASSERT_FALSE(d_column);
-  expect_one_sentence(d_column.error(), "'distortion_coefficients' is 5x1");
+      "distortion_coefficients", "distortion_coefficients: {rows: 5, cols: 1, data: [0.5,0,0,0,0.25]}"));
+  ASSERT_TRUE(d_column) << d_column.error().message;
+  EXPECT_EQ(d_column->d, (std::vector<double>{0.5, 0, 0, 0, 0.25}));
+  // A camera_name longer than the record is cut, not a reason to refuse the file.
+  auto long_name = parse_camera_info(front_with("camera_name", "camera_name: " + std::string(80, 'n')));
+  ASSERT_TRUE(long_name) << long_name.error().message;
+  EXPECT_EQ(long_name->camera_name, std::string(63, 'n'));
 
   auto too_many = parse_camera_info(front_with(
       "distortion_coefficients",

@@ -139,7 +139,7 @@ void expect_usage_error(std::vector<std::string> words, const std::string& part)
 TEST(SensorOptions, ABadFrameNameOrANumberThatIsNotFiniteIsAUsageError) {
   expect_usage_error({"--frame-id", "lidar top"}, "--frame-id");
   expect_usage_error({"--parent-frame", "/base_link"}, "--parent-frame");
-  expect_usage_error({"--frame-id", "9lidar"}, "--frame-id");
+  expect_usage_error({"--frame-id", "cam\xc3\xa9ra"}, "--frame-id");
   expect_usage_error({"--x", "nan"}, "finite");
   expect_usage_error({"--yaw", "inf"}, "finite");
   expect_usage_error({"--z", "up"}, "--z");

@@ -6,6 +6,7 @@
 // - a ROS 2 file node/write_ros2_mcap.mjs writes (no SIM metadata), played by sim_play.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <sstream>
 
@@ -324,6 +325,40 @@ TEST(SensorMetadataInMcap, ARosbag2RecordingPlaysBackWithItsCalibrationAndMounti
   EXPECT_EQ(sensor->calibration->d, (std::vector<double>{-0.2, 0.1, 0, 0, 0.01}));
   EXPECT_EQ(sensor->calibration->k, (std::array<double, 9>{500, 0, 2, 0, 501, 1.5, 0, 0, 1}));
   EXPECT_EQ(sensor->calibration->p, (std::array<double, 12>{499, 0, 2, 0, 0, 498, 1.5, 0, 0, 0, 1, 0}));
+}
+
+// Review turn 4 M2, M3, M5: a RealSense-like recording without calibration (K all zero, no
+// distortion_model) whose optical frame hangs off base_link through camera_link and
+// camera_color_frame, one rotation typed with four decimals: the stream gets the whole chain
+// composed as its mounting under base_link, and no calibration.
+TEST(SensorMetadataInMcap, AnUncalibratedRigPlaysBackWithItsChainOfMountingsComposed) {
+  sim::testing::TempFile file;
+  sim::testing::StreamCleanup cleanup;
+  const auto written = sim::testing::run({NODE, WRITE_ROSBAG2_SENSOR_SCRIPT, file.path(), "uncalibrated-rig"});
+  ASSERT_EQ(written.code, 0) << written.err;
+  const std::string out = sim::testing::unique_stream("rosbag2rig");
+  cleanup.names = {out};
+  const auto played = sim::testing::run({SIM_PLAY, file.path(), "--remap", "/cam/front/image_raw=" + out,
+                                         "--max-rate", "--keep-streams"});
+  EXPECT_EQ(played.code, 0) << played.err;
+  const auto sensor = sensor_of(out);
+  ASSERT_TRUE(sensor) << "no description: " << played.err;
+  EXPECT_EQ(sensor->frame_id, "camera_color_optical_frame");
+  EXPECT_EQ(sensor->parent_frame, "base_link") << "one hop of the chain: " << played.err;
+  EXPECT_FALSE(sensor->calibration) << "an all-zero K is no calibration";
+  ASSERT_TRUE(sensor->mounting) << played.err;
+  // camera_link turned 90 degrees about z carries camera_color_frame 15 mm along its y: -x of base_link.
+  const auto& t = sensor->mounting->translation;
+  EXPECT_NEAR(t[0], 0.985, 1e-4);
+  EXPECT_NEAR(t[1], 0.0, 1e-4);
+  EXPECT_NEAR(t[2], 0.5, 1e-12);
+  // (0, 0, s, s) * (-0.5, 0.5, -0.5, 0.5) = (-s, 0, 0, s), s = sqrt(1/2), stored as a unit quaternion.
+  const auto& q = sensor->mounting->rotation;
+  const double s = std::sqrt(0.5);
+  EXPECT_NEAR(q[0], -s, 1e-12);
+  EXPECT_NEAR(q[1], 0.0, 1e-12);
+  EXPECT_NEAR(q[2], 0.0, 1e-12);
+  EXPECT_NEAR(q[3], s, 1e-12);
 }
 
 }  // namespace

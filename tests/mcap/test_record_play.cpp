@@ -9,12 +9,18 @@
 #include <sys/statvfs.h>
 #include <turbojpeg.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cstddef>
 #include <cstring>
 
+#include "../../sim/region.hpp"
 #include "mcap_test_files.hpp"
 #include "record_play_support.hpp"
 #include "sim/mcap/writer.hpp"
+#include "sim/writer.hpp"
 #include "sim/ros2/encode.hpp"
 #include "sim/ros2/message.hpp"
 #include "sim_test/process.hpp"
@@ -494,6 +500,75 @@ TEST(SimRecord, ExitsWith1WhenTheLastChunkCannotBeWritten) {
   EXPECT_NE(recorder.err().find("No space left"), std::string::npos) << recorder.err();
   EXPECT_EQ(json_number(recorder.out(), camera_stream, "frames"), 0u) << recorder.out();  // none reached it
   camera.signal(SIGTERM);
+}
+
+// Review turn 4 M6: a description sim_record cannot read for a moment (its writer stopped in the
+// middle of an update, as under SIGSTOP, a debugger or a loaded host) is read again at a later
+// frame: once the writer goes on, the images carry the sensor's frame and their CameraInfo.
+TEST(SimRecord, ADescriptionUnreadableForAMomentIsReadAgainAtALaterFrame) {
+  sim::testing::StreamCleanup cleanup;
+  sim::testing::TempFile file;
+  const std::string name = unique_stream("stuck_cam");
+  cleanup.names = {name};
+  sim::StreamSpec spec;
+  spec.name = name;
+  spec.layout = sim::Layout::of(sim::ImageLayout::packed(4, 3, sim::PixelFormat::mono8));
+  sim::SensorInfo sensor;
+  sensor.frame_id = "stuck_cam_optical";
+  sim::CameraCalibration c;
+  c.width = 4;
+  c.height = 3;
+  c.distortion_model = "plumb_bob";
+  c.d = {0, 0, 0, 0, 0};
+  c.k = {10, 0, 2, 0, 10, 1.5, 0, 0, 1};
+  c.p = {10, 0, 2, 0, 0, 10, 1.5, 0, 0, 0, 1, 0};
+  sensor.calibration = c;
+  spec.sensor = sensor;
+  auto writer = sim::Writer::create(spec);
+  ASSERT_TRUE(writer) << writer.error().message;
+
+  // The description's word as a writer leaves it in the middle of an update.
+  const int fd = open(("/dev/shm/sim." + name.substr(1)).c_str(), O_RDWR);
+  ASSERT_GE(fd, 0);
+  const auto at = static_cast<off_t>(sim::detail::kHeaderOffset + offsetof(sim::detail::RegionHeader, sensor));
+  std::uint64_t word = 0;
+  ASSERT_EQ(pread(fd, &word, sizeof word, at), static_cast<ssize_t>(sizeof word));
+  const std::uint64_t writing = word | sim::detail::kSensorWriting;
+  ASSERT_EQ(pwrite(fd, &writing, sizeof writing, at), static_cast<ssize_t>(sizeof writing));
+
+  Process recorder({SIM_RECORD, "-o", file.path(), name, "--json"});
+  ASSERT_TRUE(recorder.wait_for_line("recording")) << recorder.err();
+  const std::byte pixels[12] = {};
+  std::int64_t stamp_ns = 1'700'000'000'000'000'000;
+  auto publish = [&](int frames) {
+    for (int n = 0; n < frames; ++n) {
+      stamp_ns += 20'000'000;
+      ASSERT_TRUE((*writer).write(pixels, sizeof pixels, stamp_ns) == sim::WriteStatus::ok);
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  };
+  publish(100);  // read by the recorder while the description cannot be read
+  ASSERT_EQ(pwrite(fd, &word, sizeof word, at), static_cast<ssize_t>(sizeof word));  // the writer goes on
+  close(fd);
+  publish(50);
+  recorder.signal(SIGINT);
+  EXPECT_EQ(recorder.wait(), 0) << recorder.err();
+  EXPECT_NE(recorder.err().find("stopped in the middle"), std::string::npos)
+      << "the recorder never met the unreadable description: " << recorder.err();
+
+  auto reader = sim::mcap::Reader::open(file.path());
+  ASSERT_TRUE(reader) << reader.error().message;
+  std::string last_frame_id;
+  int camera_infos = 0;
+  while (auto m = reader->next()) {
+    const auto* schema = reader->schema_of(reader->channels().at(m->header.channel_id));
+    if (schema && schema->name == "sensor_msgs/msg/CameraInfo") ++camera_infos;
+    if (schema && schema->name == "sensor_msgs/msg/Image") {
+      if (auto image = sim::ros2::decode_image(m->data)) last_frame_id = std::string(image->header.frame_id);
+    }
+  }
+  EXPECT_EQ(last_frame_id, "stuck_cam_optical") << recorder.err();
+  EXPECT_GT(camera_infos, 0) << recorder.err();
 }
 
 }  // namespace

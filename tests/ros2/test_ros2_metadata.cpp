@@ -163,6 +163,12 @@ TEST(Ros2CameraInfo, TheSiblingTopicReplacesTheLastNameToken) {
   EXPECT_EQ(camera_info_topic_for("/camera_front"), "/camera_info");
 }
 
+TEST(Ros2CameraInfo, ACompressedImagesSiblingIsTheCameraInfoBesideItsImageTopic) {
+  // Review turn 4 L1: image_transport's /compressed is a sub-topic of the image topic.
+  EXPECT_EQ(camera_info_topic_for("/cam/image_raw/compressed"), "/cam/camera_info");
+  EXPECT_EQ(camera_info_topic_for("/compressed"), "/camera_info");
+}
+
 TEST(Ros2CameraInfo, RestampRewritesOnlyTheHeaderStamp) {
   auto message = encode_camera_info({Time{1, 2}, "cam"}, some_calibration()).value();
   ASSERT_TRUE(restamp(message, Time{-3, 999999999}));

@@ -164,10 +164,10 @@ TEST(CApi, DamagedSensorDescriptionIsAnErrorWhileFramesFlow) {
   ASSERT_EQ(SIM_writerSetSensorInfo(w, &info), 0) << SIM_lastError();
   sim_reader* r = SIM_readerInit(g.name.c_str(), 64);
   ASSERT_NE(r, nullptr) << SIM_lastError();
-  // Another process turns the frame name into one that starts with a digit.
+  // Another process turns the frame name into one that starts with '/'.
   const int fd = open(("/dev/shm/sim." + g.name.substr(1)).c_str(), O_RDWR);
   ASSERT_GE(fd, 0);
-  const char digit = '7';
+  const char digit = '/';
   const off_t at = static_cast<off_t>(sim::detail::kHeaderOffset + offsetof(sim::detail::RegionHeader, sensor) +
                                       offsetof(sim::detail::SensorBlock, record) +
                                       offsetof(sim::detail::SensorRecord, frame_id));

@@ -278,10 +278,15 @@ void ChannelPlayer::update_sensor(std::string_view frame_id) {
   info.frame_id = frame_id_;
   info.calibration = calibration_;
   if (mountings_ != nullptr) {
-    if (const auto it = mountings_->by_child.find(frame_id_); it != mountings_->by_child.end()) {
+    if (const auto it = mountings_->to_root.find(frame_id_); it != mountings_->to_root.end()) {
       info.parent_frame = it->second.first;
       info.mounting = it->second.second;
     }
+  }
+  // Review turn 4 M2: an uncalibrated camera's CameraInfo (K all zero) loses only its calibration.
+  const std::string dropped = drop_unusable_parts(info);
+  if (!dropped.empty() && sensor_problem_.empty()) {
+    sensor_problem_ = "the sensor description of " + stream_ + " is restored in part: " + dropped;
   }
   if (!info.calibration && !info.mounting) return;  // the recording says nothing about it
   if (sensor_ && *sensor_ == info) return;

@@ -28,6 +28,10 @@ namespace sim::play {
 // `generation` changes with every /tf_static message, so players notice without comparing.
 struct Mountings {
   std::map<std::string, std::pair<std::string, Mounting>, std::less<>> by_child;
+  // Each child's chain composed up to base_link (or the root of its tree when base_link is not
+  // in it): RealSense's camera_link -> camera_color_frame -> camera_color_optical_frame becomes
+  // one mounting of the optical frame under base_link, as a stream's description holds one.
+  std::map<std::string, std::pair<std::string, Mounting>, std::less<>> to_root;
   std::uint64_t generation = 0;
 };
 

@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sensor_metadata.hpp"
 
+#include <array>
+#include <cmath>
+
 #include "sim/ros2/diagnostics.hpp"
 #include "sim/ros2/metadata.hpp"
 
@@ -23,6 +26,53 @@ std::string_view image_base(std::string_view topic) {
     topic.remove_suffix(suffix.size());
   }
   return topic;
+}
+
+using Quaternion = std::array<double, 4>;  // x, y, z, w
+
+Quaternion unit(const Quaternion& q) {
+  const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  if (!(norm > 0.0)) return q;  // left for sensor_info_problem to refuse
+  return {q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm};
+}
+
+// a * b (Hamilton product, x y z w).
+Quaternion multiply(const Quaternion& a, const Quaternion& b) {
+  return {a[3] * b[0] + a[0] * b[3] + a[1] * b[2] - a[2] * b[1],
+          a[3] * b[1] - a[0] * b[2] + a[1] * b[3] + a[2] * b[0],
+          a[3] * b[2] + a[0] * b[1] - a[1] * b[0] + a[2] * b[3],
+          a[3] * b[3] - a[0] * b[0] - a[1] * b[1] - a[2] * b[2]};
+}
+
+// `v` turned by the unit quaternion `q`.
+std::array<double, 3> rotate(const Quaternion& q, const std::array<double, 3>& v) {
+  const Quaternion p = multiply(multiply(q, {v[0], v[1], v[2], 0.0}), {-q[0], -q[1], -q[2], q[3]});
+  return {p[0], p[1], p[2]};
+}
+
+// The mounting of c in a from b in a (`outer`) and c in b (`inner`), as tf2 chains transforms.
+Mounting compose(const Mounting& outer, const Mounting& inner) {
+  const Quaternion q = unit(outer.rotation);
+  const std::array<double, 3> moved = rotate(q, inner.translation);
+  Mounting m;
+  for (std::size_t i = 0; i < 3; ++i) m.translation[i] = outer.translation[i] + moved[i];
+  m.rotation = unit(multiply(q, unit(inner.rotation)));
+  return m;
+}
+
+// Review turn 4 M5: every child's chain of mountings composed up to base_link, or to the root of
+// its tree. A loop (a bad file) ends after as many hops as there are mountings.
+void compose_chains(Mountings& mountings) {
+  mountings.to_root.clear();
+  for (const auto& [child, direct] : mountings.by_child) {
+    std::pair<std::string, Mounting> chained = direct;
+    for (std::size_t hops = 0; hops < mountings.by_child.size() && chained.first != "base_link"; ++hops) {
+      const auto up = mountings.by_child.find(chained.first);
+      if (up == mountings.by_child.end() || up->first == child) break;
+      chained = {up->second.first, compose(up->second.second, chained.second)};
+    }
+    mountings.to_root.emplace(child, std::move(chained));
+  }
 }
 
 }  // namespace
@@ -70,6 +120,7 @@ std::optional<Error> SensorMetadata::take(std::uint16_t channel, std::span<const
   for (const auto& t : *transforms) {
     mountings_.by_child[std::string(t.child_frame_id)] = {std::string(t.header.frame_id), t.transform};
   }
+  compose_chains(mountings_);
   ++mountings_.generation;
   return std::nullopt;
 }

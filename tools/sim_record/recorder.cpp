@@ -117,6 +117,7 @@ struct StreamState {
   std::string frame_id;  // the sensor's frame, else the stream name without its slash: "lidar_top"
   Reader reader;
   std::uint64_t sensor_generation = UINT64_MAX;  // of the description below; MAX: not looked yet
+  std::uint64_t sensor_failed = UINT64_MAX;      // a generation whose description could not be read
   std::vector<std::byte> camera_info;            // CameraInfo to restamp per image; empty: none
   std::string hardware_id;                       // the sensor's serial, else the stream name
   std::uint64_t clock_generation = UINT64_MAX;   // of the clock recorded last; MAX: not looked yet
@@ -281,14 +282,18 @@ struct Recorder::Impl {
   // A new sensor description (or the first look): the frame id of the messages, the CameraInfo
   // beside images, and the stream's mounting on /tf_static follow it.
   void sensor_changed(StreamState& s, std::size_t index, std::uint64_t generation) {
+    auto sensor = s.reader.sensor_info();
+    if (!sensor) {
+      // Review turn 4 M6: a writer stopped in the middle of an update (SIGSTOP, a debugger, a
+      // loaded host) is no final answer: the recording keeps what it has, and the next frame
+      // looks again (said once per generation).
+      if (s.sensor_failed != generation) note("stream " + s.name + ": " + sensor.error().message);
+      s.sensor_failed = generation;
+      return;
+    }
     s.sensor_generation = generation;
     s.frame_id = s.default_frame_id();
     s.camera_info.clear();
-    auto sensor = s.reader.sensor_info();
-    if (!sensor) {
-      note("stream " + s.name + ": " + sensor.error().message);
-      return;
-    }
     const std::optional<SensorInfo>& info = *sensor;
     s.hardware_id = ros2::clock_hardware_id(s.name, info);
     if (!info) return set_mounting(index, std::nullopt);

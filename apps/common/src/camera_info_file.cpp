@@ -118,13 +118,17 @@ CameraCalibration calibration_from(const YAML::Node& root) {
   c.height = whole_number(required(root, "image_height"), "'image_height'", kMaxSide);
   if (c.width == 0 || c.height == 0) throw Problem{"gives an image size of zero"};
   if (const YAML::Node name = root["camera_name"]; name.IsDefined() && !name.IsNull()) {
-    c.camera_name = text_of(name, "camera_name");
+    // Informational, and ROS sets no limit: cut to fit the record rather than refuse the file
+    // (review turn 4 L7).
+    c.camera_name = sensor_text(text_of(name, "camera_name"), SensorInfo::kMaxName);
   }
   if (const YAML::Node model = root["distortion_model"]; model.IsDefined() && !model.IsNull()) {
     c.distortion_model = text_of(model, "distortion_model");
   }
   c.k = fixed_matrix<9>(root, "camera_matrix", 3, 3);
-  c.d = matrix(root, "distortion_coefficients", 1, 0);
+  // camera_calibration_parsers reads rows x cols values whatever the shape: 1x5 and 5x1 alike
+  // (review turn 4 L7).
+  c.d = matrix(root, "distortion_coefficients", 0, 0);
   if (c.d.size() > CameraCalibration::kMaxDistortion) {
     throw Problem{"has " + std::to_string(c.d.size()) + " distortion coefficients, more than " +
                   std::to_string(CameraCalibration::kMaxDistortion)};

@@ -105,8 +105,10 @@ Expected<SensorInfo> sensor_info_from(const SensorOptions& options, std::string_
     info.calibration_source = "file://" + std::filesystem::absolute(*path).lexically_normal().string();
     if (info.calibration_source.size() > SensorInfo::kMaxSource) {
       // Too long to store: the file's name still says which calibration it was.
-      info.calibration_source = path->filename().string().substr(0, SensorInfo::kMaxSource);
+      info.calibration_source = path->filename().string();
     }
+    // A path is the user's: odd characters in it (a newline) are shown as '?', never refused.
+    info.calibration_source = sensor_text(info.calibration_source, SensorInfo::kMaxSource);
   }
   if (auto stored = check_sensor_info(info); !stored) return stored.error();
   return info;

@@ -167,13 +167,21 @@ void Inbound::update_sensor() {
     sensor.parent_frame = parent->frame;
     sensor.mounting = parent->mounting;
   }
+  if (same_sensor(offered_, sensor)) return;  // told once, not retried per frame
+  offered_ = sensor;
+  // Review turn 4 M2: a part that cannot be used (an uncalibrated camera's all-zero K) goes
+  // alone; the frame and the mounting stay.
+  if (const std::string dropped = drop_unusable_parts(sensor); !dropped.empty()) {
+    counters_.problem(options_.stream + ": the sensor description from ROS 2: " + dropped);
+  }
   if (!sensor.mounting && !sensor.calibration) return;  // nothing worth describing
   if (same_sensor(sensor_, sensor)) return;
   if (auto set = writer_->set_sensor_info(sensor); !set) {
     counters_.problem(options_.stream + ": the sensor description from ROS 2 is refused: " +
                       set.error().message);
+    return;  // review turn 4 M1: sensor_ (what a replaced region gets) holds only what was set
   }
-  sensor_ = std::move(sensor);  // told once, not retried per frame
+  sensor_ = std::move(sensor);
 }
 
 void Inbound::drop(const std::string& sentence) {

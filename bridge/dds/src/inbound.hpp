@@ -75,7 +75,8 @@ class Inbound final : private MessageSink {
   std::optional<Writer> writer_;
   std::string frame_id_;                        // of the last message
   std::optional<CameraCalibration> calibration_;  // from camera_info
-  std::optional<SensorInfo> sensor_;            // what the writer has
+  std::optional<SensorInfo> sensor_;            // what the writer has (accepted by it)
+  std::optional<SensorInfo> offered_;           // the last built from ROS 2, as built
   bool sensor_check_due_ = false;
   std::int64_t next_sensor_check_ns_ = 0;
   CameraInfoSink camera_info_sink_;

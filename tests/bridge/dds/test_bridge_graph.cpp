@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 #include <cstring>
 #include <map>
 #include <optional>
@@ -278,6 +279,57 @@ TEST(BridgeGraph, ALateRos2NodeGetsCalibrationMountingsUserDataAndTheBridgeAsANo
   EXPECT_EQ(bridge.wait(), 0) << bridge.err();
 }
 
+// Review turn 4 L9: `ros2 topic echo <ns>/camera_info` alone (nobody reads the images) gets the
+// calibration, one per frame, with the frame's stamp.
+TEST(BridgeGraph, AReaderOfCameraInfoAloneGetsTheCalibration) {
+  SKIP_WITHOUT_NETWORK();
+  StreamGuard camera(unique_name("cam_info_only"));
+  sim::StreamSpec spec{.name = camera.name};
+  spec.layout = sim::Layout::of(sim::ImageLayout::packed(16, 12, sim::PixelFormat::bgr8));
+  spec.sensor = camera_sensor();
+  FramePump frames(spec);
+  ASSERT_TRUE(frames.ok()) << frames.error();
+  Process bridge = start_bridge({"--publish", camera.name});
+  ASSERT_FALSE(wait_counter(bridge, "/tf_static", "bridged", 1).empty()) << bridge.err();
+
+  CycloneParticipant node;
+  CycloneReader<CameraInfo> infos(node, &sensor_msgs_msg_dds__CameraInfo__desc,
+                                  "rt" + camera.name + "/camera_info", deep);
+  std::set<std::int64_t> stamps;
+  for (int n = 0; n < 3; ++n) {
+    ASSERT_TRUE(infos.take([&](const CameraInfo& info) {
+      EXPECT_STREQ(info.header.frame_id, "camera_front_optical");
+      EXPECT_EQ(info.width, 16u);
+      EXPECT_EQ(info.k[0], 500.5);
+      stamps.insert(stamp_of(info.header));
+    })) << "no CameraInfo without an image reader: " << bridge.err();
+  }
+  EXPECT_EQ(stamps.size(), 3u) << "one CameraInfo per frame, each with its frame's stamp";
+  bridge.signal(SIGTERM);
+  EXPECT_EQ(bridge.wait(), 0) << bridge.err();
+}
+
+// Review turn 4 L2: with --frame-id S=F the images say F, so /tf_static mounts F (not the
+// description's frame, which then was in no message).
+TEST(BridgeGraph, AFrameIdOverrideIsTheChildOnTfStaticToo) {
+  SKIP_WITHOUT_NETWORK();
+  StreamGuard camera(unique_name("cam_renamed"));
+  sim::StreamSpec spec{.name = camera.name};
+  spec.layout = sim::Layout::of(sim::ImageLayout::packed(16, 12, sim::PixelFormat::bgr8));
+  spec.sensor = camera_sensor();
+  FramePump frames(spec);
+  ASSERT_TRUE(frames.ok()) << frames.error();
+  Process bridge = start_bridge({"--publish", camera.name, "--frame-id", camera.name + "=renamed_optical"});
+  CycloneParticipant node;
+  CycloneReader<TfMessage> tf(node, &tf2_msgs_msg_dds__TFMessage__desc, "rt/tf_static", latched);
+  const auto mounted = take_mountings(tf);
+  ASSERT_TRUE(mounted) << bridge.err();
+  EXPECT_EQ(mounted->count("renamed_optical"), 1u) << bridge.err();
+  EXPECT_EQ(mounted->count("camera_front_optical"), 0u);
+  bridge.signal(SIGTERM);
+  EXPECT_EQ(bridge.wait(), 0) << bridge.err();
+}
+
 TEST(BridgeGraph, CameraInfoAndTfStaticFromRos2BecomeTheStreamsSensorDescription) {
   SKIP_WITHOUT_NETWORK();
   const std::string ns = unique_name("remote_cam");
@@ -310,6 +362,69 @@ TEST(BridgeGraph, CameraInfoAndTfStaticFromRos2BecomeTheStreamsSensorDescription
   EXPECT_EQ(described->mounting->translation, (std::array<double, 3>{0.5, -0.25, 2.0}));
   EXPECT_EQ(described->calibration->k, (std::array<double, 9>{40.5, 0, 4, 0, 41.5, 3, 0, 0, 1}));
   EXPECT_EQ(described->calibration->d, (std::vector<double>{0.1, -0.05, 0, 0, 0}));
+  bridge.signal(SIGTERM);
+  EXPECT_EQ(bridge.wait(), 0) << bridge.err();
+}
+
+// Review turn 4 M1-M4: an uncalibrated camera (CameraInfo with K all zero and no
+// distortion_model, as camera drivers send without a calibration file) whose frame has a '-' and
+// a '.' and whose mounting has a hand-typed quaternion: the stream gets the frame and the
+// mounting (without the calibration), and keeps flowing after its region is replaced for a new
+// image size.
+TEST(BridgeGraph, AnUncalibratedCameraKeepsItsMountingAndItsStreamSurvivesANewImageSize) {
+  SKIP_WITHOUT_NETWORK();
+  const std::string ns = unique_name("raw_cam");
+  StreamGuard local(unique_name("raw_cam_local"));
+  Process bridge = start_bridge({"--subscribe", ns + "/image_raw", "--as", local.name});
+  CycloneParticipant node;
+  CycloneWriter tf(node, &tf2_msgs_msg_dds__TFMessage__desc, "rt/tf_static", latched);
+  CycloneWriter images(node, &sensor_msgs_msg_dds__Image__desc, "rt" + ns + "/image_raw");
+  CycloneWriter infos(node, &sensor_msgs_msg_dds__CameraInfo__desc, "rt" + ns + "/camera_info");
+
+  geometry_msgs_msg_dds__TransformStamped_ mounting{};
+  mounting.header.frame_id = const_cast<char*>("base_link");
+  mounting.child_frame_id = const_cast<char*>("usb-cam.optical");
+  mounting.transform.translation = {0.5, -0.25, 2.0};
+  mounting.transform.rotation = {0.7071, 0, 0, 0.7071};  // typed with four decimals
+  TfMessage tf_message{};
+  tf_message.transforms._buffer = &mounting;
+  tf_message.transforms._length = tf_message.transforms._maximum = 1;
+  tf.write(&tf_message);
+
+  ImageMessage small(8, 6, "mono8", 8, 9, "usb-cam.optical");
+  CameraInfoMessage uncalibrated(small.image, {}, {});
+  uncalibrated.info.distortion_model = const_cast<char*>("");
+  const auto described = publish_until_described(images, small.image, infos, uncalibrated.info, local.name,
+                                                 [](const sim::SensorInfo& s) { return s.mounting.has_value(); });
+  EXPECT_TRUE(described && described->mounting) << bridge.err();
+  if (described && described->mounting) {
+    EXPECT_EQ(described->frame_id, "usb-cam.optical");
+    EXPECT_EQ(described->parent_frame, "base_link");
+    EXPECT_NEAR(described->mounting->rotation[0], std::sqrt(0.5), 1e-12) << "stored normalised";
+    EXPECT_FALSE(described->calibration) << "an all-zero K is no calibration";
+  }
+
+  // A larger image replaces the region; the stream carries on with its description.
+  ImageMessage large(16, 12, "mono8", 16, 5, "usb-cam.optical");
+  CameraInfoMessage large_info(large.image, {}, {});
+  large_info.info.distortion_model = const_cast<char*>("");
+  std::optional<sim::StreamStatus> status;
+  for (int n = 0; n < 600; ++n) {  // a hang guard, not a timing check
+    large.image.header.stamp = large_info.info.header.stamp = {1'800'000'000 + n, 0};
+    images.write(&large.image);
+    infos.write(&large_info.info);
+    std::this_thread::sleep_for(50ms);
+    if (auto got = sim::inspect(local.name)) status = *got;
+    if (status && status->layout.kind == sim::LayoutKind::image && status->layout.image.width == 16 &&
+        status->frames_this_writer > 0) {
+      break;
+    }
+  }
+  ASSERT_TRUE(status) << bridge.err();
+  EXPECT_EQ(status->layout.image.width, 16u) << "the stream stopped at the new image size: " << bridge.err();
+  EXPECT_GT(status->frames_this_writer, 0u) << bridge.err();
+  ASSERT_TRUE(status->sensor && status->sensor->mounting) << bridge.err();
+  EXPECT_EQ(status->sensor->frame_id, "usb-cam.optical");
   bridge.signal(SIGTERM);
   EXPECT_EQ(bridge.wait(), 0) << bridge.err();
 }

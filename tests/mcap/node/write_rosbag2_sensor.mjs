@@ -8,6 +8,11 @@
 //   /tf_static              one TFMessage (transient_local offered QoS, as rosbag2 writes it):
 //                           base_link -> cam_front_optical t = (1.5, 0.25, 2) r = (0, 0, 0.6, 0.8)
 //                           base_link -> lidar_top         t = (0, 0, 2.5)    r = (0, 0, 0, 1)
+// With "uncalibrated-rig" after the path (review turn 4 M2, M3, M5), as a RealSense driver
+// without a calibration records: the images' frame is camera_color_optical_frame, chained
+//   base_link -> camera_link (t = (1, 0, 0.5), r = (0, 0, 0.7071, 0.7071), typed to 4 decimals)
+//   camera_link -> camera_color_frame (t = (0, 0.015, 0)) -> camera_color_optical_frame
+//   (r = (-0.5, 0.5, -0.5, 0.5)), and the CameraInfo has k all zero and no distortion_model.
 // Every channel carries topic_type_hash (RIHS01 of sensor_msgs and tf2_msgs as rosidl generates it).
 import { open } from "node:fs/promises";
 import { McapWriter } from "@mcap/core";
@@ -61,9 +66,17 @@ const imageChannel = await channel("/cam/front/image_raw", "sensor_msgs/msg/Imag
 
 const start = { sec: 1700000500, nanosec: 0 };
 const toNs = (t) => BigInt(t.sec) * 1000000000n + BigInt(t.nanosec);
+const rig = process.argv[3] === "uncalibrated-rig";
+const cameraFrame = rig ? "camera_color_optical_frame" : "cam_front_optical";
+const mount = (parent, child, t, r) => ({ header: { stamp: start, frame_id: parent }, child_frame_id: child,
+  transform: { translation: { x: t[0], y: t[1], z: t[2] }, rotation: { x: r[0], y: r[1], z: r[2], w: r[3] } } });
+const cameraMountings = rig ? [
+  mount("base_link", "camera_link", [1, 0, 0.5], [0, 0, 0.7071, 0.7071]),
+  mount("camera_link", "camera_color_frame", [0, 0.015, 0], [0, 0, 0, 1]),
+  mount("camera_color_frame", "camera_color_optical_frame", [0, 0, 0], [-0.5, 0.5, -0.5, 0.5]),
+] : [mount("base_link", "cam_front_optical", [1.5, 0.25, 2], [0, 0, 0.6, 0.8])];
 const tf = new MessageWriter(parse(TF, { ros2: true })).writeMessage({ transforms: [
-  { header: { stamp: start, frame_id: "base_link" }, child_frame_id: "cam_front_optical",
-    transform: { translation: { x: 1.5, y: 0.25, z: 2 }, rotation: { x: 0, y: 0, z: 0.6, w: 0.8 } } },
+  ...cameraMountings,
   { header: { stamp: start, frame_id: "base_link" }, child_frame_id: "lidar_top",
     transform: { translation: { x: 0, y: 0, z: 2.5 }, rotation: { x: 0, y: 0, z: 0, w: 1 } } },
 ] });
@@ -73,12 +86,13 @@ const infoWriter = new MessageWriter(parse(CAMERA_INFO, { ros2: true }));
 const imageWriter = new MessageWriter(parse(IMAGE, { ros2: true }));
 for (let m = 0; m < 5; ++m) {
   const stamp = { sec: start.sec + 1, nanosec: m * 100000000 };
-  const header = { stamp, frame_id: "cam_front_optical" };
+  const header = { stamp, frame_id: cameraFrame };
   const time = toNs(stamp);
   const info = infoWriter.writeMessage({
-    header, height: 3, width: 4, distortion_model: "plumb_bob", d: [-0.2, 0.1, 0, 0, 0.01],
-    k: [500, 0, 2, 0, 501, 1.5, 0, 0, 1], r: [1, 0, 0, 0, 1, 0, 0, 0, 1],
-    p: [499, 0, 2, 0, 0, 498, 1.5, 0, 0, 0, 1, 0], binning_x: 0, binning_y: 0,
+    header, height: 3, width: 4, distortion_model: rig ? "" : "plumb_bob", d: rig ? [] : [-0.2, 0.1, 0, 0, 0.01],
+    k: rig ? new Array(9).fill(0) : [500, 0, 2, 0, 501, 1.5, 0, 0, 1],
+    r: rig ? new Array(9).fill(0) : [1, 0, 0, 0, 1, 0, 0, 0, 1],
+    p: rig ? new Array(12).fill(0) : [499, 0, 2, 0, 0, 498, 1.5, 0, 0, 0, 1, 0], binning_x: 0, binning_y: 0,
     roi: { x_offset: 0, y_offset: 0, height: 0, width: 0, do_rectify: false },
   });
   const pixels = new Uint8Array(4 * 3 * 3).map((_, j) => (m + j) % 256);

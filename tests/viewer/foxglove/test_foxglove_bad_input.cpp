@@ -330,7 +330,9 @@ TEST_F(FoxgloveBadInput, APageOfAnotherSiteMayNotOpenTheWebSocket) {
     EXPECT_NE(head->find(" 403 "), std::string::npos) << *head;
   }
   const std::string own = host_port("127.0.0.1", port());
-  for (const std::string& origin : {"http://" + own, std::string("https://app.foxglove.dev")}) {
+  // file:// is what desktop apps send (the docs let them in; issue 32: it got 403).
+  for (const std::string& origin : {"http://" + own, std::string("https://app.foxglove.dev"),
+                                    std::string("file://")}) {
     RawClient client(port());
     const auto head = client.handshake_with(offer + "Origin: " + origin + "\r\n", own);
     ASSERT_TRUE(head);

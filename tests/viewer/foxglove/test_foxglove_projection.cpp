@@ -109,4 +109,21 @@ TEST(FoxgloveProjection, AnEquidistantLensBendsByTheAngle) {
   EXPECT_NEAR((*p)[1], 240, 1e-3);
 }
 
+// Review turn 4 L4: a wide fisheye (1280x960, fx = 330) sees 76 degrees off axis inside its
+// picture, where the undistorted pixel (u = 640 + 330 tan 76°, about 1963) is far outside.
+TEST(FoxgloveProjection, AWideFisheyeDrawsItsPeriphery) {
+  sim::CameraCalibration c;
+  c.width = 1280;
+  c.height = 960;
+  c.distortion_model = "equidistant";
+  c.d = {0, 0, 0, 0};
+  c.k = {330, 0, 640, 0, 330, 480, 0, 0, 1};
+  c.p = {330, 0, 640, 0, 0, 330, 480, 0, 0, 0, 1, 0};
+  const double theta = 76.0 * 3.14159265358979323846 / 180.0;
+  auto p = sim::foxglove::project_to_pixel(c, 1280, 960, {std::sin(theta), 0, std::cos(theta)});
+  ASSERT_TRUE(p) << "a point at 76 degrees off axis was not drawn";
+  EXPECT_NEAR((*p)[0], 640 + 330 * theta, 1e-3);
+  EXPECT_NEAR((*p)[1], 480, 1e-3);
+}
+
 }  // namespace

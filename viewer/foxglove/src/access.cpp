@@ -102,7 +102,8 @@ std::string AccessPolicy::origin_problem(std::string_view origin, std::string_vi
   if (any_ || origin.empty()) return {};
   std::string o = lower(origin);
   while (!o.empty() && o.back() == '/') o.pop_back();
-  if (o == "http://" + lower(trim(host)) || o == "file://") return {};
+  // A desktop app's "file://" has lost its slashes above (issue 32: it was never let in).
+  if (o == "http://" + lower(trim(host)) || o == "file:") return {};
   for (const std::string& allowed : origins_) {
     if (o == allowed) return {};
   }

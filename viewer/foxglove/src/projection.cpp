@@ -123,10 +123,16 @@ std::optional<std::array<float, 2>> project_to_pixel(const CameraCalibration& c,
   if (fx == 0 || fy == 0) return std::nullopt;
   const double x = point[0] / point[2], y = point[1] / point[2];
   // Far outside the calibrated field a distortion polynomial folds back into the image: only
-  // points whose undistorted pixel is near the picture are distorted and drawn.
+  // points whose undistorted pixel is near the picture are distorted and drawn. Not for the
+  // equidistant (fisheye) model, whose angle stays below 90 degrees in front of the camera while
+  // its undistorted pixel grows like tan: that gate culled a wide lens's periphery (review turn
+  // 4 L4); the picture's bounds below still apply.
   const double w = c.width > 0 ? c.width : image_width, h = c.height > 0 ? c.height : image_height;
   const double u0 = fx * x + cx, v0 = fy * y + cy;
-  if (u0 < -0.5 * w || u0 > 1.5 * w || v0 < -0.5 * h || v0 > 1.5 * h) return std::nullopt;
+  if (c.distortion_model != "equidistant" &&
+      (u0 < -0.5 * w || u0 > 1.5 * w || v0 < -0.5 * h || v0 > 1.5 * h)) {
+    return std::nullopt;
+  }
   const auto [xd, yd] = distort(c, x, y);
   double u = fx * xd + skew * yd + cx;
   double v = fy * yd + cy;

@@ -113,9 +113,12 @@ bool Pump::take_frame(Clock::time_point now) {
   // The writer described its sensor anew (or first): messages carry the sensor's frame, the
   // one its calibration and mounting name. Read only when the generation changes.
   if (frame.info().sensor_generation != sensor_generation_) {
-    sensor_generation_ = frame.info().sensor_generation;
-    auto sensor = reader_->sensor_info();
-    encoder_.set_frame_id(frame_of(stream_, sensor ? *sensor : std::nullopt));
+    // Review turn 4 M6: a description that cannot be read now (its writer stopped mid-update)
+    // leaves the frame id as it was; the next frame looks again.
+    if (auto sensor = reader_->sensor_info()) {
+      sensor_generation_ = frame.info().sensor_generation;
+      encoder_.set_frame_id(frame_of(stream_, *sensor));
+    }
   }
 
   const std::shared_ptr<Message> message = reusable_message();

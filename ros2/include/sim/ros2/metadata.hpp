@@ -34,8 +34,9 @@ std::string_view tf_message_schema() noexcept;
 inline constexpr std::size_t max_transforms = 1024;
 inline constexpr std::size_t max_distortion_coefficients = CameraCalibration::kMaxDistortion;
 
-// "/cam/front/camera_info" for "/cam/front/image_raw": the sibling topic image_transport's
-// CameraSubscriber and Foxglove pair with an image topic (its last name token replaced).
+// "/cam/front/camera_info" for "/cam/front/image_raw" and "/cam/front/image_raw/compressed": the
+// sibling topic image_transport's CameraSubscriber and Foxglove pair with an image topic (its
+// last name token replaced, after the "/compressed" of a compressed image's topic).
 std::string camera_info_topic_for(std::string_view image_topic);
 
 // CameraInfo of `calibration` (camera_name is not on the wire). An error for a frame_id that a

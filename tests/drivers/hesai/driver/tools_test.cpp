@@ -916,7 +916,7 @@ TEST(ReplayTool, TheStreamSaysWhichClockItsStampsAreWithAndWithoutRestamp) {
 TEST(ReplayTool, ABadFrameNameOrMountingIsRefusedWithOneSentenceAndNoStream) {
   StreamGuard stream;
   const std::vector<std::vector<std::string>> bad = {
-      {"--frame-id", "lidar top"}, {"--frame-id", "9lidar"}, {"--parent-frame", "/base_link"},
+      {"--frame-id", "lidar top"}, {"--frame-id", "cam\xc3\xa9ra"}, {"--parent-frame", "/base_link"},
       {"--x", "nan"}, {"--yaw", "inf"}};
   for (const auto& extra : bad) {
     std::vector<std::string> argv = {replay_tool, p64_capture, "--stream", stream.name,

@@ -122,6 +122,11 @@ try {
   // A picture under 320 pixels wide is scaled up to a readable size (review L6).
   const shownWidth = await page.$eval(`.view[data-stream="${camera}"] img`, (img) => img.getBoundingClientRect().width);
   assert.ok(shownWidth >= 320, `a 160-pixel picture is shown ${shownWidth} pixels wide`);
+  // A camera picture has no colour scale: its legend is not displayed (issue 32: the legend's
+  // CSS display rule overrode the hidden attribute, so every camera showed an empty scale).
+  const cameraLegend = await page.$eval(`.view[data-stream="${camera}"] .legend`,
+                                        (l) => ({ hidden: l.hidden, display: getComputedStyle(l).display }));
+  assert.deepEqual(cameraLegend, { hidden: true, display: "none" }, "an empty colour scale under the camera view");
   const lidarPicture = await measure(page, lidar);
   assert.ok(lidarPicture.colours > 20, `top-down view has only ${lidarPicture.colours} colours`);
   assert.ok(lidarPicture.lit > 2000, `top-down view shows only ${lidarPicture.lit} bright pixels`);
