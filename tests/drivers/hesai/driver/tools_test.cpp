@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -537,6 +538,32 @@ std::vector<Frame> send_revolution_by_revolution(UdpSender& sender, sim::Reader&
   return frames;
 }
 
+// Waits (up to 60 s) until no datagram waits in the receive queue of this network namespace's
+// UDP socket on `port` (/proc/net/udp's rx_queue): every datagram sent has been taken by the
+// driver, whose loop handles what it took before it looks at a stop request. A SIGTERM sent at
+// once after the last burst could otherwise end the driver with that burst still queued (seen
+// under AddressSanitizer). True when drained.
+bool wait_until_taken(int port) {
+  char local[16];
+  std::snprintf(local, sizeof local, ":%04X ", port);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (std::chrono::steady_clock::now() < deadline) {
+    std::ifstream table("/proc/net/udp");
+    std::string line;
+    bool queued = false;
+    while (std::getline(table, line)) {
+      // "sl local_address rem_address st tx_queue:rx_queue …"
+      const auto at = line.find(local);
+      if (at == std::string::npos || at > 24) continue;
+      const auto colon = line.find(':', line.find(' ', line.find(' ', at + 1) + 1) + 1);
+      if (colon != std::string::npos && std::strtoul(line.c_str() + colon + 1, nullptr, 16) != 0) queued = true;
+    }
+    if (!queued) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return false;
+}
+
 int listening_port(Process& driver) {
   const auto line = driver.wait_for_line("listening on");
   if (!line) return -1;
@@ -728,6 +755,7 @@ TEST(LiveDriver, MulticastGroupGivesTheSameFramesAsReplay) {
   UdpSender sender(port, 0, group);
   const auto from_live = send_revolution_by_revolution(sender, *reader, payloads,
                                                        sim::hesai::Model::pandar64, p64_calibration);
+  EXPECT_TRUE(wait_until_taken(port)) << "the driver left datagrams queued for a minute";
   driver.signal(SIGTERM);
   ASSERT_EQ(driver.wait(), 0) << driver.err();
   expect_same_frames(from_replay, expected, 1);
