@@ -173,6 +173,7 @@ std::int64_t median_offset(const fs::path& capture,
 ClockStatus replayed_clock(const fs::path& capture, const fs::path& calibration,
                            const std::vector<std::string>& extra = {"--max-rate"}) {
   sim::testing::StreamGuard stream(sim::testing::unique_name("hesai_clock"));
+  stream.names.push_back(stream.name + ".imu");  // an Ouster replay's IMU stream goes too
   std::vector<std::string> argv{replay_tool, capture.string(), "--stream", stream.name, "--calibration",
                                 (calibration.is_absolute() ? calibration : data_dir / calibration).string(), "--quiet"};
   argv.insert(argv.end(), extra.begin(), extra.end());
