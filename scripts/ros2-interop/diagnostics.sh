@@ -2,11 +2,11 @@
 # The streams' clocks on /diagnostics as a real ROS 2 sees them (docs/ros2-interop.md, "Clock
 # diagnostics"). Run as root from the repository: `unshare --net scripts/ros2-interop/diagnostics.sh`.
 # B=<build dir> (build/dev), WS=<ROS 2 Jazzy workspace> (/tmp/ros2ws, from
-# ../shared/tools/ros2/jazzy-install.tar.gz), WS_TOOLS=<that folder> (for cyclonedds-lo.xml). A test camera reports a clock 37 s ahead (TAI):
+# a ROS 2 Jazzy install tarball), WS_TOOLS=<that folder> (for cyclonedds-lo.xml). A test camera reports a clock 37 s ahead (TAI):
 # sim_dds_bridge publishes it, ros2 lists, describes and echoes /diagnostics.
 B=${B:-build/dev}
 WS=${WS:-/tmp/ros2ws}
-WS_TOOLS=${WS_TOOLS:-$(cd ../shared/tools/ros2 2>/dev/null && pwd || echo /work/shared/tools/ros2)}
+: "${WS_TOOLS:?set WS_TOOLS to the folder of a ROS 2 Jazzy test workspace (its cyclonedds-lo.xml and jazzy-install.tar.gz)}"
 S=/interop_clock_$$
 ip link set lo up && ip link set lo multicast on
 export PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin

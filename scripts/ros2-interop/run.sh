@@ -4,7 +4,7 @@
 # then ros2 node/topic list, topic info -v, topic hz, topic echo and peer_nodes' image_listener
 # look at them. Results are written up in docs/ros2-interop.md.
 #
-# NEEDS the ROS 2 build from ../shared/tools/ros2 (build.sh: core nodes py, i.e. rclcpp,
+# NEEDS a ROS 2 Jazzy build in the workspace WS_TOOLS names (build.sh: core nodes py, i.e. rclcpp,
 # rmw_cyclonedds_cpp, ros2cli and peer_nodes installed in $WS) and a release build of SIM
 # (sim_dds_bridge, sim_replay_pcap, sim_replay_video, sim_ls, sim_rm). Root (unshare --net).
 # NOT part of CI: CI has no ROS 2.
@@ -16,10 +16,11 @@ export HERE
 export SIM=${SIM:-$(cd "$HERE/../.." && pwd)}
 export B=${B:-$SIM/build/release}
 export WS=${WS:-/tmp/ros2ws}
-export WS_TOOLS=${WS_TOOLS:-$(cd "$SIM/../shared/tools/ros2" 2>/dev/null && pwd || echo /work/shared/tools/ros2)}
+: "${WS_TOOLS:?set WS_TOOLS to the folder of a ROS 2 Jazzy test workspace (its build.sh and cyclonedds-lo.xml)}"
+export WS_TOOLS
 export OUT=${OUT:-/tmp/ros2-interop}
 export PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin   # Debian python, not pyenv
-[ -f "$WS/install/setup.bash" ] || { echo "no ROS 2 install in $WS (run ../shared/tools/ros2/build.sh)" >&2; exit 1; }
+[ -f "$WS/install/setup.bash" ] || { echo "no ROS 2 install in $WS (run $WS_TOOLS/build.sh)" >&2; exit 1; }
 mkdir -p "$OUT"
 # 10 RGB PNG frames 768x576 (the size of tests/apps/data/camera_front.yaml), stdlib python only
 [ -d "$OUT/frames" ] || /usr/bin/python3 - "$OUT/frames" 10 768 576 <<'PY'

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Inside a private network namespace (run by run.sh): SIM producers + sim_dds_bridge, then real
 # ROS 2 Jazzy tools (rmw_cyclonedds_cpp) against it. Every command and its output go to stdout.
-# NEEDS the ROS 2 build from ../shared/tools/ros2 (see run.sh); NOT part of CI.
+# NEEDS a ROS 2 Jazzy build in the workspace WS_TOOLS names (see run.sh); NOT part of CI.
 # Env: WS (ROS 2 workspace), SIM (repository root), B (build dir), OUT (scratch), HERE (this folder).
 set -u
 ip link set lo up; ip link set lo multicast on

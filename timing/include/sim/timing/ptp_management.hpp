@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The linuxptp management messages a pmc-like client needs (IEEE 1588 §15, as ptp4l speaks them
 // on its Unix socket): a GET request, and a bounds-checked parser of ptp4l's responses, which are
-// outside bytes. Layouts: ../shared/reference/time-sync.md §6.1 and §1.3.
+// outside bytes. Layouts: linuxptp's msg.h, tlv.h and ds.h (docs/time.md, "Host clock").
 #pragma once
 
 #include <array>

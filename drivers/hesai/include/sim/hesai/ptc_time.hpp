@@ -3,7 +3,7 @@
 // the bounds-checked readers of the answers, and how they make a sim::ClockStatus. No I/O here;
 // the client that asks once a second is sim/hesai/ptc_clock.hpp.
 //
-// Commands (PTC 1.0; every multi-byte field big-endian; ../shared/reference/time-sync.md §1):
+// Commands (PTC 1.0; every multi-byte field big-endian; sources in docs/hesai.md, "Clock"):
 //   0x06 PTP diagnostics, 1 payload byte = the query:
 //        1 PTP STATUS (16 B)               master_offset i64 ns, ptp_state i32, elapsed ms i32
 //        2 PORT_DATA_SET (26 B)            linuxptp's portDS: clockIdentity[8], portNumber u16,

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // What an Ouster sensor says about its clock over HTTP (GET /api/v1/time; FW ≤ 2.0:
 // /api/v1/system/time), as a sim::ClockStatus. No I/O here; the client is
-// sim/ouster/time_client.hpp. (../shared/reference/time-sync.md §2.)
+// sim/ouster/time_client.hpp. (Sources in docs/ouster.md, "Clock".)
 //
 //   {"sensor": {"timestamp": {"mode": "TIME_FROM_PTP_1588", …}, "sync_pulse_in": {"locked": 1, …},
 //               "nmea": {"locked": 0, …}, …},
