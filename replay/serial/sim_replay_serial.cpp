@@ -2,6 +2,7 @@
 // sim_replay_serial: replays a raw byte-stream recording of a Unitree LiDAR (what
 // `sim_lidar_unitree --record` wrote, or any capture of the serial line) into SIM through the
 // same decoder as the live driver. Frames are stamped with the host time they are published.
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The command line every program shares: exit codes, stream names refused before anything is
 // opened, and the YAML config file merged under the command line.
+#include <CLI/CLI.hpp>
 #include <gtest/gtest.h>
 #include <unistd.h>
 

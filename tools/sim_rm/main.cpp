@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // sim_rm: removes SIM streams. A stream with a live writer is kept unless --force.
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <string>
 #include <vector>

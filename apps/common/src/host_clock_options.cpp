@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/apps/host_clock_options.hpp"
 
+#include <CLI/CLI.hpp>
 #include <sys/un.h>
 
 #include <string>

@@ -3,6 +3,7 @@
 // an L1 behind its serial-to-UDP board) or a serial port (L1 always, L2 in serial work mode);
 // whatever arrives goes through the same Decoder as the replay tools, straight into the
 // stream's loaned slot.
+#include <CLI/CLI.hpp>
 #include <unistd.h>
 
 #include <array>

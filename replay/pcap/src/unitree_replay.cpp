@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // sim_replay_pcap for Unitree L1/L2 captures: each UDP payload is a chunk of the sensor's byte
 // stream, decoded by the same UnitreeStream (decoder -> SIM) as the live driver.
+#include <CLI/CLI.hpp>
 #include <optional>
 #include <span>
 #include <string>

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/apps/lidar_options.hpp"
 
+#include <CLI/CLI.hpp>
+
 namespace sim::apps {
 
 void add_lidar_writer_options(CommandLine& cli, LidarWriterOptions& o) {

@@ -5,9 +5,12 @@
 // anything is opened, --cpu/--rt-priority, and one exit-code contract:
 //   0 done, 1 failed at run time, 2 the command line (or the config file) was wrong.
 // Every message is one sentence on stderr, prefixed with the program's name.
+//
+// CLI11 stays out of this header (and every other header): CLI11 2.x is header-only, and each
+// translation unit that includes <CLI/CLI.hpp> compiles its validators, formatter and parser again
+// (docs/build-times.md). A .cpp that adds its options through app() includes <CLI/CLI.hpp> itself;
+// scripts/check-cli11-headers.py (ctest cli11_stays_out_of_headers) keeps it so.
 #pragma once
-
-#include <CLI/CLI.hpp>
 
 #include <functional>
 #include <memory>
@@ -19,6 +22,12 @@
 #include "sim/os.hpp"
 #include "sim/reader.hpp"
 #include "sim/result.hpp"
+
+namespace CLI {
+class App;
+class Option;
+class Validator;
+}  // namespace CLI
 
 namespace sim::apps {
 
@@ -41,8 +50,12 @@ class CommandLine {
  public:
   // `tool` prefixes every message ("sim_echo"); `description` is the first paragraph of --help.
   CommandLine(std::string tool, std::string description);
+  ~CommandLine();
+  CommandLine(const CommandLine&) = delete;  // options point into it
+  CommandLine& operator=(const CommandLine&) = delete;
 
-  CLI::App& app() noexcept { return app_; }
+  // The parser, to add a program's own options (the caller includes <CLI/CLI.hpp>).
+  CLI::App& app() noexcept { return *app_; }
   const std::string& tool() const noexcept { return tool_; }
 
   // A stream name option ("--stream") or positional ("stream"), checked by the core's rules.
@@ -80,7 +93,7 @@ class CommandLine {
 
  private:
   std::string tool_;
-  CLI::App app_;
+  std::unique_ptr<CLI::App> app_;
   std::vector<std::string> path_options_;
   std::shared_ptr<YamlConfig> config_;  // set by add_config_file
   Trust* trust_ = nullptr;
