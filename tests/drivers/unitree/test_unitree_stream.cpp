@@ -22,10 +22,6 @@ using sim::testing::StreamGuard;
 using sim::unitree::LidarStream;
 using sim::unitree::LidarStreamConfig;
 
-std::span<const std::uint8_t> u8(const Bytes& bytes) {
-  return {reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()};
-}
-
 L2PointSpec packet_spec(std::uint32_t seq) {
   L2PointSpec s;
   s.seq = seq;
@@ -100,7 +96,7 @@ TEST(UnitreeLidarStream, PublishesEveryScanOfAChunkAsTheDecoderMakesIt) {
   auto stream = LidarStream::create(config);
   ASSERT_TRUE(stream) << stream.error().message;
   const Bytes wire = l2_wire(0, 7);  // two scans of three packets and one more packet
-  EXPECT_EQ(stream->push(u8(wire), 5'000), 2U) << "one chunk completes two scans";
+  EXPECT_EQ(stream->push(std::span<const std::uint8_t>(wire), 5'000), 2U) << "one chunk completes two scans";
   EXPECT_EQ(stream->published().frames, 2U);
   EXPECT_EQ(stream->published().imu_samples, 2U);
   EXPECT_EQ(stream->counters().framing.packets, 9U);
@@ -126,7 +122,7 @@ TEST(UnitreeLidarStream, TheSummaryKeepsTheKeysScriptsParse) {
   ASSERT_TRUE(stream) << stream.error().message;
   Bytes wire = l2_wire(0, 3);
   wire = concat({wire, l2_point_packet(packet_spec(5))});  // two packets lost
-  stream->push(u8(wire), 1);
+  stream->push(std::span<const std::uint8_t>(wire), 1);
   const std::string summary = stream->describe_counters(true);
   EXPECT_EQ(summary.rfind("frames=1 packets=5 lost=2 malformed=0 imu=1 failed=0 ", 0), 0U) << summary;
   const std::string status = stream->describe_counters();
@@ -140,10 +136,10 @@ TEST(UnitreeLidarStream, ResetForgetsTheScanInProgress) {
   const LidarStreamConfig config = config_for(name, 3);
   auto stream = LidarStream::create(config);
   ASSERT_TRUE(stream) << stream.error().message;
-  stream->push(u8(l2_wire(0, 2)), 1);
+  stream->push(std::span<const std::uint8_t>(l2_wire(0, 2)), 1);
   stream->reset();
   const Bytes after = l2_wire(10, 3);
-  EXPECT_EQ(stream->push(u8(after), 2), 1U);
+  EXPECT_EQ(stream->push(std::span<const std::uint8_t>(after), 2), 1U);
   const auto expected = decoded(config.decoder, after, 2);
   ASSERT_EQ(expected.size(), 1U);
   const auto frame = newest_frame(name);
@@ -163,7 +159,7 @@ TEST(UnitreeLidarStream, TheStampOffsetMovesTheL2sOwnStampsNotHostStamps) {
     ASSERT_TRUE(stream) << stream.error().message;
     stream->set_stamp_offset(7'000'000'000);
     EXPECT_EQ(stream->stamp_offset(), 7'000'000'000);
-    stream->push(u8(l2_wire(0, 3)), 123);
+    stream->push(std::span<const std::uint8_t>(l2_wire(0, 3)), 123);
     const auto frame = newest_frame(name);
     ASSERT_TRUE(frame);
     const std::int64_t sensor_stamp = 1000LL * 1'000'000'000;  // packet 0: 1000 s + 0 ns
@@ -185,7 +181,7 @@ TEST(UnitreeLidarStream, APublishGateStampsEachScanOrDropsIt) {
   };
   auto stream = LidarStream::create(config);
   ASSERT_TRUE(stream) << stream.error().message;
-  EXPECT_EQ(stream->push(u8(l2_wire(0, 9)), 1), 2U);
+  EXPECT_EQ(stream->push(std::span<const std::uint8_t>(l2_wire(0, 9)), 1), 2U);
   EXPECT_EQ(asked, 3);
   EXPECT_EQ(stream->published().frames, 2U);
   const auto frame = newest_frame(name);
@@ -209,11 +205,11 @@ TEST(UnitreeLidarStream, NoAllocationPerPacketOrScan) {
   auto stream = LidarStream::create(config_for(name, 3));
   ASSERT_TRUE(stream) << stream.error().message;
   const Bytes warm = l2_wire(0, 3);
-  stream->push(u8(warm), 1);  // the first commit and clock check have run once
+  stream->push(std::span<const std::uint8_t>(warm), 1);  // the first commit and clock check have run once
   const Bytes wire = l2_wire(3, 12);
   const std::uint64_t before = allocations();
   for (std::size_t off = 0; off < wire.size(); off += 700) {
-    stream->push(u8(wire).subspan(off, std::min<std::size_t>(700, wire.size() - off)), 2);
+    stream->push(std::span<const std::uint8_t>(wire).subspan(off, std::min<std::size_t>(700, wire.size() - off)), 2);
   }
   EXPECT_EQ(allocations(), before);
   EXPECT_EQ(stream->published().frames, 5U);

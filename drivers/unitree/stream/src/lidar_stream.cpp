@@ -119,7 +119,7 @@ LidarStream::~LidarStream() = default;
 
 std::size_t LidarStream::push(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns) noexcept {
   impl_->frames_in_push = 0;
-  impl_->decoder.push(std::as_bytes(payload), host_receive_ns);
+  impl_->decoder.push(payload, host_receive_ns);
   return impl_->frames_in_push;
 }
 
