@@ -183,7 +183,7 @@ TEST(UnitreeDriver, L2OverLoopbackUdp) {
   guard.names = {stream, stream + ".imu"};
   Process driver({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", "0",
                   "--bind-address", "127.0.0.1", "--lidar-ip", "127.0.0.1", "--stream",
-                  stream, "--scan-packets", "3", "--record", record, "-q"});
+                  stream, "--scan-packets", "3", "--record", record, "--summary", "-q"});
   const auto line = driver.next_line(kTimeout);
   ASSERT_TRUE(line.has_value());
   unsigned port = 0;
@@ -236,6 +236,11 @@ TEST(UnitreeDriver, L2OverLoopbackUdp) {
   driver.signal(SIGTERM);
   EXPECT_EQ(driver.wait(kTimeout), 0);
   EXPECT_EQ(read_file(record), sender.sent);  // exactly what came off the wire
+  // The counters scripts parse, as every LiDAR family begins them: seven packets passed their
+  // checksum (six point packets and the IMU's), one did not.
+  EXPECT_NE(driver.unread().find("summary frames=2 packets=7 lost=0 malformed=0 imu=1 failed=0 "), std::string::npos)
+      << driver.unread();
+  EXPECT_NE(driver.unread().find(" bad_crc=1 "), std::string::npos) << driver.unread();
   std::filesystem::remove(record);
 }
 
