@@ -142,6 +142,9 @@ void LiveReceiver::publish_to(LidarStream& stream, std::ostream* record) noexcep
 
 Expected<void> LiveReceiver::run(int stop_fd, const std::function<void()>& tick) {
   Impl& r = *impl_;
+  if (r.stream == nullptr) {
+    return Error{ErrorCode::invalid_argument, "the receiver has no stream to publish to; call publish_to() before run()"};
+  }
   // The stop signal's descriptor ends io.run() like any other event.
   asio::posix::stream_descriptor stop_events(r.io, ::dup(stop_fd));
   stop_events.async_wait(asio::posix::stream_descriptor::wait_read, [&r](const boost::system::error_code& ec) {
