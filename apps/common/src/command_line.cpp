@@ -87,6 +87,22 @@ CLI::Option* CommandLine::add_streams(std::string_view name, std::vector<std::st
       ->check(stream_name_validator());
 }
 
+void CommandLine::add_flag(std::string_view name, bool& value, std::string_view help,
+                           std::string_view group) {
+  auto* option = app_->add_flag(std::string(name), value, std::string(help));
+  if (!group.empty()) option->group(std::string(group));
+}
+
+void CommandLine::add_text(std::string_view name, std::string& value, std::string_view help,
+                           std::string_view type_name,
+                           std::function<std::string(const std::string&)> problem,
+                           std::string_view group) {
+  auto* option = app_->add_option(std::string(name), value, std::string(help))
+                     ->type_name(std::string(type_name));
+  if (problem) option->check(validator(std::move(problem), std::string(type_name)));
+  if (!group.empty()) option->group(std::string(group));
+}
+
 void CommandLine::add_config_file(std::vector<std::string> path_options) {
   for (std::string& name : path_options_) path_options.push_back(std::move(name));
   path_options_.clear();

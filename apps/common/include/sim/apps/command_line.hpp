@@ -63,6 +63,15 @@ class CommandLine {
   // Several stream names (a positional list), each checked the same way.
   CLI::Option* add_streams(std::string_view name, std::vector<std::string>& values,
                            std::string_view help);
+  // Options that need no CLI11 in the caller (a translation unit that includes <CLI/CLI.hpp>
+  // costs about 10 CPU-seconds at -O3): a flag, and a text value that `problem` checks (it returns
+  // what is wrong, empty when nothing), shown as `type_name`. An empty `group`: the default one.
+  void add_flag(std::string_view name, bool& value, std::string_view help,
+                std::string_view group = {});
+  void add_text(std::string_view name, std::string& value, std::string_view help,
+                std::string_view type_name,
+                std::function<std::string(const std::string&)> problem = {},
+                std::string_view group = {});
   // --config FILE: YAML keys set the options of the same long name ("rt_priority" or
   // "rt-priority" for --rt-priority); a map becomes a list of "key=value" items; options given on
   // the command line override the file. The options named in `path_options` ("calibration")
