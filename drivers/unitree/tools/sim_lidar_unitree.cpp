@@ -1,24 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
-<<<<<<< HEAD
-// sim_lidar_unitree: a Unitree L1 or L2 LiDAR into SIM. Bytes come from UDP (L2's default, or
-// an L1 behind its serial-to-UDP board) or a serial port (L1 always, L2 in serial work mode);
-// whatever arrives goes through the same Decoder as the replay tools, straight into the
-// stream's loaned slot.
-#include <CLI/CLI.hpp>
-#include <unistd.h>
-
-#include <array>
-#include <functional>
-#include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange
-
-#include <boost/asio.hpp>
-#include <chrono>
-=======
 // sim_lidar_unitree: a Unitree L1 or L2 LiDAR into SIM. The work is the stream library's
 // (sim/unitree/live_receiver.hpp: the UDP socket or the serial port; LidarStream: decode straight
 // into shared memory, the path the replays take too); this program is its command line, its
 // messages and its exit code.
->>>>>>> main
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <fstream>
 #include <string>
