@@ -189,8 +189,7 @@ TEST(LittleEndian, reads_each_field_in_wire_order_at_any_alignment) {
   EXPECT_EQ(sim::lidar::le64(bytes.data() + 1), 0x0807060504030201u);
   const std::array<std::uint8_t, 5> one{0x00, 0x00, 0x00, 0x80, 0x3f};  // 1.0f after one byte
   EXPECT_EQ(sim::lidar::le_f32(one.data() + 1), 1.0f);
-  const auto* as_bytes = reinterpret_cast<const std::byte*>(bytes.data());
-  EXPECT_EQ(sim::lidar::le32(as_bytes + 6), 0xff080706u);
+  EXPECT_EQ(sim::lidar::le32(bytes.data() + 6), 0xff080706u);
 }
 
 }  // namespace

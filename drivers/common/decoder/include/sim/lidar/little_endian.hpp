@@ -7,7 +7,6 @@
 // Header-only and on the core alone: the family decoders include it.
 #pragma once
 
-#include <cstddef>
 #include <cstdint>
 #include <cstring>
 
@@ -37,11 +36,5 @@ inline float le_f32(const std::uint8_t* p) noexcept {
   std::memcpy(&value, &bits, sizeof value);
   return value;
 }
-
-// The same for std::byte buffers (Unitree's frames).
-inline std::uint16_t le16(const std::byte* p) noexcept { return le16(reinterpret_cast<const std::uint8_t*>(p)); }
-inline std::uint32_t le32(const std::byte* p) noexcept { return le32(reinterpret_cast<const std::uint8_t*>(p)); }
-inline std::uint64_t le64(const std::byte* p) noexcept { return le64(reinterpret_cast<const std::uint8_t*>(p)); }
-inline float le_f32(const std::byte* p) noexcept { return le_f32(reinterpret_cast<const std::uint8_t*>(p)); }
 
 }  // namespace sim::lidar
