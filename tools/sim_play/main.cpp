@@ -6,6 +6,7 @@
 // The steps, each a function below: read the command line; open the file; make one player per
 // playable channel; bound the streams; create them; play the messages (paced, looped); report;
 // remove the streams it made.
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
