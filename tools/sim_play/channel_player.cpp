@@ -139,8 +139,8 @@ std::optional<Error> ChannelPlayer::ensure_writer(const mcap::StreamShape& wante
   return std::nullopt;
 }
 
-std::optional<Error> ChannelPlayer::bound_by(std::optional<std::span<const std::byte>> first_message) {
-  if (!shape_) return first_message ? learn_shape(*first_message) : std::nullopt;
+std::optional<std::string> ChannelPlayer::bound_by(std::optional<std::span<const std::byte>> first_message) {
+  if (!shape_) return std::nullopt;
   const std::uint64_t room = room_for(first_message ? first_message->size() : 0);
   // Beyond --max-capacity the stream is refused anyway, with the sentence naming that option.
   if (shape_->capacity <= room || shape_->capacity > max_capacity_) return std::nullopt;
@@ -153,10 +153,10 @@ std::optional<Error> ChannelPlayer::bound_by(std::optional<std::span<const std::
   const std::string asked = "topic " + topic_ + " asks for " + mib(shape_->capacity) + " MiB per frame but ";
   const std::string advice = "; check where the file came from (sim_record never writes this)";
   shape_.reset();
-  if (!first_message) return bad(asked + "holds no message, so no stream is made for it" + advice);
+  if (!first_message) return asked + "holds no message, so no stream is made for it" + advice;
   (void)learn_shape(*first_message);  // a message that does not decode is said when it is played
-  return bad(asked + "its first message holds " + std::to_string(first_message->size()) +
-             " bytes, so its stream is sized from its messages instead" + advice);
+  return asked + "its first message holds " + std::to_string(first_message->size()) +
+         " bytes, so its stream is sized from its messages instead" + advice;
 }
 
 std::optional<Error> ChannelPlayer::learn_shape(std::span<const std::byte> message) {

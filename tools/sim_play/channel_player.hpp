@@ -84,9 +84,8 @@ class ChannelPlayer {
   // A recording may reserve no more shared memory than it holds (review L4): given the channel's
   // first message (nullopt: it holds none) before the stream is created, a recorded shape whose
   // slot is larger than room_for() that message is dropped and the stream sized from its
-  // messages instead, as a recording made elsewhere is. Learns the shape when the metadata gave
-  // none. The sentence to say, if any.
-  std::optional<Error> bound_by(std::optional<std::span<const std::byte>> first_message);
+  // messages instead, as a recording made elsewhere is. The sentence saying so, if it was.
+  std::optional<std::string> bound_by(std::optional<std::span<const std::byte>> first_message);
 
   // Decodes one message into the stream, stamped with its header stamp + stamp_shift_ns.
   // An error for a message that cannot be decoded (nothing is published then).

@@ -159,18 +159,27 @@ void bound_by_first_messages(sim::mcap::Reader& reader, Players& players, sim::a
     if (holds_messages(id)) waiting.insert(id);
   }
   std::set<std::uint16_t> met;
+  std::vector<std::string> asked_more;  // one sentence each; a crafted file may have 64
   while (!waiting.empty()) {
     auto m = reader.next();
     if (!m) break;
     if (waiting.erase(m->header.channel_id) == 0) continue;
     met.insert(m->header.channel_id);
-    if (auto said = players.at(m->header.channel_id).bound_by(m->data)) say(status, said->message);
+    auto& player = players.at(m->header.channel_id);
+    if (!player.shape_known()) {
+      if (auto error = player.learn_shape(m->data)) say(status, error->message);
+    } else if (auto asked = player.bound_by(m->data)) {
+      asked_more.push_back(std::move(*asked));
+    }
   }
   for (auto& [id, player] : players) {
     if (met.count(id) > 0) continue;
-    if (auto said = player.bound_by(std::nullopt)) say(status, said->message);
+    if (auto asked = player.bound_by(std::nullopt)) asked_more.push_back(std::move(*asked));
   }
   reader.rewind();
+  if (asked_more.empty()) return;
+  const auto more = asked_more.size() - 1;
+  say(status, asked_more.front() + (more > 0 ? " (and so do " + std::to_string(more) + " more topics)" : ""));
 }
 
 // Creates every stream before playing, each sized from its metadata or its channel's first
