@@ -139,7 +139,7 @@ LidarStream::LidarStream(LidarStream&&) noexcept = default;
 LidarStream& LidarStream::operator=(LidarStream&&) noexcept = default;
 LidarStream::~LidarStream() = default;
 
-PushResult LidarStream::push_lidar(std::span<const std::uint8_t> payload,
+PushResult LidarStream::push(std::span<const std::uint8_t> payload,
                                    std::int64_t host_receive_ns) noexcept {
   return impl_->push(payload, host_receive_ns);
 }
@@ -161,7 +161,7 @@ bool LidarStream::push_imu(std::span<const std::uint8_t> payload) noexcept {
 }
 
 std::optional<CompletedFrame> LidarStream::finish() noexcept {
-  return impl_->flush();
+  return impl_->finish();
 }
 
 void LidarStream::reset() noexcept { impl_->assembler.reset(); }
