@@ -16,7 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "fake_sensor_http.hpp"
+#include "lidar_test/fake_sensor_http.hpp"
 #include "ouster_test_support.hpp"
 #include "sim/apps/clock_poll.hpp"
 #include "sim/ouster/time_client.hpp"
@@ -30,7 +30,7 @@ namespace {
 
 using namespace std::chrono_literals;
 using Json = nlohmann::json;
-using ouster_test::FakeSensorHttp;
+using lidar_test::FakeSensorHttp;
 using sim::ClockSource;
 using sim::ClockState;
 using sim::ClockStatus;
