@@ -5,12 +5,14 @@
 #include <span>
 #include <string>
 
-#include "replay_loop.hpp"
 #include "unitree_replay.hpp"
 #include "replay_common.hpp"
+#include "replay_loop.hpp"
+#include "sniff.hpp"
 #include "sim/apps/sensor_options.hpp"
 #include "sim/clock.hpp"
 #include "sim/unitree/bytes.hpp"
+#include "sim/unitree/decoder.hpp"
 #include "sim/unitree/framing.hpp"
 #include "sim/unitree/l2_protocol.hpp"
 #include "sim/unitree/sim_sink.hpp"
@@ -38,6 +40,11 @@ std::optional<std::int64_t> first_sensor_time(std::span<const std::byte> payload
   return std::nullopt;
 }
 
+// Every datagram is a chunk of the sensor's byte stream, as on the live driver's one socket:
+// the stream's framer finds the packets (points, IMU) in it.
+enum class Route { bytes };
+Route route(const Datagram&) { return Route::bytes; }
+
 class UnitreeTarget final : public ReplayTarget {
  public:
   UnitreeTarget(std::unique_ptr<unitree::UnitreeStream> stream, bool restamp)
@@ -45,19 +52,11 @@ class UnitreeTarget final : public ReplayTarget {
         sensor_stamps_(unitree::stream_clock_base(stream_->decoder_options(), lidar::ClockBase::sensor) ==
                        lidar::ClockBase::sensor) {}
 
-  bool push(std::span<const std::byte> payload, std::int64_t capture_ns) override {
-    const std::uint64_t before = stream_->sink_counters().scans_published;
-    const std::int64_t now = realtime_ns();
-    if (sensor_stamps_) {
-      push_sensor_stamped(payload, capture_ns, now);
-    } else {
-      // Scans are stamped with the time their bytes arrived: the capture's (moved on by loops),
-      // or the present with --restamp.
-      if (restamp_ && restamp_offset_ == 0) restamp_offset_ = now - capture_ns;
-      stream_->push(payload, capture_ns + shift_ns_ + restamp_offset_);
+  bool push(const Datagram& datagram) override {
+    switch (route(datagram)) {
+      case Route::bytes: return push_bytes(datagram.payload, datagram.timestamp_ns);
     }
-    stream_->tick_clock(now);
-    return stream_->sink_counters().scans_published > before;
+    return false;
   }
   void restart() override { stream_->reset(); }
   void shift_stamps(std::int64_t shift_ns) override {
@@ -83,6 +82,21 @@ class UnitreeTarget final : public ReplayTarget {
   }
 
  private:
+  bool push_bytes(std::span<const std::byte> payload, std::int64_t capture_ns) {
+    const std::uint64_t before = stream_->sink_counters().scans_published;
+    const std::int64_t now = realtime_ns();
+    if (sensor_stamps_) {
+      push_sensor_stamped(payload, capture_ns, now);
+    } else {
+      // Scans are stamped with the time their bytes arrived: the capture's (moved on by loops),
+      // or the present with --restamp.
+      if (restamp_ && restamp_offset_ == 0) restamp_offset_ = now - capture_ns;
+      stream_->push(payload, capture_ns + shift_ns_ + restamp_offset_);
+    }
+    stream_->tick_clock(now);
+    return stream_->sink_counters().scans_published > before;
+  }
+
   // --sensor-time: the packets' own times are the stamps, measured against the capture's time
   // of their record (moved on by loops like the stamps), or with --restamp moved to the present
   // and measured against this host's clock now.
@@ -106,7 +120,11 @@ class UnitreeTarget final : public ReplayTarget {
 
 }  // namespace
 
-int run_unitree_replay(int argc, char** argv) {
+Claim claim_unitree(const Request& request, const Sniff& /*sniff*/) {
+  return unitree::parse_model(request.model) ? Claim{Evidence::model} : Claim{};
+}
+
+int run_unitree(const Request& request, Sniff& sniff) {
   apps::CommandLine cli(
       "sim_replay_pcap",
       "Replays a Unitree L1 or L2 capture (pcap or pcapng of the sensor's UDP stream) into a "
@@ -134,7 +152,7 @@ int run_unitree_replay(int argc, char** argv) {
   apps::add_sensor_options(cli, sensor, apps::SensorKind::lidar);
   ThreadPlacement placement;
   cli.add_placement(placement);
-  if (auto code = cli.parse(argc, argv)) return *code;
+  if (auto code = cli.parse(request.argc, request.argv)) return *code;
   auto described = apps::sensor_info_from(sensor, o.points_stream);
   if (!described) return cli.fail(described.error());
   o.sensor = std::move(described.value());
@@ -150,9 +168,7 @@ int run_unitree_replay(int argc, char** argv) {
   o.sensor_clock_base = r.restamp ? lidar::ClockBase::restamped : lidar::ClockBase::replayed;
 
   // The file is read before the streams are created: a missing capture leaves nothing behind.
-  if (auto probe = CaptureReader::open(r.file, r.capture_options()); !probe) {
-    return cli.fail(std::string_view(probe.error().message));
-  }
+  if (const auto error = sniff.open_error()) return cli.fail(std::string_view(error->message));
   auto stream = unitree::UnitreeStream::create(o);
   if (!stream) return cli.fail(stream.error());
   UnitreeTarget target(std::move(*stream), r.restamp);
