@@ -24,11 +24,11 @@ std::span<const std::uint8_t> as_u8(std::span<const std::byte> bytes) {
 }
 
 // Which push a datagram goes to. Without --port and --filter, as the live receiver's sockets
-// (and ouster-sdk's pcap source) route them: the metadata's lidar port to the lidar push, its
+// (and ouster-sdk's pcap source) route them: the metadata's lidar port to the data push, its
 // IMU port to the IMU push, other ports nowhere. With them the user chose the datagrams, whose
 // ports may be anything: the 48-byte ones are the IMU's, the rest lidar packets. One port for
 // both: the size tells too.
-enum class Route { lidar, imu, none };
+enum class Route { data, imu, none };
 
 class OusterRoute {
  public:
@@ -38,8 +38,8 @@ class OusterRoute {
   Route operator()(const Datagram& datagram) const {
     const std::uint16_t port = datagram.destination.port;
     if (by_port_ && port != lidar_port_ && port != imu_port_) return Route::none;
-    if (by_port_ && lidar_port_ != imu_port_) return port == imu_port_ ? Route::imu : Route::lidar;
-    return datagram.payload.size() == ouster::imu_packet_bytes ? Route::imu : Route::lidar;
+    if (by_port_ && lidar_port_ != imu_port_) return port == imu_port_ ? Route::imu : Route::data;
+    return datagram.payload.size() == ouster::imu_packet_bytes ? Route::imu : Route::data;
   }
 
  private:
@@ -64,7 +64,7 @@ class OusterTarget final : public ReplayTarget {
   bool push(const Datagram& datagram) override {
     const auto bytes = as_u8(datagram.payload);
     switch (route_(datagram)) {
-      case Route::lidar: return push_lidar(bytes, datagram.timestamp_ns);
+      case Route::data: return push_data(bytes, datagram.timestamp_ns);
       case Route::imu: stream_.push_imu(bytes); return false;
       case Route::none: return false;
     }
@@ -89,7 +89,7 @@ class OusterTarget final : public ReplayTarget {
   std::uint64_t other_port() const { return other_port_; }
 
  private:
-  bool push_lidar(std::span<const std::uint8_t> bytes, std::int64_t capture_ns) {
+  bool push_data(std::span<const std::uint8_t> bytes, std::int64_t capture_ns) {
     if (restamp_ && !restamped_) {
       // Shift the sensor's clock so the first packet's time is now; loops add to it.
       ouster::LidarPacket packet;
@@ -101,7 +101,7 @@ class OusterTarget final : public ReplayTarget {
       }
     }
     const std::int64_t now = realtime_ns();
-    const ouster::PushResult result = stream_.push_lidar(bytes, now);
+    const ouster::PushResult result = stream_.push(bytes, now);
     clock_replayed_packet(stream_, result.packet_ns, capture_ns, now);
     return result.frame.has_value();
   }
