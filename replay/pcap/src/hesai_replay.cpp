@@ -132,9 +132,7 @@ class HesaiTarget final : public ReplayTarget {
 
 Claim claim_hesai(const Request& request, const Sniff& sniff) {
   if (hesai::parse_model(request.model)) return {Evidence::model};
-  std::uint32_t packets = 0;
-  for (const Datagram& datagram : sniff.head()) packets += hesai::detect_model(as_u8(datagram.payload)) ? 1 : 0;
-  return packets_claim(packets);
+  return packets_claim(sniff.count([](auto bytes) { return hesai::detect_model(bytes).has_value(); }));
 }
 
 int run_hesai(const Request& request, Sniff& sniff) {

@@ -122,9 +122,7 @@ bool ends_with(std::string_view text, std::string_view end) {
 Claim claim_ouster(const Request& request, const Sniff& sniff) {
   // A metadata JSON names the family: Hesai calibrations are CSV, Velodyne's YAML or XML.
   if (ends_with(request.calibration, ".json")) return {Evidence::calibration};
-  std::uint32_t packets = 0;
-  for (const Datagram& datagram : sniff.head()) packets += ouster::guess_format(as_u8(datagram.payload)) ? 1 : 0;
-  return packets_claim(packets);
+  return packets_claim(sniff.count([](auto bytes) { return ouster::guess_format(bytes).has_value(); }));
 }
 
 int run_ouster(const Request& request, Sniff& sniff) {

@@ -31,6 +31,16 @@ Sniff Sniff::read(const std::string& file, const CaptureOptions& options) {
   return sniff;
 }
 
+std::uint32_t Sniff::count(const std::function<bool(std::span<const std::uint8_t>)>& is_family_packet) const {
+  std::uint32_t packets = 0;
+  for (const Datagram& datagram : head_) {
+    const std::span<const std::uint8_t> bytes(reinterpret_cast<const std::uint8_t*>(datagram.payload.data()),
+                                              datagram.payload.size());
+    packets += is_family_packet(bytes) ? 1 : 0;
+  }
+  return packets;
+}
+
 Expected<bool> Sniff::find(const std::function<bool(const Datagram&)>& visit) {
   seen_ = 0;
   for (const Datagram& datagram : head_) {

@@ -30,6 +30,9 @@ class Sniff {
   // The first datagrams of the capture, up to head_size; their payloads are copies.
   std::span<const Datagram> head() const noexcept { return head_; }
 
+  // How many datagrams of the head `is_family_packet` takes for its family's (a payload as bytes).
+  std::uint32_t count(const std::function<bool(std::span<const std::uint8_t>)>& is_family_packet) const;
+
   // Visits the capture's datagrams from its start (the head, then the rest of the file) until
   // `visit` returns true, and says whether it did. The error of a capture that cannot be read
   // as far as needed.

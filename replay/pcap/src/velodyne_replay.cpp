@@ -144,12 +144,8 @@ Claim claim_velodyne(const Request& request, const Sniff& sniff) {
   if (ends_with(calibration, ".yaml") || ends_with(calibration, ".yml") || ends_with(calibration, ".xml")) {
     return {Evidence::calibration};
   }
-  std::uint32_t packets = 0;
-  for (const Datagram& datagram : sniff.head()) {
-    const auto bytes = as_u8(datagram.payload);
-    packets += velodyne::detect_model(bytes) || velodyne::is_unnamed_hdl32e(bytes) ? 1 : 0;
-  }
-  return packets_claim(packets);
+  return packets_claim(sniff.count(
+      [](auto bytes) { return velodyne::detect_model(bytes).has_value() || velodyne::is_unnamed_hdl32e(bytes); }));
 }
 
 int run_velodyne(const Request& request, Sniff& sniff) {
