@@ -13,8 +13,8 @@
 // in progress (the sensor stopped), then the stream's push, and the packet's sensor time with its
 // arrival into the stream's clock check. Far from a revolution's cut (a stream that tells
 // time_to_cut_ns) no packet can complete a frame, so the loop naps and takes the queued packets
-// at once; near the cut it wakes for each one. All of it inline over the family's types: no
-// virtual call into the family per packet.
+// at once; near the cut it wakes for each one. All of it inline over the family's types: one
+// call from the UDP loop a recvmmsg batch, none a packet.
 #pragma once
 
 #include <algorithm>
@@ -205,7 +205,14 @@ class LiveReceiver : private DatagramHandler {
     return source_.get();
   }
 
-  bool on_datagram(const Datagram& d) override {
+  bool on_datagrams(std::span<const Datagram> datagrams) override {
+    for (const Datagram& d : datagrams) {
+      if (!route_datagram(d)) return false;
+    }
+    return true;
+  }
+
+  bool route_datagram(const Datagram& d) {
     if constexpr (Route::refuse_truncated) {
       if (d.truncated) {
         ++udp_.counters().oversized;
