@@ -82,12 +82,15 @@ struct StreamSource<Route> {
 }  // namespace detail
 
 template <PacketRoute Route>
-class LiveReceiver : private DatagramHandler {
+class LiveReceiver {
  public:
   using Stream = typename Route::Stream;
   static constexpr bool detects_model = DetectsModel<Route>;
   // The stream's other packets report its clock (Velodyne's position packets).
   static constexpr bool reports_clock = requires(const Stream& s) { s.reported_clock(); };
+  // The route has packets besides the data packets (Velodyne's position, Ouster's IMU).
+  static constexpr bool has_other_packets =
+      requires(Stream& s, std::span<const std::uint8_t> p) { Route::push_other(s, PacketKind::imu, p, std::int64_t{}); };
 
   // Opens, configures and binds the route's sockets (joining the multicast group when given).
   // Creates no stream: a busy port leaves nothing behind. Errors: invalid_argument for an address
@@ -131,7 +134,8 @@ class LiveReceiver : private DatagramHandler {
   Expected<void> run(int stop_fd, const ReceiverCallbacks& callbacks = {})
     requires detects_model
   {
-    udp_.run(stop_fd, *this, callbacks);
+    Handler handler{*this};
+    udp_.run(stop_fd, handler, callbacks);
     if (const auto& error = source_.detected.error()) return *error;
     return {};
   }
@@ -139,7 +143,8 @@ class LiveReceiver : private DatagramHandler {
   void run(Stream& stream, int stop_fd, const ReceiverCallbacks& callbacks = {}) {
     given_ = &stream;
     clock_sources_given_ = false;
-    udp_.run(stop_fd, *this, callbacks);
+    Handler handler{*this};
+    udp_.run(stop_fd, handler, callbacks);
     given_ = nullptr;
   }
 
@@ -205,12 +210,19 @@ class LiveReceiver : private DatagramHandler {
     return source_.get();
   }
 
-  bool on_datagrams(std::span<const Datagram> datagrams) override {
-    for (const Datagram& d : datagrams) {
-      if (!route_datagram(d)) return false;
+  // The UDP loop's side: one call a batch; each datagram is routed inline. Apart from the
+  // receiver, which then has no virtual function (it is moved and destroyed as a value).
+  struct Handler final : DatagramHandler {
+    explicit Handler(LiveReceiver& r) noexcept : receiver(r) {}
+    bool on_datagrams(std::span<const Datagram> datagrams) override {
+      for (const Datagram& d : datagrams) {
+        if (!receiver.route_datagram(d)) return false;
+      }
+      return true;
     }
-    return true;
-  }
+    std::int64_t nap_ns() const override { return receiver.nap_ns(); }
+    LiveReceiver& receiver;
+  };
 
   bool route_datagram(const Datagram& d) {
     if constexpr (Route::refuse_truncated) {
@@ -221,7 +233,7 @@ class LiveReceiver : private DatagramHandler {
     }
     const PacketKind kind = kinds_[d.socket];
     if (kind != PacketKind::data) {
-      if constexpr (requires(Stream& s) { Route::push_other(s, kind, d.payload, d.arrival_ns); }) {
+      if constexpr (has_other_packets) {
         Stream* stream = current();
         if (stream != nullptr && Route::push_other(*stream, kind, d.payload, d.arrival_ns)) {
           if constexpr (reports_clock) reported_.set(stream->reported_clock()());
@@ -251,7 +263,7 @@ class LiveReceiver : private DatagramHandler {
     if (udp_.resumed_after_silence(d.arrival_ns)) stream.reset();
     last_packet_ns_ = d.taken_ns;
     const auto result = stream.push(d.payload, d.arrival_ns);
-    if constexpr (requires { stream.mismatch_problem(); }) {
+    if constexpr (requires(const Stream& s) { s.mismatch_problem(); }) {
       if (result.error != decltype(result.error){} && !mismatch_noted_) note_mismatch(stream);
     }
     // The packet's own time against its arrival on this host; judged about once a second.
@@ -273,7 +285,7 @@ class LiveReceiver : private DatagramHandler {
   // and then takes every queued packet in one recvmmsg; near the cut it wakes for each packet.
   // The kernel stamps each datagram's arrival, so batching does not blur receive times. A nap
   // ends a margin before the cut can come; 0: wait for the next packet.
-  std::int64_t nap_ns() const override {
+  std::int64_t nap_ns() const {
     if constexpr (requires(const Stream& s) { s.time_to_cut_ns(); }) {
       constexpr std::int64_t longest_nap_ns = 2'000'000;  // ~12 packets; the socket buffer holds seconds
       constexpr std::int64_t wake_margin_ns = 1'000'000;  // timer lateness and motor speed drift
