@@ -530,7 +530,7 @@ void FrameAssembler::close_current(PushResult& result, bool ended_at_cut) noexce
       frame.packets = current_.packets;
       frame.lost_packets = current_.lost;
       frame.dropped_points = current_.dropped;
-      frame.whole_revolution = current_.whole && ended_at_cut;
+      frame.whole = current_.whole && ended_at_cut;
       frame.motor_rpm = current_.rpm;
       frame.safety = current_.safety;
       ++counters_.frames;
@@ -560,10 +560,10 @@ void FrameAssembler::close_current(PushResult& result, bool ended_at_cut) noexce
   }
 }
 
-std::optional<CompletedFrame> FrameAssembler::flush() noexcept {
+std::optional<CompletedFrame> FrameAssembler::finish() noexcept {
   PushResult result;
   if (next_.started) {
-    // The next frame's few points cannot be kept apart from the flushed one.
+    // The next frame's few points cannot be kept apart from the finished one.
     counters_.dropped_points += output_attached_ ? carry_count_ : 0;
     if (output_attached_) carry_count_ = 0;
     next_ = FrameState{};
@@ -674,7 +674,7 @@ void FrameAssembler::count_rejected(PacketError error) noexcept {
 inline std::int64_t FrameAssembler::revolution_of_group(std::uint16_t azimuth,
                                                  std::uint16_t phase) noexcept {
   if (!have_last_) {
-    // Joining mid-revolution (start, reset, flush): the frame in progress is partial.
+    // Joining mid-revolution (start, reset, finish): the frame in progress is partial.
     block_revolution_ = 0;
     current_revolution_ = 0;
     current_ = FrameState{};

@@ -234,7 +234,7 @@ PushResult FrameAssembler::push(std::span<const std::uint8_t> payload,
   return result;
 }
 
-std::optional<CompletedFrame> FrameAssembler::flush() noexcept { return close(); }
+std::optional<CompletedFrame> FrameAssembler::finish() noexcept { return close(); }
 
 void FrameAssembler::decode(const LidarPacket& packet) noexcept {
   ++packets_;

@@ -288,7 +288,7 @@ void FrameAssembler::complete(PushResult& result) noexcept {
     frame.packets = current_.packets;
     frame.lost_packets = current_.lost;
     frame.dropped_points = current_.dropped;
-    frame.whole_revolution = current_.whole;
+    frame.whole = current_.whole;
     result.frame = frame;
     ++counters_.frames;
     output_attached_ = false;  // the span is the caller's until set_output; next_ is in carry_
@@ -721,7 +721,7 @@ void FrameAssembler::decode_point_by_point(const BlockContext& block, std::int64
   }
 }
 
-std::optional<CompletedFrame> FrameAssembler::flush() noexcept {
+std::optional<CompletedFrame> FrameAssembler::finish() noexcept {
   if (!current_.started || !output_attached_) {
     reset();
     return std::nullopt;
@@ -734,7 +734,7 @@ std::optional<CompletedFrame> FrameAssembler::flush() noexcept {
   frame.packets = current_.packets;
   frame.lost_packets = current_.lost;
   frame.dropped_points = current_.dropped;
-  frame.whole_revolution = false;
+  frame.whole = false;
   ++counters_.frames;
   output_attached_ = false;
   output_count_ = 0;

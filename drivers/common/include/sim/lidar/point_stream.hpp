@@ -28,7 +28,7 @@ namespace sim::lidar {
 
 // What a family gives PointStream<Family>:
 //   using Assembler   its FrameAssembler: push(payload, host_receive_ns, more…) -> PushResult,
-//                     flush(), reset(), set_output(span), options().emit_partial_frames, counters()
+//                     finish(), reset(), set_output(span), options().emit_partial_frames, counters()
 //                     with packets, lost_packets and malformed
 //   using Counters    its PublishCounters (lidar::PublishCounters, or one deriving from it)
 //   struct State      what its stream keeps beside the pipeline (an empty struct: nothing)
@@ -66,10 +66,10 @@ class PointStream {
     if constexpr (!Family::whole_at_finish) {
       if (!pipeline_->assembler.options().emit_partial_frames) {
         pipeline_->assembler.reset();
-        return decltype(pipeline_->flush()){};
+        return decltype(pipeline_->finish()){};
       }
     }
-    return pipeline_->flush();
+    return pipeline_->finish();
   }
   // Forgets the frame in progress (a capture loops, a sensor was silent).
   void reset() noexcept { pipeline_->assembler.reset(); }

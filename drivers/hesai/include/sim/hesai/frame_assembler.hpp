@@ -71,7 +71,7 @@ struct AssemblerOptions {
   // group (0 disables).
   float multi_return_distance_threshold_m = 0.1f;
   // The frame before the first cut (driver start, after a restart) covers part of a
-  // revolution; publish it (whole_revolution = false) or drop it.
+  // revolution; publish it (whole = false) or drop it.
   bool emit_partial_frames = false;
   // Optional firing-time file: replaces the built-in channel firing times, and with
   // firetime_azimuth_compensation adds firetime·rpm·6e-6 degrees to each point's azimuth
@@ -88,7 +88,7 @@ struct CompletedFrame {
   std::uint32_t packets = 0;          // packets that contributed points or firings
   std::uint32_t lost_packets = 0;     // packets missing inside this frame (sequence/azimuth)
   std::uint32_t dropped_points = 0;   // points that did not fit in the output span
-  bool whole_revolution = true;       // started at a cut and ended at the next one
+  bool whole = true;       // started at a cut and ended at the next one
   std::uint16_t motor_rpm = 0;        // motor speed the frame's last packet reported
   // Models with a functional-safety section (QT128): the worst state any packet of the frame
   // reported, with that packet's fault code. A user drops or flags frames that are not
@@ -126,7 +126,7 @@ class FrameAssembler {
   static Expected<FrameAssembler> create(Calibration calibration, AssemblerOptions options);
 
   // The span the following points go to. Call once before the first push and again after
-  // every completed frame (and flush); the points already decoded for the new frame are copied
+  // every completed frame (and finish); the points already decoded for the new frame are copied
   // to its front. The span must stay valid until the next completed frame. Called in the middle
   // of a frame, it restarts that frame's storage (the frame is then not a whole revolution).
   void set_output(std::span<LidarPoint> output) noexcept;
@@ -135,10 +135,10 @@ class FrameAssembler {
   // of the span last given to set_output, which the assembler no longer touches afterwards.
   PushResult push(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns) noexcept;
 
-  // Returns the frame in progress as a (partial, whole_revolution = false) frame and starts
+  // Returns the frame in progress as a (partial, whole = false) frame and starts
   // over, e.g. at the end of a recording; like a completed frame, the span then belongs to the
   // caller again. nullopt when it holds no firing or has no span.
-  std::optional<CompletedFrame> flush() noexcept;
+  std::optional<CompletedFrame> finish() noexcept;
 
   // Forget the frame in progress and the loss-detection state (a new recording, a loop). The
   // output span, if any, stays attached and is refilled from its start.

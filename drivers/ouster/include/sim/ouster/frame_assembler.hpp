@@ -134,7 +134,7 @@ class FrameAssembler {
   PushResult push(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns) noexcept;
   // The frame in progress as a finished frame (end of a recording); nullopt when empty or
   // partial without emit_partial_frames.
-  std::optional<CompletedFrame> flush() noexcept;
+  std::optional<CompletedFrame> finish() noexcept;
   // Forget the frame in progress (a loop, a silence).
   void reset() noexcept;
 

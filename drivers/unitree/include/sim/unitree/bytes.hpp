@@ -10,16 +10,16 @@
 
 namespace sim::unitree::le {
 
-inline std::uint16_t u16(std::span<const std::byte> b, std::size_t off) noexcept {
+inline std::uint16_t u16(std::span<const std::uint8_t> b, std::size_t off) noexcept {
   return static_cast<std::uint16_t>(static_cast<unsigned>(b[off]) |
                                     (static_cast<unsigned>(b[off + 1]) << 8));
 }
-inline std::uint32_t u32(std::span<const std::byte> b, std::size_t off) noexcept {
+inline std::uint32_t u32(std::span<const std::uint8_t> b, std::size_t off) noexcept {
   return static_cast<std::uint32_t>(b[off]) | (static_cast<std::uint32_t>(b[off + 1]) << 8) |
          (static_cast<std::uint32_t>(b[off + 2]) << 16) |
          (static_cast<std::uint32_t>(b[off + 3]) << 24);
 }
-inline float f32(std::span<const std::byte> b, std::size_t off) noexcept {
+inline float f32(std::span<const std::uint8_t> b, std::size_t off) noexcept {
   return std::bit_cast<float>(u32(b, off));
 }
 

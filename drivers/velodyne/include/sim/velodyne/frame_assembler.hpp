@@ -90,7 +90,7 @@ struct CompletedFrame {
   std::uint32_t packets = 0;
   std::uint32_t lost_packets = 0;    // estimated from the packets' timestamps
   std::uint32_t dropped_points = 0;  // did not fit in the output span
-  bool whole_revolution = true;
+  bool whole = true;
 };
 
 struct PushResult {
@@ -131,7 +131,7 @@ class FrameAssembler {
                   std::int64_t time_reference_ns = 0) noexcept;
 
   // The frame in progress as a partial frame (end of a recording); nullopt when empty.
-  std::optional<CompletedFrame> flush() noexcept;
+  std::optional<CompletedFrame> finish() noexcept;
   // Forget the frame in progress and the loss-detection state (a loop, a silence).
   void reset() noexcept;
 
