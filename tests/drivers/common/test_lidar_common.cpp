@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,7 @@
 
 #include "sim/clock.hpp"
 #include "sim/lidar/frame_publisher.hpp"
+#include "sim/lidar/live_receiver.hpp"
 #include "sim/lidar/tcp_client.hpp"
 #include "sim/lidar/udp_receiver.hpp"
 #include "sim/reader.hpp"
@@ -114,6 +116,82 @@ UdpListen loopback() {
   listen.bind = "127.0.0.1";
   listen.receive_buffer = 1 << 20;
   return listen;
+}
+
+// A family as LiveReceiver<Route> sees it: a stream that keeps what each push took, and a route
+// with a data and a position socket whose oversized datagrams are refused.
+struct FakeResult {
+  std::optional<std::int64_t> packet_ns;
+};
+struct FakeStream {
+  FakeResult push(std::span<const std::uint8_t> payload, std::int64_t /*arrival_ns*/) noexcept {
+    data.push_back(payload[0]);
+    return {};
+  }
+  void reset() noexcept { ++resets; }
+  sim::lidar::ClockReporter& clock() noexcept { return reporter; }
+  std::int64_t stamp_offset() const noexcept { return 0; }
+  std::optional<sim::ClockStatus> tick_clock(std::int64_t /*now*/, bool /*at_once*/ = false) { return std::nullopt; }
+
+  std::vector<std::uint8_t> data;      // each data push's first byte
+  std::vector<std::uint8_t> position;  // each position push's first byte
+  int resets = 0;
+  sim::lidar::ClockReporter reporter;
+};
+struct FakeRoute {
+  using Stream = FakeStream;
+  static constexpr std::size_t datagram_size = 2048;
+  static constexpr std::size_t batch_size = 4;
+  static constexpr bool refuse_truncated = true;
+  std::vector<sim::lidar::RoutedPort> ports() const {
+    return {{sim::lidar::PacketKind::data, {0, "UDP", "--port"}},
+            {sim::lidar::PacketKind::position, {0, "the position", "--position-port"}}};
+  }
+  sim::lidar::PacketKind operator()(std::uint16_t /*port*/, std::span<const std::uint8_t> /*payload*/) const noexcept {
+    return sim::lidar::PacketKind::data;
+  }
+  static bool push_other(FakeStream& stream, sim::lidar::PacketKind kind, std::span<const std::uint8_t> payload,
+                         std::int64_t /*arrival_ns*/) noexcept {
+    if (kind == sim::lidar::PacketKind::position) stream.position.push_back(payload[0]);
+    return true;
+  }
+};
+
+TEST(LiveReceiver, EachSocketFeedsItsPushAndAnOversizedDatagramIsCountedNotPushed) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  auto receiver = sim::lidar::LiveReceiver<FakeRoute>::open(loopback(), FakeRoute{});
+  ASSERT_TRUE(receiver) << receiver.error().message;
+  ASSERT_NE(receiver->data_port(), 0);
+  ASSERT_NE(receiver->position_port(), 0);
+  EXPECT_NE(receiver->data_port(), receiver->position_port());
+  EXPECT_EQ(receiver->imu_port(), 0);
+
+  const Sender sensor("127.0.0.1");
+  for (std::uint8_t fill = 1; fill <= 6; ++fill) sensor.send(receiver->data_port(), 100, fill);  // more than a batch
+  sensor.send(receiver->position_port(), 512, 7);
+  sensor.send(receiver->data_port(), 3000, 9);  // larger than the buffer
+  sensor.send(receiver->position_port(), 512, 8);
+
+  FakeStream stream;
+  const int stop = ::eventfd(0, EFD_CLOEXEC);
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  sim::lidar::ReceiverCallbacks callbacks;
+  callbacks.tick_period = std::chrono::milliseconds(20);
+  callbacks.tick = [&] {
+    const bool all = stream.data.size() == 6 && stream.position.size() == 2 && receiver->counters().oversized == 1;
+    if (!all && std::chrono::steady_clock::now() < until) return;
+    const std::uint64_t one = 1;
+    EXPECT_EQ(::write(stop, &one, sizeof one), 8);
+  };
+  receiver->run(stream, stop, callbacks);
+  ::close(stop);
+
+  EXPECT_EQ(stream.data, (std::vector<std::uint8_t>{1, 2, 3, 4, 5, 6}));
+  EXPECT_EQ(stream.position, (std::vector<std::uint8_t>{7, 8}));
+  EXPECT_EQ(receiver->counters().oversized, 1U);
+  EXPECT_EQ(stream.resets, 0);
+  EXPECT_NE(receiver->last_packet_ns(), 0);
+  EXPECT_EQ(receiver->stream(), nullptr);  // outside run(stream, …)
 }
 
 TEST(UdpReceiver, DatagramsFromAnotherSenderAreCountedAndNotHandled) {

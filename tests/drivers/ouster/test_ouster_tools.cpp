@@ -23,8 +23,8 @@
 #include <thread>
 #include <vector>
 
-#include "fake_sensor_http.hpp"
-#include "frames.hpp"  // tests/drivers/hesai/driver: hand-built frames and capture files
+#include "lidar_test/fake_sensor_http.hpp"
+#include "lidar_test/capture_frames.hpp"
 #include "ouster_test_support.hpp"
 #include "sim/sim.hpp"
 #include "sim_test/network.hpp"
@@ -279,7 +279,7 @@ TEST(OusterReplay, TwoAndThreeSensorsOnOnePortAreCountedAndWarnedOfOnce) {
   }
 }
 
-using ouster_test::FakeSensorHttp;
+using lidar_test::FakeSensorHttp;
 
 void send_to(std::uint16_t port, const std::vector<std::vector<std::uint8_t>>& payloads,
              const char* address = "127.0.0.1") {
