@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 // The decoder against nebula's reference clouds of real captures (data/NOTICE.md): the same
 // point count and at least 99.9 % of the points within 1 mm, point by point in order, with the
-// settings nebula decoded them with (scan phase 0°, range 0.3–300 m, cloud angles 0–359°, its
-// azimuth interpolation; the VLS-128 cut by packet as nebula cuts). Then the decoder's own
+// settings nebula decoded them with (VLP-16 and VLS-128: scan phase 0°, range 0.3–300 m, cloud
+// angles 0–359°; VLP-32C: below), its azimuth interpolation; the VLS-128 and VLP-32C cut by
+// packet as nebula cuts. Then the decoder's own
 // defaults on the same packets: per-point cut, firing-time interpolation, per-point times.
 #include <gtest/gtest.h>
 
@@ -218,6 +219,47 @@ TEST(VelodyneGolden, EveryPointOfADefaultFrameLiesInItsRevolution) {
   EXPECT_LT(azimuth(frame.front()), 1.0);
   EXPECT_GT(azimuth(frame.back()), 350.0);
   EXPECT_EQ(d.counters.dropped_points, 0U);
+}
+
+// nebula's VLP-32C test (a real capture, single return): scan phase 180°, range 0.4–50 m,
+// cloud angles 270°–90° (the sensor sent only that sector), tested on each block's azimuth as
+// sent (its VLP-32 decoder), scans cut by packet; the reference is its first scan, which starts
+// with the capture. nebula's per-unit firing slots (AzimuthInterpolation::nebula) put every point
+// where nebula's cloud has it; the manual's pairs put laser 31 up to 0.13° away.
+TEST(VelodyneGolden, Vlp32cScanEqualsNebulasReferenceCloud) {
+  const auto reference = read_pcd_xyz(data("vlp32c_strongest.reference.pcd"));
+  ASSERT_EQ(reference.size(), 26216U);
+  AssemblerOptions o;
+  o.model = Model::vlp32c;
+  o.cut_azimuth_deg = 180;
+  o.min_range_m = 0.4f;
+  o.max_range_m = 50.0f;
+  o.interpolation = AzimuthInterpolation::nebula;
+  o.cut_by = CutBy::packet;
+  o.azimuth_window = AssemblerOptions::AzimuthWindow{270, 90, false, true};
+  o.emit_partial_frames = true;
+  const Decoded d = decode("vlp32c_strongest_first152.pcap", "VLP32.yaml", o);
+  EXPECT_EQ(d.counters.packets, 152U);
+  EXPECT_EQ(d.counters.malformed, 0U);
+  ASSERT_EQ(d.frames.size(), 2U);
+  ASSERT_EQ(d.frames.front().size(), reference.size());
+  EXPECT_GE(share_within_1mm(d.frames.front(), reference), 0.999);
+
+  // The manual's firing table instead: the same points, laser by laser within its 0–16 slots
+  // of the sequence's azimuth step (0.2° at 10 Hz: 0.14°), the elevation and range unchanged.
+  o.interpolation = AzimuthInterpolation::firing_time;
+  const Decoded manual = decode("vlp32c_strongest_first152.pcap", "VLP32.yaml", o);
+  ASSERT_EQ(manual.frames.size(), 2U);
+  const auto& points = manual.frames.front();
+  ASSERT_EQ(points.size(), reference.size());
+  EXPECT_LT(share_within_1mm(points, reference), 0.5);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const double r = std::hypot(reference[i].x, reference[i].y);
+    const double moved = std::hypot(points[i].x - reference[i].x, points[i].y - reference[i].y);
+    ASSERT_LE(moved, r * 0.16 * M_PI / 180.0 + 1e-3) << "point " << i;
+    ASSERT_NEAR(points[i].z, reference[i].z, 1e-4) << "point " << i;
+    ASSERT_NEAR(std::hypot(points[i].x, points[i].y), r, 1e-4) << "point " << i;
+  }
 }
 
 }  // namespace
