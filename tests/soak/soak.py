@@ -4,9 +4,9 @@
 
     tests/soak/soak.py --build build/release --seconds 120 [--json soak.json] [--seed N]
 
-Seven 1920x1200 bgr8 camera streams at 30 Hz and two LiDAR streams, readers of every kind, and a
-chaos loop that kills and restarts readers and writers (SIGKILL and SIGTERM), replaces a stream's
-layout and removes dead streams. It checks continuously and reports at the end as a table and as
+Seven 1920x1200 bgr8 camera streams at 30 Hz, two replayed LiDAR streams and two live ones on one
+port by multicast, readers of every kind, and a chaos loop that kills and restarts readers and
+writers (SIGKILL and SIGTERM), replaces a stream's layout and removes dead streams. It checks continuously and reports at the end as a table and as
 JSON; exit 0 only if every check passed. What is checked and why it is fair on a loaded machine:
 tests/soak/README.md.
 """
@@ -486,7 +486,7 @@ class Soak:
             return set()
 
     def unexpected_regions(self):
-        """The regions under the soak's names that are none of its nine streams, and the streams
+        """The regions under the soak's names that are none of its streams, and the streams
         whose region is missing (both samples are taken with every writer running)."""
         found = self.our_regions()
         return (found - set(self.streams)) | {f"{s} (missing)" for s in set(self.streams) - found}
@@ -744,7 +744,7 @@ class Soak:
         dds = self.children.get("dds")
         if dds and dds.stats and dds.stats.get("bridge_exit") not in (None, "exit 0"):
             self.fail("sim_dds_bridge", f"{dds.stats['bridge_exit']} after SIGTERM")
-        # Every writer ended: only the nine streams' regions may remain (a writer leaves its region
+        # Every writer ended: only the streams' regions may remain (a writer leaves its region
         # for late readers; sim_rm --dead removes it). Anything else under the soak's names was
         # left behind by one of its programs.
         self.stale = sorted(self.our_regions() - set(self.streams))
@@ -791,7 +791,7 @@ class Soak:
             # raises its mmap threshold to the largest block freed), so a process that handles
             # 6.9 MB frames may hold a few more at the end without leaking; a leak of anything per
             # frame or per chaos event would be far more over thousands of frames and events.
-            if name == "/dev/shm":  # exactly the nine streams' regions, at both samples
+            if name == "/dev/shm":  # exactly the streams' regions, at both samples
                 unexpected = sorted(set(a["unexpected"]) | set(b["unexpected"]))
                 rows.append({"process": name, "what": "shm_regions", "start": a["shm_regions"],
                              "end": b["shm_regions"], "limit": f"the {len(self.streams)} streams' only",
