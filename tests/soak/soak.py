@@ -180,8 +180,11 @@ class Child:
     def stderr_tail(self):
         if not self.log.closed:
             self.log.flush()
-        with open(self.log_path, errors="replace") as f:
-            return f.read()[-400:].strip()
+        try:
+            with open(self.log_path, errors="replace") as f:
+                return f.read()[-400:].strip()
+        except FileNotFoundError:  # the soak is ending and has removed its folder
+            return ""
 
 
 def classify_stalls(violations, publish_gaps):

@@ -146,7 +146,7 @@ int run(const sim::apps::CommandLine& cli, Options& o) {
 
   sim::hesai::NetworkConfig network;
   sim::apps::set_listen(network.listen, o.receive);
-  network.port = static_cast<std::uint16_t>(o.port);
+  network.data_port = static_cast<std::uint16_t>(o.port);
   auto receiver = sim::hesai::LiveReceiver::open(network);
   if (!receiver) return cli.fail(receiver.error());
   // On stdout, for scripts and tests that bind port 0.
@@ -161,7 +161,7 @@ int run(const sim::apps::CommandLine& cli, Options& o) {
   if (auto code = cli.apply_placement(o.stream.placement)) return *code;
   const sim::apps::HostClockSource host_clock(o.receive);
 
-  sim::apps::ModelReceiverWords words{"Hesai", o.stream.stream, receiver->port(),
+  sim::apps::ModelReceiverWords words{"Hesai", o.stream.stream, receiver->data_port(),
                                       network.listen.silence_timeout.count()};
   const auto clock = poll_clock(o);
   // The stream's clock check: its packets against their arrival, with the host's clock and what

@@ -166,12 +166,12 @@ int run(const sim::apps::CommandLine& cli, Options& o) {
 
   sim::ouster::NetworkConfig network;
   sim::apps::set_listen(network.listen, o.receive);
-  network.lidar_port = static_cast<std::uint16_t>(o.lidar_port.value_or(metadata->udp_port_lidar));
+  network.data_port = static_cast<std::uint16_t>(o.lidar_port.value_or(metadata->udp_port_lidar));
   network.imu_port = static_cast<std::uint16_t>(o.imu_port.value_or(metadata->udp_port_imu));
   auto receiver = sim::ouster::LiveReceiver::open(network);
   if (!receiver) return cli.fail(std::string_view(receiver.error().message));
   std::printf("%s: listening on %s lidar port %u imu port %u for %s\n", tool, o.receive.bind.c_str(),
-              receiver->lidar_port(), receiver->imu_port(), metadata->describe().c_str());
+              receiver->data_port(), receiver->imu_port(), metadata->describe().c_str());
   std::fflush(stdout);
   status.check_receive_buffer(receiver->receive_buffer(), network.listen.receive_buffer);
   config->heartbeat_period = std::chrono::milliseconds(500);

@@ -63,7 +63,7 @@ class OusterTarget final : public ReplayTarget {
       }
     }
     const std::int64_t now = realtime_ns();
-    const ouster::PushResult result = stream_.push_lidar(bytes, now);
+    const ouster::PushResult result = stream_.push(bytes, now);
     clock_replayed_packet(stream_, result.packet_ns, capture_ns, now);
     return result.frame.has_value();
   }

@@ -63,7 +63,7 @@ struct LiveReceiver::Impl final : lidar::DatagramHandler {
 };
 
 Expected<LiveReceiver> LiveReceiver::open(const NetworkConfig& network) {
-  const std::array ports{lidar::UdpPort{network.port, "UDP", "--port"}};
+  const std::array ports{lidar::UdpPort{network.data_port, "UDP", "--port"}};
   auto udp = lidar::UdpReceiver::open(network.listen, ports, datagram_buffer);
   if (!udp) return udp.error();
   return LiveReceiver(std::make_unique<Impl>(std::move(udp.value())));
@@ -90,7 +90,7 @@ Expected<void> LiveReceiver::run(int stop_fd, const ReceiverCallbacks& callbacks
   return {};
 }
 
-std::uint16_t LiveReceiver::port() const noexcept { return impl_->udp.port(); }
+std::uint16_t LiveReceiver::data_port() const noexcept { return impl_->udp.port(); }
 std::string LiveReceiver::local_address() const { return impl_->udp.local_address(); }
 int LiveReceiver::receive_buffer() const noexcept { return impl_->udp.receive_buffer(); }
 const ReceiveCounters& LiveReceiver::counters() const noexcept { return impl_->udp.counters(); }

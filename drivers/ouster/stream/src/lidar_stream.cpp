@@ -139,7 +139,7 @@ LidarStream::LidarStream(LidarStream&&) noexcept = default;
 LidarStream& LidarStream::operator=(LidarStream&&) noexcept = default;
 LidarStream::~LidarStream() = default;
 
-PushResult LidarStream::push_lidar(std::span<const std::uint8_t> payload,
+PushResult LidarStream::push(std::span<const std::uint8_t> payload,
                                    std::int64_t host_receive_ns) noexcept {
   return impl_->push(payload, host_receive_ns);
 }

@@ -13,7 +13,7 @@ constexpr std::size_t datagram_buffer = 65536;
 constexpr std::size_t batch_size = 16;  // 1 MiB of buffers
 
 // The receiver's sockets, in the order they are opened.
-constexpr std::size_t lidar_socket = 0;
+constexpr std::size_t data_socket = 0;
 constexpr std::size_t imu_socket = 1;
 
 }  // namespace
@@ -38,7 +38,7 @@ struct LiveReceiver::Impl final : lidar::DatagramHandler {
       return true;
     }
     if (udp.resumed_after_silence(d.arrival_ns)) stream->reset();  // the frame is stale
-    const PushResult result = stream->push_lidar(d.payload, d.arrival_ns);
+    const PushResult result = stream->push(d.payload, d.arrival_ns);
     if (result.error != PacketError::none && !mismatch_noted) note_mismatch();
     // The packet's own time against its arrival on this host; judged about once a second.
     stream->clock().add(result.packet_ns, stream->stamp_offset(), d.arrival_ns);
@@ -56,7 +56,7 @@ struct LiveReceiver::Impl final : lidar::DatagramHandler {
 };
 
 Expected<LiveReceiver> LiveReceiver::open(const NetworkConfig& network) {
-  const std::array ports{lidar::UdpPort{network.lidar_port, "the lidar", "--lidar-port"},
+  const std::array ports{lidar::UdpPort{network.data_port, "the lidar", "--lidar-port"},
                          lidar::UdpPort{network.imu_port, "the IMU", "--imu-port"}};
   auto udp = lidar::UdpReceiver::open(network.listen, ports, datagram_buffer, batch_size);
   if (!udp) return udp.error();
@@ -74,7 +74,7 @@ void LiveReceiver::run(LidarStream& stream, int stop_fd, const ReceiverCallbacks
   impl_->stream = nullptr;
 }
 
-std::uint16_t LiveReceiver::lidar_port() const noexcept { return impl_->udp.port(lidar_socket); }
+std::uint16_t LiveReceiver::data_port() const noexcept { return impl_->udp.port(data_socket); }
 std::uint16_t LiveReceiver::imu_port() const noexcept { return impl_->udp.port(imu_socket); }
 int LiveReceiver::receive_buffer() const noexcept { return impl_->udp.receive_buffer(); }
 const ReceiveCounters& LiveReceiver::counters() const noexcept { return impl_->udp.counters(); }

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // LiveReceiver: a Hesai sensor's UDP packets into a LidarStream, the live end of the driver.
 //
-//   auto receiver = sim::hesai::LiveReceiver::open({.port = 2368});   // the socket, nothing else
+//   auto receiver = sim::hesai::LiveReceiver::open({.data_port = 2368});   // the socket, nothing else
 //   if (!receiver) -> receiver.error().message (one sentence; invalid_argument: a bad address)
 //   receiver->publish_to(stream_config, model);       // model nullopt: from the first packet
 //   receiver->run(stop_fd, {.tick = print_status});   // until stop_fd is readable
@@ -32,7 +32,7 @@ struct NetworkConfig {
   // Where to listen and whom to hear: bind, multicast group, source, receive buffer, silence
   // timeout. IPv4 or IPv6 (lidar::address_problem(…, IpVersions::v4_and_v6) checks an address).
   lidar::UdpListen listen{.receive_buffer = 16 << 20, .versions = lidar::IpVersions::v4_and_v6};
-  std::uint16_t port = 2368;  // 0: a free port, read back with LiveReceiver::port()
+  std::uint16_t data_port = 2368;  // 0: a free port, read back with LiveReceiver::data_port()
 };
 
 // datagrams, other_source, unrecognised (not a Hesai point-cloud packet, before the model was
@@ -68,7 +68,7 @@ class LiveReceiver {
   // Given to the stream when it is created; call before run().
   void set_clock_sources(lidar::ClockSources sources);
 
-  std::uint16_t port() const noexcept;             // the bound port
+  std::uint16_t data_port() const noexcept;        // the bound port
   std::string local_address() const;              // "127.0.0.1:2368"
   int receive_buffer() const noexcept;             // SO_RCVBUF the kernel granted, bytes
   const ReceiveCounters& counters() const noexcept;

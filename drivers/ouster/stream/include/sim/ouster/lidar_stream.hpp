@@ -74,7 +74,7 @@ class LidarStream {
   ~LidarStream();
 
   // One lidar payload; publishes the frame it completes, if any.
-  PushResult push_lidar(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns) noexcept;
+  PushResult push(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns) noexcept;
   // One IMU payload; true when it was a sample (published when the IMU stream exists).
   bool push_imu(std::span<const std::uint8_t> payload) noexcept;
   // End of input: the frame in progress, when partial frames are enabled or it is whole.

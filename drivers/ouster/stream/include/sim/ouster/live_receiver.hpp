@@ -27,7 +27,7 @@ struct NetworkConfig {
   // Where to listen and whom to hear: bind, multicast group, source, receive buffer (per
   // socket), silence timeout. IPv4 (lidar::address_problem(…, IpVersions::v4) checks an address).
   lidar::UdpListen listen{.receive_buffer = 32 << 20};
-  std::uint16_t lidar_port = 7502;  // 0: a free port (read back with lidar_port())
+  std::uint16_t data_port = 7502;  // 0: a free port (read back with data_port())
   std::uint16_t imu_port = 7503;    // 0: a free port
 };
 
@@ -50,7 +50,7 @@ class LiveReceiver {
   // Receives into `stream` until `stop_fd` becomes readable (-1: never).
   void run(LidarStream& stream, int stop_fd, const ReceiverCallbacks& callbacks = {});
 
-  std::uint16_t lidar_port() const noexcept;
+  std::uint16_t data_port() const noexcept;
   std::uint16_t imu_port() const noexcept;
   int receive_buffer() const noexcept;  // SO_RCVBUF granted
   const ReceiveCounters& counters() const noexcept;
