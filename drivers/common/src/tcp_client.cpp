@@ -125,6 +125,15 @@ Expected<Resolved> resolve(const std::string& host, std::uint16_t port, std::int
 
 }  // namespace
 
+std::string host_problem(const std::string& host) {
+  if (host.empty()) return "'' is neither an address nor a name";
+  if (first_address(host, 0, AI_NUMERICHOST).status == 0) return {};
+  const bool name = host.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789.-") ==
+                    std::string::npos;
+  if (name && host.front() != '-' && host.front() != '.') return {};
+  return "'" + host + "' is neither an address (e.g. 192.168.1.201) nor a host name (os-122.local)";
+}
+
 Expected<TcpConnection> TcpConnection::connect(const TcpPeer& peer) {
   const std::int64_t deadline = monotonic_ns() + peer.timeout.count() * 1'000'000;
   std::string who = "sensor " + peer.host + ":" + std::to_string(peer.port);

@@ -24,6 +24,7 @@
 #include "sim/apps/stop_signal.hpp"
 #include "sim/clock.hpp"
 #include "sim/lidar/frame_publisher.hpp"
+#include "sim/lidar/tcp_client.hpp"
 #include "sim/ouster/live_receiver.hpp"
 #include "sim/ouster/metadata_client.hpp"
 #include "sim/ouster/time_client.hpp"
@@ -63,14 +64,7 @@ void add_options(sim::apps::CommandLine& cli, Options& o) {
   app.add_option("--sensor-ip", o.sensor_ip,
                  "the sensor's address or name (os-122.local) for --metadata-from-sensor [--source]")
       ->type_name("ADDR|NAME")
-      ->check(sim::apps::validator(
-          [](const std::string& host) -> std::string {
-            // A name is resolved when the driver connects (within --http-timeout).
-            const bool name = !host.empty() && host.find_first_not_of(
-                "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789.-") == std::string::npos;
-            return name ? std::string() : sim::lidar::address_problem(host, sim::lidar::IpVersions::v4);
-          },
-          "ADDR|NAME"));
+      ->check(sim::apps::validator(sim::lidar::host_problem, "ADDR|NAME"));  // a name resolves at connect
   app.add_option("--http-port", o.http_port, "the sensor's HTTP port")->check(CLI::Range(1, 65535));
   app.add_option("--http-timeout", o.http_timeout,
                  "seconds the metadata download, or one reading of the sensor's clock, may take")

@@ -326,6 +326,15 @@ TEST(TcpConnection, ARefusedConnectionIsOneSentenceNamingTheSensorAndTheService)
   EXPECT_NE(unknown.error().message.find("'sensor.invalid' (--sensor-ip)"), std::string::npos) << unknown.error().message;
 }
 
+TEST(TcpConnection, AHostIsAnAddressOrAHostNameAndNothingElse) {
+  for (const char* good : {"192.168.1.201", "fe80::1", "os-122.local", "localhost", "sensor"}) {
+    EXPECT_EQ(sim::lidar::host_problem(good), "") << good;
+  }
+  for (const char* bad : {"", "os 122", "-x", "a/b", "http://sensor"}) {
+    EXPECT_NE(sim::lidar::host_problem(bad), "") << bad;
+  }
+}
+
 // Ouster sensors are reached by name (os-<serial>.local) as often as by address: a name is
 // resolved (here from /etc/hosts) within the connection's timeout.
 TEST(TcpConnection, ASensorNameIsResolvedAndConnected) {

@@ -43,6 +43,10 @@ struct TcpRead {
   int error = 0;         // errno, with failed
 };
 
+// Empty when `host` can name a sensor for TcpPeer: an IPv4 or IPv6 address, or a name of
+// letters, digits, dots and dashes (resolved when connecting); else why not, as "'x' is …".
+std::string host_problem(const std::string& host);
+
 class TcpConnection {
  public:
   // Resolves the host and connects to its first address before the deadline (now + timeout):
