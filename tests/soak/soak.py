@@ -6,8 +6,8 @@
 
 Seven 1920x1200 bgr8 camera streams at 30 Hz, two replayed LiDAR streams and two live ones on one
 port by multicast, readers of every kind, and a chaos loop that kills and restarts readers and
-writers (SIGKILL and SIGTERM), replaces a stream's layout and removes dead streams. It checks continuously and reports at the end as a table and as
-JSON; exit 0 only if every check passed. What is checked and why it is fair on a loaded machine:
+writers (SIGKILL and SIGTERM), replaces a stream's layout and removes dead streams. It checks
+continuously and reports at the end as a table and as JSON; exit 0 only if every check passed. What is checked and why it is fair on a loaded machine:
 tests/soak/README.md.
 """
 import argparse
