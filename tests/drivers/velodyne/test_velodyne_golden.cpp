@@ -246,7 +246,8 @@ TEST(VelodyneGolden, Vlp32cScanEqualsNebulasReferenceCloud) {
   EXPECT_GE(share_within_1mm(d.frames.front(), reference), 0.999);
 
   // The manual's firing table instead: the same points, laser by laser within its 0–16 slots
-  // of the sequence's azimuth step (0.2° at 10 Hz: 0.13°; bounded by 0.16° with the rounding), the elevation and range unchanged.
+  // of the sequence's azimuth step (0.2° at 10 Hz: 0.13°; 0.16° with the rounding), the
+  // elevation and range unchanged.
   o.interpolation = AzimuthInterpolation::firing_time;
   const Decoded manual = decode("vlp32c_strongest_first152.pcap", "VLP32.yaml", o);
   ASSERT_EQ(manual.frames.size(), 2U);
