@@ -104,7 +104,7 @@ void decode(benchmark::State& state, const Capture& capture) {
         counting->set_output(slots[0]);
       }
     }
-    if (auto f = counting->flush()) points_per_pass += f->point_count;
+    if (auto f = counting->finish()) points_per_pass += f->point_count;
   }
   int slot = 0;
   assembler->set_output(slots[slot]);

@@ -19,9 +19,9 @@ constexpr auto kCrc32Table = make_crc32_table();
 
 }  // namespace
 
-std::uint32_t crc32(std::span<const std::byte> bytes) noexcept {
+std::uint32_t crc32(std::span<const std::uint8_t> bytes) noexcept {
   std::uint32_t c = 0xFFFFFFFFU;
-  for (const std::byte b : bytes) {
+  for (const std::uint8_t b : bytes) {
     c = kCrc32Table[(c ^ static_cast<std::uint32_t>(b)) & 0xFFU] ^ (c >> 8);
   }
   return c ^ 0xFFFFFFFFU;

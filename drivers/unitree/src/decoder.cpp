@@ -94,7 +94,7 @@ std::uint64_t Decoder::max_points_per_scan(const DecoderOptions& options) noexce
   return std::max<std::uint64_t>(l2::kPointsPerPacket * packets, l2::kPointsPer2dPacket);
 }
 
-void Decoder::push(std::span<const std::byte> bytes, std::int64_t host_ns) noexcept {
+void Decoder::push(std::span<const std::uint8_t> bytes, std::int64_t host_ns) noexcept {
   while (!bytes.empty()) {
     const std::size_t taken =
         options_.model == Model::l2 ? l2_framer_.feed(bytes) : l1_framer_.feed(bytes);
@@ -137,7 +137,7 @@ std::int64_t Decoder::stamp_of(std::int64_t sensor_ns, std::int64_t host_ns) con
   return options_.time_source == TimeSource::host ? host_ns : saturating_add_ns(sensor_ns, stamp_offset_ns_);
 }
 
-void Decoder::on_l2_packet(std::span<const std::byte> packet, std::int64_t host_ns) noexcept {
+void Decoder::on_l2_packet(std::span<const std::uint8_t> packet, std::int64_t host_ns) noexcept {
   const std::uint32_t type = le::u32(packet, 4);
   if (type == l2::imu) {
     std::optional<ImuSample> sample = l2::parse_imu(packet);
@@ -183,7 +183,7 @@ void Decoder::on_l2_packet(std::span<const std::byte> packet, std::int64_t host_
   if (assembler_.end_packet(result.written)) ++counters_.scans;
 }
 
-void Decoder::on_l2_2d_packet(std::span<const std::byte> packet, std::int64_t host_ns) noexcept {
+void Decoder::on_l2_2d_packet(std::span<const std::uint8_t> packet, std::int64_t host_ns) noexcept {
   const std::optional<l2::PointPacketHeader> header = l2::parse_2d_header(packet);
   if (!header) {
     ++counters_.malformed;

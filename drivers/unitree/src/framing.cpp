@@ -10,7 +10,7 @@
 
 namespace sim::unitree {
 
-std::size_t ByteWindow::append(std::span<const std::byte> bytes) noexcept {
+std::size_t ByteWindow::append(std::span<const std::uint8_t> bytes) noexcept {
   if (storage_.size() - end_ < bytes.size() && begin_ > 0) {
     // Compact only when the tail is short: most datagrams then cost one copy, not two.
     std::memmove(storage_.data(), storage_.data() + begin_, end_ - begin_);
@@ -28,7 +28,7 @@ namespace {
 
 // Offset of the first place `marker` could start in `bytes`: a full match, or a prefix of it at
 // the very end (more bytes may complete it). bytes.size() when there is none.
-std::size_t find_marker(std::span<const std::byte> bytes, std::span<const std::byte> marker) {
+std::size_t find_marker(std::span<const std::uint8_t> bytes, std::span<const std::uint8_t> marker) {
   for (std::size_t i = 0; i < bytes.size(); ++i) {
     const std::size_t n = std::min(marker.size(), bytes.size() - i);
     if (std::equal(marker.begin(), marker.begin() + static_cast<std::ptrdiff_t>(n),
@@ -39,7 +39,7 @@ std::size_t find_marker(std::span<const std::byte> bytes, std::span<const std::b
   return bytes.size();
 }
 
-bool contains_marker(std::span<const std::byte> bytes, std::span<const std::byte> marker) {
+bool contains_marker(std::span<const std::uint8_t> bytes, std::span<const std::uint8_t> marker) {
   return std::search(bytes.begin(), bytes.end(), marker.begin(), marker.end()) != bytes.end();
 }
 
@@ -51,7 +51,7 @@ bool contains_marker(std::span<const std::byte> bytes, std::span<const std::byte
 // Twice the largest packet, so a whole packet always fits behind a partial one.
 L2Framer::L2Framer() : window_(2 * l2::kMaxPacketSize) {}
 
-std::size_t L2Framer::feed(std::span<const std::byte> bytes) noexcept {
+std::size_t L2Framer::feed(std::span<const std::uint8_t> bytes) noexcept {
   window_.consume(release_);
   release_ = 0;
   return window_.append(bytes);
@@ -65,12 +65,12 @@ void L2Framer::skip(std::size_t n) noexcept {
   window_.consume(n);
 }
 
-std::optional<std::span<const std::byte>> L2Framer::next() noexcept {
+std::optional<std::span<const std::uint8_t>> L2Framer::next() noexcept {
   window_.consume(release_);
   release_ = 0;
-  const std::span<const std::byte> magic(l2::kMagic);
+  const std::span<const std::uint8_t> magic(l2::kMagic);
   for (;;) {
-    std::span<const std::byte> bytes = window_.view();
+    std::span<const std::uint8_t> bytes = window_.view();
     const std::size_t start = find_marker(bytes, magic);
     if (start > 0) {
       skip(start);
@@ -95,7 +95,7 @@ std::optional<std::span<const std::byte>> L2Framer::next() noexcept {
     }
     if (bytes.size() < size) return std::nullopt;
 
-    const std::span<const std::byte> packet = bytes.first(size);
+    const std::span<const std::uint8_t> packet = bytes.first(size);
     // The CRC covers the data bytes only (reference §7: three independent receivers agree; the
     // official "head and data" comment is wrong).
     const std::uint32_t stored = le::u32(packet, size - l2::kTailSize);
@@ -122,7 +122,7 @@ std::optional<std::span<const std::byte>> L2Framer::next() noexcept {
 void L2Framer::finish() noexcept {
   window_.consume(release_);
   release_ = 0;
-  const std::span<const std::byte> rest = window_.view();
+  const std::span<const std::uint8_t> rest = window_.view();
   if (!rest.empty()) {
     if (rest.size() >= 4 && std::equal(rest.begin(), rest.begin() + 4, std::begin(l2::kMagic))) {
       ++counters_.truncated;
@@ -155,7 +155,7 @@ std::optional<MavlinkMessageInfo> mavlink_message_info(std::uint32_t msgid) noex
 // Largest frame: header, 255 B payload, CRC, signature; the window holds many.
 MavlinkFramer::MavlinkFramer() : window_(4096) {}
 
-std::size_t MavlinkFramer::feed(std::span<const std::byte> bytes) noexcept {
+std::size_t MavlinkFramer::feed(std::span<const std::uint8_t> bytes) noexcept {
   window_.consume(release_);
   release_ = 0;
   return window_.append(bytes);
@@ -171,14 +171,14 @@ void MavlinkFramer::skip(std::size_t n) noexcept {
 
 namespace {
 // Whether a plausible frame of a known message starts inside `bytes` (after its first byte).
-bool contains_known_header(std::span<const std::byte> bytes) {
+bool contains_known_header(std::span<const std::uint8_t> bytes) {
   for (std::size_t i = 1; i + MavlinkFramer::kHeaderSize <= bytes.size(); ++i) {
-    if (bytes[i] != std::byte{MavlinkFramer::kStx}) continue;
+    if (bytes[i] != std::uint8_t{MavlinkFramer::kStx}) continue;
     const std::uint32_t msgid = static_cast<std::uint32_t>(bytes[i + 7]) |
                                 (static_cast<std::uint32_t>(bytes[i + 8]) << 8) |
                                 (static_cast<std::uint32_t>(bytes[i + 9]) << 16);
     const auto info = mavlink_message_info(msgid);
-    if (info && static_cast<std::uint8_t>(bytes[i + 1]) <= info->length) return true;
+    if (info && bytes[i + 1] <= info->length) return true;
   }
   return false;
 }
@@ -187,9 +187,9 @@ bool contains_known_header(std::span<const std::byte> bytes) {
 std::optional<MavlinkMessage> MavlinkFramer::next() noexcept {
   window_.consume(release_);
   release_ = 0;
-  const std::byte stx[1] = {std::byte{kStx}};
+  const std::uint8_t stx[1] = {std::uint8_t{kStx}};
   for (;;) {
-    std::span<const std::byte> bytes = window_.view();
+    std::span<const std::uint8_t> bytes = window_.view();
     const std::size_t start = find_marker(bytes, stx);
     if (start > 0) {
       skip(start);
@@ -197,8 +197,8 @@ std::optional<MavlinkMessage> MavlinkFramer::next() noexcept {
     }
     if (bytes.size() < kHeaderSize) return std::nullopt;
 
-    const std::size_t len = static_cast<std::uint8_t>(bytes[1]);
-    const auto incompat = static_cast<std::uint8_t>(bytes[2]);
+    const std::size_t len = bytes[1];
+    const auto incompat = bytes[2];
     const std::uint32_t msgid = static_cast<std::uint32_t>(bytes[7]) |
                                 (static_cast<std::uint32_t>(bytes[8]) << 8) |
                                 (static_cast<std::uint32_t>(bytes[9]) << 16);
@@ -236,10 +236,10 @@ std::optional<MavlinkMessage> MavlinkFramer::next() noexcept {
 
     MavlinkMessage message;
     message.msgid = msgid;
-    message.seq = static_cast<std::uint8_t>(bytes[4]);
-    message.sysid = static_cast<std::uint8_t>(bytes[5]);
-    message.compid = static_cast<std::uint8_t>(bytes[6]);
-    message.payload = std::span<const std::byte>(payload_.data(), info->length);
+    message.seq = bytes[4];
+    message.sysid = bytes[5];
+    message.compid = bytes[6];
+    message.payload = std::span<const std::uint8_t>(payload_.data(), info->length);
     ++counters_.packets;
     in_sync_ = true;
     release_ = total;
@@ -250,9 +250,9 @@ std::optional<MavlinkMessage> MavlinkFramer::next() noexcept {
 void MavlinkFramer::finish() noexcept {
   window_.consume(release_);
   release_ = 0;
-  const std::span<const std::byte> rest = window_.view();
+  const std::span<const std::uint8_t> rest = window_.view();
   if (!rest.empty()) {
-    if (rest[0] == std::byte{kStx}) {
+    if (rest[0] == std::uint8_t{kStx}) {
       ++counters_.truncated;
     } else {
       skip(rest.size());

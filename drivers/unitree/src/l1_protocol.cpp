@@ -14,7 +14,7 @@ constexpr double kDegToRad = std::numbers::pi / 180.0;
 bool plausible(double v) noexcept { return std::isfinite(v) && std::fabs(v) < 1.0e4; }
 }
 
-std::optional<DistancePacket> parse_distance(std::span<const std::byte> p) noexcept {
+std::optional<DistancePacket> parse_distance(std::span<const std::uint8_t> p) noexcept {
   if (p.size() < 246) return std::nullopt;
   DistancePacket d;
   d.packet_id = le::u16(p, 0);
@@ -24,7 +24,7 @@ std::optional<DistancePacket> parse_distance(std::span<const std::byte> p) noexc
   return d;
 }
 
-std::optional<AuxiliaryPacket> parse_auxiliary(std::span<const std::byte> p) noexcept {
+std::optional<AuxiliaryPacket> parse_auxiliary(std::span<const std::uint8_t> p) noexcept {
   if (p.size() < 209) return std::nullopt;
   // MAVLink orders fields by size, so these offsets are not the struct order of the SDK.
   AuxiliaryPacket a;
@@ -39,12 +39,12 @@ std::optional<AuxiliaryPacket> parse_auxiliary(std::span<const std::byte> p) noe
   a.ksi_angle_rad = le::f32(p, 80);
   a.packet_id = le::u16(p, 84);
   for (std::size_t j = 0; j < kPointsPerPacket; ++j) {
-    a.reflect[j] = static_cast<std::uint8_t>(p[89 + j]);
+    a.reflect[j] = p[89 + j];
   }
   return a;
 }
 
-std::optional<ImuSample> parse_imu(std::span<const std::byte> p) noexcept {
+std::optional<ImuSample> parse_imu(std::span<const std::uint8_t> p) noexcept {
   if (p.size() < 42) return std::nullopt;
   ImuSample s;
   // Taken as (x, y, z, w), the order the vendor labels. Unlike the L2's (whose real samples show

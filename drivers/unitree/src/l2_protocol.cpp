@@ -31,7 +31,7 @@ std::optional<std::size_t> expected_size(std::uint32_t packet_type) noexcept {
   }
 }
 
-std::optional<PointPacketHeader> parse_point_header(std::span<const std::byte> p) noexcept {
+std::optional<PointPacketHeader> parse_point_header(std::span<const std::uint8_t> p) noexcept {
   if (p.size() != kPoint3dSize || le::u32(p, 4) != point_3d) return std::nullopt;
   namespace o = point3d;
   PointPacketHeader h;
@@ -58,7 +58,7 @@ std::optional<PointPacketHeader> parse_point_header(std::span<const std::byte> p
   return h;
 }
 
-std::optional<PointPacketHeader> parse_2d_header(std::span<const std::byte> p) noexcept {
+std::optional<PointPacketHeader> parse_2d_header(std::span<const std::uint8_t> p) noexcept {
   if (p.size() != kPoint2dSize || le::u32(p, 4) != point_2d) return std::nullopt;
   namespace o = point3d;  // DataInfo and calibration sit where they do in 3D packets
   namespace t = point2d;
@@ -84,7 +84,7 @@ std::optional<PointPacketHeader> parse_2d_header(std::span<const std::byte> p) n
   return h;
 }
 
-DecodeResult decode_2d_points(std::span<const std::byte> p, const PointPacketHeader& h,
+DecodeResult decode_2d_points(std::span<const std::uint8_t> p, const PointPacketHeader& h,
                               const DecodeLimits& limits, std::uint32_t base_offset_ns,
                               std::span<LidarPoint> out) noexcept {
   const double r_min = std::max(double{h.range_min}, double{limits.range_min_m});
@@ -110,7 +110,7 @@ DecodeResult decode_2d_points(std::span<const std::byte> p, const PointPacketHea
     pt.x = 0.0F;
     pt.y = static_cast<float>(y);
     pt.z = static_cast<float>(z);
-    pt.intensity = static_cast<float>(static_cast<std::uint8_t>(p[point2d::intensities + j]));
+    pt.intensity = static_cast<float>(p[point2d::intensities + j]);
     pt.time_offset_ns = (t >= 0.0 && t < 4.0e9) ? static_cast<std::uint32_t>(t) : base_offset_ns;
     pt.ring = 0;
     pt.return_index = 0;
@@ -119,7 +119,7 @@ DecodeResult decode_2d_points(std::span<const std::byte> p, const PointPacketHea
   return result;
 }
 
-DecodeResult decode_points(std::span<const std::byte> p, const PointPacketHeader& h,
+DecodeResult decode_points(std::span<const std::uint8_t> p, const PointPacketHeader& h,
                           const DecodeLimits& limits, std::uint32_t base_offset_ns,
                           std::span<LidarPoint> out) noexcept {
   // Double precision inside, so the angle accumulation j·step does not lose the last digits.
@@ -158,7 +158,7 @@ DecodeResult decode_points(std::span<const std::byte> p, const PointPacketHeader
     pt.x = static_cast<float>(x);
     pt.y = static_cast<float>(y);
     pt.z = static_cast<float>(z);
-    pt.intensity = static_cast<float>(static_cast<std::uint8_t>(p[point3d::intensities + j]));
+    pt.intensity = static_cast<float>(p[point3d::intensities + j]);
     pt.time_offset_ns = (t >= 0.0 && t < 4.0e9) ? static_cast<std::uint32_t>(t) : base_offset_ns;
     pt.ring = 0;  // one laser: Unitree has no rings
     pt.return_index = 0;
@@ -167,7 +167,7 @@ DecodeResult decode_points(std::span<const std::byte> p, const PointPacketHeader
   return result;
 }
 
-std::optional<ImuSample> parse_imu(std::span<const std::byte> p) noexcept {
+std::optional<ImuSample> parse_imu(std::span<const std::uint8_t> p) noexcept {
   if (p.size() != kImuSize || le::u32(p, 4) != imu) return std::nullopt;
   namespace o = imu_packet;
   ImuSample s;

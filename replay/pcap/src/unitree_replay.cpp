@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // sim_replay_pcap for Unitree L1/L2 captures: each UDP payload is a chunk of the sensor's byte
-// stream, decoded by the same UnitreeStream (decoder -> SIM) as the live driver.
+// stream, decoded by the same LidarStream (decoder -> SIM) and options as the live driver.
 #include <optional>
 #include <span>
 #include <string>
@@ -9,18 +9,19 @@
 #include "unitree_replay.hpp"
 #include "replay_common.hpp"
 #include "sim/apps/sensor_options.hpp"
+#include "sim/apps/unitree_options.hpp"
 #include "sim/clock.hpp"
 #include "sim/unitree/bytes.hpp"
 #include "sim/unitree/framing.hpp"
 #include "sim/unitree/l2_protocol.hpp"
-#include "sim/unitree/sim_sink.hpp"
+#include "sim/unitree/lidar_stream.hpp"
 
 namespace sim::pcap {
 namespace {
 
 // The L2's own time of the first packet in `payload` that carries one (a capture may begin
 // mid-packet: the framer finds the first whole one).
-std::optional<std::int64_t> first_sensor_time(std::span<const std::byte> payload) {
+std::optional<std::int64_t> first_sensor_time(std::span<const std::uint8_t> payload) {
   unitree::L2Framer framer;
   while (!payload.empty()) {
     payload = payload.subspan(framer.feed(payload));
@@ -40,63 +41,60 @@ std::optional<std::int64_t> first_sensor_time(std::span<const std::byte> payload
 
 class UnitreeTarget final : public ReplayTarget {
  public:
-  UnitreeTarget(std::unique_ptr<unitree::UnitreeStream> stream, bool restamp)
+  UnitreeTarget(unitree::LidarStream stream, bool restamp)
       : stream_(std::move(stream)), restamp_(restamp),
-        sensor_stamps_(unitree::stream_clock_base(stream_->decoder_options(), lidar::ClockBase::sensor) ==
+        sensor_stamps_(unitree::stream_clock_base(stream_.options(), lidar::ClockBase::sensor) ==
                        lidar::ClockBase::sensor) {}
 
   bool push(std::span<const std::byte> payload, std::int64_t capture_ns) override {
-    const std::uint64_t before = stream_->sink_counters().scans_published;
     const std::int64_t now = realtime_ns();
+    std::size_t published = 0;
     if (sensor_stamps_) {
-      push_sensor_stamped(payload, capture_ns, now);
+      published = push_sensor_stamped(payload, capture_ns, now);
     } else {
       // Scans are stamped with the time their bytes arrived: the capture's (moved on by loops),
       // or the present with --restamp.
       if (restamp_ && restamp_offset_ == 0) restamp_offset_ = now - capture_ns;
-      stream_->push(payload, capture_ns + shift_ns_ + restamp_offset_);
+      published = stream_.push(bytes(payload), capture_ns + shift_ns_ + restamp_offset_);
     }
-    stream_->tick_clock(now);
-    return stream_->sink_counters().scans_published > before;
+    stream_.tick_clock(now);
+    return published > 0;
   }
-  void restart() override { stream_->reset(); }
+  void restart() override {
+    stream_.reset();
+    stream_.clock().restart();
+  }
   void shift_stamps(std::int64_t shift_ns) override {
     shift_ns_ += shift_ns;
-    if (sensor_stamps_) stream_->set_stamp_offset(stream_->stamp_offset() + shift_ns);
+    if (sensor_stamps_) stream_.set_stamp_offset(stream_.stamp_offset() + shift_ns);
   }
   void finish() override {
-    stream_->finish();
-    stream_->tick_clock(realtime_ns(), true);  // even a capture shorter than a tick leaves its verdict
+    stream_.finish();
+    stream_.tick_clock(realtime_ns(), true);  // even a capture shorter than a tick leaves its verdict
   }
-  std::uint64_t decoded_packets() const override {
-    return stream_->decoder_counters().framing.packets;
-  }
-  std::uint64_t frames() const override { return stream_->sink_counters().scans_published; }
-  std::string status() const override { return stream_->status(); }
-  std::string summary() const override {
-    const auto d = stream_->decoder_counters();
-    const auto& s = stream_->sink_counters();
-    return "frames=" + std::to_string(s.scans_published) +
-           " packets=" + std::to_string(d.framing.packets) +
-           " imu=" + std::to_string(s.imu_published) +
-           " failed=" + std::to_string(s.publish_failures);
-  }
+  std::uint64_t decoded_packets() const override { return stream_.counters().framing.packets; }
+  std::uint64_t frames() const override { return stream_.published().frames; }
+  std::string status() const override { return stream_.describe_counters(); }
+  std::string summary() const override { return stream_.describe_counters(true); }
 
  private:
+  static std::span<const std::uint8_t> bytes(std::span<const std::byte> payload) {
+    return {reinterpret_cast<const std::uint8_t*>(payload.data()), payload.size()};
+  }
   // --sensor-time: the packets' own times are the stamps, measured against the capture's time
   // of their record (moved on by loops like the stamps), or with --restamp moved to the present
   // and measured against this host's clock now.
-  void push_sensor_stamped(std::span<const std::byte> payload, std::int64_t capture_ns, std::int64_t now) {
+  std::size_t push_sensor_stamped(std::span<const std::byte> payload, std::int64_t capture_ns, std::int64_t now) {
     if (restamp_ && !restamped_) {
-      if (const auto first = first_sensor_time(payload)) {
-        stream_->set_stamp_offset(stream_->stamp_offset() + (now - *first));
+      if (const auto first = first_sensor_time(bytes(payload))) {
+        stream_.set_stamp_offset(stream_.stamp_offset() + (now - *first));
         restamped_ = true;
       }
     }
-    stream_->push(payload, restamp_ ? now : capture_ns + shift_ns_);
+    return stream_.push(bytes(payload), restamp_ ? now : capture_ns + shift_ns_);
   }
 
-  std::unique_ptr<unitree::UnitreeStream> stream_;
+  unitree::LidarStream stream_;
   bool restamp_;
   bool sensor_stamps_;
   bool restamped_ = false;
@@ -113,52 +111,30 @@ int run_unitree_replay(int argc, char** argv) {
       "SIM point stream and its IMU stream, paced by the capture's timestamps, through the same "
       "decoder as the live driver sim_lidar_unitree.");
   ReplayArgs r;
-  std::string model_text;
-  unitree::UnitreeStreamOptions o;
-  std::uint32_t scan_packets = o.decoder.packets_per_scan;
-  auto& app = cli.app();
+  apps::UnitreeStreamOptions o;
   add_replay_options(cli, r);
-  app.add_option("--model", model_text, "unitree-l1 or unitree-l2")
-      ->required()
-      ->check(apps::validator(unitree::model_problem, "MODEL"));
-  cli.add_stream("--stream", o.points_stream, "SIM point stream, e.g. /lidar_top")->required();
-  cli.add_stream("--imu-stream", o.imu_stream, "SIM IMU stream (empty: <stream>.imu)");
-  app.add_flag("--no-imu", o.no_imu, "do not publish IMU samples");
-  app.add_option("--scan-packets", scan_packets, "packets per published scan")
-      ->check(CLI::Range(1U, 1000U));
-  app.add_flag("--checksum", o.checksum, "publish frames with an XXH3 checksum");
-  bool sensor_time = false;
-  app.add_flag("--sensor-time", sensor_time,
-               "stamp frames with the L2's own clock (its packets' times) instead of the capture's");
-  apps::SensorOptions sensor;
-  apps::add_sensor_options(cli, sensor, apps::SensorKind::lidar);
-  ThreadPlacement placement;
-  cli.add_placement(placement);
+  apps::add_unitree_stream_options(cli, o);
   if (auto code = cli.parse(argc, argv)) return *code;
-  auto described = apps::sensor_info_from(sensor, o.points_stream);
-  if (!described) return cli.fail(described.error());
-  o.sensor = std::move(described.value());
+  auto config = apps::unitree_stream_config(o);
+  if (!config) return cli.fail(config.error());
   // Scans are stamped with the capture's times, or the L2's own (see UnitreeTarget::push).
-  apps::describe_replayed_stamps(*o.sensor, r.restamp,
-                                 sensor_time ? apps::RecordedClock::sensor : apps::RecordedClock::capturing_host);
-  const auto& stop = apps::StopSignal::install();
-  if (auto code = cli.apply_placement(placement)) return *code;
-  o.decoder.model = *unitree::parse_model(model_text);
-  o.decoder.packets_per_scan = scan_packets;
+  apps::describe_replayed_stamps(*config->sensor, r.restamp,
+                                 o.sensor_time ? apps::RecordedClock::sensor : apps::RecordedClock::capturing_host);
   // The capture's time (the recording host's clock), or the L2's own clock as recorded.
-  o.decoder.time_source = sensor_time ? unitree::TimeSource::sensor : unitree::TimeSource::host;
-  o.sensor_clock_base = r.restamp ? lidar::ClockBase::restamped : lidar::ClockBase::replayed;
+  config->sensor_clock_base = r.restamp ? lidar::ClockBase::restamped : lidar::ClockBase::replayed;
+  const auto& stop = apps::StopSignal::install();
+  if (auto code = cli.apply_placement(o.placement)) return *code;
 
   // The file is read before the streams are created: a missing capture leaves nothing behind.
   if (auto probe = CaptureReader::open(r.file, r.capture_options()); !probe) {
     return cli.fail(std::string_view(probe.error().message));
   }
-  auto stream = unitree::UnitreeStream::create(o);
+  auto stream = unitree::LidarStream::create(*config);
   if (!stream) return cli.fail(stream.error());
-  UnitreeTarget target(std::move(*stream), r.restamp);
+  UnitreeTarget target(std::move(stream.value()), r.restamp);
   const ReplayResult result = replay(r, target, stop, cli.tool());
   return finish_replay(cli, r, result, target,
-                       std::string("as Unitree ") + unitree::to_string(o.decoder.model) +
+                       std::string("as Unitree ") + unitree::to_string(config->decoder.model) +
                            " packets with a good checksum; check --model and the capture",
                        stop);
 }

@@ -103,7 +103,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       if (!forget_output) assembler->set_output(use_a ? a : b);
     }
   }
-  if (auto last = assembler->flush()) {
+  if (auto last = assembler->finish()) {
     check(*last, use_a ? std::span<const sim::LidarPoint>(a) : std::span<const sim::LidarPoint>(b));
   }
   return 0;

@@ -62,7 +62,7 @@ std::vector<Frame> run(FrameAssembler& a, const Payloads& packets, std::size_t c
     if (r.frame) take(*r.frame);
   }
   if (flush) {
-    if (auto f = a.flush()) take(*f);
+    if (auto f = a.finish()) take(*f);
   }
   return frames;
 }
@@ -87,7 +87,7 @@ TEST(HesaiAssembler, FramesAreWholeRevolutionsWithSensorStampsAndPointTimes) {
   ASSERT_GE(frames.size(), 2u);
   for (std::size_t i = 0; i < frames.size(); ++i) {
     const auto& f = frames[i];
-    EXPECT_TRUE(f.info.whole_revolution);
+    EXPECT_TRUE(f.info.whole);
     EXPECT_EQ(f.info.index, i);
     EXPECT_LE(f.info.point_count, capacity());
     // The first point is just past 0°, the last just before 360°.
@@ -303,7 +303,7 @@ TEST(HesaiAssembler, AFirstSpanGivenLateStartsCleanAtTheNextCut) {
     frame = late.push(packets[i].bytes, packets[i].capture_ns).frame;
   }
   ASSERT_TRUE(frame);
-  EXPECT_TRUE(frame->whole_revolution);
+  EXPECT_TRUE(frame->whole);
   EXPECT_EQ(frame->stamp_ns, expected[0].info.stamp_ns);
   ASSERT_EQ(frame->point_count, expected[0].points.size());
   EXPECT_EQ(std::memcmp(late_span.data(), expected[0].points.data(),
@@ -319,8 +319,8 @@ TEST(HesaiAssembler, PartialFramesOnRequestAndFlushAtTheEnd) {
   auto b = make();
   const auto whole_only = run(b, pandar64_packets(), capacity());
   ASSERT_EQ(frames.size(), whole_only.size() + 2);
-  EXPECT_FALSE(frames.front().info.whole_revolution);
-  EXPECT_FALSE(frames.back().info.whole_revolution);
+  EXPECT_FALSE(frames.front().info.whole);
+  EXPECT_FALSE(frames.back().info.whole);
   EXPECT_TRUE(same_points(frames[1].points, whole_only[0].points));
   // Every packet went somewhere: 2400 packets counted once, plus the straddling ones twice.
   std::uint32_t packets = 0;
@@ -474,7 +474,7 @@ TEST(HesaiAssembler, SyntheticXT16QT64AndXT32MTurnsHaveEveryFiringOfARevolution)
       EXPECT_EQ(a->counters().lost_packets, 0u);
       const std::size_t firings = 36000 / m.azimuth_step_10hz;
       for (const auto& f : frames) {
-        EXPECT_TRUE(f.whole_revolution);
+        EXPECT_TRUE(f.whole);
         // Every channel of every firing, once: a dual-return pair of identical returns keeps
         // only its last.
         EXPECT_EQ(f.point_count, firings * m.channels);

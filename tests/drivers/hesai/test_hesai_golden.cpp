@@ -236,7 +236,7 @@ std::vector<std::string> run(const Scenario& s) {
     d.value(f.packets);
     d.value(f.lost_packets);
     d.value(f.dropped_points);
-    d.value(f.whole_revolution);
+    d.value(f.whole);
     d.value(f.motor_rpm);
     d.value(f.safety.has_value());
     if (f.safety) {
@@ -264,7 +264,7 @@ std::vector<std::string> run(const Scenario& s) {
   }
   if (give_in > 0) a->set_output(*span);
   if (s.flush) {
-    if (auto f = a->flush()) record(*f);
+    if (auto f = a->finish()) record(*f);
   }
   const AssemblerCounters& c = a->counters();
   Digest d;

@@ -135,9 +135,9 @@ TEST(HesaiPacket, Pandar64PointsOfTheFirstFiringByHand) {
   std::vector<sim::LidarPoint> points(2000);
   assembler->set_output(points);
   ASSERT_EQ(assembler->push(bytes, 0).error, PacketError::none);
-  const auto frame = assembler->flush();
+  const auto frame = assembler->finish();
   ASSERT_TRUE(frame);
-  EXPECT_FALSE(frame->whole_revolution);
+  EXPECT_FALSE(frame->whole);
   ASSERT_GT(frame->point_count, 20u);
   // Channel 1 (ring 0): both returns are raw 173, reflectivity 0, so only the last (the
   // Strongest block, return_index 1) is kept. d = 0.692 m, az = 0.71 - 1.042°, el = 14.9°:
@@ -249,7 +249,7 @@ TEST(HesaiPacket, SyntheticXT16AndQT64FromTheLayoutTables) {
   std::vector<sim::LidarPoint> points(300);
   assembler->set_output(points);
   ASSERT_EQ(assembler->push(qt, 7).error, PacketError::none);
-  const auto frame = assembler->flush();
+  const auto frame = assembler->finish();
   ASSERT_TRUE(frame);
   ASSERT_EQ(frame->point_count, 4u);  // one point per block
   EXPECT_EQ(frame->host_receive_ns, 7);
@@ -399,7 +399,7 @@ TEST(HesaiPacket, RejectedPacketsAreCountedByReasonAndMakeNoFrame) {
   EXPECT_EQ(c.rejected[static_cast<std::size_t>(PacketError::too_short)], c.malformed - 1);
   EXPECT_EQ(c.rejected[static_cast<std::size_t>(PacketError::bad_size)], 1u);
   EXPECT_EQ(assembler->pending_points(), 0u);
-  EXPECT_FALSE(assembler->flush());
+  EXPECT_FALSE(assembler->finish());
 }
 
 TEST(HesaiPacket, SyntheticXT32MInEveryReturnModeFromTheLayoutTables) {

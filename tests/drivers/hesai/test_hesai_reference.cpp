@@ -40,7 +40,7 @@ std::vector<DecodedFrame> decode_all(FrameAssembler& assembler,
     if (r.frame) take(*r.frame);
   }
   if (flush_at_end) {
-    if (auto f = assembler.flush()) take(*f);
+    if (auto f = assembler.finish()) take(*f);
   }
   return frames;
 }
@@ -77,7 +77,7 @@ void expect_matches_reference(Model model, const char* pcap, const char* calibra
   // The reference revolution is the whole frame whose first point is the reference's first.
   const DecodedFrame* match = nullptr;
   for (const auto& f : frames) {
-    if (!f.info.whole_revolution || f.points.empty()) continue;
+    if (!f.info.whole || f.points.empty()) continue;
     const auto& p = f.points.front();
     if (std::abs(p.x - reference[0].x) < 1e-3f && std::abs(p.y - reference[0].y) < 1e-3f &&
         std::abs(p.z - reference[0].z) < 1e-3f) {
@@ -195,11 +195,11 @@ TEST(HesaiReference, RawEthernetPandar40PGivesWholeRevolutionsAt20Hz) {
   EXPECT_EQ(c.dropped_points, 0u);
 
   // 200 packets × 10 firings × 0.4° = 2.2 turns starting at 129.8°: one whole revolution
-  // between two partial ones (the first is not published, the last comes from flush()).
+  // between two partial ones (the first is not published, the last comes from finish()).
   ASSERT_EQ(frames.size(), 2u);
   const auto& whole = frames[0];
-  EXPECT_TRUE(whole.info.whole_revolution);
-  EXPECT_FALSE(frames[1].info.whole_revolution);
+  EXPECT_TRUE(whole.info.whole);
+  EXPECT_FALSE(frames[1].info.whole);
   EXPECT_EQ(whole.info.lost_packets, 0u);
   // 20 Hz at 0.4° per firing: 900 firings in 90 packets, plus those whose points straddle a
   // cut: the calibration's azimuth offsets spread over 8.3°, about 2 packets of 4°.

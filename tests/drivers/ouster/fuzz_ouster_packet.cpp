@@ -61,6 +61,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       assembler->set_output(points);
     }
   }
-  if (auto last = assembler->flush(); last && last->point_count > points.size()) __builtin_trap();
+  if (auto last = assembler->finish(); last && last->point_count > points.size()) __builtin_trap();
   return 0;
 }

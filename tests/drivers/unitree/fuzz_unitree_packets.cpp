@@ -33,40 +33,40 @@ class CheckingSink : public sim::unitree::ScanSink {
   std::vector<sim::LidarPoint> storage_;
 };
 
-void put_u32(std::vector<std::byte>& b, std::size_t off, std::uint32_t v) {
-  for (std::size_t i = 0; i < 4; ++i) b[off + i] = static_cast<std::byte>(v >> (8 * i));
+void put_u32(std::vector<std::uint8_t>& b, std::size_t off, std::uint32_t v) {
+  for (std::size_t i = 0; i < 4; ++i) b[off + i] = static_cast<std::uint8_t>(v >> (8 * i));
 }
 
-std::vector<std::byte> l2_packet(std::uint32_t type, std::size_t data_size,
-                                 std::span<const std::byte> body) {
-  std::vector<std::byte> p(12 + data_size + 12);
-  p[0] = std::byte{0x55};
-  p[1] = std::byte{0xAA};
-  p[2] = std::byte{0x05};
-  p[3] = std::byte{0x0A};
+std::vector<std::uint8_t> l2_packet(std::uint32_t type, std::size_t data_size,
+                                 std::span<const std::uint8_t> body) {
+  std::vector<std::uint8_t> p(12 + data_size + 12);
+  p[0] = std::uint8_t{0x55};
+  p[1] = std::uint8_t{0xAA};
+  p[2] = std::uint8_t{0x05};
+  p[3] = std::uint8_t{0x0A};
   put_u32(p, 4, type);
   put_u32(p, 8, static_cast<std::uint32_t>(p.size()));
   std::memcpy(p.data() + 12, body.data(), std::min(body.size(), data_size));
   put_u32(p, 12 + data_size,
-          sim::unitree::crc32(std::span<const std::byte>(p).subspan(12, data_size)));
+          sim::unitree::crc32(std::span<const std::uint8_t>(p).subspan(12, data_size)));
   return p;
 }
 
-std::vector<std::byte> mavlink(std::uint32_t msgid, std::uint8_t crc_extra, std::size_t full,
-                               std::span<const std::byte> body) {
+std::vector<std::uint8_t> mavlink(std::uint32_t msgid, std::uint8_t crc_extra, std::size_t full,
+                               std::span<const std::uint8_t> body) {
   // A MAVLink v2 payload is at most 255 bytes (its length is one byte). Saying so also gives
   // GCC 12 the bound it needs: without it, -O3 warns the memcpy below may copy ~2^64 bytes.
   const std::size_t len = std::min({body.size(), full, std::size_t{255}});
-  std::vector<std::byte> f(10 + len + 2);
-  f[0] = std::byte{0xFD};
-  f[1] = static_cast<std::byte>(len);
-  f[7] = static_cast<std::byte>(msgid);
+  std::vector<std::uint8_t> f(10 + len + 2);
+  f[0] = std::uint8_t{0xFD};
+  f[1] = static_cast<std::uint8_t>(len);
+  f[7] = static_cast<std::uint8_t>(msgid);
   std::memcpy(f.data() + 10, body.data(), len);
   sim::unitree::Crc16Mcrf4xx crc;
-  crc.add(std::span<const std::byte>(f).subspan(1, 9 + len));
+  crc.add(std::span<const std::uint8_t>(f).subspan(1, 9 + len));
   crc.add(crc_extra);
-  f[10 + len] = static_cast<std::byte>(crc.value() & 0xFF);
-  f[11 + len] = static_cast<std::byte>(crc.value() >> 8);
+  f[10 + len] = static_cast<std::uint8_t>(crc.value() & 0xFF);
+  f[11 + len] = static_cast<std::uint8_t>(crc.value() >> 8);
   return f;
 }
 
@@ -74,12 +74,12 @@ std::vector<std::byte> mavlink(std::uint32_t msgid, std::uint8_t crc_extra, std:
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;
-  const std::span<const std::byte> body(reinterpret_cast<const std::byte*>(data + 1), size - 1);
+  const std::span<const std::uint8_t> body(data + 1, size - 1);
   sim::unitree::DecoderOptions options;
   options.packets_per_scan = 2;
   options.time_source = (data[0] & 4U) ? sim::unitree::TimeSource::sensor
                                        : sim::unitree::TimeSource::host;
-  std::vector<std::byte> stream;
+  std::vector<std::uint8_t> stream;
   switch (data[0] % 4) {
     case 0: {
       const auto p = l2_packet(102, 1020, body);

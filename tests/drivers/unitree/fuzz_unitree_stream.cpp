@@ -49,7 +49,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::size_t chunk = 1 + (std::size_t{data[0]} >> 3) * 97;
   CheckingSink sink(sim::unitree::Decoder::max_points_per_scan(options));
   sim::unitree::Decoder decoder(options, sink);
-  std::span<const std::byte> rest(reinterpret_cast<const std::byte*>(data + 1), size - 1);
+  std::span<const std::uint8_t> rest(data + 1, size - 1);
   while (!rest.empty()) {
     const std::size_t n = std::min(chunk, rest.size());
     decoder.push(rest.first(n), 0);

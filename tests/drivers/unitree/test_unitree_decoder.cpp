@@ -277,7 +277,7 @@ TEST(UnitreeL2Decoder, DatagramsSplitAndMergedGiveTheSameScan) {
   VectorSink pieces(Decoder::max_points_per_scan(options));
   Decoder b(options, pieces);
   for (std::size_t off = 0; off < stream.size(); off += 333) {
-    b.push(std::span<const std::byte>(stream).subspan(off, std::min<std::size_t>(333, stream.size() - off)), 0);
+    b.push(std::span<const std::uint8_t>(stream).subspan(off, std::min<std::size_t>(333, stream.size() - off)), 0);
   }
   ASSERT_EQ(whole.scans.size(), 1U);
   ASSERT_EQ(pieces.scans.size(), 1U);
@@ -470,7 +470,7 @@ TEST(UnitreeL2Decoder, ResetDropsThePartialScanAndBufferedBytes) {
   s.ranges.fill(1000);
   const Bytes packet = l2_point_packet(s);
   decoder.push(packet, 0);                                          // half a scan
-  decoder.push(std::span<const std::byte>(packet).first(100), 0);   // and part of a packet
+  decoder.push(std::span<const std::uint8_t>(packet).first(100), 0);   // and part of a packet
   decoder.reset();
   EXPECT_EQ(decoder.counters().framing.truncated, 1U);
   s.ranges.fill(2000);
@@ -528,7 +528,7 @@ TEST(UnitreeSteadyState, NoAllocationPerPacketOrScan) {
     }
     const std::uint64_t before = unitree_test::allocations();
     for (std::size_t off = 0; off < stream.size(); off += 517) {
-      decoder.push(std::span<const std::byte>(stream).subspan(
+      decoder.push(std::span<const std::uint8_t>(stream).subspan(
                        off, std::min<std::size_t>(517, stream.size() - off)),
                    0);
     }

@@ -16,8 +16,8 @@ using namespace unitree_test;
 using sim::unitree::L2Framer;
 using sim::unitree::MavlinkFramer;
 
-std::span<const std::byte> as_bytes(std::string_view s) {
-  return {reinterpret_cast<const std::byte*>(s.data()), s.size()};
+std::span<const std::uint8_t> as_bytes(std::string_view s) {
+  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
 }
 
 L2PointSpec point_spec(std::uint32_t seq) {
@@ -42,7 +42,7 @@ void drain(L2Framer& framer, L2Out& out) {
     out.packets.emplace_back(type, p->size());
   }
 }
-void feed_all(L2Framer& framer, std::span<const std::byte> bytes, L2Out& out) {
+void feed_all(L2Framer& framer, std::span<const std::uint8_t> bytes, L2Out& out) {
   while (!bytes.empty()) {
     bytes = bytes.subspan(framer.feed(bytes));
     drain(framer, out);
@@ -85,7 +85,7 @@ TEST(UnitreeL2Framer, OnePacketOverFourDatagrams) {
   L2Framer framer;
   L2Out out;
   const Bytes packet = l2_point_packet(point_spec(1));
-  const std::span<const std::byte> all(packet);
+  const std::span<const std::uint8_t> all(packet);
   feed_all(framer, all.subspan(0, 300), out);
   feed_all(framer, all.subspan(300, 300), out);
   feed_all(framer, all.subspan(600, 300), out);
@@ -96,11 +96,11 @@ TEST(UnitreeL2Framer, OnePacketOverFourDatagrams) {
 
 TEST(UnitreeL2Framer, LargePacketOfUnknownTypeSpansDatagrams) {
   // A 2D packet (5536 B) arrives in 4 datagrams; its tail need not be 00 FF.
-  Bytes packet = l2_packet(103, Bytes(5512, std::byte{0x42}));
-  packet[packet.size() - 1] = std::byte{0x00};
+  Bytes packet = l2_packet(103, Bytes(5512, std::uint8_t{0x42}));
+  packet[packet.size() - 1] = std::uint8_t{0x00};
   L2Framer framer;
   L2Out out;
-  const std::span<const std::byte> all(packet);
+  const std::span<const std::uint8_t> all(packet);
   for (std::size_t off = 0; off < all.size(); off += 1400) {
     feed_all(framer, all.subspan(off, std::min<std::size_t>(1400, all.size() - off)), out);
   }
@@ -114,7 +114,7 @@ TEST(UnitreeL2Framer, StreamCutAtEveryOffset) {
   for (std::size_t cut = 0; cut <= stream.size(); ++cut) {
     L2Framer framer;
     L2Out out;
-    const std::span<const std::byte> all(stream);
+    const std::span<const std::uint8_t> all(stream);
     feed_all(framer, all.first(cut), out);
     feed_all(framer, all.subspan(cut), out);
     ASSERT_EQ(out.packets.size(), 3U) << "cut at " << cut;
@@ -127,14 +127,14 @@ TEST(UnitreeL2Framer, ByteByByte) {
   L2Framer framer;
   L2Out out;
   for (std::size_t i = 0; i < stream.size(); ++i) {
-    feed_all(framer, std::span<const std::byte>(stream).subspan(i, 1), out);
+    feed_all(framer, std::span<const std::uint8_t>(stream).subspan(i, 1), out);
   }
   EXPECT_EQ(out.packets.size(), 2U);
 }
 
 TEST(UnitreeL2Framer, BadCrcIsCountedAndDropped) {
   Bytes bad = l2_point_packet(point_spec(1));
-  bad[500] ^= std::byte{0x01};
+  bad[500] ^= std::uint8_t{0x01};
   const Bytes stream = concat({bad, l2_point_packet(point_spec(2))});
   L2Framer framer;
   L2Out out;
@@ -149,7 +149,7 @@ TEST(UnitreeL2Framer, CrcOverHeaderAndDataIsRejected) {
   // the data only. A packet following the comment must fail.
   Bytes packet = l2_imu_packet({});
   const std::uint32_t wrong =
-      reference_crc32(std::span<const std::byte>(packet).first(packet.size() - 12));
+      reference_crc32(std::span<const std::uint8_t>(packet).first(packet.size() - 12));
   std::memcpy(packet.data() + packet.size() - 12, &wrong, 4);
   L2Framer framer;
   L2Out out;
@@ -160,7 +160,7 @@ TEST(UnitreeL2Framer, CrcOverHeaderAndDataIsRejected) {
 
 TEST(UnitreeL2Framer, OfficialCommentSizesAreRejected) {
   // A 3D point packet claiming the official comment's 1036 B is not a real L2 packet.
-  Bytes packet = l2_packet(102, Bytes(1012, std::byte{0}));
+  Bytes packet = l2_packet(102, Bytes(1012, std::uint8_t{0}));
   ASSERT_EQ(packet.size(), 1036U);
   L2Framer framer;
   L2Out out;
@@ -172,7 +172,7 @@ TEST(UnitreeL2Framer, OfficialCommentSizesAreRejected) {
 
 TEST(UnitreeL2Framer, TruncatedPacketFollowedByGoodOnes) {
   const Bytes first = l2_point_packet(point_spec(1));
-  const Bytes stream = concat({std::span<const std::byte>(first).first(600), l2_imu_packet({}),
+  const Bytes stream = concat({std::span<const std::uint8_t>(first).first(600), l2_imu_packet({}),
                                l2_point_packet(point_spec(2)), l2_imu_packet({})});
   L2Framer framer;
   L2Out out;
@@ -186,7 +186,7 @@ TEST(UnitreeL2Framer, TruncatedAtEndOfInput) {
   const Bytes packet = l2_point_packet(point_spec(1));
   L2Framer framer;
   L2Out out;
-  feed_all(framer, std::span<const std::byte>(packet).first(700), out);
+  feed_all(framer, std::span<const std::uint8_t>(packet).first(700), out);
   framer.finish();
   EXPECT_TRUE(out.packets.empty());
   EXPECT_EQ(framer.counters().truncated, 1U);
@@ -194,7 +194,7 @@ TEST(UnitreeL2Framer, TruncatedAtEndOfInput) {
 
 TEST(UnitreeL2Framer, WrongMagicIsSkipped) {
   Bytes wrong = l2_point_packet(point_spec(1));
-  wrong[3] = std::byte{0x0B};
+  wrong[3] = std::uint8_t{0x0B};
   L2Framer framer;
   L2Out out;
   feed_all(framer, concat({wrong, l2_imu_packet({})}), out);
@@ -216,8 +216,8 @@ TEST(UnitreeL2Framer, RoboSensePacketIsRejected) {
 }
 
 TEST(UnitreeL2Framer, GarbageBetweenPacketsResyncs) {
-  const Bytes garbage = {std::byte{0x55}, std::byte{0xAA}, std::byte{0x05}, std::byte{0x00},
-                         std::byte{0x12}, std::byte{0x55}};
+  const Bytes garbage = {std::uint8_t{0x55}, std::uint8_t{0xAA}, std::uint8_t{0x05}, std::uint8_t{0x00},
+                         std::uint8_t{0x12}, std::uint8_t{0x55}};
   L2Framer framer;
   L2Out out;
   feed_all(framer, concat({garbage, l2_imu_packet({}), garbage, l2_imu_packet({})}), out);
@@ -252,7 +252,7 @@ struct MavOut {
   std::vector<std::uint32_t> ids;
   std::vector<Bytes> payloads;
 };
-void feed_all(MavlinkFramer& framer, std::span<const std::byte> bytes, MavOut& out) {
+void feed_all(MavlinkFramer& framer, std::span<const std::uint8_t> bytes, MavOut& out) {
   while (!bytes.empty()) {
     bytes = bytes.subspan(framer.feed(bytes));
     while (auto m = framer.next()) {
@@ -302,7 +302,7 @@ TEST(UnitreeMavlinkFramer, WrongCrcExtraIsRejected) {
 TEST(UnitreeMavlinkFramer, UnknownMessageIsSkipped) {
   MavlinkFramer framer;
   MavOut out;
-  feed_all(framer, concat({mavlink_frame({250, 1}, Bytes(8, std::byte{1})),
+  feed_all(framer, concat({mavlink_frame({250, 1}, Bytes(8, std::uint8_t{1})),
                            l1_imu_frame({0, 0, 0, 1}, {}, {}, 1)}),
            out);
   ASSERT_EQ(out.ids.size(), 1U);
@@ -325,7 +325,7 @@ TEST(UnitreeMavlinkFramer, SerialStreamCutAtEveryOffset) {
   for (std::size_t cut = 0; cut <= stream.size(); ++cut) {
     MavlinkFramer framer;
     MavOut out;
-    const std::span<const std::byte> all(stream);
+    const std::span<const std::uint8_t> all(stream);
     feed_all(framer, all.first(cut), out);
     feed_all(framer, all.subspan(cut), out);
     ASSERT_EQ(out.ids, (std::vector<std::uint32_t>{16, 17, 19, 16})) << "cut at " << cut;
@@ -334,8 +334,8 @@ TEST(UnitreeMavlinkFramer, SerialStreamCutAtEveryOffset) {
 }
 
 TEST(UnitreeMavlinkFramer, GarbageAndStxBytesBetweenFrames) {
-  const Bytes noise = {std::byte{0xFD}, std::byte{0x00}, std::byte{0xFD}, std::byte{0x10},
-                       std::byte{0x02}, std::byte{0xFD}, std::byte{0x33}};
+  const Bytes noise = {std::uint8_t{0xFD}, std::uint8_t{0x00}, std::uint8_t{0xFD}, std::uint8_t{0x10},
+                       std::uint8_t{0x02}, std::uint8_t{0xFD}, std::uint8_t{0x33}};
   const Bytes frames = l1_stream();
   MavlinkFramer framer;
   MavOut out;
@@ -349,7 +349,7 @@ TEST(UnitreeMavlinkFramer, TruncatedFrameThenGoodOnes) {
   const Bytes cut = l1_distance_frame(5, ranges_with_zero_tail());
   MavlinkFramer framer;
   MavOut out;
-  feed_all(framer, concat({std::span<const std::byte>(cut).first(40), l1_stream()}), out);
+  feed_all(framer, concat({std::span<const std::uint8_t>(cut).first(40), l1_stream()}), out);
   EXPECT_EQ(out.ids, (std::vector<std::uint32_t>{16, 17, 19, 16}));
   EXPECT_EQ(framer.counters().truncated, 1U);
 }
@@ -358,7 +358,7 @@ TEST(UnitreeMavlinkFramer, TruncatedAtEndOfInput) {
   const Bytes frame = l1_imu_frame({0, 0, 0, 1}, {}, {}, 1);
   MavlinkFramer framer;
   MavOut out;
-  feed_all(framer, std::span<const std::byte>(frame).first(frame.size() - 1), out);
+  feed_all(framer, std::span<const std::uint8_t>(frame).first(frame.size() - 1), out);
   framer.finish();
   EXPECT_TRUE(out.ids.empty());
   EXPECT_EQ(framer.counters().truncated, 1U);

@@ -57,7 +57,7 @@ Bytes read_file(const std::string& path) {
   return b;
 }
 
-void write_file(const std::string& path, std::span<const std::byte> bytes) {
+void write_file(const std::string& path, std::span<const std::uint8_t> bytes) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
 }
@@ -96,7 +96,7 @@ L2ImuSpec imu_spec() {
 
 // What the library makes of `bytes`: the reference the published frames must equal.
 std::vector<Scan> expected_scans(sim::unitree::Model model, std::uint32_t scan_packets,
-                                 std::span<const std::byte> bytes) {
+                                 std::span<const std::uint8_t> bytes) {
   sim::unitree::DecoderOptions options;
   options.model = model;
   options.packets_per_scan = scan_packets;
@@ -163,7 +163,7 @@ class UdpSender {
     to_.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
   }
   ~UdpSender() { close(fd_); }
-  void send(std::span<const std::byte> datagram) {
+  void send(std::span<const std::uint8_t> datagram) {
     sent.insert(sent.end(), datagram.begin(), datagram.end());
     ASSERT_EQ(sendto(fd_, datagram.data(), datagram.size(), 0, reinterpret_cast<sockaddr*>(&to_),
                      sizeof to_),
@@ -183,7 +183,7 @@ TEST(UnitreeDriver, L2OverLoopbackUdp) {
   guard.names = {stream, stream + ".imu"};
   Process driver({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", "0",
                   "--bind-address", "127.0.0.1", "--lidar-ip", "127.0.0.1", "--stream",
-                  stream, "--scan-packets", "3", "--record", record, "-q"});
+                  stream, "--scan-packets", "3", "--record", record, "--summary", "-q"});
   const auto line = driver.next_line(kTimeout);
   ASSERT_TRUE(line.has_value());
   unsigned port = 0;
@@ -199,11 +199,11 @@ TEST(UnitreeDriver, L2OverLoopbackUdp) {
   std::vector<Bytes> packets;
   for (std::uint32_t i = 0; i < 6; ++i) packets.push_back(l2_point_packet(l2_packet_spec(i)));
   Bytes bad = l2_point_packet(l2_packet_spec(99));
-  bad[200] ^= std::byte{0xFF};
+  bad[200] ^= std::uint8_t{0xFF};
 
   // Scan 1: a packet and a half in one datagram, the rest with an IMU packet in the next,
   // then a RoboSense packet, a packet with a bad CRC, and the scan's last packet.
-  const std::span<const std::byte> p1(packets[1]);
+  const std::span<const std::uint8_t> p1(packets[1]);
   sender.send(concat({packets[0], p1.first(500)}));
   sender.send(concat({p1.subspan(500), l2_imu_packet(imu_spec())}));
   sender.send(robosense_packet());
@@ -236,6 +236,11 @@ TEST(UnitreeDriver, L2OverLoopbackUdp) {
   driver.signal(SIGTERM);
   EXPECT_EQ(driver.wait(kTimeout), 0);
   EXPECT_EQ(read_file(record), sender.sent);  // exactly what came off the wire
+  // The counters scripts parse, as every LiDAR family begins them: seven packets passed their
+  // checksum (six point packets and the IMU's), one did not.
+  EXPECT_NE(driver.unread().find("summary frames=2 packets=7 lost=0 malformed=0 imu=1 failed=0 "), std::string::npos)
+      << driver.unread();
+  EXPECT_NE(driver.unread().find(" bad_crc=1 "), std::string::npos) << driver.unread();
   std::filesystem::remove(record);
 }
 
@@ -300,7 +305,7 @@ struct Pty {
     if (slave >= 0) close(slave);
   }
   // Writes in small pieces, so frames arrive cut at arbitrary places.
-  void write_in_pieces(std::span<const std::byte> bytes, std::size_t piece) {
+  void write_in_pieces(std::span<const std::uint8_t> bytes, std::size_t piece) {
     for (std::size_t off = 0; off < bytes.size(); off += piece) {
       const std::size_t n = std::min(piece, bytes.size() - off);
       ASSERT_EQ(::write(master, bytes.data() + off, n), static_cast<ssize_t>(n));
@@ -398,7 +403,7 @@ TEST(UnitreeDriver, L1BehindSerialToUdpBoard) {
   const Bytes wire = l1_wire();
   UdpSender sender(static_cast<std::uint16_t>(port));
   for (std::size_t off = 0; off < wire.size(); off += 100) {
-    sender.send(std::span<const std::byte>(wire).subspan(off, std::min<std::size_t>(100, wire.size() - off)));
+    sender.send(std::span<const std::uint8_t>(wire).subspan(off, std::min<std::size_t>(100, wire.size() - off)));
   }
   const auto expected = expected_scans(sim::unitree::Model::l1, 4, wire);
   ASSERT_EQ(expected.size(), 1U);
@@ -455,7 +460,7 @@ TEST(UnitreeReplaySerial, ReplaysARecordingThroughTheSameDecoder) {
   guard.names = {stream, stream + ".imu"};
   const std::string file = temp_path("replay_input");
   // Two scans of 3 packets with line noise before, between and after.
-  const Bytes noise = {std::byte{0x55}, std::byte{0xAA}, std::byte{0x01}, std::byte{0x7E}};
+  const Bytes noise = {std::uint8_t{0x55}, std::uint8_t{0xAA}, std::uint8_t{0x01}, std::uint8_t{0x7E}};
   Bytes wire = noise;
   for (std::uint32_t i = 0; i < 6; ++i) {
     wire = concat({wire, l2_point_packet(l2_packet_spec(i)), (i == 2 ? noise : Bytes{})});
@@ -487,7 +492,7 @@ TEST(UnitreeReplaySerial, ReplaysARecordingThroughTheSameDecoder) {
 
 TEST(UnitreeReplaySerial, BadInputIsReportedWithExitCodes) {
   const std::string garbage = temp_path("garbage");
-  write_file(garbage, Bytes(5000, std::byte{0x42}));
+  write_file(garbage, Bytes(5000, std::uint8_t{0x42}));
   StreamGuard guard;
   const std::string stream = unique_name("bad");
   guard.names = {stream, stream + ".imu"};

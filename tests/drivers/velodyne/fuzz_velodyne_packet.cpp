@@ -66,6 +66,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     data += length;
     size -= length;
   }
-  (void)assembler->flush();
+  (void)assembler->finish();
   return 0;
 }

@@ -169,7 +169,7 @@ TEST(VelodyneGolden, PointTimesFollowTheVlp16DualFiringTable) {
     EXPECT_LE(p.ring, 15U);
   }
   EXPECT_GT(latest, 90'000'000U);
-  EXPECT_TRUE(info.whole_revolution);
+  EXPECT_TRUE(info.whole);
   EXPECT_EQ(info.lost_packets, 0U);
   // Both returns are there: the strongest where it differs from the last.
   const auto seconds = std::count_if(frame.begin(), frame.end(), [](const auto& p) { return p.return_index == 1; });

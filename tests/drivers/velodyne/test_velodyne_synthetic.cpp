@@ -89,7 +89,7 @@ TEST(VelodyneSynthetic, Hdl32ePointsFollowTheManualsGeometryAndFiringTimes) {
   ASSERT_TRUE(assembler) << assembler.error().message;
   const Decoded r = run(*assembler, packets);
   ASSERT_EQ(r.frames.size(), 1U);
-  EXPECT_TRUE(r.info[0].whole_revolution);
+  EXPECT_TRUE(r.info[0].whole);
   EXPECT_EQ(r.counters.lost_packets, 0U);
   // The frame starts with the first point at or past 0°; check every point against the model.
   const auto& frame = r.frames[0];

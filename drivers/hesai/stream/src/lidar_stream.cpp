@@ -68,7 +68,7 @@ std::optional<CompletedFrame> LidarStream::finish() noexcept {
     impl_->assembler.reset();
     return std::nullopt;
   }
-  return impl_->flush();
+  return impl_->finish();
 }
 
 void LidarStream::reset() noexcept { impl_->assembler.reset(); }

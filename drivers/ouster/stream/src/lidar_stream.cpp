@@ -161,7 +161,7 @@ bool LidarStream::push_imu(std::span<const std::uint8_t> payload) noexcept {
 }
 
 std::optional<CompletedFrame> LidarStream::finish() noexcept {
-  return impl_->flush();
+  return impl_->finish();
 }
 
 void LidarStream::reset() noexcept { impl_->assembler.reset(); }

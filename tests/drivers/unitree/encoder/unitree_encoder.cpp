@@ -7,7 +7,7 @@
 namespace unitree_test {
 namespace {
 
-void put_u8(Bytes& b, std::size_t off, std::uint8_t v) { b.at(off) = std::byte{v}; }
+void put_u8(Bytes& b, std::size_t off, std::uint8_t v) { b.at(off) = std::uint8_t{v}; }
 void put_u16(Bytes& b, std::size_t off, std::uint16_t v) {
   put_u8(b, off, static_cast<std::uint8_t>(v & 0xFF));
   put_u8(b, off + 1, static_cast<std::uint8_t>(v >> 8));
@@ -29,16 +29,16 @@ std::uint16_t x25_accumulate(std::uint16_t crc, std::uint8_t byte) {
 
 }  // namespace
 
-std::uint32_t reference_crc32(std::span<const std::byte> bytes) {
+std::uint32_t reference_crc32(std::span<const std::uint8_t> bytes) {
   std::uint32_t crc = 0xFFFFFFFFU;
-  for (const std::byte b : bytes) {
+  for (const std::uint8_t b : bytes) {
     crc ^= static_cast<std::uint32_t>(b);
     for (int k = 0; k < 8; ++k) crc = (crc & 1U) ? (crc >> 1) ^ 0xEDB88320U : crc >> 1;
   }
   return ~crc;
 }
 
-Bytes l2_packet(std::uint32_t type, std::span<const std::byte> data) {
+Bytes l2_packet(std::uint32_t type, std::span<const std::uint8_t> data) {
   const std::size_t size = 12 + data.size() + 12;
   Bytes b(size);
   put_u8(b, 0, 0x55);
@@ -84,7 +84,7 @@ Bytes l2_point_packet(const L2PointSpec& s) {
     put_u16(p, 132 + 2 * j, s.ranges[j]);
     put_u8(p, 732 + j, s.intensities[j]);
   }
-  return l2_packet(102, std::span<const std::byte>(p).subspan(12, 1020));
+  return l2_packet(102, std::span<const std::uint8_t>(p).subspan(12, 1020));
 }
 
 Bytes l2_2d_packet(const L2Point2dSpec& s) {
@@ -106,7 +106,7 @@ Bytes l2_2d_packet(const L2Point2dSpec& s) {
     put_u16(p, 124 + 2 * j, s.ranges.at(j));
     put_u8(p, 3724 + j, s.intensities.at(j));
   }
-  return l2_packet(103, std::span<const std::byte>(p).subspan(12, 5512));
+  return l2_packet(103, std::span<const std::uint8_t>(p).subspan(12, 5512));
 }
 
 Bytes l2_imu_packet(const L2ImuSpec& s) {
@@ -120,22 +120,22 @@ Bytes l2_imu_packet(const L2ImuSpec& s) {
     put_f32(p, 44 + 4 * i, s.angular_velocity[i]);
     put_f32(p, 56 + 4 * i, s.linear_acceleration[i]);
   }
-  return l2_packet(104, std::span<const std::byte>(p).subspan(12, 56));
+  return l2_packet(104, std::span<const std::uint8_t>(p).subspan(12, 56));
 }
 
 Bytes robosense_packet() {
   // RoboSense MSOP header 55 AA 05 0A 5A A5 50 A0, then payload: 1248 B in all.
-  Bytes b(1248, std::byte{0x11});
+  Bytes b(1248, std::uint8_t{0x11});
   const std::uint8_t head[8] = {0x55, 0xAA, 0x05, 0x0A, 0x5A, 0xA5, 0x50, 0xA0};
   for (std::size_t i = 0; i < 8; ++i) put_u8(b, i, head[i]);
   return b;
 }
 
-Bytes mavlink_frame(const MavlinkSpec& s, std::span<const std::byte> full_payload) {
+Bytes mavlink_frame(const MavlinkSpec& s, std::span<const std::uint8_t> full_payload) {
   std::size_t len = full_payload.size();
   if (s.trim) {
     // MAVLink v2 drops trailing zeros but always sends at least one payload byte.
-    while (len > 1 && full_payload[len - 1] == std::byte{0}) --len;
+    while (len > 1 && full_payload[len - 1] == std::uint8_t{0}) --len;
   }
   Bytes b(10 + len + 2 + (s.signed_frame ? 13 : 0));
   put_u8(b, 0, 0xFD);
@@ -209,7 +209,7 @@ Bytes l1_imu_frame(const std::array<float, 4>& q, const std::array<float, 3>& gy
   return mavlink_frame({19, 110, seq}, l1_imu_payload(q, gyro, acc, packet_id));
 }
 
-Bytes concat(std::initializer_list<std::span<const std::byte>> parts) {
+Bytes concat(std::initializer_list<std::span<const std::uint8_t>> parts) {
   Bytes out;
   for (const auto& part : parts) out.insert(out.end(), part.begin(), part.end());
   return out;

@@ -13,15 +13,15 @@
 
 namespace unitree_test {
 
-using Bytes = std::vector<std::byte>;
+using Bytes = std::vector<std::uint8_t>;
 
 // ---- L2 (reference §7) ----------------------------------------------------------------------
 
-std::uint32_t reference_crc32(std::span<const std::byte> bytes);
+std::uint32_t reference_crc32(std::span<const std::uint8_t> bytes);
 
 // Header (magic 55 AA 05 0A, type, size) + data + tail (CRC-32 of the data only, msg_type_check,
 // reserve, 00 FF).
-Bytes l2_packet(std::uint32_t type, std::span<const std::byte> data);
+Bytes l2_packet(std::uint32_t type, std::span<const std::uint8_t> data);
 
 struct L2PointSpec {
   std::uint32_t seq = 0;
@@ -79,7 +79,7 @@ struct MavlinkSpec {
   bool trim = true;    // strip trailing zero bytes of the payload, as MAVLink v2 senders do
   bool signed_frame = false;
 };
-Bytes mavlink_frame(const MavlinkSpec& spec, std::span<const std::byte> full_payload);
+Bytes mavlink_frame(const MavlinkSpec& spec, std::span<const std::uint8_t> full_payload);
 
 struct L1AuxSpec {
   std::uint32_t sys_rotation_period = 0, com_rotation_period = 0;
@@ -106,6 +106,6 @@ Bytes l1_imu_frame(const std::array<float, 4>& q, const std::array<float, 3>& gy
                    const std::array<float, 3>& acc, std::uint16_t packet_id, std::uint8_t seq = 0);
 
 // Concatenation helper.
-Bytes concat(std::initializer_list<std::span<const std::byte>> parts);
+Bytes concat(std::initializer_list<std::span<const std::uint8_t>> parts);
 
 }  // namespace unitree_test

@@ -19,6 +19,7 @@
 
 #include "sim/clock.hpp"
 #include "sim/lidar/clock_reporter.hpp"
+#include "sim/lidar/completed_frame.hpp"
 #include "sim/lidar_point.hpp"
 #include "sim/writer.hpp"
 
@@ -116,8 +117,8 @@ struct PointPipeline {
     return result;
   }
   // End of input: publishes the frame in progress, when the assembler gives one.
-  auto flush() noexcept {
-    auto frame = assembler.flush();
+  auto finish() noexcept {
+    auto frame = assembler.finish();
     if (frame) publish(*frame);
     return frame;
   }
@@ -133,18 +134,12 @@ struct PointPipeline {
   ClockReporter clock;  // the caller adds each packet's sensor time with its arrival
 
  private:
-  template <class Frame>
-  void publish(const Frame& f) noexcept {
-    bool whole = false;
-    if constexpr (requires { f.whole_revolution; }) {
-      whole = f.whole_revolution;  // a spinning sensor's revolution (Hesai, Velodyne)
-    } else {
-      whole = f.whole;  // Ouster: the column window from its first column
-    }
+  // Every family's frame is a lidar::CompletedFrame, whatever it adds.
+  void publish(const CompletedFrame& f) noexcept {
     // The sensor's stamp, or with --stamp-fallback its arrival while the sensor's clock is in error.
     const std::int64_t stamp =
         clock.frame_stamp(frames.writer(), saturating_add_ns(f.stamp_ns, frames.stamp_offset()), f.host_receive_ns);
-    assembler.set_output(frames.publish_stamped(f.point_count, stamp, f.host_receive_ns, whole));
+    assembler.set_output(frames.publish_stamped(f.point_count, stamp, f.host_receive_ns, f.whole));
   }
 };
 

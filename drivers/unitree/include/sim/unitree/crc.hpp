@@ -10,7 +10,7 @@
 namespace sim::unitree {
 
 // Standard reflected CRC-32 (polynomial 0xEDB88320, init and final xor 0xFFFFFFFF): zlib's crc32.
-std::uint32_t crc32(std::span<const std::byte> bytes) noexcept;
+std::uint32_t crc32(std::span<const std::uint8_t> bytes) noexcept;
 
 // CRC-16/MCRF4XX (the X.25 polynomial, init 0xFFFF, no final xor) as MAVLink accumulates it.
 class Crc16Mcrf4xx {
@@ -20,8 +20,8 @@ class Crc16Mcrf4xx {
     tmp = static_cast<std::uint8_t>(tmp ^ static_cast<std::uint8_t>(tmp << 4));
     crc_ = static_cast<std::uint16_t>((crc_ >> 8) ^ (tmp << 8) ^ (tmp << 3) ^ (tmp >> 4));
   }
-  void add(std::span<const std::byte> bytes) noexcept {
-    for (const std::byte b : bytes) add(static_cast<std::uint8_t>(b));
+  void add(std::span<const std::uint8_t> bytes) noexcept {
+    for (const std::uint8_t b : bytes) add(b);
   }
   std::uint16_t value() const noexcept { return crc_; }
 

@@ -110,7 +110,7 @@ class Decoder {
 
   // Any chunk of the byte stream: one UDP datagram (holding several packets or part of one), or
   // whatever a serial read returned. host_ns is the host time the bytes arrived (CLOCK_REALTIME).
-  void push(std::span<const std::byte> bytes, std::int64_t host_ns) noexcept;
+  void push(std::span<const std::uint8_t> bytes, std::int64_t host_ns) noexcept;
   // End of input: a partial packet is counted as truncated; an unfinished scan is not published.
   void finish() noexcept;
   // Starts over on a new, unrelated byte stream (a replay looping back to its start): buffered
@@ -127,8 +127,8 @@ class Decoder {
 
  private:
   void drain(std::int64_t host_ns) noexcept;
-  void on_l2_packet(std::span<const std::byte> packet, std::int64_t host_ns) noexcept;
-  void on_l2_2d_packet(std::span<const std::byte> packet, std::int64_t host_ns) noexcept;
+  void on_l2_packet(std::span<const std::uint8_t> packet, std::int64_t host_ns) noexcept;
+  void on_l2_2d_packet(std::span<const std::uint8_t> packet, std::int64_t host_ns) noexcept;
   void on_l1_message(const MavlinkMessage& message, std::int64_t host_ns) noexcept;
   void decode_l1_pair(std::int64_t host_ns) noexcept;
   // The stamp of a packet with the sensor time `sensor_ns`, as TimeSource says.

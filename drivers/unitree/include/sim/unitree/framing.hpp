@@ -36,15 +36,15 @@ class ByteWindow {
  public:
   explicit ByteWindow(std::size_t capacity) : storage_(capacity) {}
   // Copies in as many bytes as fit; returns how many.
-  std::size_t append(std::span<const std::byte> bytes) noexcept;
-  std::span<const std::byte> view() const noexcept {
+  std::size_t append(std::span<const std::uint8_t> bytes) noexcept;
+  std::span<const std::uint8_t> view() const noexcept {
     return {storage_.data() + begin_, end_ - begin_};
   }
   void consume(std::size_t n) noexcept { begin_ += n; }
   void clear() noexcept { begin_ = end_ = 0; }
 
  private:
-  std::vector<std::byte> storage_;
+  std::vector<std::uint8_t> storage_;
   std::size_t begin_ = 0;
   std::size_t end_ = 0;
 };
@@ -54,9 +54,9 @@ class L2Framer {
   L2Framer();
   // Takes as many bytes as the buffer holds; returns how many (call next() until it is empty
   // before feeding the rest).
-  std::size_t feed(std::span<const std::byte> bytes) noexcept;
+  std::size_t feed(std::span<const std::uint8_t> bytes) noexcept;
   // The next whole packet (header + data + tail) with a good CRC; valid until the next call.
-  std::optional<std::span<const std::byte>> next() noexcept;
+  std::optional<std::span<const std::uint8_t>> next() noexcept;
   // End of input: a partial packet left in the buffer is counted as truncated and dropped.
   void finish() noexcept;
   const FramerCounters& counters() const noexcept { return counters_; }
@@ -84,7 +84,7 @@ struct MavlinkMessage {
   std::uint8_t sysid = 0;
   std::uint8_t compid = 0;
   // The payload zero-extended to the message's full length (MAVLink v2 trims trailing zeros).
-  std::span<const std::byte> payload;
+  std::span<const std::uint8_t> payload;
 };
 
 class MavlinkFramer {
@@ -94,7 +94,7 @@ class MavlinkFramer {
   static constexpr std::size_t kSignatureSize = 13;
 
   MavlinkFramer();
-  std::size_t feed(std::span<const std::byte> bytes) noexcept;
+  std::size_t feed(std::span<const std::uint8_t> bytes) noexcept;
   // The next message with a good CRC (including its CRC_EXTRA); valid until the next call.
   std::optional<MavlinkMessage> next() noexcept;
   void finish() noexcept;
@@ -105,7 +105,7 @@ class MavlinkFramer {
   ByteWindow window_;
   std::size_t release_ = 0;
   bool in_sync_ = true;
-  std::array<std::byte, 255> payload_{};
+  std::array<std::uint8_t, 255> payload_{};
   FramerCounters counters_;
 };
 

@@ -45,9 +45,9 @@ struct AuxiliaryPacket {
 };
 
 // Each takes a zero-extended payload of the message's full length; nullopt on a shorter one.
-std::optional<DistancePacket> parse_distance(std::span<const std::byte> payload) noexcept;
-std::optional<AuxiliaryPacket> parse_auxiliary(std::span<const std::byte> payload) noexcept;
-std::optional<ImuSample> parse_imu(std::span<const std::byte> payload) noexcept;  // stamp_ns 0
+std::optional<DistancePacket> parse_distance(std::span<const std::uint8_t> payload) noexcept;
+std::optional<AuxiliaryPacket> parse_auxiliary(std::span<const std::uint8_t> payload) noexcept;
+std::optional<ImuSample> parse_imu(std::span<const std::uint8_t> payload) noexcept;  // stamp_ns 0
 
 struct DecodeLimits {
   float range_min_m = 0.0F;

@@ -15,11 +15,11 @@
 
 namespace sim::unitree::l2 {
 
-inline constexpr std::byte kMagic[4] = {std::byte{0x55}, std::byte{0xAA}, std::byte{0x05},
-                                        std::byte{0x0A}};
+inline constexpr std::uint8_t kMagic[4] = {std::uint8_t{0x55}, std::uint8_t{0xAA}, std::uint8_t{0x05},
+                                        std::uint8_t{0x0A}};
 // RoboSense MSOP packets begin with the same four bytes, then 5A A5 50 A0.
-inline constexpr std::byte kRoboSenseTag[4] = {std::byte{0x5A}, std::byte{0xA5}, std::byte{0x50},
-                                               std::byte{0xA0}};
+inline constexpr std::uint8_t kRoboSenseTag[4] = {std::uint8_t{0x5A}, std::uint8_t{0xA5}, std::uint8_t{0x50},
+                                               std::uint8_t{0xA0}};
 
 inline constexpr std::size_t kHeaderSize = 12;  // magic, packet_type, packet_size
 inline constexpr std::size_t kTailSize = 12;    // crc32, msg_type_check, reserve[2], tail[2]
@@ -115,10 +115,10 @@ struct PointPacketHeader {
 
 // Reads the fields of a framed, CRC-checked type-102 packet. nullopt when the packet is not one
 // (wrong size/type) or its point count exceeds 300.
-std::optional<PointPacketHeader> parse_point_header(std::span<const std::byte> packet) noexcept;
+std::optional<PointPacketHeader> parse_point_header(std::span<const std::uint8_t> packet) noexcept;
 
 // The same for a type-103 (2D) packet: no horizontal angle fields; point_num ≤ 1800.
-std::optional<PointPacketHeader> parse_2d_header(std::span<const std::byte> packet) noexcept;
+std::optional<PointPacketHeader> parse_2d_header(std::span<const std::uint8_t> packet) noexcept;
 
 struct DecodeLimits {
   float range_min_m = 0.0F;   // user limits, applied on top of the packet's own
@@ -133,17 +133,17 @@ struct DecodeResult {
 // Converts the packet's points with the official range/angle→XYZ formulas into `out`
 // (at most out.size() points; zero, out-of-range and implausible results are skipped).
 // time_offset_ns is `base_offset_ns + j·time_increment`.
-DecodeResult decode_points(std::span<const std::byte> packet, const PointPacketHeader& header,
+DecodeResult decode_points(std::span<const std::uint8_t> packet, const PointPacketHeader& header,
                           const DecodeLimits& limits, std::uint32_t base_offset_ns,
                           std::span<LidarPoint> out) noexcept;
 
 // 2D mode (reference §7.2): x = 0, y = cosα·r, z = sinα·r + a_axis_dist, with α and r as for
 // 3D packets.
-DecodeResult decode_2d_points(std::span<const std::byte> packet, const PointPacketHeader& header,
+DecodeResult decode_2d_points(std::span<const std::uint8_t> packet, const PointPacketHeader& header,
                               const DecodeLimits& limits, std::uint32_t base_offset_ns,
                               std::span<LidarPoint> out) noexcept;
 
 // Reads a framed, CRC-checked type-104 packet.
-std::optional<ImuSample> parse_imu(std::span<const std::byte> packet) noexcept;
+std::optional<ImuSample> parse_imu(std::span<const std::uint8_t> packet) noexcept;
 
 }  // namespace sim::unitree::l2
