@@ -398,9 +398,45 @@ TEST(TcpConnection, ARefusedConnectionIsOneSentenceNamingTheSensorAndTheService)
   EXPECT_EQ(refused.error().message.rfind("sensor 127.0.0.1:" + std::to_string(port) + " refused the PTC connection (", 0),
             0u)
       << refused.error().message;
-  auto not_ipv4 = sim::lidar::TcpConnection::connect({"sensor.local", port, std::chrono::milliseconds(2000), "HTTP"});
-  ASSERT_FALSE(not_ipv4);
-  EXPECT_EQ(not_ipv4.error().code, sim::ErrorCode::invalid_argument);
+  // A name that never resolves (.invalid, RFC 6761): one sentence naming it and the option.
+  auto unknown = sim::lidar::TcpConnection::connect({"sensor.invalid", port, std::chrono::milliseconds(2000), "HTTP"});
+  ASSERT_FALSE(unknown);
+  EXPECT_NE(unknown.error().message.find("'sensor.invalid' (--sensor-ip)"), std::string::npos) << unknown.error().message;
+}
+
+TEST(TcpConnection, AHostIsAnAddressOrAHostNameAndNothingElse) {
+  for (const char* good : {"192.168.1.201", "fe80::1", "os-122.local", "localhost", "sensor"}) {
+    EXPECT_EQ(sim::lidar::host_problem(good), "") << good;
+  }
+  for (const char* bad : {"", "os 122", "-x", "a/b", "http://sensor"}) {
+    EXPECT_NE(sim::lidar::host_problem(bad), "") << bad;
+  }
+}
+
+// Ouster sensors are reached by name (os-<serial>.local) as often as by address: a name is
+// resolved (here from /etc/hosts) within the connection's timeout.
+TEST(TcpConnection, ASensorNameIsResolvedAndConnected) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  const int listener = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in local{};
+  local.sin_family = AF_INET;
+  local.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::bind(listener, reinterpret_cast<const sockaddr*>(&local), sizeof local), 0);
+  ASSERT_EQ(::listen(listener, 1), 0);
+  socklen_t length = sizeof local;
+  ::getsockname(listener, reinterpret_cast<sockaddr*>(&local), &length);
+  auto connection = sim::lidar::TcpConnection::connect(
+      {"localhost", ntohs(local.sin_port), std::chrono::milliseconds(20000), "HTTP"});
+  ASSERT_TRUE(connection) << connection.error().message;
+  const int accepted = ::accept(listener, nullptr, nullptr);
+  EXPECT_GE(accepted, 0);
+  const std::array<std::uint8_t, 4> request{'G', 'E', 'T', ' '};
+  EXPECT_EQ(connection->send_all(request), sim::lidar::TcpIo::done);
+  std::array<std::uint8_t, 4> got{};
+  EXPECT_EQ(::recv(accepted, got.data(), got.size(), MSG_WAITALL), 4);
+  EXPECT_EQ(got, request);
+  ::close(accepted);
+  ::close(listener);
 }
 
 TEST(TcpConnection, ASensorThatAcceptsButNeverAnswersEndsTheReadAtTheDeadline) {

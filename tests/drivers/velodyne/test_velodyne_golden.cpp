@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 // The decoder against nebula's reference clouds of real captures (data/NOTICE.md): the same
 // point count and at least 99.9 % of the points within 1 mm, point by point in order, with the
-// settings nebula decoded them with (scan phase 0°, range 0.3–300 m, cloud angles 0–359°, its
-// azimuth interpolation; the VLS-128 cut by packet as nebula cuts). One table of golden cases
-// (capture, calibration, model options, reference cloud, tolerance) and one parameterised test
-// over it, the shape every family's golden tests share (tests/support/lidar_test/golden.hpp).
-// Then the decoder's own defaults on the same packets: per-point cut, firing-time
-// interpolation, per-point times.
+// settings nebula decoded them with (VLP-16 and VLS-128: scan phase 0°, range 0.3–300 m, cloud
+// angles 0–359°; VLP-32C: below), its azimuth interpolation; the VLS-128 and VLP-32C cut by
+// packet as nebula cuts. One table of golden cases (capture, calibration, model options,
+// reference cloud, tolerance) and one parameterised test over it, the shape every family's golden
+// tests share (tests/support/lidar_test/golden.hpp). Then the decoder's own defaults on the same
+// packets: per-point cut, firing-time interpolation, per-point times.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -87,6 +87,23 @@ AssemblerOptions cut_by_packet(AssemblerOptions o) {
   return o;
 }
 
+// nebula's VLP-32C test: scan phase 180°, range 0.4–50 m, cloud angles 270°–90° (the sensor sent
+// only that sector), tested on each block's azimuth as sent (its VLP-32 decoder), scans cut by
+// packet; the reference is its first scan, which starts with the capture. nebula's per-unit
+// firing slots (AzimuthInterpolation::nebula) put every point where nebula's cloud has it.
+AssemblerOptions vlp32c_nebula_settings() {
+  AssemblerOptions o;
+  o.model = Model::vlp32c;
+  o.cut_azimuth_deg = 180;
+  o.min_range_m = 0.4f;
+  o.max_range_m = 50.0f;
+  o.interpolation = AzimuthInterpolation::nebula;
+  o.cut_by = CutBy::packet;
+  o.azimuth_window = AssemblerOptions::AzimuthWindow{270, 90, false, true};
+  o.emit_partial_frames = true;
+  return o;
+}
+
 // At least 99.9 % of the points within 1 mm.
 constexpr Tolerance nebula_tolerance{Tolerance::Distance::euclidean, 1e-3, 0.999};
 
@@ -101,6 +118,8 @@ const GoldenCase golden_cases[] = {
      "vlp16_dual.reference.pcd", 14831, -1, 3, 0, nebula_tolerance},
     {"Vls128", "vls128_strongest_first1100.pcap", "VLS128.yaml", cut_by_packet(nebula_settings(Model::vls128)),
      "vls128_strongest.reference.pcd", 208680, 0, 0, 0, nebula_tolerance},
+    {"Vlp32c", "vlp32c_strongest_first152.pcap", "VLP32.yaml", vlp32c_nebula_settings(),
+     "vlp32c_strongest.reference.pcd", 26216, 0, 2, 152, nebula_tolerance},
 };
 
 class VelodyneReference : public ::testing::TestWithParam<GoldenCase> {};
@@ -212,6 +231,29 @@ TEST(VelodyneGolden, EveryPointOfADefaultFrameLiesInItsRevolution) {
   EXPECT_LT(azimuth(frame.front()), 1.0);
   EXPECT_GT(azimuth(frame.back()), 350.0);
   EXPECT_EQ(d.counters.dropped_points, 0U);
+}
+
+// nebula's VLP-32C test (a real capture, single return): scan phase 180°, range 0.4–50 m,
+// The VLP-32C decoded by the manual's firing table instead of nebula's slots (the default mode):
+// the same points, laser by laser within its 0–16 slots of the sequence's azimuth step (0.2° at
+// 10 Hz: 0.13°; 0.16° with the rounding), the elevation and range unchanged.
+TEST(VelodyneGolden, Vlp32cDefaultModeFiresInPairsWithinSixteenSlotsOfNebulasCloud) {
+  const auto reference = read_xyz_pcd(data("vlp32c_strongest.reference.pcd"));
+  ASSERT_EQ(reference.size(), 26216U);
+  AssemblerOptions o = vlp32c_nebula_settings();
+  o.interpolation = AzimuthInterpolation::firing_time;
+  const Decoded manual = decode("vlp32c_strongest_first152.pcap", "VLP32.yaml", o);
+  ASSERT_EQ(manual.frames.size(), 2U);
+  const auto& points = manual.frames.front();
+  ASSERT_EQ(points.size(), reference.size());
+  EXPECT_LT(lidar_test::compare_clouds(points, reference, nebula_tolerance).share_within(), 0.5);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const double r = std::hypot(reference[i].x, reference[i].y);
+    const double moved = std::hypot(points[i].x - reference[i].x, points[i].y - reference[i].y);
+    ASSERT_LE(moved, r * 0.16 * M_PI / 180.0 + 1e-3) << "point " << i;
+    ASSERT_NEAR(points[i].z, reference[i].z, 1e-4) << "point " << i;
+    ASSERT_NEAR(std::hypot(points[i].x, points[i].y), r, 1e-4) << "point " << i;
+  }
 }
 
 }  // namespace
