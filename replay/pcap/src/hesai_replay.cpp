@@ -16,6 +16,7 @@
 #include "sim/apps/sensor_options.hpp"
 #include "sim/clock.hpp"
 #include "sim/hesai/lidar_stream.hpp"
+#include "sim/hesai/route.hpp"
 
 namespace sim::pcap {
 namespace {
@@ -72,11 +73,6 @@ Expected<Detected> detect(Sniff& sniff, const ReplayArgs& r, std::optional<hesai
                    "choose the sensor's port with --port"};
 }
 
-// Every datagram is a point-cloud packet: the live receiver listens on one port, and so does a
-// capture replayed with --port. The stream counts what is not one.
-enum class Route { data };
-Route route(const Datagram&) { return Route::data; }
-
 class HesaiTarget final : public ReplayTarget {
  public:
   HesaiTarget(hesai::LidarStream stream, bool restamp)
@@ -84,11 +80,13 @@ class HesaiTarget final : public ReplayTarget {
     stream_.clock().set_base(restamp ? lidar::ClockBase::restamped : lidar::ClockBase::replayed);
   }
 
+  bool takes(const Datagram& datagram) override {
+    return route_(datagram.destination.port, as_u8(datagram.payload)) != lidar::PacketKind::none;
+  }
   bool push(const Datagram& datagram) override {
-    switch (route(datagram)) {
-      case Route::data: return push_data(as_u8(datagram.payload), datagram.timestamp_ns);
-    }
-    return false;
+    const auto bytes = as_u8(datagram.payload);
+    if (route_(datagram.destination.port, bytes) != lidar::PacketKind::data) return false;
+    return push_data(bytes, datagram.timestamp_ns);
   }
   void restart() override {
     stream_.reset();
@@ -124,6 +122,9 @@ class HesaiTarget final : public ReplayTarget {
   }
 
   hesai::LidarStream stream_;
+  // The live receiver's route: every datagram is a point-cloud packet (the stream counts what
+  // is not one), as on the one port the live receiver listens to.
+  hesai::Route route_;
   bool restamp_;
   bool restamped_ = false;
 };

@@ -15,6 +15,7 @@
 #include "sim/apps/sensor_options.hpp"
 #include "sim/clock.hpp"
 #include "sim/ouster/lidar_stream.hpp"
+#include "sim/ouster/route.hpp"
 
 namespace sim::pcap {
 namespace {
@@ -23,51 +24,32 @@ std::span<const std::uint8_t> as_u8(std::span<const std::byte> bytes) {
   return {reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()};
 }
 
-// Which push a datagram goes to. Without --port and --filter, as the live receiver's sockets
-// (and ouster-sdk's pcap source) route them: the metadata's lidar port to the data push, its
-// IMU port to the IMU push, other ports nowhere. With them the user chose the datagrams, whose
-// ports may be anything: the 48-byte ones are the IMU's, the rest lidar packets. One port for
-// both: the size tells too.
-enum class Route { data, imu, none };
-
-class OusterRoute {
- public:
-  OusterRoute(const ouster::Metadata& m, bool by_port)
-      : lidar_port_(m.udp_port_lidar), imu_port_(m.udp_port_imu), by_port_(by_port) {}
-
-  Route operator()(const Datagram& datagram) const {
-    const std::uint16_t port = datagram.destination.port;
-    if (by_port_ && port != lidar_port_ && port != imu_port_) return Route::none;
-    if (by_port_ && lidar_port_ != imu_port_) return port == imu_port_ ? Route::imu : Route::data;
-    return datagram.payload.size() == ouster::imu_packet_bytes ? Route::imu : Route::data;
-  }
-
- private:
-  std::uint16_t lidar_port_;
-  std::uint16_t imu_port_;
-  bool by_port_;
-};
+// The live receiver's route with the metadata's ports. Without --port and --filter, as the live
+// sockets (and ouster-sdk's pcap source) take them: the lidar port to push, the IMU port to
+// push_imu, other ports nowhere. With them the user chose the datagrams, whose ports may be
+// anything (by_port false): the 48-byte ones are the IMU's, the rest lidar packets.
+ouster::Route route_of(const ouster::Metadata& m, bool by_port) {
+  return ouster::Route{.data_port = m.udp_port_lidar, .imu_port = m.udp_port_imu, .by_port = by_port};
+}
 
 class OusterTarget final : public ReplayTarget {
  public:
   OusterTarget(ouster::LidarStream stream, bool restamp, bool by_port)
-      : stream_(std::move(stream)), route_(stream_.metadata(), by_port), restamp_(restamp) {
+      : stream_(std::move(stream)), route_(route_of(stream_.metadata(), by_port)), restamp_(restamp) {
     stream_.clock().set_base(restamp ? lidar::ClockBase::restamped : lidar::ClockBase::replayed);
   }
 
   bool takes(const Datagram& datagram) override {
-    if (route_(datagram) != Route::none) return true;
+    if (route_(datagram.destination.port, as_u8(datagram.payload)) != lidar::PacketKind::none) return true;
     ++other_port_;
     return false;
   }
 
   bool push(const Datagram& datagram) override {
     const auto bytes = as_u8(datagram.payload);
-    switch (route_(datagram)) {
-      case Route::data: return push_data(bytes, datagram.timestamp_ns);
-      case Route::imu: stream_.push_imu(bytes); return false;
-      case Route::none: return false;
-    }
+    const lidar::PacketKind kind = route_(datagram.destination.port, bytes);
+    if (kind == lidar::PacketKind::data) return push_data(bytes, datagram.timestamp_ns);
+    ouster::Route::push_other(stream_, kind, bytes, realtime_ns());
     return false;
   }
   void restart() override {
@@ -107,7 +89,7 @@ class OusterTarget final : public ReplayTarget {
   }
 
   ouster::LidarStream stream_;
-  OusterRoute route_;
+  ouster::Route route_;
   bool restamp_;
   std::uint64_t other_port_ = 0;
   bool restamped_ = false;

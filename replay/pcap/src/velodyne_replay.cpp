@@ -18,6 +18,7 @@
 #include "sim/apps/velodyne_options.hpp"
 #include "sim/clock.hpp"
 #include "sim/velodyne/lidar_stream.hpp"
+#include "sim/velodyne/route.hpp"
 
 namespace sim::pcap {
 namespace {
@@ -77,27 +78,20 @@ Expected<Detected> detect(Sniff& sniff, const ReplayArgs& r, std::optional<velod
                    "); check the file, or choose the sensor's port with --port"};
 }
 
-// Which push a datagram goes to. The live receiver routes by socket (the data port, the
-// position port); a capture replayed with --port or --filter may keep only one of them, so the
-// datagram's size tells: data packets are 1206 bytes, the rest (port 8308's GPRMC/PPS packets,
-// or a stray datagram the stream counts) goes to the position push.
-enum class Route { data, position };
-Route route(const Datagram& datagram) {
-  return datagram.payload.size() == velodyne::packet_size ? Route::data : Route::position;
-}
-
 class VelodyneTarget final : public ReplayTarget {
  public:
   VelodyneTarget(velodyne::LidarStream stream, bool restamp) : stream_(std::move(stream)), restamp_(restamp) {
     stream_.clock().set_base(restamp ? lidar::ClockBase::restamped : lidar::ClockBase::replayed);
   }
 
+  bool takes(const Datagram& datagram) override {
+    return route_(datagram.destination.port, as_u8(datagram.payload)) != lidar::PacketKind::none;
+  }
   bool push(const Datagram& datagram) override {
     const auto bytes = as_u8(datagram.payload);
-    switch (route(datagram)) {
-      case Route::data: return push_data(bytes, datagram.timestamp_ns);
-      case Route::position: stream_.push_position(bytes); return false;
-    }
+    const lidar::PacketKind kind = route_(datagram.destination.port, bytes);
+    if (kind == lidar::PacketKind::data) return push_data(bytes, datagram.timestamp_ns);
+    velodyne::Route::push_other(stream_, kind, bytes, realtime_ns());
     return false;
   }
   void restart() override {
@@ -117,7 +111,9 @@ class VelodyneTarget final : public ReplayTarget {
 
  private:
   bool push_data(std::span<const std::uint8_t> bytes, std::int64_t capture_ns) {
-    if (restamp_ && !restamped_) {
+    // A datagram to the data port may be shorter than a data packet (the stream counts it):
+    // its timestamp is read only from one of the right size.
+    if (restamp_ && !restamped_ && bytes.size() == velodyne::packet_size) {
       // Shift the sensor's clock so the first packet's time is now; loops add to it.
       stream_.set_stamp_offset(realtime_ns() - velodyne::packet_time_ns(velodyne::Packet::read_u32(
                                                    bytes.data() + velodyne::timestamp_offset), capture_ns));
@@ -130,6 +126,11 @@ class VelodyneTarget final : public ReplayTarget {
   }
 
   velodyne::LidarStream stream_;
+  // The live receiver's route with the sensor's default ports: a datagram to 2368 is a data
+  // packet, one to 8308 a position packet (GPRMC, PPS), as the live sockets take them; one to
+  // another port (a sensor set to other ports, or a capture filtered with --port or --filter)
+  // by its size: 1206 bytes are data, the rest position packets or strays the stream counts.
+  velodyne::Route route_;
   bool restamp_;
   bool restamped_ = false;
 };

@@ -167,20 +167,25 @@ bool equals_one_of(const std::vector<std::vector<sim::LidarPoint>>& expected, co
 }
 
 // The bundled VLP-16 capture (which holds data packets only) with a position packet in front
-// (PPS locked, GPRMC valid), as a sensor's two ports record it; a temporary file.
+// (PPS locked, GPRMC valid), as a sensor's two ports record it (by default 2368 and 8308), and
+// `strays` sent to the data port before the first data packet; a temporary file.
 struct CaptureWithPositionPacket {
-  std::string path =
-      (std::filesystem::temp_directory_path() / ("velodyne_position_" + std::to_string(::getpid()) + ".pcap")).string();
-  CaptureWithPositionPacket() {
+  std::string path = (std::filesystem::temp_directory_path() /
+                      ("velodyne_position_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + ".pcap"))
+                         .string();
+  static inline int counter = 0;
+  explicit CaptureWithPositionPacket(std::uint16_t data_port = 2368, std::uint16_t position_port = 8308,
+                                     const std::vector<std::vector<std::uint8_t>>& strays = {}) {
     namespace pt = sim::pcap::testing;
     const auto frame = [](std::uint16_t port, const pt::Bytes& payload) {
       return pt::ethernet(0x0800, pt::ipv4({192, 168, 1, 201}, {255, 255, 255, 255}, pt::udp(port, port, payload)));
     };
     const auto payloads = lidar_test::read_udp_payloads(capture);
     const auto gprmc = velodyne_test::nmea("GPRMC,123519,A,4807.038,N,01131.000,E,022.4,084.4,230326,003.1,W");
-    std::vector<pt::Record> records{{frame(8308, velodyne_test::position_packet(0, 2, gprmc)),
+    std::vector<pt::Record> records{{frame(position_port, velodyne_test::position_packet(0, 2, gprmc)),
                                      payloads.front().capture_ns - 1'000'000}};
-    for (const auto& p : payloads) records.push_back({frame(2368, p.bytes), p.capture_ns});
+    for (const auto& stray : strays) records.push_back({frame(data_port, stray), payloads.front().capture_ns - 1'000});
+    for (const auto& p : payloads) records.push_back({frame(data_port, p.bytes), p.capture_ns});
     pt::write_capture(path, DLT_EN10MB, records);
   }
   ~CaptureWithPositionPacket() { std::filesystem::remove(path); }
@@ -335,6 +340,40 @@ TEST(VelodyneTools, AReplayWithTheRecordedStampsSaysSoWithTheRecordedPpsState) {
   EXPECT_EQ(info->time_base, sim::TimeBase::sensor_synchronized);
   EXPECT_EQ(info->time_sync,
             "replayed with the recorded stamps (the sensor's clock); as recorded: PPS locked, GPRMC valid");
+}
+
+// A replay routes a datagram as the live driver does (velodyne::Route): one to the data port
+// (2368) is a data packet whatever its size, so the datagrams cut short or of another vendor are
+// counted malformed as live, and the first of them does not set --restamp's offset.
+TEST(VelodyneTools, AReplayCountsBadDatagramsToTheDataPortAsTheLiveDriverDoes) {
+  const auto payloads = lidar_test::read_udp_payloads(capture);
+  const std::vector<std::vector<std::uint8_t>> strays{
+      {payloads[0].bytes.begin(), payloads[0].bytes.begin() + 700},  // cut short
+      std::vector<std::uint8_t>(1080, 0xEE)};                         // another vendor's datagram
+  const CaptureWithPositionPacket recorded(2368, 8308, strays);
+  StreamGuard stream;
+  const auto r = sim::testing::run({SIM_REPLAY_PCAP, recorded.path, "--stream", stream.name, "--calibration",
+                                    calibration, "--max-rate", "--restamp", "--summary", "-q"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(summary_value(r.out, "malformed"), 2) << r.out;
+  EXPECT_EQ(summary_value(r.out, "packets"), 603) << r.out;
+  EXPECT_EQ(summary_value(r.out, "frames"), 3) << r.out;
+  EXPECT_EQ(summary_value(r.out, "position_packets"), 1) << r.out;
+}
+
+// A sensor set to other ports (or a capture filtered to them): the datagrams' sizes tell the
+// data packets (1206 bytes) from the position packets, so all of them are replayed.
+TEST(VelodyneTools, ACaptureOnOtherPortsIsReplayedWithItsPositionPacketsToldBySize) {
+  const CaptureWithPositionPacket recorded(2369, 8309);
+  StreamGuard stream;
+  const auto r = sim::testing::run({SIM_REPLAY_PCAP, recorded.path, "--stream", stream.name, "--calibration",
+                                    calibration, "--max-rate", "--summary", "-q"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(summary_value(r.out, "packets"), 603) << r.out;
+  EXPECT_EQ(summary_value(r.out, "frames"), 3) << r.out;
+  EXPECT_EQ(summary_value(r.out, "malformed"), 0) << r.out;
+  EXPECT_EQ(summary_value(r.out, "position_packets"), 1) << r.out;
+  EXPECT_EQ(summary_text(r.out, "time_sync"), "PPS_locked__GPRMC_valid") << r.out;
 }
 
 // The bundled capture holds no position packet: nothing says whether the sensor was synchronised.
