@@ -9,7 +9,7 @@
 #include "sim/apps/camera_info_file.hpp"
 #include "sim/imaging/decoder.hpp"
 #include "sim/clock.hpp"
-#include "sim/lidar/clock_reporter.hpp"
+#include "sim/timing/clock_reporter.hpp"
 #include "sim/writer.hpp"
 
 namespace sim::camera {
@@ -73,7 +73,7 @@ struct AravisCapture::Impl {
   std::atomic<bool> lost{false};
   bool device_time = false;  // stamp with the camera's clock: asked for, or PTP is on
   ReportedClock reported;    // the camera's clock as last read (main thread), for any reader
-  std::optional<lidar::ClockReporter> clock_check;  // fed and ticked by the stream thread only
+  std::optional<timing::ClockReporter> clock_check;  // fed and ticked by the stream thread only
   std::chrono::steady_clock::time_point clock_read{};  // when it was read
   std::optional<std::uint64_t> last_frame_id;  // touched by the stream thread only
   std::atomic<std::uint64_t> published{0};

@@ -29,7 +29,7 @@ class OusterTarget final : public ReplayTarget {
   // dispatches them (without --port or --filter); otherwise the user chose them.
   OusterTarget(ouster::LidarStream stream, bool restamp, bool by_port)
       : stream_(std::move(stream)), restamp_(restamp), by_port_(by_port) {
-    stream_.clock().set_base(restamp ? lidar::ClockBase::restamped : lidar::ClockBase::replayed);
+    stream_.clock().set_base(restamp ? timing::ClockBase::restamped : timing::ClockBase::replayed);
   }
 
   bool takes(const Datagram& datagram) override {

@@ -43,8 +43,8 @@ class UnitreeTarget final : public ReplayTarget {
  public:
   UnitreeTarget(unitree::LidarStream stream, bool restamp)
       : stream_(std::move(stream)), restamp_(restamp),
-        sensor_stamps_(unitree::stream_clock_base(stream_.options(), lidar::ClockBase::sensor) ==
-                       lidar::ClockBase::sensor) {}
+        sensor_stamps_(unitree::stream_clock_base(stream_.options(), timing::ClockBase::sensor) ==
+                       timing::ClockBase::sensor) {}
 
   bool push(std::span<const std::byte> payload, std::int64_t capture_ns) override {
     const std::int64_t now = realtime_ns();
@@ -121,7 +121,7 @@ int run_unitree_replay(int argc, char** argv) {
   apps::describe_replayed_stamps(*config->sensor, r.restamp,
                                  o.sensor_time ? apps::RecordedClock::sensor : apps::RecordedClock::capturing_host);
   // The capture's time (the recording host's clock), or the L2's own clock as recorded.
-  config->sensor_clock_base = r.restamp ? lidar::ClockBase::restamped : lidar::ClockBase::replayed;
+  config->sensor_clock_base = r.restamp ? timing::ClockBase::restamped : timing::ClockBase::replayed;
   const auto& stop = apps::StopSignal::install();
   if (auto code = cli.apply_placement(o.placement)) return *code;
 

@@ -84,7 +84,7 @@ Expected<Detected> detect(const ReplayArgs& r, std::optional<velodyne::Model> fo
 class VelodyneTarget final : public ReplayTarget {
  public:
   VelodyneTarget(velodyne::LidarStream stream, bool restamp) : stream_(std::move(stream)), restamp_(restamp) {
-    stream_.clock().set_base(restamp ? lidar::ClockBase::restamped : lidar::ClockBase::replayed);
+    stream_.clock().set_base(restamp ? timing::ClockBase::restamped : timing::ClockBase::replayed);
   }
 
   bool push(std::span<const std::byte> payload, std::int64_t capture_ns) override {

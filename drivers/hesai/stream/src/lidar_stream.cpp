@@ -83,7 +83,7 @@ std::optional<std::int64_t> LidarStream::time_to_cut_ns() const noexcept {
 }
 std::uint64_t LidarStream::max_points() const noexcept { return impl_->frames.max_points(); }
 Writer& LidarStream::writer() noexcept { return impl_->frames.writer(); }
-lidar::ClockReporter& LidarStream::clock() noexcept { return impl_->clock; }
+timing::ClockReporter& LidarStream::clock() noexcept { return impl_->clock; }
 std::optional<ClockStatus> LidarStream::tick_clock(std::int64_t now_realtime_ns, bool at_once) {
   return impl_->tick_clock(now_realtime_ns, at_once);
 }

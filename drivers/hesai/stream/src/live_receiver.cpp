@@ -23,7 +23,7 @@ struct LiveReceiver::Impl final : lidar::DatagramHandler {
   lidar::UdpReceiver udp;
   lidar::DetectedStream<LidarStream, LidarStreamConfig, detect_model, returns_in> stream;
   std::int64_t last_packet_ns = 0;   // monotonic time the last packet was taken
-  lidar::ClockSources clock_sources;  // for the stream, once it exists
+  timing::ClockSources clock_sources;  // for the stream, once it exists
   bool clock_sources_given = false;
 
   // Waking once per packet (6,000 a second for a dual-return Pandar64) costs more CPU than
@@ -74,7 +74,7 @@ LiveReceiver::LiveReceiver(LiveReceiver&&) noexcept = default;
 LiveReceiver& LiveReceiver::operator=(LiveReceiver&&) noexcept = default;
 LiveReceiver::~LiveReceiver() = default;
 
-void LiveReceiver::set_clock_sources(lidar::ClockSources sources) {
+void LiveReceiver::set_clock_sources(timing::ClockSources sources) {
   impl_->clock_sources = std::move(sources);
   impl_->clock_sources_given = false;
 }

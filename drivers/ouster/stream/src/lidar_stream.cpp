@@ -167,7 +167,7 @@ std::optional<CompletedFrame> LidarStream::finish() noexcept {
 void LidarStream::reset() noexcept { impl_->assembler.reset(); }
 void LidarStream::set_stamp_offset(std::int64_t offset_ns) noexcept { impl_->frames.set_stamp_offset(offset_ns); }
 std::int64_t LidarStream::stamp_offset() const noexcept { return impl_->frames.stamp_offset(); }
-lidar::ClockReporter& LidarStream::clock() noexcept { return impl_->clock; }
+timing::ClockReporter& LidarStream::clock() noexcept { return impl_->clock; }
 std::optional<ClockStatus> LidarStream::tick_clock(std::int64_t now_realtime_ns, bool at_once) {
   return impl_->tick_clock(now_realtime_ns, at_once);
 }

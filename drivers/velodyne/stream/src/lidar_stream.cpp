@@ -183,7 +183,7 @@ const PublishCounters& LidarStream::published() const noexcept { return impl_->p
 const TimeSync& LidarStream::time_sync() const noexcept { return impl_->sync; }
 ReportedClock LidarStream::reported_clock() const { return impl_->reported; }
 Writer& LidarStream::writer() noexcept { return impl_->frames.writer(); }
-lidar::ClockReporter& LidarStream::clock() noexcept { return impl_->clock; }
+timing::ClockReporter& LidarStream::clock() noexcept { return impl_->clock; }
 std::optional<ClockStatus> LidarStream::tick_clock(std::int64_t now_realtime_ns, bool at_once) {
   return impl_->tick_clock(now_realtime_ns, at_once);
 }

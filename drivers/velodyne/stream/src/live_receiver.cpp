@@ -33,7 +33,7 @@ struct LiveReceiver::Impl final : lidar::DatagramHandler {
   lidar::UdpReceiver udp;
   lidar::DetectedStream<LidarStream, LidarStreamConfig, detect_model, returns_in> stream;
   std::int64_t last_packet_ns = 0;   // monotonic time the last data packet was taken
-  lidar::ClockSources clock_sources;  // for the stream, once it exists
+  timing::ClockSources clock_sources;  // for the stream, once it exists
   bool clock_sources_given = false;
   // The stream's reported clock, readable before the stream exists (its model may come with the
   // first data packet); copied from the stream after each position packet.
@@ -49,7 +49,7 @@ struct LiveReceiver::Impl final : lidar::DatagramHandler {
     LidarStream* published = stream.for_packet(d, udp);
     if (published == nullptr) return !stream.error();
     if (!clock_sources_given) {
-      lidar::ClockSources sources = clock_sources;
+      timing::ClockSources sources = clock_sources;
       if (!sources.reported) sources.reported = reported;  // what the position packets say
       published->clock().set_sources(std::move(sources));
       clock_sources_given = true;
@@ -78,7 +78,7 @@ LiveReceiver::LiveReceiver(LiveReceiver&&) noexcept = default;
 LiveReceiver& LiveReceiver::operator=(LiveReceiver&&) noexcept = default;
 LiveReceiver::~LiveReceiver() = default;
 
-void LiveReceiver::set_clock_sources(lidar::ClockSources sources) {
+void LiveReceiver::set_clock_sources(timing::ClockSources sources) {
   impl_->clock_sources = std::move(sources);
   impl_->clock_sources_given = false;
 }

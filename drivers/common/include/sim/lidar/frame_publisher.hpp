@@ -18,7 +18,7 @@
 #include <utility>
 
 #include "sim/clock.hpp"
-#include "sim/lidar/clock_reporter.hpp"
+#include "sim/timing/clock_reporter.hpp"
 #include "sim/lidar_point.hpp"
 #include "sim/writer.hpp"
 
@@ -130,7 +130,7 @@ struct PointPipeline {
   Counters published;  // before `frames`, which counts into it
   FramePublisher frames;
   Assembler assembler;
-  ClockReporter clock;  // the caller adds each packet's sensor time with its arrival
+  timing::ClockReporter clock;  // the caller adds each packet's sensor time with its arrival
 
  private:
   template <class Frame>

@@ -22,7 +22,7 @@
 
 #include "sim/hesai/lidar_stream.hpp"
 #include "sim/hesai/model.hpp"
-#include "sim/lidar/clock_reporter.hpp"
+#include "sim/timing/clock_reporter.hpp"
 #include "sim/lidar/udp_receiver.hpp"
 #include "sim/result.hpp"
 
@@ -64,9 +64,9 @@ class LiveReceiver {
   Expected<void> run(int stop_fd, const ReceiverCallbacks& callbacks = {});
 
   // What the stream's clock check asks besides its packets: the sensor's own report and the
-  // host's clock (lidar::ClockSources; each must return its last reading without waiting).
+  // host's clock (timing::ClockSources; each must return its last reading without waiting).
   // Given to the stream when it is created; call before run().
-  void set_clock_sources(lidar::ClockSources sources);
+  void set_clock_sources(timing::ClockSources sources);
 
   std::uint16_t data_port() const noexcept;        // the bound port
   std::string local_address() const;              // "127.0.0.1:2368"

@@ -108,7 +108,7 @@ class LidarStream {
   // The clock check: the caller adds each packet's sensor time (PushResult::packet_ns) with its
   // arrival (live: the datagram's receive stamp; a replay: the record's capture time) and
   // ticks it; it judges and writes the stream's clock about once a second (`at_once`: now).
-  lidar::ClockReporter& clock() noexcept;
+  timing::ClockReporter& clock() noexcept;
   std::optional<ClockStatus> tick_clock(std::int64_t now_realtime_ns, bool at_once = false);
   // "frames 12 packets 9000 lost 0 malformed 0 wrong-model 0 points/frame 28800 time PPS locked…"
   // for status lines; key=value pairs with `machine` for summaries.

@@ -18,11 +18,11 @@
 #include <string>
 
 #include "sim/clock_status.hpp"
-#include "sim/lidar/stamp_switch.hpp"
+#include "sim/timing/stamp_switch.hpp"
 #include "sim/timing/clock_check.hpp"
 #include "sim/writer.hpp"
 
-namespace sim::lidar {
+namespace sim::timing {
 
 // What a stream's stamps are and where its clock is judged against.
 enum class ClockBase {
@@ -45,7 +45,7 @@ class ClockReporter {
   static constexpr std::int64_t kPeriodNs = 1'000'000'000;   // judged about once a second
   static constexpr std::int64_t kFirstNs = 250'000'000;      // the first judgement: after 0.25 s
 
-  explicit ClockReporter(timing::ClockTolerance tolerance = {}) noexcept : check_(tolerance) {}
+  explicit ClockReporter(ClockTolerance tolerance = {}) noexcept : check_(tolerance) {}
 
   // One packet's sensor time and arrival (see ClockBase): constant time, no allocation.
   void add(std::int64_t sensor_ns, std::int64_t arrival_ns) noexcept { check_.add(sensor_ns, arrival_ns); }
@@ -64,7 +64,7 @@ class ClockReporter {
   ClockBase base() const noexcept { return base_; }
   // The sources and the stamp fallback (a switch already under way is kept when it is the same).
   void set_sources(ClockSources sources);
-  void set_tolerance(const timing::ClockTolerance& tolerance) noexcept;
+  void set_tolerance(const ClockTolerance& tolerance) noexcept;
 
   // When a second has passed since the last judgement (`now_realtime_ns`, the host's
   // CLOCK_REALTIME or a datagram's arrival stamp), judges the clock and writes it to the stream.
@@ -85,10 +85,10 @@ class ClockReporter {
     return switch_stamp(writer, sensor_stamp_ns, host_ns);
   }
   const StampSwitch& stamps() const noexcept { return stamps_; }
-  const timing::ClockCheck& check() const noexcept { return check_; }
+  const ClockCheck& check() const noexcept { return check_; }
 
  private:
-  timing::ClockCheck check_;
+  ClockCheck check_;
   ClockBase base_ = ClockBase::sensor;
   ClockSources sources_;
   std::int64_t first_tick_ns_ = 0;  // the first tick that saw packets
@@ -104,4 +104,4 @@ class ClockReporter {
 // Writes `clock` to the stream (Writer::set_clock); false when the writer refused it.
 bool write_clock(Writer& writer, const ClockStatus& clock);
 
-}  // namespace sim::lidar
+}  // namespace sim::timing

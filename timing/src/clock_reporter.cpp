@@ -1,15 +1,15 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "sim/lidar/clock_reporter.hpp"
+#include "sim/timing/clock_reporter.hpp"
 
 #include <cstdio>
 #include <utility>
 
 #include "sim/clock.hpp"
 
-namespace sim::lidar {
+namespace sim::timing {
 
-void ClockReporter::set_tolerance(const timing::ClockTolerance& tolerance) noexcept {
-  check_ = timing::ClockCheck(tolerance);
+void ClockReporter::set_tolerance(const ClockTolerance& tolerance) noexcept {
+  check_ = ClockCheck(tolerance);
   first_tick_ns_ = 0;
   last_judged_ns_ = 0;
   last_.reset();
@@ -99,4 +99,4 @@ bool write_clock(Writer& writer, const ClockStatus& clock) {
   return writer.set_clock(clock).has_value();
 }
 
-}  // namespace sim::lidar
+}  // namespace sim::timing
