@@ -27,6 +27,8 @@ INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
 # The floors of the house, lowest first. A folder may include its own floor and those below.
 FLOORS = [
     ("core", ["include/sim", "sim"]),
+    # Header-only, what every family's decoder shares (CompletedFrame, FrameOutput, readers).
+    ("LiDAR decoder common", ["drivers/common/decoder"]),
     ("timing and imaging", ["timing", "imaging"]),
     ("drivers/common", ["drivers/common"]),
     ("apps", ["apps"]),  # the programs' shared layer

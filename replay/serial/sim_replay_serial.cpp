@@ -3,6 +3,7 @@
 // `sim_lidar_unitree --record` wrote, or any capture of the serial line) into SIM through the
 // same LidarStream as the live driver. A byte recording holds no times of its own, so scans are
 // published no faster than --rate-hz and stamped with the host time they are published.
+#include <CLI/CLI.hpp>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>

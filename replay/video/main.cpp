@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // sim_replay_video: replays a video file or a folder of images into a SIM image stream at the
 // recorded rate, through the decoder the live camera drivers use.
+#include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
 #include <opencv2/core.hpp>

@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "sim/apps/camera_info_file.hpp"
 
@@ -150,6 +152,33 @@ TEST(CameraInfoFile, ANumberThatIsNotFiniteIsRefusedWithOneSentence) {
       "rectification_matrix", "rectification_matrix: {rows: 3, cols: 3, data: [1,0,0,0,one,0,0,0,1]}"));
   ASSERT_FALSE(word);
   expect_one_sentence(word.error(), "entry 5");
+}
+
+// Review turn 4 L7: fx = fy = 1e308 and an R that is not a rotation were read and published.
+TEST(CameraInfoFile, NumbersNoCameraHasAreRefusedWithOneSentenceThatSaysWhatToDo) {
+  for (const char* focal : {"1e308, 0, 383, 0, 1e308", "-612, 0, 383, 0, 613", "612, 0, 383, 0, 0"}) {
+    auto c = parse_camera_info(front_with(
+        "camera_matrix", std::string("camera_matrix: {rows: 3, cols: 3, data: [") + focal + ", 291, 0, 0, 1]}"));
+    ASSERT_FALSE(c) << focal;
+    expect_one_sentence(c.error(), "in 'camera_matrix', which no 768x576 camera has");
+    expect_one_sentence(c.error(), "calibrate the camera again or fix the file");
+  }
+  for (const char* r : {"2, 0, 0, 0, 1, 0, 0, 0, 1", "-1, 0, 0, 0, 1, 0, 0, 0, 1", "1, 0.5, 0, 0, 1, 0, 0, 0, 1"}) {
+    auto c = parse_camera_info(front_with(
+        "rectification_matrix", std::string("rectification_matrix: {rows: 3, cols: 3, data: [") + r + "]}"));
+    ASSERT_FALSE(c) << r;
+    expect_one_sentence(c.error(), "'rectification_matrix' that is not a rotation");
+  }
+  // What real files hold is read: a rotated R (stereo rectification), an uncalibrated camera's
+  // zeros, R of zeros.
+  for (const auto& [key, line] : std::vector<std::pair<std::string, std::string>>{
+           {"rectification_matrix",
+            "rectification_matrix: {rows: 3, cols: 3, data: [0.9998, 0.0175, 0, -0.0175, 0.9998, 0, 0, 0, 1]}"},
+           {"camera_matrix", "camera_matrix: {rows: 3, cols: 3, data: [0, 0, 0, 0, 0, 0, 0, 0, 0]}"},
+           {"rectification_matrix", "rectification_matrix: {rows: 3, cols: 3, data: [0, 0, 0, 0, 0, 0, 0, 0, 0]}"}}) {
+    auto c = parse_camera_info(front_with(key, line));
+    EXPECT_TRUE(c) << line << ": " << c.error().message;
+  }
 }
 
 TEST(CameraInfoFile, AMalformedFileIsRefusedWithOneSentence) {

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The command line every program shares: exit codes, stream names refused before anything is
 // opened, and the YAML config file merged under the command line.
+#include <CLI/CLI.hpp>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -80,6 +81,40 @@ TEST(CommandLine, HelpExitsZeroAndShowsDefaultsAndExitCodes) {
   EXPECT_EQ(code, std::optional<int>(sim::apps::kExitOk));
   EXPECT_NE(help.find("INT=5"), std::string::npos) << help;
   EXPECT_NE(help.find("Exit codes: 0"), std::string::npos) << help;
+}
+
+// add_flag and add_text: the verbs a file uses when it should not compile CLI11 itself.
+TEST(CommandLine, AFlagAndACheckedTextAreSetAndShownInTheirGroup) {
+  CommandLine cli("sim_test", "test");
+  bool force = false;
+  std::string socket = "/var/run/ptp4l";
+  cli.add_flag("--force", force, "remove anyway");
+  cli.add_text("--socket", socket, "the socket", "PATH", {}, "Clock");
+  EXPECT_FALSE(parse(cli, {"sim_test", "--force", "--socket", "/tmp/s"}).has_value());
+  EXPECT_TRUE(force);
+  EXPECT_EQ(socket, "/tmp/s");
+
+  CommandLine help_cli("sim_test", "test");
+  help_cli.add_text("--socket", socket, "the socket", "PATH", {}, "Clock");
+  testing::internal::CaptureStdout();
+  EXPECT_EQ(parse(help_cli, {"sim_test", "--help"}), std::optional<int>(sim::apps::kExitOk));
+  const std::string help = testing::internal::GetCapturedStdout();
+  EXPECT_NE(help.find("Clock:"), std::string::npos) << help;
+  EXPECT_NE(help.find("PATH=/tmp/s"), std::string::npos) << help;
+}
+
+TEST(CommandLine, ATextItsCheckRefusesIsAUsageErrorThatSaysWhy) {
+  CommandLine cli("sim_test", "test");
+  std::string name;
+  cli.add_text("--name", name, "a name", "NAME", [](const std::string& text) {
+    return text.size() > 3 ? "the name is longer than 3 characters" : std::string();
+  });
+  testing::internal::CaptureStderr();
+  const auto code = parse(cli, {"sim_test", "--name", "toolong"});
+  const std::string message = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(code, std::optional<int>(sim::apps::kExitUsage));
+  EXPECT_NE(message.find("the name is longer than 3 characters"), std::string::npos) << message;
+  EXPECT_TRUE(name.empty());
 }
 
 TEST(CommandLine, AnImpossibleRealtimePriorityIsRefusedBeforeRunning) {

@@ -17,6 +17,7 @@
 #include <cstring>
 
 #include "../../sim/region.hpp"
+#include "channel_player.hpp"
 #include "mcap_test_files.hpp"
 #include "record_play_support.hpp"
 #include "sim/mcap/writer.hpp"
@@ -410,36 +411,81 @@ TEST(SimPlay, TheStreamsOfOneRecordingShareOneSharedMemoryBudget) {
   sim::testing::TempFile file;
   sim::testing::StreamCleanup cleanup;
   sim::testing::RawMcap raw;
-  const auto streams = byte_channels(raw, cleanup, 3, 3u << 20, "budget");  // 6 MiB each
+  // 512 KiB a slot: within what a channel may ask for without a message (1 MiB).
+  const auto streams = byte_channels(raw, cleanup, 3, 512u << 10, "budget");
   sim::testing::write_bytes(file.path(), raw.finish());
-  const auto played = sim::testing::run({SIM_PLAY, file.path(), "--max-rate", "--max-shm", "10",
+  const auto played = sim::testing::run({SIM_PLAY, file.path(), "--max-rate", "--max-shm", "2",
                                          "--keep-streams"});
   EXPECT_EQ(played.code, 1) << played.err;
-  EXPECT_NE(played.err.find("stream " + streams[1] + " would take 6.0 MiB of shared memory"), std::string::npos)
+  EXPECT_NE(played.err.find("stream " + streams[1] + " would take 1.0 MiB of shared memory"), std::string::npos)
       << played.err;
-  EXPECT_NE(played.err.find("--max-shm 10 MiB"), std::string::npos) << played.err;
+  EXPECT_NE(played.err.find("--max-shm 2 MiB"), std::string::npos) << played.err;
   EXPECT_TRUE(sim::inspect(streams[0]));  // the first fits, the others are not created
   EXPECT_FALSE(sim::inspect(streams[1]));
   EXPECT_FALSE(sim::inspect(streams[2]));
 }
 
+// No file reaches this check any more (a stream may take only a few times what its file holds),
+// so the budget is asked directly for more than /dev/shm has free.
 TEST(SimPlay, AStreamLargerThanWhatDevShmHasFreeIsRefusedBeforeItIsReserved) {
   struct statvfs shm {};
   ASSERT_EQ(::statvfs("/dev/shm", &shm), 0);
-  const std::uint64_t capacity = std::uint64_t{1} << 39;  // 1 TiB for its two slots
-  if (static_cast<std::uint64_t>(shm.f_bavail) * shm.f_frsize >= 2 * capacity) {
-    GTEST_SKIP() << "/dev/shm has more than 1 TiB free";
-  }
+  const std::uint64_t free_bytes = static_cast<std::uint64_t>(shm.f_bavail) * shm.f_frsize;
+  sim::play::ShmBudget budget(UINT64_MAX);
+  const auto refused = budget.take("/nofree", 0, free_bytes + (std::uint64_t{1} << 30));
+  ASSERT_TRUE(refused);
+  EXPECT_NE(refused->message.find("MiB are free"), std::string::npos) << refused->message;
+  EXPECT_FALSE(budget.take("/fits", 0, 4096)) << "the refused bytes were counted as taken";
+}
+
+// MCAP review L4: a 6 KB file of 64 channels, each asking 255 MiB a slot in its metadata, made
+// 2 GiB of regions (the --max-shm default) before it played a frame. What a channel holds
+// bounds what it may ask for: here each holds 4x2 pictures, so its stream is sized from them,
+// and a channel holding nothing makes no stream. --max-shm 64 keeps a failing run from
+// reserving the 2 GiB it asks for.
+TEST(SimPlay, ASmallFileAskingForGigabytesGetsStreamsSizedFromTheMessagesItHolds) {
   sim::testing::TempFile file;
   sim::testing::StreamCleanup cleanup;
   sim::testing::RawMcap raw;
-  const auto streams = byte_channels(raw, cleanup, 1, capacity, "nofree");
-  sim::testing::write_bytes(file.path(), raw.finish());
-  const auto played = sim::testing::run({SIM_PLAY, file.path(), "--max-rate", "--max-capacity", "1048576",
-                                         "--max-shm", "1073741824"});
-  EXPECT_EQ(played.code, 1) << played.err;
-  EXPECT_NE(played.err.find("MiB are free"), std::string::npos) << played.err;
-  EXPECT_FALSE(sim::inspect(streams[0]));
+  const std::uint64_t asked = std::uint64_t{128} << 20;  // 256 MiB a region, 2 GiB for eight
+  const std::string layout_keys_of_16384x8192_mono8[][2] = {
+      {"sim.kind", "image"}, {"sim.image.width", "16384"}, {"sim.image.height", "8192"},
+      {"sim.image.channels", "1"}, {"sim.image.stride", "16384"},
+      {"sim.image.format", std::to_string(static_cast<std::uint32_t>(sim::PixelFormat::mono8))},
+      {"sim.image.bit_depth", "8"}};
+  std::vector<std::pair<std::string, std::string>> metadata{{"sim.capacity", std::to_string(asked)}};
+  for (const auto& kv : layout_keys_of_16384x8192_mono8) metadata.emplace_back(kv[0], kv[1]);
+  raw.schema(1, "sensor_msgs/msg/Image", image_schema());
+  std::vector<std::string> streams;
+  for (std::uint16_t i = 1; i <= 9; ++i) {
+    streams.push_back(unique_stream("asks" + std::to_string(i)));
+    raw.channel(i, 1, streams.back(), metadata);
+  }
+  cleanup.names = streams;
+  for (std::uint32_t n = 0; n < 3; ++n) {
+    const std::uint64_t t = kTinyStart + n * 10'000'000ull;
+    for (std::uint16_t i = 1; i <= 8; ++i) raw.message(i, n, t, tiny_image_message(n, static_cast<std::int64_t>(t)));
+  }
+  const auto bytes = raw.finish();
+  ASSERT_LT(bytes.size(), 8000u);
+  sim::testing::write_bytes(file.path(), bytes);
+  const auto played = sim::testing::run({SIM_PLAY, file.path(), "--max-rate", "--max-shm", "64", "--keep-streams"});
+  EXPECT_EQ(played.code, 0) << played.err;
+  for (int i = 0; i < 8; ++i) {
+    auto status = sim::inspect(streams[static_cast<std::size_t>(i)]);
+    ASSERT_TRUE(status) << streams[static_cast<std::size_t>(i)] << " was not made: " << played.err;
+    EXPECT_EQ(status->frames_published, 3u);
+    EXPECT_LE(status->capacity, sim::play::kRoomFloor);
+    EXPECT_EQ(status->layout.image.width, kTinyWidth);
+  }
+  EXPECT_NE(played.err.find("topic " + streams[0] + " asks for 128.0 MiB per frame but its first message holds "),
+            std::string::npos) << played.err;
+  EXPECT_NE(played.err.find("so its stream is sized from its messages instead; check where the file came from "
+                            "(sim_record never writes this) (and so do 8 more topics)"),
+            std::string::npos) << played.err;
+  EXPECT_EQ(played.err.find("asks for", played.err.find("asks for") + 1), std::string::npos)
+      << "one sentence for the nine topics: " << played.err;
+  EXPECT_FALSE(sim::inspect(streams[8])) << "a channel holding nothing made a stream";
 }
 
 std::string tiny_image_file(const std::string& path, std::uint64_t interval_ns) {

@@ -2,6 +2,7 @@
 // sim_dump: writes frames of a SIM stream to files, one frame file plus a JSON sidecar of its
 // metadata per frame: LiDAR streams as PCD (through PCL), image streams as PNG (through OpenCV),
 // raw streams as .bin.
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // sim_echo: prints the frames of a stream (one readable line each, or JSON with --json), or with
 // --stats their rate, interval spread, latency, delay, bandwidth and skips.
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <optional>
 #include <string>

@@ -3,6 +3,7 @@
 // keeps a live view of them all (rate, bandwidth, age, latency, skips, sleeping readers, writer),
 // refreshed in place; --clocks puts the host's clock and every stream's side by side and says which
 // streams can be paired by stamp.
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <algorithm>
 #include <map>

@@ -45,15 +45,17 @@ PointType repack_type(const ros2::PointCloud2View& cloud) {
   return PointType::xyzi32;
 }
 
+// "255.0": bytes in MiB, for sentences.
+std::string mib(std::uint64_t bytes) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f", static_cast<double>(bytes) / (1u << 20));
+  return text;
+}
+
 }  // namespace
 
 std::optional<Error> ShmBudget::take(const std::string& stream, std::uint64_t current,
                                      std::uint64_t needed) {
-  const auto mib = [](std::uint64_t bytes) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%.1f", static_cast<double>(bytes) / (1u << 20));
-    return std::string(text);
-  };
   if (used_ - std::min(used_, current) + needed > limit_) {
     return bad("stream " + stream + " would take " + mib(needed) + " MiB of shared memory, and the " +
                "recording's streams together may take at most --max-shm " + std::to_string(limit_ >> 20) +
@@ -137,6 +139,26 @@ std::optional<Error> ChannelPlayer::ensure_writer(const mcap::StreamShape& wante
   return std::nullopt;
 }
 
+std::optional<std::string> ChannelPlayer::bound_by(std::optional<std::span<const std::byte>> first_message) {
+  if (!shape_) return std::nullopt;
+  const std::uint64_t room = room_for(first_message ? first_message->size() : 0);
+  // Beyond --max-capacity the stream is refused anyway, with the sentence naming that option.
+  if (shape_->capacity <= room || shape_->capacity > max_capacity_) return std::nullopt;
+  if (shape_->layout.kind == LayoutKind::image && shape_->layout.image.format == PixelFormat::mjpeg) {
+    // A JPEG stream's capacity is room for one picture of any size (cameras ask two bytes a pixel),
+    // not its shape: the pictures it holds tell how much they need, and nothing is wrong.
+    shape_->capacity = room;
+    return std::nullopt;
+  }
+  const std::string asked = "topic " + topic_ + " asks for " + mib(shape_->capacity) + " MiB per frame but ";
+  const std::string advice = "; check where the file came from (sim_record never writes this)";
+  shape_.reset();
+  if (!first_message) return asked + "holds no message, so no stream is made for it" + advice;
+  (void)learn_shape(*first_message);  // a message that does not decode is said when it is played
+  return asked + "its first message holds " + std::to_string(first_message->size()) +
+         " bytes, so its stream is sized from its messages instead" + advice;
+}
+
 std::optional<Error> ChannelPlayer::learn_shape(std::span<const std::byte> message) {
   if (shape_) return std::nullopt;
   mcap::StreamShape shape;
@@ -167,7 +189,7 @@ std::optional<Error> ChannelPlayer::learn_shape(std::span<const std::byte> messa
       const auto size = jpeg_size(image->data);
       if (!size) return bad("the first image of " + topic_ + " is not a readable JPEG");
       shape.layout = Layout::of(ImageLayout::packed(size->first, size->second, PixelFormat::mjpeg));
-      shape.capacity = std::max<std::uint64_t>(4u << 20, image->data.size() * 4);
+      shape.capacity = std::max<std::uint64_t>(kRoomFloor, image->data.size() * 4);
       break;
     }
   }

@@ -52,6 +52,14 @@ class ShmBudget {
   std::uint64_t used_ = 0;
 };
 
+// The most one slot may take for a channel whose first message holds `message_bytes`: eight times
+// that (a LiDAR stream keeps room for a few times one revolution's points), and at least 1 MiB.
+// A file needs no more to play: a later, larger message makes its stream grow.
+inline constexpr std::uint64_t kRoomFloor = std::uint64_t{1} << 20;
+constexpr std::uint64_t room_for(std::uint64_t message_bytes) noexcept {
+  return std::max(kRoomFloor, message_bytes * 8);
+}
+
 class ChannelPlayer {
  public:
   // Checks the channel can be played (ROS 2 CDR of a type SIM has) without creating anything.
@@ -73,6 +81,11 @@ class ChannelPlayer {
   std::optional<Error> create_stream();
   // Learns the shape from a message when the metadata did not give it.
   std::optional<Error> learn_shape(std::span<const std::byte> message);
+  // A recording may reserve no more shared memory than it holds (review L4): given the channel's
+  // first message (nullopt: it holds none) before the stream is created, a recorded shape whose
+  // slot is larger than room_for() that message is dropped and the stream sized from its
+  // messages instead, as a recording made elsewhere is. The sentence saying so, if it was.
+  std::optional<std::string> bound_by(std::optional<std::span<const std::byte>> first_message);
 
   // Decodes one message into the stream, stamped with its header stamp + stamp_shift_ns.
   // An error for a message that cannot be decoded (nothing is published then).

@@ -6,6 +6,7 @@
 // The steps, each a function below: read the command line; open the file; make one player per
 // playable channel; bound the streams; create them; play the messages (paced, looped); report;
 // remove the streams it made.
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -143,21 +144,51 @@ std::string too_many_streams(const Players& players, const PlayOptions& o) {
          "; raise it if you trust the recording";
 }
 
-// Creates every stream before playing: from the metadata, or from each topic's first message.
-// A stream that cannot be created is said and its channels dropped; returns the streams made.
+// What each channel holds bounds what its stream may reserve (review L4): reads the file until
+// every player has met its channel's first message (or to the end; a channel the summary's
+// Statistics count no message for is not waited for), hands each player that message or
+// nothing, then rewinds. Usually the first chunk holds them all.
+void bound_by_first_messages(sim::mcap::Reader& reader, Players& players, sim::apps::StatusLine& status) {
+  const auto& stats = reader.statistics();
+  const auto holds_messages = [&stats](std::uint16_t id) {
+    if (!stats || stats->channel_message_counts.empty()) return true;  // not counted: look
+    const auto count = stats->channel_message_counts.find(id);
+    return count != stats->channel_message_counts.end() && count->second > 0;
+  };
+  std::set<std::uint16_t> waiting;
+  for (const auto& [id, player] : players) {
+    if (holds_messages(id)) waiting.insert(id);
+  }
+  std::set<std::uint16_t> met;
+  std::vector<std::string> asked_more;  // one sentence each; a crafted file may have 64
+  while (!waiting.empty()) {
+    auto m = reader.next();
+    if (!m) break;
+    if (waiting.erase(m->header.channel_id) == 0) continue;
+    met.insert(m->header.channel_id);
+    auto& player = players.at(m->header.channel_id);
+    if (!player.shape_known()) {
+      if (auto error = player.learn_shape(m->data)) say(status, error->message);
+    } else if (auto asked = player.bound_by(m->data)) {
+      asked_more.push_back(std::move(*asked));
+    }
+  }
+  for (auto& [id, player] : players) {
+    if (met.count(id) > 0) continue;
+    if (auto asked = player.bound_by(std::nullopt)) asked_more.push_back(std::move(*asked));
+  }
+  reader.rewind();
+  if (asked_more.empty()) return;
+  const auto more = asked_more.size() - 1;
+  say(status, asked_more.front() + (more > 0 ? " (and so do " + std::to_string(more) + " more topics)" : ""));
+}
+
+// Creates every stream before playing, each sized from its metadata or its channel's first
+// message. A stream that cannot be created is said and its channels dropped; returns the streams
+// made.
 std::vector<std::string> create_streams(sim::mcap::Reader& reader, Players& players,
                                         sim::apps::StatusLine& status, bool& failed) {
-  const bool need_first_messages =
-      std::any_of(players.begin(), players.end(), [](const auto& p) { return !p.second.shape_known(); });
-  if (need_first_messages) {
-    while (auto m = reader.next()) {
-      auto it = players.find(m->header.channel_id);
-      if (it != players.end() && !it->second.shape_known()) {
-        if (auto error = it->second.learn_shape(m->data)) say(status, error->message);
-      }
-    }
-    reader.rewind();
-  }
+  bound_by_first_messages(reader, players, status);
   std::vector<std::string> streams;
   for (auto it = players.begin(); it != players.end();) {
     auto& player = it->second;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // sim_record: records SIM streams into an MCAP file (ROS 2 profile) that Foxglove, rosbag2 and
 // the mcap CLI read, and that sim_play replays into SIM exactly as recorded.
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cstdint>

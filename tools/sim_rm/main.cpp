@@ -17,12 +17,12 @@ int main(int argc, char** argv) {
   bool force = false;
   bool dead = false;
   cli.add_streams("names", names, "stream names, like /lidar_top");
-  cli.app().add_flag("--force", force,
-                     "remove even when the writer is alive (its readers keep their copy of the "
-                     "region until they close it)");
-  cli.app().add_flag("--dead", dead,
-                     "remove the named streams, or every stream if none is named, whose writer "
-                     "is gone");
+  cli.add_flag("--force", force,
+               "remove even when the writer is alive (its readers keep their copy of the region "
+               "until they close it)");
+  cli.add_flag("--dead", dead,
+               "remove the named streams, or every stream if none is named, whose writer is "
+               "gone");
   if (auto code = cli.parse(argc, argv)) return *code;
   if (names.empty() && !dead) return cli.usage_error("name a stream to remove, or pass --dead");
   const auto& stop = sim::apps::StopSignal::install();

@@ -2,6 +2,7 @@
 // sim_foxglove: SIM streams live in Foxglove / Lichtblick (Foxglove WebSocket protocol) and in a
 // browser (the built-in page), from one port. The work is in the sim_foxglove library; options,
 // stop signals and exit codes are the programs' shared ones (apps/common).
+#include <CLI/CLI.hpp>
 #include <poll.h>
 
 #include <cstdio>

@@ -21,6 +21,10 @@ constexpr std::uintmax_t kMaxFileBytes = 1 << 20;
 struct Problem {
   std::string what;
 };
+// The same for a well-formed file whose numbers no camera has: its sentence says what to do.
+struct Implausible {
+  std::string what;
+};
 
 std::string line_of(const YAML::Node& node) { return std::to_string(node.Mark().line + 1); }
 
@@ -110,6 +114,38 @@ std::string text_of(const YAML::Node& node, const char* key) {
   return node.Scalar();
 }
 
+// Numbers no camera has (review turn 4 L7): camera_calibration_parsers reads any, and such a
+// file would be published and draw every overlay nowhere. K of zeros is an uncalibrated camera
+// (ROS's convention) and R of zeros one without rectification: both are let through.
+void check_plausible(const CameraCalibration& c) {
+  const double fx = c.k[0], fy = c.k[4];
+  const double side = std::max(c.width, c.height);
+  if ((fx != 0 || fy != 0) && !(fx > 0 && fy > 0 && fx <= 1000 * side && fy <= 1000 * side)) {
+    std::ostringstream what;
+    what << "has focal lengths fx = " << fx << " and fy = " << fy << " in 'camera_matrix', which no "
+         << c.width << "x" << c.height << " camera has (they are positive and at most 1000 times "
+         << "the image's side); calibrate the camera again or fix the file";
+    throw Implausible{what.str()};
+  }
+  if (std::all_of(c.r.begin(), c.r.end(), [](double v) { return v == 0; })) return;
+  // A rotation: R times its transpose is the identity, and its determinant is +1.
+  double worst = 0;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      double dot = 0;
+      for (int n = 0; n < 3; ++n) dot += c.r[i * 3 + n] * c.r[j * 3 + n];
+      worst = std::max(worst, std::abs(dot - (i == j ? 1.0 : 0.0)));
+    }
+  }
+  const auto& r = c.r;
+  const double det = r[0] * (r[4] * r[8] - r[5] * r[7]) - r[1] * (r[3] * r[8] - r[5] * r[6]) +
+                     r[2] * (r[3] * r[7] - r[4] * r[6]);
+  if (worst > 1e-3 || det < 0) {
+    throw Implausible{"has a 'rectification_matrix' that is not a rotation (R times its transpose "
+                      "is not the identity, or it mirrors); calibrate the camera again or fix the file"};
+  }
+}
+
 CameraCalibration calibration_from(const YAML::Node& root) {
   if (!root.IsMap()) throw Problem{"is not a map of calibration keys"};
   constexpr std::uint32_t kMaxSide = 1 << 20;
@@ -143,6 +179,7 @@ CameraCalibration calibration_from(const YAML::Node& root) {
     c.binning_y = whole_number(n, "'binning_y'", kMaxBinning);
   }
   if (const YAML::Node n = root["roi"]; n.IsDefined() && !n.IsNull()) c.roi = region_of_interest(n);
+  check_plausible(c);
   return c;
 }
 
@@ -190,6 +227,8 @@ Expected<CameraCalibration> parse_camera_info(std::string_view text, std::string
     return Error{ErrorCode::invalid_argument,
                  where + " " + problem.what + "; give a camera_calibration_parsers YAML file "
                  "(as ROS's cameracalibrator writes)"};
+  } catch (const Implausible& implausible) {
+    return Error{ErrorCode::invalid_argument, where + " " + implausible.what};
   } catch (const YAML::Exception& e) {
     return Error{ErrorCode::invalid_argument, where + " is not valid YAML (" + e.msg +
                                                   " at line " + std::to_string(e.mark.line + 1) +

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/apps/command_line.hpp"
 
+#include <CLI/CLI.hpp>
 #include <unistd.h>
 
 #include <cstdio>
@@ -23,6 +24,32 @@ std::string as_sentence(std::string text) {
   return text;
 }
 
+// CLI11's side of the --config file: YamlConfig reads it, CLI11 merges it with the command line.
+class CliYamlConfig final : public CLI::Config {
+ public:
+  explicit CliYamlConfig(std::shared_ptr<YamlConfig> yaml) : yaml_(std::move(yaml)) {}
+
+  // Writing a config file back (--write-config) is not offered.
+  std::string to_config(const CLI::App*, bool, bool, std::string) const override { return {}; }
+  // CLI11 reports a ConfigError as a usage error; parse() words it.
+  std::vector<CLI::ConfigItem> from_config(std::istream& input) const override {
+    auto entries = yaml_->read(input);
+    if (!entries) throw CLI::ConfigError(entries.error().message);
+    std::vector<CLI::ConfigItem> result;
+    result.reserve(entries->size());
+    for (ConfigEntry& entry : *entries) {
+      CLI::ConfigItem item;
+      item.name = std::move(entry.name);
+      item.inputs = std::move(entry.inputs);
+      result.push_back(std::move(item));
+    }
+    return result;
+  }
+
+ private:
+  std::shared_ptr<YamlConfig> yaml_;
+};
+
 }  // namespace
 
 CLI::Validator stream_name_validator() {
@@ -36,26 +63,44 @@ CLI::Validator validator(std::function<std::string(const std::string&)> problem,
 }
 
 CommandLine::CommandLine(std::string tool, std::string description)
-    : tool_(std::move(tool)), app_(std::move(description), tool_) {
+    : tool_(std::move(tool)), app_(std::make_unique<CLI::App>(std::move(description), tool_)) {
   // One style of --help: every option shows its default the same way, "--count INT=5".
-  app_.option_defaults()->always_capture_default();
-  app_.get_formatter()->column_width(36);
-  app_.footer("Exit codes: 0 done (or stopped by SIGINT/SIGTERM), 1 failed at run time, "
+  app_->option_defaults()->always_capture_default();
+  app_->get_formatter()->column_width(36);
+  app_->footer("Exit codes: 0 done (or stopped by SIGINT/SIGTERM), 1 failed at run time, "
               "2 wrong command line or config file.");
 }
 
+CommandLine::~CommandLine() = default;
+
 CLI::Option* CommandLine::add_stream(std::string_view name, std::string& value,
                                      std::string_view help) {
-  return app_.add_option(std::string(name), value, std::string(help))
+  return app_->add_option(std::string(name), value, std::string(help))
       ->type_name("NAME")
       ->check(stream_name_validator());
 }
 
 CLI::Option* CommandLine::add_streams(std::string_view name, std::vector<std::string>& values,
                                       std::string_view help) {
-  return app_.add_option(std::string(name), values, std::string(help))
+  return app_->add_option(std::string(name), values, std::string(help))
       ->type_name("NAME")
       ->check(stream_name_validator());
+}
+
+void CommandLine::add_flag(std::string_view name, bool& value, std::string_view help,
+                           std::string_view group) {
+  auto* option = app_->add_flag(std::string(name), value, std::string(help));
+  if (!group.empty()) option->group(std::string(group));
+}
+
+void CommandLine::add_text(std::string_view name, std::string& value, std::string_view help,
+                           std::string_view type_name,
+                           std::function<std::string(const std::string&)> problem,
+                           std::string_view group) {
+  auto* option = app_->add_option(std::string(name), value, std::string(help))
+                     ->type_name(std::string(type_name));
+  if (problem) option->check(validator(std::move(problem), std::string(type_name)));
+  if (!group.empty()) option->group(std::string(group));
 }
 
 void CommandLine::add_config_file(std::vector<std::string> path_options) {
@@ -63,9 +108,9 @@ void CommandLine::add_config_file(std::vector<std::string> path_options) {
   path_options_.clear();
   auto config = std::make_shared<YamlConfig>(std::move(path_options));
   config_ = config;
-  app_.config_formatter(config);
-  app_.allow_config_extras(CLI::config_extras_mode::error);  // a typo in the file is an error
-  app_.set_config("--config", "",
+  app_->config_formatter(std::make_shared<CliYamlConfig>(config));
+  app_->allow_config_extras(CLI::config_extras_mode::error);  // a typo in the file is an error
+  app_->set_config("--config", "",
                   "YAML file of options (keys are the long option names; the command line "
                   "overrides the file)")
       ->type_name("FILE")
@@ -88,10 +133,10 @@ void CommandLine::add_path_option(std::string name) {
 }
 
 void CommandLine::add_placement(ThreadPlacement& placement) {
-  app_.add_option("--cpu", placement.cpu, "pin the working thread to this CPU")
+  app_->add_option("--cpu", placement.cpu, "pin the working thread to this CPU")
       ->type_name("N")
       ->check(CLI::NonNegativeNumber);
-  app_.add_option("--rt-priority", placement.rt_priority,
+  app_->add_option("--rt-priority", placement.rt_priority,
                   "run the working thread under SCHED_FIFO at this priority (needs root or "
                   "CAP_SYS_NICE)")
       ->type_name("1-99")
@@ -100,10 +145,10 @@ void CommandLine::add_placement(ThreadPlacement& placement) {
 
 void CommandLine::add_trust(Trust& trust) {
   trust_ = &trust;
-  app_.add_option("--trust-owner", trust_owner_,
+  app_->add_option("--trust-owner", trust_owner_,
                   "also accept streams owned by this user (name or uid); default: only your own")
       ->type_name("USER");
-  app_.add_option("--trust-group", trust_group_,
+  app_->add_option("--trust-group", trust_group_,
                   "also accept streams owned by this group (name or gid): every member is then "
                   "trusted to be the writer")
       ->type_name("GROUP");
@@ -111,13 +156,13 @@ void CommandLine::add_trust(Trust& trust) {
 
 std::optional<int> CommandLine::parse(int argc, char** argv) {
   try {
-    app_.parse(argc, argv);
+    app_->parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
-    return app_.exit(e) == 0 ? kExitOk : kExitUsage;
+    return app_->exit(e) == 0 ? kExitOk : kExitUsage;
   } catch (const CLI::CallForAllHelp& e) {
-    return app_.exit(e) == 0 ? kExitOk : kExitUsage;
+    return app_->exit(e) == 0 ? kExitOk : kExitUsage;
   } catch (const CLI::CallForVersion& e) {
-    return app_.exit(e) == 0 ? kExitOk : kExitUsage;
+    return app_->exit(e) == 0 ? kExitOk : kExitUsage;
   } catch (const CLI::ConfigError& e) {
     std::string what = as_sentence(e.what());
     // CLI11 calls every config file "INI"; say what the user gave.

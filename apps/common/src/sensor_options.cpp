@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/apps/sensor_options.hpp"
 
+#include <CLI/CLI.hpp>
 #include <cmath>
 
 #include "sim/apps/camera_info_file.hpp"

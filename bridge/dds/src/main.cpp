@@ -3,6 +3,7 @@
 // from DDS into local SIM streams (--subscribe), on Fast DDS over UDP. A thin program: the
 // options become one Outbound or Inbound per topic, each with its own thread; this thread only
 // reports. See docs/bridge.md.
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <memory>
 #include <optional>

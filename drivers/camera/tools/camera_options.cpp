@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "camera_options.hpp"
 
+#include <CLI/CLI.hpp>
+
 #include "sim/apps/host_clock_options.hpp"
 #include "sim/imaging/image_format.hpp"
 

@@ -436,7 +436,7 @@ FrameAssembler::FrameAssembler(Calibration calibration, AssemblerOptions options
   const double spread = max_cut_offset_centi_ - min_cut_offset_centi_;
   const auto overlap_groups =
       static_cast<std::size_t>(std::ceil(spread / (m.azimuth_step_10hz / 2.0))) + 1;
-  carry_.resize((overlap_groups + 2 * std::size_t{m.blocks_per_packet}) * m.channels * 3);
+  out_.reserve_carry((overlap_groups + 2 * std::size_t{m.blocks_per_packet}) * m.channels * 3);
 }
 
 void FrameAssembler::update_azimuth_offsets(std::uint16_t rpm) noexcept {
@@ -457,9 +457,7 @@ void FrameAssembler::update_azimuth_offsets(std::uint16_t rpm) noexcept {
   compensated_rpm_ = rpm;
 }
 
-std::size_t FrameAssembler::pending_points() const noexcept {
-  return output_attached_ ? output_count_ : carry_count_;
-}
+std::size_t FrameAssembler::pending_points() const noexcept { return out_.pending(); }
 
 std::optional<std::int64_t> FrameAssembler::time_to_cut_ns() const noexcept {
   if (!have_last_ || last_rpm_ == 0) return std::nullopt;
@@ -473,37 +471,22 @@ std::optional<std::int64_t> FrameAssembler::time_to_cut_ns() const noexcept {
 }
 
 void FrameAssembler::set_output(std::span<LidarPoint> output) noexcept {
-  if (output_attached_) {
-    // Replaced in the middle of a frame: its points so far stay in the old span.
-    if (output_count_ > 0) {
-      current_.whole = false;
-      current_.dropped += static_cast<std::uint32_t>(output_count_);
-      counters_.dropped_points += output_count_;
-    }
-    output_ = output;
-    output_count_ = 0;
-    return;
-  }
-  // The carry-over holds the current frame's points: they go to the front of the new span.
-  output_ = output;
-  output_attached_ = true;
-  const std::size_t copied = std::min(carry_count_, output.size());
-  std::copy_n(carry_.begin(), copied, output.begin());
-  if (copied < carry_count_) {
-    current_.dropped += static_cast<std::uint32_t>(carry_count_ - copied);
-    counters_.dropped_points += carry_count_ - copied;
-  }
-  output_count_ = copied;
-  carry_count_ = 0;
+  // Replaced in the middle of a frame, its points so far stay in the old span (lost to it) and
+  // the carry-over keeps the next frame's; else the carry-over moves to the span's front.
+  const lidar::FrameOutput::Attached attached = out_.attach(output);
+  if (attached.lost > 0) current_.whole = false;
+  drop_points(current_, attached.lost + attached.did_not_fit);
+}
+
+void FrameAssembler::drop_points(FrameState& frame, std::size_t points) noexcept {
+  frame.dropped += static_cast<std::uint32_t>(points);
+  counters_.dropped_points += points;
 }
 
 void FrameAssembler::reset() noexcept {
   current_ = FrameState{};
   next_ = FrameState{};
-  if (output_attached_) {
-    output_count_ = 0;
-  }
-  carry_count_ = 0;
+  out_.clear();
   have_last_ = false;
   azimuth_step_ = 0;
   have_sequence_ = false;
@@ -512,18 +495,10 @@ void FrameAssembler::reset() noexcept {
 void FrameAssembler::close_current(PushResult& result, bool ended_at_cut) noexcept {
   if (current_.started) {
     if (!current_.whole && !options_.emit_partial_frames && ended_at_cut) {
-      ++counters_.partial_frames_dropped;
-      // Its points are in the span when one is attached (the carry-over then holds next_'s,
-      // moved below), or else in the carry-over.
-      if (output_attached_) {
-        output_count_ = 0;
-      } else {
-        counters_.dropped_points += carry_count_;
-        carry_count_ = 0;
-      }
-    } else if (output_attached_) {
+      ++counters_.partial_frames_dropped;  // its points go below
+    } else if (out_.attached()) {
       CompletedFrame& frame = result.frame.emplace();
-      frame.point_count = output_count_;
+      frame.point_count = out_.output_count();
       frame.stamp_ns = current_.stamp_ns;
       frame.host_receive_ns = current_.host_ns;
       frame.index = frame_index_++;
@@ -535,37 +510,31 @@ void FrameAssembler::close_current(PushResult& result, bool ended_at_cut) noexce
       frame.safety = current_.safety;
       ++counters_.frames;
       // The span now belongs to the caller; the next frame's points are in the carry-over.
-      output_attached_ = false;
-      output_ = {};
-      output_count_ = 0;
+      out_.hand_out();
       current_ = next_;
       next_ = FrameState{};
       return;
     } else {
       // Completed while the caller still holds the previous frame: nowhere to put it.
       ++counters_.frames_without_output;
-      counters_.dropped_points += carry_count_;
-      carry_count_ = 0;
     }
   }
-  // No frame handed out: the next frame takes over the storage the current one had. When the
-  // output is attached the carry-over holds next_'s points, which move to the span's front.
+  // No frame handed out: the next frame takes over the storage the current one had. A partial
+  // frame's points in the span are not counted as dropped (the frame is, as
+  // partial_frames_dropped); points that never had a span are.
+  const bool had_span = out_.attached();
+  const lidar::FrameOutput::Advanced advanced = out_.advance();
+  if (!had_span) counters_.dropped_points += advanced.discarded;
   current_ = next_;
   next_ = FrameState{};
-  if (output_attached_) {
-    const std::size_t moved = std::min(carry_count_, output_.size());
-    std::copy_n(carry_.begin(), moved, output_.begin());
-    output_count_ = moved;
-    carry_count_ = 0;
-  }
+  drop_points(current_, advanced.did_not_fit);
 }
 
 std::optional<CompletedFrame> FrameAssembler::finish() noexcept {
   PushResult result;
   if (next_.started) {
     // The next frame's few points cannot be kept apart from the finished one.
-    counters_.dropped_points += output_attached_ ? carry_count_ : 0;
-    if (output_attached_) carry_count_ = 0;
+    counters_.dropped_points += out_.drop_next();
     next_ = FrameState{};
   }
   close_current(result, false);
@@ -716,8 +685,7 @@ inline void FrameAssembler::close_frame_before(const Packet& packet, unsigned bl
     current_revolution_ = group_revolution;
     current_ = FrameState{};
     next_ = FrameState{};
-    if (output_attached_) output_count_ = 0;
-    carry_count_ = 0;
+    out_.clear();
   }
 }
 
@@ -816,19 +784,21 @@ inline detail::GroupSinks FrameAssembler::open_sinks(const detail::GroupTargets&
     if (!current_.started) begin(current_, packet, first_block, host_ns, false);
     detail::PointSink& s = sinks.of[to_current];
     s.active = true;
-    s.out = output_attached_ ? output_.data() : carry_.data();
-    s.capacity = output_attached_ ? output_.size() : carry_.size();
-    s.count = output_attached_ ? output_count_ : carry_count_;
+    const lidar::FrameOutput::Storage storage = out_.current();
+    s.out = storage.data;
+    s.capacity = storage.capacity;
+    s.count = storage.count;
     note_packet(current_, packet);
   }
   if (used[to_next]) {
     if (!next_.started) begin(next_, packet, first_block, host_ns, true);
     detail::PointSink& s = sinks.of[to_next];
     s.active = true;
-    if (output_attached_) {
-      s.out = carry_.data();
-      s.capacity = carry_.size();
-      s.count = carry_count_;
+    if (out_.attached()) {
+      const lidar::FrameOutput::Storage storage = out_.next();
+      s.out = storage.data;
+      s.capacity = storage.capacity;
+      s.count = storage.count;
     } else {
       // The carry-over still holds the current frame (no span yet): the next one loses
       // these points and is not a whole revolution.
@@ -854,8 +824,8 @@ inline void FrameAssembler::note_packet(FrameState& frame, const Packet& packet)
 inline void FrameAssembler::store_sinks(const detail::GroupSinks& sinks) noexcept {
   const detail::PointSink& current = sinks.of[to_current];
   const detail::PointSink& next = sinks.of[to_next];
-  if (current.active) (output_attached_ ? output_count_ : carry_count_) = current.count;
-  if (next.active && output_attached_) carry_count_ = next.count;
+  if (current.active) out_.set_current_count(current.count);
+  if (next.active) out_.set_next_count(next.count);
   FrameState* const frames[2] = {&current_, &next_};
   for (unsigned t = 0; t < 2; ++t) {
     if (sinks.of[t].active) {

@@ -62,13 +62,8 @@ constexpr std::array<std::int32_t, 128> pandar_qt128_loop2_ns{
     33136, 58480, 7792,  83824, 86992,  10960, 61648, 36304, 39472, 64816, 14128, 90160, 93328,
     17296, 67984, 42640, 45808, 71152,  20464, 96496, 99664, 23632, 74320, 48976};
 
-std::uint16_t u16(const std::uint8_t* p) noexcept {
-  return static_cast<std::uint16_t>(p[0] | (p[1] << 8));
-}
-std::uint32_t u32(const std::uint8_t* p) noexcept {
-  return std::uint32_t{p[0]} | (std::uint32_t{p[1]} << 8) | (std::uint32_t{p[2]} << 16) |
-         (std::uint32_t{p[3]} << 24);
-}
+using lidar::le16;
+using lidar::le32;
 
 // Days since 1970-01-01 of a proleptic Gregorian date (Howard Hinnant's algorithm): no timegm,
 // no time zone, no locale, safe on the hot path.
@@ -229,9 +224,9 @@ bool carries_sequence(const std::uint8_t* p, Model model, bool long_payload) noe
 // the functional-safety section after its version byte, tail = the tail before its CRC.
 bool qt128_crcs_match(const std::uint8_t* p) noexcept {
   constexpr std::size_t tail = layout_of(Model::pandar_qt128).tail;
-  return detail::crc32_mpeg2(p + 12, qt128_blocks_end - 12) == u32(p + qt128_blocks_end) &&
-         detail::crc32_mpeg2(p + qt128_safety + 1, 12) == u32(p + qt128_safety + 13) &&
-         detail::crc32_mpeg2(p + tail, 30) == u32(p + tail + 30);
+  return detail::crc32_mpeg2(p + 12, qt128_blocks_end - 12) == le32(p + qt128_blocks_end) &&
+         detail::crc32_mpeg2(p + qt128_safety + 1, 12) == le32(p + qt128_safety + 13) &&
+         detail::crc32_mpeg2(p + tail, 30) == le32(p + tail + 30);
 }
 
 // Azimuths: in range, equal inside a return group, and moving forward by a small step from
@@ -262,7 +257,7 @@ FunctionalSafety read_safety(const std::uint8_t* fs) noexcept {
   out.rolling_counter = fs[1] & 0x7;
   out.total_fault_codes = static_cast<std::uint8_t>(fs[2] >> 4);
   out.fault_code_id = fs[2] & 0xF;
-  out.fault_code = u16(fs + 3);
+  out.fault_code = le16(fs + 3);
   return out;
 }
 
@@ -337,9 +332,9 @@ PacketError Packet::parse(std::span<const std::uint8_t> payload, Model model,
   pk.unit_size_ = layout.unit_size;
 
   const std::uint8_t* tail = p + layout.tail;
-  pk.rpm_ = u16(tail + layout.rpm);
+  pk.rpm_ = le16(tail + layout.rpm);
   pk.has_sequence_ = carries_sequence(p, model, n == m.long_payload_size);
-  if (pk.has_sequence_) pk.sequence_ = u32(tail + layout.sequence);
+  if (pk.has_sequence_) pk.sequence_ = le32(tail + layout.sequence);
   if (model == Model::pandar_qt128) {
     pk.mode_flag_ = tail[qt128_mode_flag];
     pk.has_safety_ = true;
@@ -359,7 +354,7 @@ PacketError Packet::parse(std::span<const std::uint8_t> payload, Model model,
   if (!azimuths_step_forward(pk)) return PacketError::bad_azimuth;
 
   const std::uint8_t* date = tail + layout.date;
-  const std::uint32_t micros = u32(tail + layout.micros);
+  const std::uint32_t micros = le32(tail + layout.micros);
   const bool time_ok = layout.unix_seconds_date ? xt_time_ns(date, micros, pk.time_ns_)
                                                 : utc_time_ns(date, micros, pk.time_ns_);
   if (!time_ok) return PacketError::bad_time;

@@ -3,6 +3,7 @@
 // The work is the stream library's (sim/hesai/live_receiver.hpp: socket, batched receive, model
 // detection, silence; LidarStream: decode straight into shared memory, the path sim_replay_pcap
 // takes too); this program is its command line, its messages and its exit code.
+#include <CLI/CLI.hpp>
 #include <arpa/inet.h>
 
 #include <chrono>

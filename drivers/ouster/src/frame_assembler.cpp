@@ -185,6 +185,7 @@ void FrameAssembler::begin(const LidarPacket& packet, std::int64_t host_ns) noex
   host_ns_ = host_ns;
   packets_ = 0;
   invalid_columns_ = 0;
+  dropped_points_ = 0;
   dense_count_ = 0;
   std::fill(received_.begin(), received_.end(), std::uint8_t{0});
 }
@@ -735,6 +736,7 @@ void FrameAssembler::decode_beams_as(const PacketColumns& columns) noexcept {
   }
   dense_count_ = out.next;
   counters_.dropped_points += out.dropped;
+  dropped_points_ += out.dropped;
 }
 
 // Organised frames: columns that never came (lost packets, invalid status) hold no return.
@@ -749,6 +751,7 @@ void FrameAssembler::fill_missing_columns() noexcept {
           store_scalars(output_[at], 0, 0, 0, 0, 0, static_cast<std::uint16_t>(u), static_cast<std::uint8_t>(r));
         } else {
           ++counters_.dropped_points;
+          ++dropped_points_;
         }
       }
     }
@@ -763,7 +766,9 @@ std::optional<CompletedFrame> FrameAssembler::close() noexcept {
   for (std::uint8_t r : received_) received += r;
   const unsigned missing = window > received + invalid_columns_ ? window - received - invalid_columns_ : 0;
   const unsigned per_packet = metadata_.format.columns_per_packet;
-  if (whole_) counters_.lost_packets += (missing + per_packet - 1) / per_packet;
+  // A partial frame's missing columns are mostly those before it began: not lost.
+  const unsigned lost_packets = whole_ ? (missing + per_packet - 1) / per_packet : 0;
+  counters_.lost_packets += lost_packets;
   if (!whole_ && !options_.emit_partial_frames) {
     ++counters_.partial_frames_dropped;
     return std::nullopt;  // the span stays attached and is refilled
@@ -784,6 +789,8 @@ std::optional<CompletedFrame> FrameAssembler::close() noexcept {
   frame.index = frame_index_++;
   frame.frame_id = frame_id_;
   frame.packets = packets_;
+  frame.lost_packets = lost_packets;
+  frame.dropped_points = static_cast<std::uint32_t>(std::min<std::uint64_t>(dropped_points_, std::numeric_limits<std::uint32_t>::max()));
   frame.missing_columns = missing;
   frame.invalid_columns = invalid_columns_;
   frame.whole = whole_;

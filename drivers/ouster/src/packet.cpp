@@ -2,24 +2,15 @@
 #include "sim/ouster/packet.hpp"
 
 #include <cmath>
-#include <cstring>
 
 namespace sim::ouster {
 namespace {
 
-std::uint64_t le(const std::uint8_t* p, unsigned bytes) noexcept {
-  std::uint64_t v = 0;
-  for (unsigned i = 0; i < bytes; ++i) v |= std::uint64_t{p[i]} << (8 * i);
-  return v;
-}
-std::uint16_t le16(const std::uint8_t* p) noexcept { return static_cast<std::uint16_t>(le(p, 2)); }
-std::uint32_t le32(const std::uint8_t* p) noexcept { return static_cast<std::uint32_t>(le(p, 4)); }
-float lef32(const std::uint8_t* p) noexcept {
-  const std::uint32_t bits = le32(p);
-  float f;
-  std::memcpy(&f, &bits, sizeof f);
-  return f;
-}
+using lidar::le16;
+using lidar::le32;
+using lidar::le64;
+using lidar::le_uint;
+using lidar::le_f32;
 
 struct ProfileInfo {
   Profile profile;
@@ -146,14 +137,14 @@ PacketError LidarPacket::parse(std::span<const std::uint8_t> payload, const Pack
     }
   } else if (format.fusa_header) {
     out.packet_type_ = p[0];
-    out.init_id_ = static_cast<std::uint32_t>(le(p + 1, 3));
+    out.init_id_ = static_cast<std::uint32_t>(le_uint(p + 1, 3));
     out.frame_id_ = le32(p + 4);
-    out.serial_ = le(p + 11, 5);
+    out.serial_ = le_uint(p + 11, 5);
   } else {
     out.packet_type_ = le16(p);
     out.frame_id_ = le16(p + 2);
-    out.init_id_ = static_cast<std::uint32_t>(le(p + 4, 3));
-    out.serial_ = le(p + 7, 5);
+    out.init_id_ = static_cast<std::uint32_t>(le_uint(p + 4, 3));
+    out.serial_ = le_uint(p + 7, 5);
   }
   if (out.packet_type_ != 1) return PacketError::not_lidar;
   for (unsigned c = 0; c < format.columns_per_packet; ++c) {
@@ -170,7 +161,7 @@ PacketError LidarPacket::parse(std::span<const std::uint8_t> payload, const Pack
 Column LidarPacket::column(unsigned index) const noexcept {
   const std::uint8_t* c = column_start(index);
   Column col;
-  col.timestamp_ns = le(c, 8);
+  col.timestamp_ns = le64(c);
   col.measurement_id = le16(c + 8);
   if (format_->profile == Profile::legacy) {
     col.encoder = le32(c + 12);
@@ -226,12 +217,12 @@ std::optional<ImuPacket> parse_imu(std::span<const std::uint8_t> payload) noexce
   if (payload.size() != imu_packet_bytes) return std::nullopt;
   const std::uint8_t* p = payload.data();
   ImuPacket imu;
-  imu.system_ns = le(p, 8);
-  imu.accel_ns = le(p + 8, 8);
-  imu.gyro_ns = le(p + 16, 8);
+  imu.system_ns = le64(p);
+  imu.accel_ns = le64(p + 8);
+  imu.gyro_ns = le64(p + 16);
   for (unsigned i = 0; i < 3; ++i) {
-    imu.acceleration_g[i] = lef32(p + 24 + 4 * i);
-    imu.angular_velocity_dps[i] = lef32(p + 36 + 4 * i);
+    imu.acceleration_g[i] = le_f32(p + 24 + 4 * i);
+    imu.angular_velocity_dps[i] = le_f32(p + 36 + 4 * i);
     if (!std::isfinite(imu.acceleration_g[i]) || !std::isfinite(imu.angular_velocity_dps[i])) {
       return std::nullopt;
     }

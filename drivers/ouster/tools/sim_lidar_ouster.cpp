@@ -3,6 +3,7 @@
 // frame per rotation. The work is the stream library's (sim/ouster/live_receiver.hpp: sockets,
 // batched receive, silence; LidarStream: decode straight into shared memory, the path
 // sim_replay_pcap takes too); this program is its command line, its messages and its exit code.
+#include <CLI/CLI.hpp>
 #include <atomic>
 #include <chrono>
 #include <cmath>

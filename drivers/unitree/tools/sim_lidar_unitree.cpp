@@ -3,6 +3,7 @@
 // (sim/unitree/live_receiver.hpp: the UDP socket or the serial port; LidarStream: decode straight
 // into shared memory, the path the replays take too); this program is its command line, its
 // messages and its exit code.
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <fstream>
 #include <string>

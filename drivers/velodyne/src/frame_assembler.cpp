@@ -147,7 +147,7 @@ FrameAssembler::FrameAssembler(Calibration calibration, AssemblerOptions options
   // laser offsets' spread of the cut (VLS-128: about 12°, 20 packets) plus two packets.
   const double spread_centi = max_point_delta_centi_ - min_point_delta_centi_;
   const double packets_in_spread = spread_centi / 10.0 + 2;  // ≥ 0.1° per packet at any rpm
-  carry_.resize(static_cast<std::size_t>(packets_in_spread) * info_->max_points_per_packet());
+  out_.reserve_carry(static_cast<std::size_t>(packets_in_spread) * info_->max_points_per_packet());
 }
 
 void FrameAssembler::build_unit_geometry() noexcept {
@@ -193,22 +193,17 @@ void FrameAssembler::build_unit_geometry() noexcept {
 }
 
 void FrameAssembler::set_output(std::span<LidarPoint> output) noexcept {
-  if (output_attached_) {
-    // Mid-frame: the points already in the old span stay there; this frame restarts.
-    output_count_ = 0;
-    current_.whole = false;
-  }
-  output_ = output;
-  output_attached_ = true;
-  // The frame in progress waited in the carry-over buffer: move it to the front.
-  const std::size_t n = std::min(carry_count_, output_.size());
-  std::copy_n(carry_.begin(), n, output_.begin());
-  if (n < carry_count_) {
-    current_.dropped += static_cast<std::uint32_t>(carry_count_ - n);
-    counters_.dropped_points += carry_count_ - n;
-  }
-  output_count_ = n;
-  carry_count_ = 0;
+  // Replaced in the middle of a frame, its points so far stay in the old span (lost to it) and
+  // the carry-over keeps the next frame's (this used to copy them into the new span, into the
+  // wrong revolution: sim/lidar/frame_output.hpp); else the carry-over moves to its front.
+  const lidar::FrameOutput::Attached attached = out_.attach(output);
+  if (attached.lost > 0) current_.whole = false;
+  drop_points(current_, attached.lost + attached.did_not_fit);
+}
+
+void FrameAssembler::drop_points(FrameState& frame, std::size_t points) noexcept {
+  frame.dropped += static_cast<std::uint32_t>(points);
+  counters_.dropped_points += points;
 }
 
 bool FrameAssembler::starts_whole(std::int64_t revolution) const noexcept {
@@ -238,7 +233,7 @@ void FrameAssembler::emit(const LidarPoint& point, std::int64_t position, std::i
     current_revolution_ = revolution;
     start(current_, point_ns, host_ns, starts_whole(revolution));
   } else if (revolution > current_revolution_ + 1 ||
-             (revolution == current_revolution_ + 1 && !output_attached_)) {
+             (revolution == current_revolution_ + 1 && !out_.attached())) {
     // Half a revolution or more went missing (or no span to keep two frames apart): the frame
     // in progress can never be whole; drop it and start over at this point.
     abandon_current();
@@ -248,15 +243,11 @@ void FrameAssembler::emit(const LidarPoint& point, std::int64_t position, std::i
   FrameState* frame = &current_;
   LidarPoint* slot = nullptr;
   if (revolution == current_revolution_) {
-    if (output_attached_) {
-      if (output_count_ < output_.size()) slot = &output_[output_count_++];
-    } else if (carry_count_ < carry_.size()) {
-      slot = &carry_[carry_count_++];
-    }
+    slot = out_.take_current();
   } else if (revolution == current_revolution_ + 1) {
     if (!next_.started) start(next_, point_ns, host_ns, starts_whole(revolution));
     frame = &next_;
-    if (carry_count_ < carry_.size()) slot = &carry_[carry_count_++];
+    slot = out_.take_carry();  // a span is attached (else the frame in progress was abandoned)
   }  // else: a point of a revolution already published (it came too late)
   if (slot == nullptr) {
     ++frame->dropped;
@@ -271,17 +262,16 @@ void FrameAssembler::abandon_current() noexcept {
   if (current_.started) ++counters_.partial_frames_dropped;
   current_ = FrameState{};
   next_ = FrameState{};
-  output_count_ = 0;
-  carry_count_ = 0;
+  out_.clear();
   next_is_whole_ = false;
 }
 
 void FrameAssembler::complete(PushResult& result) noexcept {
   ++current_revolution_;
   const bool publish = current_.whole || options_.emit_partial_frames;
-  if (publish && output_attached_) {
+  if (publish && out_.attached()) {
     CompletedFrame frame;
-    frame.point_count = output_count_;
+    frame.point_count = out_.output_count();
     frame.stamp_ns = current_.stamp_ns;
     frame.host_receive_ns = current_.host_ns;
     frame.index = frame_index_++;
@@ -291,19 +281,18 @@ void FrameAssembler::complete(PushResult& result) noexcept {
     frame.whole = current_.whole;
     result.frame = frame;
     ++counters_.frames;
-    output_attached_ = false;  // the span is the caller's until set_output; next_ is in carry_
-    output_count_ = 0;
+    out_.hand_out();  // the span is the caller's until set_output; next_ is in the carry-over
+    current_ = next_;
   } else {
     if (current_.started) ++counters_.partial_frames_dropped;
-    // Reuse the span: the next frame's points move to its front.
-    if (output_attached_) {
-      const std::size_t n = std::min(carry_count_, output_.size());
-      std::copy_n(carry_.begin(), n, output_.begin());
-      output_count_ = n;
-      carry_count_ = 0;
-    }
+    // Reuse the span: the next frame's points move to its front. Without a span the carry-over
+    // held the frame in progress: its points are gone with it.
+    const bool had_span = out_.attached();
+    const lidar::FrameOutput::Advanced advanced = out_.advance();
+    if (!had_span) counters_.dropped_points += advanced.discarded;
+    current_ = next_;
+    drop_points(current_, advanced.did_not_fit);
   }
-  current_ = next_;
   next_ = FrameState{};
   next_is_whole_ = true;
 }
@@ -314,18 +303,11 @@ void FrameAssembler::move_packet_tail_to_next() noexcept {
   // before nebula's.)
   std::size_t keep = packet_points_;
   while (keep > 0 && packet_point_phase_[keep - 1] < 9000) --keep;
-  const std::size_t moved = packet_points_ - keep;
-  if (moved == 0 || !output_attached_ || output_count_ < moved || moved > carry_.size()) return;
-  const std::size_t first = output_count_ - moved;
-  const std::int64_t first_ns = current_.stamp_ns + output_[first].time_offset_ns;
+  const std::span<LidarPoint> moved = out_.move_tail_to_carry(packet_points_ - keep);
+  if (moved.empty()) return;
+  const std::int64_t first_ns = current_.stamp_ns + moved.front().time_offset_ns;
   start(next_, first_ns, current_.host_ns, true);
-  for (std::size_t i = 0; i < moved; ++i) {
-    LidarPoint p = output_[first + i];
-    p.time_offset_ns = clamp_offset(current_.stamp_ns + p.time_offset_ns - first_ns);
-    carry_[i] = p;
-  }
-  carry_count_ = moved;
-  output_count_ = first;
+  for (LidarPoint& p : moved) p.time_offset_ns = clamp_offset(current_.stamp_ns + p.time_offset_ns - first_ns);
 }
 
 void FrameAssembler::count_packet(std::int64_t packet_ns, const Packet& packet) noexcept {
@@ -421,7 +403,7 @@ PushResult FrameAssembler::push(std::span<const std::uint8_t> payload, std::int6
   const auto phase_of = [&](std::uint16_t az) {
     return static_cast<std::uint16_t>((full_turn + az - cut_centi_) % full_turn);
   };
-  packet_first_point_ = output_count_;
+  packet_first_point_ = out_.output_count();
   packet_points_ = 0;
   bool wrapped = false;
   std::int64_t slot_position = 0;
@@ -532,7 +514,7 @@ bool FrameAssembler::block_context(const Packet& packet, unsigned block, const B
 }
 
 bool FrameAssembler::fits_in_place(BlockContext& block, std::int64_t block_position) const noexcept {
-  if (!in_place_ || !current_.started || !output_attached_ || output_.size() - output_count_ < units_per_block) {
+  if (!in_place_ || !current_.started || out_.output_room() < units_per_block) {  // no span: no room
     return false;
   }
   // Every point's position lies within the deltas of its sequence's: all in this revolution?
@@ -675,7 +657,7 @@ void FrameAssembler::decode_in_place(const BlockContext& block) noexcept {
   // How far the write position moves after each unit: a point's size, or 0 for a unit dropped.
   PerUnit<std::uint32_t> advance;
   for (unsigned u = 0; u < units_per_block; ++u) advance[u] = points.keep[u] * std::uint32_t{sizeof(LidarPoint)};
-  auto* const first = reinterpret_cast<unsigned char*>(output_.data() + output_count_);
+  auto* const first = reinterpret_cast<unsigned char*>(out_.output_end());
   unsigned char* point = first;
 #pragma GCC unroll 32
   for (unsigned u = 0; u < units_per_block; ++u) {
@@ -684,7 +666,7 @@ void FrameAssembler::decode_in_place(const BlockContext& block) noexcept {
     std::memcpy(point + offsetof(LidarPoint, time_offset_ns), &last_bytes, sizeof last_bytes);
     point += advance[u];
   }
-  output_count_ += static_cast<std::size_t>(point - first) / sizeof(LidarPoint);
+  out_.extend(static_cast<std::size_t>(point - first) / sizeof(LidarPoint));
 }
 
 // Near a cut, in the nebula modes, or with an azimuth window: each point finds its frame.
@@ -711,9 +693,9 @@ void FrameAssembler::decode_point_by_point(const BlockContext& block, std::int64
     }
     const Xyzi& v = points.xyzi[u];
     const LidarPoint p{v.x, v.y, v.z, v.intensity, 0, g.ring[u], block.return_index, 0};
-    const std::size_t before = output_count_;
+    const std::size_t before = out_.output_count();
     emit(p, position, block.ns + g.time_ns[u], host_ns);
-    if (by_packet && output_attached_ && output_count_ == before + 1 &&
+    if (by_packet && out_.attached() && out_.output_count() == before + 1 &&
         packet_points_ < packet_point_phase_.size()) {
       packet_point_phase_[packet_points_++] =
           static_cast<std::uint16_t>((full_turn + azimuth - cut_centi_) % full_turn);
@@ -722,12 +704,12 @@ void FrameAssembler::decode_point_by_point(const BlockContext& block, std::int64
 }
 
 std::optional<CompletedFrame> FrameAssembler::finish() noexcept {
-  if (!current_.started || !output_attached_) {
+  if (!current_.started || !out_.attached()) {
     reset();
     return std::nullopt;
   }
   CompletedFrame frame;
-  frame.point_count = output_count_;
+  frame.point_count = out_.output_count();
   frame.stamp_ns = current_.stamp_ns;
   frame.host_receive_ns = current_.host_ns;
   frame.index = frame_index_++;
@@ -736,11 +718,11 @@ std::optional<CompletedFrame> FrameAssembler::finish() noexcept {
   frame.dropped_points = current_.dropped;
   frame.whole = false;
   ++counters_.frames;
-  output_attached_ = false;
-  output_count_ = 0;
+  // The next frame's few points cannot be kept apart from the finished one.
+  counters_.dropped_points += out_.drop_next();
+  out_.hand_out();
   current_ = FrameState{};
   next_ = FrameState{};
-  carry_count_ = 0;
   have_block_ = false;
   have_packet_ = false;
   next_is_whole_ = false;
@@ -750,8 +732,7 @@ std::optional<CompletedFrame> FrameAssembler::finish() noexcept {
 void FrameAssembler::reset() noexcept {
   current_ = FrameState{};
   next_ = FrameState{};
-  output_count_ = 0;
-  carry_count_ = 0;
+  out_.clear();
   next_is_whole_ = false;
   have_block_ = false;
   have_packet_ = false;

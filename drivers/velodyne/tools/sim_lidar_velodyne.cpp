@@ -4,6 +4,7 @@
 // stream library's (sim/velodyne/live_receiver.hpp: sockets, batched receive, model detection,
 // silence; LidarStream: decode straight into shared memory, the path sim_replay_pcap takes
 // too); this program is its command line, its messages and its exit code.
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
 #include <optional>

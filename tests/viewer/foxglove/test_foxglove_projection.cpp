@@ -6,7 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 
+#include "foxglove_messages.hpp"
 #include "projection.hpp"
 
 namespace {
@@ -124,6 +126,46 @@ TEST(FoxgloveProjection, AWideFisheyeDrawsItsPeriphery) {
   ASSERT_TRUE(p) << "a point at 76 degrees off axis was not drawn";
   EXPECT_NEAR((*p)[0], 640 + 330 * theta, 1e-3);
   EXPECT_NEAR((*p)[1], 480, 1e-3);
+}
+
+// Review turn 4 L3: Foxglove's CameraCalibration has no binning or ROI, so a 2x-binned, cut
+// picture got the full sensor's K, P and size and Foxglove drew overlays at twice the distance
+// from the corner. What goes to Foxglove is the picture's own camera: with it, a plain pinhole
+// projection puts every point where the full calibration with binning and ROI puts it.
+TEST(FoxgloveProjection, TheCalibrationSentToFoxgloveIsThePictureOfABinnedCutCamera) {
+  sim::CameraCalibration full = calibration();
+  full.d = {0.05, -0.01, 0.001, 0.002, 0};
+  full.binning_x = 2;
+  full.binning_y = 2;
+  full.roi.x_offset = 100;
+  full.roi.y_offset = 40;
+  full.roi.width = 400;
+  full.roi.height = 320;
+  const sim::CameraCalibration picture = sim::foxglove::reduced_calibration(full);
+  EXPECT_EQ(picture.width, 200u);
+  EXPECT_EQ(picture.height, 160u);
+  EXPECT_EQ(picture.binning_x, 0u);
+  EXPECT_EQ(picture.roi.x_offset, 0u);
+  EXPECT_DOUBLE_EQ(picture.k[0], 250);
+  EXPECT_DOUBLE_EQ(picture.k[2], (320 - 100) / 2.0);
+  EXPECT_DOUBLE_EQ(picture.p[6], (240 - 40) / 2.0);
+  for (const std::array<double, 3> point : {std::array<double, 3>{0, 0, 5}, {0.3, 0.1, 4}, {-0.2, -0.1, 3}}) {
+    const auto expected = sim::foxglove::project_to_pixel(full, 200, 160, point);
+    const auto got = sim::foxglove::project_to_pixel(picture, 200, 160, point);
+    ASSERT_TRUE(expected && got) << point[0] << " " << point[1];
+    EXPECT_NEAR((*got)[0], (*expected)[0], 1e-3);
+    EXPECT_NEAR((*got)[1], (*expected)[1], 1e-3);
+  }
+  // The message carries the picture's size: after the CDR header, the stamp and "cam\0".
+  const auto message = sim::foxglove::encode_calibration(full, "cam", 0);
+  ASSERT_GE(message.size(), 28u);
+  std::uint32_t width = 0, height = 0;
+  std::memcpy(&width, message.data() + 20, 4);
+  std::memcpy(&height, message.data() + 24, 4);
+  EXPECT_EQ(width, 200u);
+  EXPECT_EQ(height, 160u);
+  // Neither binning nor ROI: sent as it is.
+  EXPECT_EQ(sim::foxglove::reduced_calibration(calibration()), calibration());
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 #include "catalog.hpp"
 
 #include <algorithm>
+#include <cstdio>
 
 #include "sim/clock.hpp"
 #include "sim/ros2/diagnostics.hpp"
@@ -180,16 +181,43 @@ void Catalog::track_calibration(Tracked& t, const std::optional<SensorInfo>& sen
   }
 }
 
-// One latched message with every mounting the streams know, changed when any of them changes.
-void Catalog::track_transforms(CatalogChanges& changes) {
+// Every mounting the streams know, one per frame. Two streams that mount one frame differently
+// (a camera's raw and JPEG streams, one remounted) cannot both be right (review L10): the stream
+// whose name sorts last wins, as it does in tf2 from sim_dds_bridge's /tf_static (which lists
+// every stream in name order, and tf2 keeps the last transform of a frame); both streams carry
+// the sentence (the page shows it) and it is said once on stderr.
+std::vector<FrameTransform> Catalog::collect_mountings() {
   std::vector<FrameTransform> transforms;
-  for (const auto& [name, t] : streams_) {
+  std::map<std::string, std::string> mounted_by;  // frame -> the stream whose mounting is kept
+  for (auto& [name, t] : streams_) t.entry.mounting_problem.clear();
+  for (auto& [name, t] : streams_) {
     if (!t.sensor || !t.sensor->mounting) continue;
     FrameTransform f{t.sensor->parent_frame, frame_of(name, t.sensor), *t.sensor->mounting};
-    const bool known = std::any_of(transforms.begin(), transforms.end(),
+    const auto same = std::find_if(transforms.begin(), transforms.end(),
                                    [&](const FrameTransform& o) { return o.child == f.child; });
-    if (!known) transforms.push_back(std::move(f));
+    if (same == transforms.end()) {
+      mounted_by[f.child] = name;
+      transforms.push_back(std::move(f));
+      continue;
+    }
+    if (*same == f) continue;  // the same mounting twice: nothing to choose
+    std::string& earlier = mounted_by[f.child];
+    const std::string sentence =
+        "streams " + earlier + " and " + name + " both mount frame " + f.child + ", differently; " +
+        name + "'s mounting is used (the later name, as tf2 keeps from sim_dds_bridge's /tf_static): give "
+        "them the same mounting or frames of their own";
+    streams_.at(earlier).entry.mounting_problem = sentence;
+    t.entry.mounting_problem = sentence;
+    if (told_conflicts_.insert(sentence).second) std::fprintf(stderr, "sim_foxglove: %s\n", sentence.c_str());
+    earlier = name;
+    *same = std::move(f);
   }
+  return transforms;
+}
+
+// One latched message with every mounting the streams know, changed when any of them changes.
+void Catalog::track_transforms(CatalogChanges& changes) {
+  std::vector<FrameTransform> transforms = collect_mountings();
   if (transforms == transforms_) return;
   transforms_ = transforms;
   if (transforms.empty()) {

@@ -14,6 +14,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
@@ -35,6 +36,8 @@ struct StreamEntry {
   std::int64_t age_ns = -1;            // since the newest frame was published; -1 before any
   std::optional<Channel> channel;      // nullopt for streams Foxglove cannot show
   std::optional<Channel> calibration_channel;  // calibrated cameras only
+  // Another stream mounts the same frame differently (review L10), one sentence naming both.
+  std::string mounting_problem;
 };
 
 // A channel and what its messages are made from: the frames of a stream of `layout` (a pump
@@ -88,6 +91,7 @@ class Catalog {
   void track(Tracked& t, const StreamStatus& s, CatalogChanges& changes);
   void track_calibration(Tracked& t, const std::optional<SensorInfo>& sensor,
                          CatalogChanges& changes);
+  std::vector<FrameTransform> collect_mountings();
   void track_transforms(CatalogChanges& changes);
   void track_clocks(CatalogChanges& changes);
   Channel new_channel(std::string topic, const MessageSchema& schema);
@@ -103,6 +107,7 @@ class Catalog {
   std::uint32_t next_channel_id_ = 1;
   std::optional<Channel> transforms_channel_;
   std::vector<FrameTransform> transforms_;
+  std::set<std::string> told_conflicts_;  // said once on stderr each
   // What the /diagnostics message says now: by stream, its hardware id, clock and writer's life.
   struct ClockEntry {
     std::string hardware_id;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "foxglove_messages.hpp"
 
+#include <algorithm>
 #include <array>
 
 #include "sim/ros2/message.hpp"
@@ -102,8 +103,31 @@ std::string calibration_topic(std::string_view stream) {
   return std::string(stream) + "/camera_info";
 }
 
-std::vector<std::byte> encode_calibration(const CameraCalibration& calibration,
+CameraCalibration reduced_calibration(const CameraCalibration& calibration) {
+  CameraCalibration c = calibration;
+  const double bx = std::max(1u, c.binning_x), by = std::max(1u, c.binning_y);
+  const double x0 = c.roi.x_offset, y0 = c.roi.y_offset;
+  // Row 0 of K and P maps to u, row 1 to v: u' = (u - x_offset) / bx, v' = (v - y_offset) / by.
+  const auto reduce_rows = [&](double* row0, double* row1, double* row2, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) {
+      row0[i] = (row0[i] - x0 * row2[i]) / bx;
+      row1[i] = (row1[i] - y0 * row2[i]) / by;
+    }
+  };
+  reduce_rows(&c.k[0], &c.k[3], &c.k[6], 3);
+  reduce_rows(&c.p[0], &c.p[4], &c.p[8], 4);
+  const std::uint32_t full_w = c.roi.width > 0 ? c.roi.width : c.width;
+  const std::uint32_t full_h = c.roi.height > 0 ? c.roi.height : c.height;
+  c.width = static_cast<std::uint32_t>(full_w / std::max(1u, c.binning_x));
+  c.height = static_cast<std::uint32_t>(full_h / std::max(1u, c.binning_y));
+  c.binning_x = c.binning_y = 0;
+  c.roi = {};
+  return c;
+}
+
+std::vector<std::byte> encode_calibration(const CameraCalibration& full,
                                           std::string_view frame_id, std::int64_t stamp_ns) {
+  const CameraCalibration calibration = reduced_calibration(full);
   std::array<double, 12> p = calibration.p;
   if (p[0] == 0 && p[5] == 0) {
     p = {calibration.k[0], calibration.k[1], calibration.k[2], 0,

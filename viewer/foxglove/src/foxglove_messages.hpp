@@ -36,9 +36,17 @@ std::string frame_of(std::string_view stream, const std::optional<SensorInfo>& s
 // Where every mounting goes (the tf2 name for transforms that do not change).
 inline constexpr std::string_view kTransformsTopic = "/tf_static";
 
-// foxglove_msgs/msg/CameraCalibration of `calibration` in `frame_id`, stamped `stamp_ns`. The
-// ROS "equidistant" model is Foxglove's "kannala_brandt"; a P of zeros (a file without a
-// projection matrix) is sent as [K | 0], the monocular P, since Foxglove needs P's focal lengths.
+// The calibration of the picture a binned or cut camera sends (image_geometry's "reduced"
+// camera): ROS calibrates the full sensor, and binning_x/y and the ROI say which part of it at
+// which scale the image is; Foxglove's CameraCalibration has no such fields, so the picture's own
+// K and P (fx / bx, (cx - x_offset) / bx, …) and size go instead (review turn 4 L3). Unchanged
+// when there is neither binning nor an ROI.
+CameraCalibration reduced_calibration(const CameraCalibration& calibration);
+
+// foxglove_msgs/msg/CameraCalibration of `calibration` (reduced as above) in `frame_id`, stamped
+// `stamp_ns`. The ROS "equidistant" model is Foxglove's "kannala_brandt"; a P of zeros (a file
+// without a projection matrix) is sent as [K | 0], the monocular P, since Foxglove needs P's
+// focal lengths.
 std::vector<std::byte> encode_calibration(const CameraCalibration& calibration,
                                           std::string_view frame_id, std::int64_t stamp_ns);
 

@@ -77,6 +77,7 @@ void add_sensor(nlohmann::json& s, const StreamEntry& e, const std::vector<Strea
                 const std::vector<FrameTransform>& mountings) {
   const StreamStatus& st = *e.status;
   if (!st.sensor_problem.empty()) s["sensor_problem"] = st.sensor_problem;
+  else if (!e.mounting_problem.empty()) s["sensor_problem"] = e.mounting_problem;
   const std::optional<SensorInfo>& sensor = st.sensor;
   s["frame_id"] = frame_of(e.name, sensor);
   if (!sensor) return;

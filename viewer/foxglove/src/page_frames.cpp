@@ -129,15 +129,13 @@ Expected<Picture> PageFrames::projection(const std::string& camera, const std::s
   std::scoped_lock lock(c->mutex, l->mutex);  // both, in an order that cannot deadlock
   if (auto error = newest(*c, camera, LayoutKind::image)) return *error;
   if (auto error = newest(*l, lidar, LayoutKind::points)) return *error;
-  char key[320];
-  std::snprintf(key, sizeof key, "projection %s %llu %llu %g %g %g %g %g %g %g %g %g",
-                lidar.c_str(), static_cast<unsigned long long>(c->info.seq),
-                static_cast<unsigned long long>(l->info.seq), lidar_to_camera.translation[0],
-                lidar_to_camera.translation[1], lidar_to_camera.translation[2],
-                lidar_to_camera.rotation[0], lidar_to_camera.rotation[1],
-                lidar_to_camera.rotation[2], lidar_to_camera.rotation[3], calibration.k[0],
-                calibration.k[2]);
-  if (c->picture.jpeg && c->picture_key == key) return c->picture;
+  const std::string key = "projection " + std::to_string(c->info.seq) + " " + std::to_string(l->info.seq) +
+                          " " + lidar;
+  const bool same_pose = c->picture_pose.rotation == lidar_to_camera.rotation &&
+                         c->picture_pose.translation == lidar_to_camera.translation;
+  if (c->picture.jpeg && c->picture_key == key && same_pose && c->picture_calibration == calibration) {
+    return c->picture;
+  }
   if (!c->jpeg) {
     auto jpeg = ImageToJpeg::create(quality_);
     if (!jpeg) return jpeg.error();
@@ -162,6 +160,8 @@ Expected<Picture> PageFrames::projection(const std::string& camera, const std::s
                 static_cast<unsigned long long>(l->info.seq), drawn.nearest_m, drawn.farthest_m);
   c->picture = {out, caption};
   c->picture_key = key;
+  c->picture_pose = lidar_to_camera;
+  c->picture_calibration = calibration;
   return c->picture;
 }
 

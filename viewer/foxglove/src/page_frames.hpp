@@ -59,6 +59,10 @@ class PageFrames {
     bool have_frame = false;
     std::optional<ImageToJpeg> jpeg;
     std::string picture_key;  // what `picture` shows: seq and options
+    // What a projection `picture` was drawn with: the whole calibration and pose, not a few
+    // numbers of it, so a recalibration of a paused stream is drawn anew (review L5).
+    std::optional<CameraCalibration> picture_calibration;
+    Pose picture_pose;
     Picture picture;
     std::vector<std::uint8_t> bgr;  // the image drawn on (projections)
   };

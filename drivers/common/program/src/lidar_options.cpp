@@ -4,9 +4,8 @@
 namespace sim::apps {
 
 void add_lidar_writer_options(CommandLine& cli, LidarWriterOptions& o) {
-  CLI::App& app = cli.app();
-  app.add_flag("--checksum", o.checksum, "add an XXH3 checksum to every frame, verified by readers");
-  app.add_flag("--lock-memory", o.lock_memory, "mlock the stream's shared memory");
+  cli.add_flag("--checksum", o.checksum, "add an XXH3 checksum to every frame, verified by readers");
+  cli.add_flag("--lock-memory", o.lock_memory, "mlock the stream's shared memory");
   add_sensor_options(cli, o.sensor, SensorKind::lidar);
   cli.add_placement(o.placement);
 }

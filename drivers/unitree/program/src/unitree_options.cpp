@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/apps/unitree_options.hpp"
 
+#include <CLI/CLI.hpp>
+
 #include <chrono>
 
 namespace sim::apps {

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/apps/velodyne_options.hpp"
 
+#include <CLI/CLI.hpp>
+
 namespace sim::apps {
 namespace {
 

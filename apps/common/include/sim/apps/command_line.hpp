@@ -5,9 +5,12 @@
 // anything is opened, --cpu/--rt-priority, and one exit-code contract:
 //   0 done, 1 failed at run time, 2 the command line (or the config file) was wrong.
 // Every message is one sentence on stderr, prefixed with the program's name.
+//
+// CLI11 stays out of this header (and every other header): CLI11 2.x is header-only, and each
+// translation unit that includes <CLI/CLI.hpp> compiles its validators, formatter and parser again
+// (docs/build-times.md). A .cpp that adds its options through app() includes <CLI/CLI.hpp> itself;
+// scripts/check-cli11-headers.py (ctest cli11_stays_out_of_headers) keeps it so.
 #pragma once
-
-#include <CLI/CLI.hpp>
 
 #include <functional>
 #include <memory>
@@ -19,6 +22,12 @@
 #include "sim/os.hpp"
 #include "sim/reader.hpp"
 #include "sim/result.hpp"
+
+namespace CLI {
+class App;
+class Option;
+class Validator;
+}  // namespace CLI
 
 namespace sim::apps {
 
@@ -41,8 +50,12 @@ class CommandLine {
  public:
   // `tool` prefixes every message ("sim_echo"); `description` is the first paragraph of --help.
   CommandLine(std::string tool, std::string description);
+  ~CommandLine();
+  CommandLine(const CommandLine&) = delete;  // options point into it
+  CommandLine& operator=(const CommandLine&) = delete;
 
-  CLI::App& app() noexcept { return app_; }
+  // The parser, to add a program's own options (the caller includes <CLI/CLI.hpp>).
+  CLI::App& app() noexcept { return *app_; }
   const std::string& tool() const noexcept { return tool_; }
 
   // A stream name option ("--stream") or positional ("stream"), checked by the core's rules.
@@ -50,6 +63,15 @@ class CommandLine {
   // Several stream names (a positional list), each checked the same way.
   CLI::Option* add_streams(std::string_view name, std::vector<std::string>& values,
                            std::string_view help);
+  // Options that need no CLI11 in the caller (a translation unit that includes <CLI/CLI.hpp>
+  // costs about 10 CPU-seconds at -O3): a flag, and a text value that `problem` checks (it returns
+  // what is wrong, empty when nothing), shown as `type_name`. An empty `group`: the default one.
+  void add_flag(std::string_view name, bool& value, std::string_view help,
+                std::string_view group = {});
+  void add_text(std::string_view name, std::string& value, std::string_view help,
+                std::string_view type_name,
+                std::function<std::string(const std::string&)> problem = {},
+                std::string_view group = {});
   // --config FILE: YAML keys set the options of the same long name ("rt_priority" or
   // "rt-priority" for --rt-priority); a map becomes a list of "key=value" items; options given on
   // the command line override the file. The options named in `path_options` ("calibration")
@@ -80,7 +102,7 @@ class CommandLine {
 
  private:
   std::string tool_;
-  CLI::App app_;
+  std::unique_ptr<CLI::App> app_;
   std::vector<std::string> path_options_;
   std::shared_ptr<YamlConfig> config_;  // set by add_config_file
   Trust* trust_ = nullptr;

@@ -18,6 +18,7 @@
 #include <utility>
 
 #include "sim/clock.hpp"
+#include "sim/lidar/completed_frame.hpp"
 #include "sim/timing/clock_reporter.hpp"
 #include "sim/lidar_point.hpp"
 #include "sim/writer.hpp"
@@ -133,8 +134,8 @@ struct PointPipeline {
   timing::ClockReporter clock;  // the caller adds each packet's sensor time with its arrival
 
  private:
-  template <class Frame>
-  void publish(const Frame& f) noexcept {
+  // Every family's frame is a lidar::CompletedFrame, whatever it adds.
+  void publish(const CompletedFrame& f) noexcept {
     // The sensor's stamp, or with --stamp-fallback its arrival while the sensor's clock is in error.
     const std::int64_t stamp =
         clock.frame_stamp(frames.writer(), saturating_add_ns(f.stamp_ns, frames.stamp_offset()), f.host_receive_ns);

@@ -32,6 +32,9 @@
 #include "sim/hesai/calibration.hpp"
 #include "sim/hesai/model.hpp"
 #include "sim/hesai/packet.hpp"
+#include "sim/lidar/assembler_counters.hpp"
+#include "sim/lidar/completed_frame.hpp"
+#include "sim/lidar/frame_output.hpp"
 #include "sim/lidar_point.hpp"
 #include "sim/result.hpp"
 
@@ -80,16 +83,12 @@ struct AssemblerOptions {
   bool firetime_azimuth_compensation = false;
 };
 
-struct CompletedFrame {
-  std::size_t point_count = 0;        // points written at the front of the output span
-  std::int64_t stamp_ns = 0;          // sensor UTC of the frame's earliest firing, ns since epoch
-  std::int64_t host_receive_ns = 0;   // host receive time of the frame's first packet
-  std::uint64_t index = 0;            // 0, 1, 2… frames completed by this assembler
-  std::uint32_t packets = 0;          // packets that contributed points or firings
-  std::uint32_t lost_packets = 0;     // packets missing inside this frame (sequence/azimuth)
-  std::uint32_t dropped_points = 0;   // points that did not fit in the output span
-  bool whole = true;       // started at a cut and ended at the next one
-  std::uint16_t motor_rpm = 0;        // motor speed the frame's last packet reported
+// lidar::CompletedFrame's fields as Hesai fills them: stamp_ns is the sensor UTC of the frame's
+// earliest firing; packets are those that contributed points or firings; lost_packets come
+// from the UDP sequence or, without one, azimuth gaps; whole = started at a cut and ended at
+// the next one.
+struct CompletedFrame : lidar::CompletedFrame {
+  std::uint16_t motor_rpm = 0;  // motor speed the frame's last packet reported
   // Models with a functional-safety section (QT128): the worst state any packet of the frame
   // reported, with that packet's fault code. A user drops or flags frames that are not
   // `normal` (or `initialization`, while the sensor starts).
@@ -104,17 +103,13 @@ struct PushResult {
   std::optional<std::int64_t> packet_ns;
 };
 
-struct AssemblerCounters {
-  std::uint64_t packets = 0;          // decoded
-  std::uint64_t malformed = 0;        // rejected: cut short, bad field values
+// lidar::AssemblerCounters (packets, malformed, lost_packets from UDP sequence or azimuth
+// gaps, frames, partial_frames_dropped, dropped_points) and what only Hesai sees.
+struct AssemblerCounters : lidar::AssemblerCounters {
   std::uint64_t crc_errors = 0;       // rejected: a CRC did not match (QT128), not in malformed
   std::uint64_t wrong_model = 0;      // rejected: another Hesai model on the port
-  std::uint64_t lost_packets = 0;     // estimated from UDP sequence or azimuth gaps
   std::uint64_t out_of_order = 0;     // sequence went backwards or repeated
-  std::uint64_t frames = 0;           // completed and returned
-  std::uint64_t partial_frames_dropped = 0;  // before the first cut (emit_partial_frames off)
   std::uint64_t frames_without_output = 0;   // completed while set_output() had not been called
-  std::uint64_t dropped_points = 0;   // output span or carry-over full, no output set, late
   std::array<std::uint64_t, packet_error_count> rejected{};  // by PacketError value
 };
 
@@ -177,6 +172,7 @@ class FrameAssembler {
   void begin(FrameState& frame, const Packet& packet, unsigned block, std::int64_t host_ns,
              bool whole) noexcept;
   void close_current(PushResult& result, bool ended_at_cut) noexcept;
+  void drop_points(FrameState& frame, std::size_t points) noexcept;
   // push()'s steps.
   void count_rejected(PacketError error) noexcept;
   std::int64_t revolution_of_group(std::uint16_t azimuth, std::uint16_t phase) noexcept;
@@ -226,12 +222,9 @@ class FrameAssembler {
   FrameState current_;
   FrameState next_;
   std::int64_t current_revolution_ = 0;
-  std::span<LidarPoint> output_;  // current_'s points, when attached
-  bool output_attached_ = false;
-  std::size_t output_count_ = 0;
-  // next_'s points while current_ is attached, current_'s points while it is not.
-  std::vector<LidarPoint> carry_;
-  std::size_t carry_count_ = 0;
+  // current_'s points in the caller's span, when attached; the carry-over holds next_'s points
+  // then, current_'s while no span is attached.
+  lidar::FrameOutput out_;
 
   bool have_last_ = false;           // a previous firing group exists (cut and gap detection)
   std::int64_t block_revolution_ = 0;  // revolutions the block azimuth has wrapped at the cut

@@ -11,6 +11,7 @@
 #include <span>
 
 #include "sim/hesai/model.hpp"
+#include "sim/lidar/little_endian.hpp"
 
 namespace sim::hesai {
 
@@ -103,9 +104,9 @@ class Packet {
   }
 
   // Block azimuth in 0.01° (0…35999). All blocks of one return group share it.
-  std::uint16_t azimuth(unsigned block) const noexcept { return read_u16(block_at(block) + az_offset_); }
+  std::uint16_t azimuth(unsigned block) const noexcept { return lidar::le16(block_at(block) + az_offset_); }
   std::uint16_t raw_distance(unsigned block, unsigned channel) const noexcept {
-    return read_u16(unit_at(block, channel));
+    return lidar::le16(unit_at(block, channel));
   }
   std::uint8_t reflectivity(unsigned block, unsigned channel) const noexcept {
     return unit_at(block, channel)[2];
@@ -129,9 +130,6 @@ class Packet {
                                         unsigned loop = 0) noexcept;
 
  private:
-  static std::uint16_t read_u16(const std::uint8_t* p) noexcept {
-    return static_cast<std::uint16_t>(p[0] | (p[1] << 8));
-  }
   const std::uint8_t* block_at(unsigned block) const noexcept {
     return data_ + first_block_ + std::size_t{block} * block_stride_;
   }

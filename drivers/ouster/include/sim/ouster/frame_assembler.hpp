@@ -27,6 +27,8 @@
 #include <span>
 #include <vector>
 
+#include "sim/lidar/assembler_counters.hpp"
+#include "sim/lidar/completed_frame.hpp"
 #include "sim/lidar_point.hpp"
 #include "sim/ouster/metadata.hpp"
 #include "sim/ouster/packet.hpp"
@@ -61,16 +63,15 @@ struct AssemblerOptions {
   bool emit_partial_frames = false;
 };
 
-struct CompletedFrame {
-  std::size_t point_count = 0;       // points written at the front of the output span
-  std::int64_t stamp_ns = 0;         // the frame's first valid column, sensor clock
-  std::int64_t host_receive_ns = 0;  // host receive time of the frame's first packet
-  std::uint64_t index = 0;           // frames completed by this assembler
-  std::uint32_t frame_id = 0;        // the sensor's frame counter
-  std::uint32_t packets = 0;
+// lidar::CompletedFrame's fields as Ouster fills them: stamp_ns is the frame's first valid
+// column (sensor clock); whole = began at the window's first column. What was lost is counted in
+// columns, the sensor's own unit: missing_columns; lost_packets is the same rounded up to whole
+// packets (columns_per_packet), as AssemblerCounters::lost_packets adds it up, and 0 for a
+// partial frame (its missing columns are mostly those before it began).
+struct CompletedFrame : lidar::CompletedFrame {
+  std::uint32_t frame_id = 0;         // the sensor's frame counter
   std::uint32_t missing_columns = 0;  // columns of the window that never came (lost packets)
   std::uint32_t invalid_columns = 0;  // columns the sensor marked invalid (status)
-  bool whole = true;                  // began at the window's first column
 };
 
 struct PushResult {
@@ -81,17 +82,14 @@ struct PushResult {
   std::optional<std::int64_t> packet_ns;
 };
 
-struct AssemblerCounters {
-  std::uint64_t packets = 0;       // decoded
-  std::uint64_t malformed = 0;     // rejected: every PacketError
-  std::uint64_t lost_packets = 0;  // estimated from missing columns
+// lidar::AssemblerCounters (malformed: every PacketError; lost_packets from missing columns of
+// whole frames; dropped_points: no output span, or the span was too small) and what only
+// Ouster sees.
+struct AssemblerCounters : lidar::AssemblerCounters {
   std::uint64_t duplicate_columns = 0;
   std::uint64_t invalid_columns = 0;
-  std::uint64_t frames = 0;
-  std::uint64_t partial_frames_dropped = 0;
   std::uint64_t late_packets = 0;  // of a frame already closed or older: dropped (ouster-sdk too)
   std::uint64_t frames_without_output = 0;
-  std::uint64_t dropped_points = 0;  // no output span, or the span was too small
   std::array<std::uint64_t, packet_error_count> rejected{};  // by PacketError
   std::size_t last_rejected_size = 0;  // payload size of the last wrong_size packet
 };
@@ -196,6 +194,7 @@ class FrameAssembler {
   std::int64_t host_ns_ = 0;
   std::uint32_t packets_ = 0;
   std::uint32_t invalid_columns_ = 0;
+  std::uint64_t dropped_points_ = 0;  // found no room in the span
   std::vector<std::uint8_t> received_;  // per measurement_id
   std::size_t dense_count_ = 0;
 

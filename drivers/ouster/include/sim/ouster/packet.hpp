@@ -17,6 +17,7 @@
 #include <string>
 #include <string_view>
 
+#include "sim/lidar/little_endian.hpp"
 #include "sim/result.hpp"
 
 namespace sim::ouster {
@@ -57,11 +58,8 @@ struct Pixel {
 // those of the firmware user manual's "Lidar Data Format" tables.
 template <Profile P>
 inline Pixel decode_pixel_as(const std::uint8_t* b) noexcept {
-  auto u16 = [b](unsigned at) { return static_cast<std::uint16_t>(b[at] | b[at + 1] << 8); };
-  auto u32 = [b](unsigned at) {
-    return std::uint32_t{b[at]} | std::uint32_t{b[at + 1]} << 8 | std::uint32_t{b[at + 2]} << 16 |
-           std::uint32_t{b[at + 3]} << 24;
-  };
+  auto u16 = [b](unsigned at) { return lidar::le16(b + at); };
+  auto u32 = [b](unsigned at) { return lidar::le32(b + at); };
   Pixel px;
   if constexpr (P == Profile::legacy || P == Profile::rng19_rfl8_sig16_nir16) {
     const std::uint32_t w0 = u32(0);

@@ -21,6 +21,9 @@
 #include <span>
 #include <vector>
 
+#include "sim/lidar/assembler_counters.hpp"
+#include "sim/lidar/completed_frame.hpp"
+#include "sim/lidar/frame_output.hpp"
 #include "sim/lidar_point.hpp"
 #include "sim/result.hpp"
 #include "sim/velodyne/calibration.hpp"
@@ -82,16 +85,9 @@ struct AssemblerOptions {
   std::optional<AzimuthWindow> azimuth_window;
 };
 
-struct CompletedFrame {
-  std::size_t point_count = 0;       // points at the front of the output span
-  std::int64_t stamp_ns = 0;         // sensor time of the frame's first point, ns since epoch
-  std::int64_t host_receive_ns = 0;  // host receive time of the frame's first packet
-  std::uint64_t index = 0;           // frames completed by this assembler so far
-  std::uint32_t packets = 0;
-  std::uint32_t lost_packets = 0;    // estimated from the packets' timestamps
-  std::uint32_t dropped_points = 0;  // did not fit in the output span
-  bool whole = true;
-};
+// Velodyne's frames say no more than every family's: stamp_ns is the sensor time of the
+// frame's first point, lost_packets are estimated from the packets' timestamps.
+using CompletedFrame = lidar::CompletedFrame;
 
 struct PushResult {
   PacketError error = PacketError::none;
@@ -101,14 +97,10 @@ struct PushResult {
   std::optional<std::int64_t> packet_ns;
 };
 
-struct AssemblerCounters {
-  std::uint64_t packets = 0;        // decoded
-  std::uint64_t malformed = 0;      // cut short, bad flags, azimuth or return mode
+// lidar::AssemblerCounters (malformed: cut short, bad flags, azimuth or return mode;
+// lost_packets from timestamp gaps) and what only Velodyne sees.
+struct AssemblerCounters : lidar::AssemblerCounters {
   std::uint64_t wrong_model = 0;    // another model's (or another vendor's) packet
-  std::uint64_t lost_packets = 0;   // estimated from timestamp gaps
-  std::uint64_t frames = 0;
-  std::uint64_t partial_frames_dropped = 0;
-  std::uint64_t dropped_points = 0;  // output or carry-over full, or arrived after their frame
   std::array<std::uint64_t, packet_error_count> rejected{};
 };
 
@@ -138,7 +130,7 @@ class FrameAssembler {
   const AssemblerCounters& counters() const noexcept { return counters_; }
   const AssemblerOptions& options() const noexcept { return options_; }
   const Calibration& calibration() const noexcept { return calibration_; }
-  std::size_t pending_points() const noexcept { return output_attached_ ? output_count_ : carry_count_; }
+  std::size_t pending_points() const noexcept { return out_.pending(); }
   // Return mode of the last decoded packet (nullopt before the first).
   std::optional<ReturnMode> return_mode() const noexcept { return last_mode_; }
 
@@ -262,6 +254,7 @@ class FrameAssembler {
             std::int64_t host_ns) noexcept;
   void start(FrameState& frame, std::int64_t point_ns, std::int64_t host_ns, bool whole) noexcept;
   void complete(PushResult& result) noexcept;
+  void drop_points(FrameState& frame, std::size_t points) noexcept;
   bool starts_whole(std::int64_t revolution) const noexcept;
   void move_packet_tail_to_next() noexcept;
   bool in_window(std::int32_t azimuth_centi) const noexcept;
@@ -295,11 +288,9 @@ class FrameAssembler {
   FrameState current_;
   FrameState next_;
   std::int64_t current_revolution_ = 0;
-  std::span<LidarPoint> output_;
-  bool output_attached_ = false;
-  std::size_t output_count_ = 0;
-  std::vector<LidarPoint> carry_;  // next_'s points (current_'s while no output is attached)
-  std::size_t carry_count_ = 0;
+  // current_'s points in the caller's span, when attached; the carry-over holds next_'s points
+  // then, current_'s while no span is attached.
+  lidar::FrameOutput out_;
   bool next_is_whole_ = false;     // the frame after a completed one starts at the cut
 
   bool have_block_ = false;

@@ -10,6 +10,7 @@
 #include <span>
 #include <string_view>
 
+#include "sim/lidar/little_endian.hpp"
 #include "sim/velodyne/model.hpp"
 
 namespace sim::velodyne {
@@ -78,13 +79,10 @@ class Packet {
   // dual-return pair share it.
   unsigned sequence(unsigned block, unsigned unit) const noexcept;
 
-  static std::uint16_t read_u16(const std::uint8_t* p) noexcept {
-    return static_cast<std::uint16_t>(p[0] | (p[1] << 8));
-  }
-  static std::uint32_t read_u32(const std::uint8_t* p) noexcept {
-    return std::uint32_t{p[0]} | (std::uint32_t{p[1]} << 8) | (std::uint32_t{p[2]} << 16) |
-           (std::uint32_t{p[3]} << 24);
-  }
+  // The packet's little-endian fields (sim/lidar/little_endian.hpp), by the names the replay
+  // and tests read a timestamp with.
+  static std::uint16_t read_u16(const std::uint8_t* p) noexcept { return lidar::le16(p); }
+  static std::uint32_t read_u32(const std::uint8_t* p) noexcept { return lidar::le32(p); }
 
  private:
   const std::uint8_t* block_at(unsigned block) const noexcept { return data_ + block * block_size; }
