@@ -133,6 +133,7 @@ struct AravisCapture::Impl {
     const auto received = static_cast<std::int64_t>(arv_buffer_get_system_timestamp(buffer));
     const std::int64_t stamp =
         device_time ? static_cast<std::int64_t>(arv_buffer_get_timestamp(buffer)) : received;
+    clock_check->start(*writer);  // the stream's first record, before its first frame: once
     Loan loan = writer->loan();
     const imaging::DecodeResult decoded =
         decoder->decode({static_cast<const std::byte*>(data), size}, loan.bytes());
@@ -412,6 +413,7 @@ struct AravisCapture::Impl {
         return made.error();
       }
       writer.emplace(std::move(made.value()));
+      clock_check->new_stream();  // its first frame carries the clock record too
     } else if (*described && *described != sensor) {
       // The same stream after a reconnect: readers see what changed (the PTP state, a camera).
       if (auto set = writer->set_sensor_info(**described); !set) log("warning: " + set.error().message);

@@ -74,6 +74,18 @@ class ClockReporter {
   std::optional<ClockStatus> tick(Writer& writer, std::int64_t now_realtime_ns, bool at_once = false);
   // Judges now without writing (a test, a status line).
   ClockStatus judge(std::int64_t now_realtime_ns);
+  // The record before the first judgement: which clock the stamps are in is known from the start
+  // (the base, the sensor's report, --stamp-fallback); the verdict is unknown until judged.
+  ClockStatus unjudged() const;
+  static constexpr const char* kNotJudged = "not judged yet: waiting for the first second of packets";
+  // Writes the stream's first record, when none was written to it: the unjudged one (or the last
+  // judgement, for a stream created anew). frame_stamp and tick call it, so the first frame
+  // carries its FrameInfo::stamp_clock; a driver that commits frames itself calls it first.
+  void start(Writer& writer) {
+    if (!record_written_) write_first(writer);
+  }
+  // The stream was created anew (a camera back with another format): start writes again.
+  void new_stream() noexcept { record_written_ = false; }
   const std::optional<ClockStatus>& last() const noexcept { return last_; }
 
   // The stamp a frame is published with: `sensor_stamp_ns` (the sensor's, the stamp offset
@@ -81,6 +93,7 @@ class ClockReporter {
   // error (see StampSwitch). A switch rewrites the stream's clock record before the frame is
   // committed, so the frame's FrameInfo::stamp_clock names the clock of its stamp.
   std::int64_t frame_stamp(Writer& writer, std::int64_t sensor_stamp_ns, std::int64_t host_ns) {
+    start(writer);
     if (!stamps_.enabled()) return sensor_stamp_ns;
     return switch_stamp(writer, sensor_stamp_ns, host_ns);
   }
@@ -99,6 +112,9 @@ class ClockReporter {
   bool record_written_ = false;
 
   std::int64_t switch_stamp(Writer& writer, std::int64_t sensor_stamp_ns, std::int64_t host_ns);
+  void write_first(Writer& writer);
+  // What the sources report, as the base makes it: the half of a record a judgement starts from.
+  ClockStatus reported() const;
 };
 
 // Writes `clock` to the stream (Writer::set_clock); false when the writer refused it.
