@@ -40,6 +40,47 @@ function(sim_add_test)
   endif()
 endfunction()
 
+# sim_add_test_suites(NAME exe SOURCES a.cpp… [LIBS lib…] [LABELS …] [TIMEOUT s] [NO_PCH]
+#                     TESTS ctest_name gtest_filter [ctest_name gtest_filter…])
+# One GoogleTest executable for a folder's suites (one link instead of one per file), registered
+# as one ctest test per TESTS pair, each running the suites its --gtest_filter names: ctest -j2
+# still schedules suite by suite, and the names scripts and docs use stay. A suite no filter names
+# still runs, under <exe>_other_suites (which runs nothing while every suite is named). Every
+# source keeps its helpers in an anonymous namespace: the files now share one program.
+function(sim_add_test_suites)
+  cmake_parse_arguments(T "NO_PCH" "NAME;TIMEOUT" "SOURCES;LIBS;LABELS;TESTS" ${ARGN})
+  list(LENGTH T_TESTS n)
+  math(EXPR odd "${n} % 2")
+  if(n EQUAL 0 OR odd)
+    message(FATAL_ERROR "sim_add_test_suites(${T_NAME}): TESTS takes pairs of a ctest name and a gtest filter")
+  endif()
+  add_executable(${T_NAME} ${T_SOURCES})
+  sim_target_defaults(${T_NAME})
+  target_link_libraries(${T_NAME} PRIVATE GTest::gtest GTest::gtest_main ${T_LIBS})
+  if(NOT T_NO_PCH)
+    sim_use_test_pch(${T_NAME})
+  endif()
+  if(NOT T_TIMEOUT)
+    set(T_TIMEOUT 300)
+  endif()
+  set(named)
+  math(EXPR last "${n} - 1")
+  foreach(i RANGE 0 ${last} 2)
+    math(EXPR j "${i} + 1")
+    list(GET T_TESTS ${i} test)
+    list(GET T_TESTS ${j} filter)
+    add_test(NAME ${test} COMMAND ${T_NAME} --gtest_filter=${filter})
+    set_tests_properties(${test} PROPERTIES TIMEOUT ${T_TIMEOUT} LABELS "${T_LABELS}")
+    string(APPEND named ":${filter}")
+  endforeach()
+  string(SUBSTRING "${named}" 1 -1 named)
+  add_test(NAME ${T_NAME}_other_suites COMMAND ${T_NAME} --gtest_filter=-${named})
+  set_tests_properties(${T_NAME}_other_suites PROPERTIES TIMEOUT ${T_TIMEOUT} LABELS "${T_LABELS}")
+  if("concurrency" IN_LIST T_LABELS)
+    add_dependencies(sim_concurrency_suites ${T_NAME})
+  endif()
+endfunction()
+
 # sim_add_fuzzer(NAME name SOURCES a.cpp… [LIBS lib…] [CORPUS dir])
 # With SIM_FUZZ (clang): a libFuzzer binary run for SIM_FUZZ_SECONDS as the test fuzz_<name>.
 # Without: the same entry point linked to a small main that replays the seed corpus, so the

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# The soak test of the whole vehicle (issue 23): seven 1920x1200 cameras at 30 Hz and two LiDARs
+# The soak test of the whole vehicle (issue 23): seven 1920x1200 cameras at 30 Hz and two replayed LiDARs
 # into SIM, readers of every kind (C++ blocking, borrowing, adaptive, a WaitSet, C, Python,
 # sim_foxglove with a Foxglove client and the page, sim_record, sim_dds_bridge with a Cyclone DDS
-# subscriber in a private network namespace) and a chaos loop that kills and restarts them.
+# subscriber in a private network namespace), two live LiDAR drivers on one UDP port fed by
+# multicast (two groups) in another, and a chaos loop that kills and restarts them.
 # Prints a table (and JSON with --json) and exits 0 only if every check passed.
 #
 #   scripts/soak.sh                       two minutes (SIM_SOAK_SECONDS, default 120)
@@ -16,7 +17,7 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
-if [[ ${1:-} == --help || ${1:-} == -h ]]; then sed -n '2,15p' "$0"; exit 0; fi
+if [[ ${1:-} == --help || ${1:-} == -h ]]; then sed -n '2,16p' "$0"; exit 0; fi
 build=${SIM_SOAK_BUILD:-build/release}
 seconds=${SIM_SOAK_SECONDS:-120}
 
@@ -31,7 +32,8 @@ if [[ ! -f $build/CMakeCache.txt ]]; then
     { cat "$build.configure.log"; exit 1; }
 fi
 cmake --build "$build" -j"${SIM_JOBS:-2}" --target sim_soak_agent sim_soak_c_reader sim_soak_dds \
-  sim_replay_video sim_replay_pcap sim_record sim_play sim_dds_bridge sim_rm sim_foxglove sim_python
+  sim_replay_video sim_replay_pcap sim_record sim_play sim_dds_bridge sim_rm sim_foxglove sim_python \
+  sim_lidar_hesai sim_lidar_velodyne
 # The Foxglove client's npm packages (pinned; installed once, as for the viewer's tests).
 "$root/tests/viewer/foxglove/node/install.sh"
 # The Python the module was built for (with numpy), not whichever python3 is first on the PATH.

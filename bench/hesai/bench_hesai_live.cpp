@@ -33,7 +33,7 @@
 #include <thread>
 #include <vector>
 
-#include "pcap_payloads.hpp"
+#include "hesai_test_data.hpp"
 #include "sim/hesai/frame_assembler.hpp"
 #include "sim/hesai/lidar_stream.hpp"
 #include "sim/sim.hpp"

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "velodyne/packet_builder.hpp"
-#include "pcap_payloads.hpp"
+#include "lidar_test/pcap_payloads.hpp"
 #include "sim/velodyne/velodyne.hpp"
 
 using namespace sim::velodyne;
@@ -37,7 +37,7 @@ Calibration load_calibration(const std::string& path) {
 
 Capture real(const char* pcap, const char* yaml, Model model) {
   std::vector<std::vector<std::uint8_t>> packets;
-  for (auto& p : hesai_test::read_udp_payloads(std::string(VELODYNE_TEST_DATA) + "/" + pcap)) {
+  for (auto& p : lidar_test::read_udp_payloads(std::string(VELODYNE_TEST_DATA) + "/" + pcap)) {
     packets.push_back(std::move(p.bytes));
   }
   Packet first, last;

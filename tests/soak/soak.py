@@ -4,10 +4,10 @@
 
     tests/soak/soak.py --build build/release --seconds 120 [--json soak.json] [--seed N]
 
-Seven 1920x1200 bgr8 camera streams at 30 Hz and two LiDAR streams, readers of every kind, and a
-chaos loop that kills and restarts readers and writers (SIGKILL and SIGTERM), replaces a stream's
-layout and removes dead streams. It checks continuously and reports at the end as a table and as
-JSON; exit 0 only if every check passed. What is checked and why it is fair on a loaded machine:
+Seven 1920x1200 bgr8 camera streams at 30 Hz, two replayed LiDAR streams and two live ones on one
+port by multicast, readers of every kind, and a chaos loop that kills and restarts readers and
+writers (SIGKILL and SIGTERM), replaces a stream's layout and removes dead streams. It checks
+continuously and reports at the end as a table and as JSON; exit 0 only if every check passed. What is checked and why it is fair on a loaded machine:
 tests/soak/README.md.
 """
 import argparse
@@ -28,6 +28,19 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 HESAI = os.path.join(ROOT, "tests", "drivers", "hesai", "data")
+VELODYNE = os.path.join(ROOT, "tests", "drivers", "velodyne", "data")
+# Two live LiDARs on one UDP port, each joined to its own multicast group, in a network namespace
+# of their own (README "Two LiDARs on one port"): soak_multicast.py sends each capture's payloads
+# to its group from its own address; each driver must hear only its sensor (other_senders=0).
+MULTICAST_PORT = 2368
+MULTICAST_FEEDS = (  # group, sender address, capture, program (in the build), calibration
+    ("239.255.77.1", "127.0.0.2", os.path.join(HESAI, "pandarxt32_dual.pcap"), "drivers/hesai/sim_lidar_hesai",
+     os.path.join(HESAI, "pandarxt32.calibration.csv")),
+    ("239.255.77.2", "127.0.0.3", os.path.join(VELODYNE, "vlp16_dual.pcap"),
+     "drivers/velodyne/stream/sim_lidar_velodyne", os.path.join(VELODYNE, "VLP16.yaml")),
+)
+# Counters of a live driver's --summary that say it decoded another sensor's packets.
+HEARD_ANOTHER = ("other_senders", "malformed", "wrong_model")
 CAMERA_PERIOD_MS = 1000 / 30
 LIDAR_PERIOD_MS = 100.0
 STOP_GRACE_S = 15  # a process asked to stop with SIGTERM must be gone by then (else: a hang)
@@ -103,6 +116,7 @@ class Child:
         self.last_line = self.started
         self.stats = None
         self.other = []  # JSON lines that are neither stats nor violations (sim_foxglove's port)
+        self.summary = None  # a live driver's --summary line on exit, as {key: value}
         self.signalled = None
         self.handled = False  # whether it had its handler for the signal it was sent
         self.ended_reported = False
@@ -112,6 +126,9 @@ class Child:
     def _read(self):
         for line in self.proc.stdout:
             self.last_line = time.monotonic()
+            if line.startswith("summary "):
+                self.summary = dict(kv.split("=", 1) for kv in line.split()[1:] if "=" in kv)
+                continue
             try:
                 record = json.loads(line)
             except ValueError:
@@ -200,6 +217,51 @@ def classify_stalls(violations, publish_gaps):
     return changed
 
 
+def find_program(build, rel):
+    """A program of the build: at `rel`, or wherever the build put a file of its name."""
+    path = os.path.join(build, rel)
+    if not os.path.exists(path):
+        name = os.path.basename(rel)
+        found = [os.path.join(d, name) for d, _, files in os.walk(build) if name in files]
+        path = found[0] if found else path
+    return path
+
+
+def multicast_sender_argv(feeds, port=MULTICAST_PORT):
+    """soak_multicast.py in a network namespace of its own (unshare execs it, so the sender's pid
+    names the namespace: /proc/PID/ns/net), sending each feed to its group on one port."""
+    return ["unshare", "--net", "--", sys.executable, os.path.join(HERE, "soak_multicast.py"), "--port", str(port),
+            *[",".join(f[:3]) for f in feeds]]
+
+
+def live_driver_argv(program, namespace_pid, feed, stream, port=MULTICAST_PORT):
+    """A live driver in the sender's network namespace (nsenter execs it: the process started is
+    the driver itself), joined to its sensor's group on the shared port."""
+    group, _, _, _, calibration = feed
+    return ["nsenter", f"--net=/proc/{namespace_pid}/ns/net", "--", program, "--port", str(port), "--multicast",
+            group, "--stream", stream, "--calibration", calibration, "--checksum", "--summary", "--quiet"]
+
+
+def multicast_findings(incarnations):
+    """What the live drivers on one port said when they ended: each incarnation is (process, its
+    exit code, its --summary as {key: value} or None). One that exited (SIGTERM, or the end of the
+    run) must have printed its summary, with no datagram of another sender, none malformed and
+    none of another model: each driver joined its own group and must hear only its sensor. One
+    killed by a signal (SIGKILL, or SIGTERM before its handler) says nothing. Returns one
+    sentence per problem."""
+    problems = []
+    for process, code, summary in incarnations:
+        if code is not None and code < 0:
+            continue
+        if summary is None:
+            problems.append(f"{process} printed no summary when it was stopped")
+            continue
+        heard = {k: summary.get(k) for k in HEARD_ANOTHER if summary.get(k, "0") != "0"}
+        if heard:
+            problems.append(f"{process} heard another sensor: " + ", ".join(f"{k}={v}" for k, v in heard.items()))
+    return problems
+
+
 def theil_sen(points):
     """The median of the slopes between every two points (robust to a few steps and outliers)."""
     if len(points) > 240:  # enough for the median; keeps an hour's samples cheap
@@ -232,7 +294,12 @@ class Soak:
         self.spawner = Spawner()
         tag = f"{os.getpid()}"
         self.cameras = [f"/soak{tag}_cam{i}" for i in range(7)]
-        self.lidars = [f"/soak{tag}_lidar{i}" for i in range(2)]
+        self.replayed_lidars = [f"/soak{tag}_lidar{i}" for i in range(2)]
+        # Live drivers fed by multicast in a private network namespace (root, like the DDS bridge).
+        self.live_lidars = [] if args.lean else [f"/soak{tag}_lidar{i}" for i in range(2, 2 + len(MULTICAST_FEEDS))]
+        self.lidars = self.replayed_lidars + self.live_lidars
+        self.multicast_pid = None
+        self.programs = {}
         self.streams = self.cameras + self.lidars
         self.period = {s: CAMERA_PERIOD_MS for s in self.cameras}
         self.period.update({s: LIDAR_PERIOD_MS for s in self.lidars})
@@ -282,6 +349,8 @@ class Soak:
         if layout == "other":  # a writer of another layout under the same name
             return [self.bin("tests/soak/sim_soak_agent"), "writer", "--stream", stream, "--hz", "30",
                     "--points", "50000"]
+        if stream in self.live_lidars:
+            return self.live_lidar_argv(stream)
         if stream in self.lidars:
             capture, calibration = [("pandar64_dual.pcap", "pandar64.calibration.csv"),
                                     ("pandarxt32_dual.pcap", "pandarxt32.calibration.csv")][i - 7]
@@ -294,6 +363,23 @@ class Soak:
         tear = ["--tear-every", "97"] if "torn" in self.faults and stream == self.cameras[3] else []
         return [self.bin("tests/soak/sim_soak_agent"), "writer", "--stream", stream, "--hz", "30",
                 "--image", self.args.image, *tear]
+
+    def live_lidar_argv(self, stream):
+        feed = MULTICAST_FEEDS[self.live_lidars.index(stream)]
+        if feed[3] not in self.programs:
+            self.programs[feed[3]] = find_program(self.args.build, feed[3])
+        return live_driver_argv(self.programs[feed[3]], self.multicast_pid, feed, stream)
+
+    def start_multicast(self):
+        """The two sensors' sender, holding the network namespace the live drivers join."""
+        sender = self.start("multicast", multicast_sender_argv(MULTICAST_FEEDS))
+        deadline = time.monotonic() + 30
+        while not sender.other and sender.alive() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        ready = next((r for r in sender.other if r.get("kind") == "ready"), None)
+        if not ready:
+            self.fail("multicast", f"did not make its network: {sender.stderr_tail()}")
+        self.multicast_pid = sender.pid  # unshare execs the sender: its namespace is /proc/PID/ns/net
 
     def arg(self, stream):
         return f"{stream}:{self.period[stream]:.3f}"
@@ -322,6 +408,8 @@ class Soak:
         width, height = self.args.image.split("x")
         subprocess.run([self.bin("tests/soak/sim_soak_agent"), "make-pictures", self.pictures, "--frames", "4",
                         "--width", width, "--height", height], check=True)
+        if self.live_lidars:
+            self.start_multicast()
         for s in self.streams:
             self.start("writer" + s, self.writer_argv(s))
         for name, (argv, long_lived) in self.reader_argvs().items():
@@ -332,8 +420,10 @@ class Soak:
         self.start_record()
 
     def start_foxglove(self):
+        # The nine streams it always had: the live LiDARs' frames are read by the C++ readers (the
+        # checks), and converting two more LiDARs at 5 Hz would cost the 2-core machine more.
         fox = self.start("sim_foxglove", [self.bin("viewer/foxglove/sim_foxglove"), "--port", "0", "--json",
-                                          "--max-rate", "5", *self.streams], True)
+                                          "--max-rate", "5", *self.cameras, *self.replayed_lidars], True)
         deadline = time.monotonic() + 30
         while not fox.other and fox.alive() and time.monotonic() < deadline:
             time.sleep(0.05)
@@ -350,9 +440,9 @@ class Soak:
             self.fail("sim_soak_dds", "was not built (Cyclone DDS missing?)")
             return
         bridge = [self.bin("bridge/dds/sim_dds_bridge"), "--quiet"]
-        for s in self.lidars:
+        for s in self.replayed_lidars:
             bridge += ["--publish", s]
-        self.start("dds", [dds, *self.lidars, "--", *bridge], True)
+        self.start("dds", [dds, *self.replayed_lidars, "--", *bridge], True)
 
     def start_record(self):
         out = os.path.join(self.workdir, "segment.mcap")
@@ -401,7 +491,7 @@ class Soak:
             return set()
 
     def unexpected_regions(self):
-        """The regions under the soak's names that are none of its nine streams, and the streams
+        """The regions under the soak's names that are none of its streams, and the streams
         whose region is missing (both samples are taken with every writer running)."""
         found = self.our_regions()
         return (found - set(self.streams)) | {f"{s} (missing)" for s in set(self.streams) - found}
@@ -659,7 +749,7 @@ class Soak:
         dds = self.children.get("dds")
         if dds and dds.stats and dds.stats.get("bridge_exit") not in (None, "exit 0"):
             self.fail("sim_dds_bridge", f"{dds.stats['bridge_exit']} after SIGTERM")
-        # Every writer ended: only the nine streams' regions may remain (a writer leaves its region
+        # Every writer ended: only the streams' regions may remain (a writer leaves its region
         # for late readers; sim_rm --dead removes it). Anything else under the soak's names was
         # left behind by one of its programs.
         self.stale = sorted(self.our_regions() - set(self.streams))
@@ -706,7 +796,7 @@ class Soak:
             # raises its mmap threshold to the largest block freed), so a process that handles
             # 6.9 MB frames may hold a few more at the end without leaking; a leak of anything per
             # frame or per chaos event would be far more over thousands of frames and events.
-            if name == "/dev/shm":  # exactly the nine streams' regions, at both samples
+            if name == "/dev/shm":  # exactly the streams' regions, at both samples
                 unexpected = sorted(set(a["unexpected"]) | set(b["unexpected"]))
                 rows.append({"process": name, "what": "shm_regions", "start": a["shm_regions"],
                              "end": b["shm_regions"], "limit": f"the {len(self.streams)} streams' only",
@@ -743,6 +833,19 @@ class Soak:
                 "rise_over_first_quarter_kib": rise, "samples": len(points),
                 "noise_kib": round(noise), "ok": slope <= limit or rise <= noise or not judged}
 
+    def multicast_report(self):
+        """The live drivers' summaries judged (multicast_findings), and what the sender sent."""
+        if not self.live_lidars:
+            return {"problems": [], "detail": "not run (--lean)", "summaries": []}
+        runs = [("writer" + s, c.proc.returncode, c.summary) for s in self.live_lidars
+                for c in self.history.get("writer" + s, [])]
+        sender = self.children.get("multicast")
+        groups = (sender.stats or {}).get("groups", {}) if sender else {}
+        frames = sum(int((summary or {}).get("frames", 0)) for _, _, summary in runs)
+        sent = ", ".join(f"{g}: {c['sent']}" for g, c in groups.items())
+        return {"problems": multicast_findings(runs), "summaries": [list(r) for r in runs],
+                "detail": f"{len(runs)} driver runs, {frames} frames in their summaries; datagrams sent: {sent}"}
+
     def deliveries(self):
         """Frames each long-lived (or restarted C++) reader got per stream, against the frames the
         writer published while it read them (got + skipped), over all its incarnations."""
@@ -774,6 +877,7 @@ class Soak:
         resources = self.resource_checks()
         other = [v for v in self.violations
                  if v.get("what") not in ("torn", "out_of_order", "missed", "backwards", "writer_stall")]
+        multicast = self.multicast_report()
         checks = [
             ("torn frames (pattern, structure or checksum)", count("torn"), f"{frames} frames read"),
             ("out-of-order frames (SIM sequence, DDS and Foxglove stamps)",
@@ -791,6 +895,8 @@ class Soak:
             ("our /dev/shm regions left behind", self.left_behind, ", ".join(self.stale)),
             ("recordings that do not play back whole (sim_play)", len(self.recordings["broken"]),
              f"{self.recordings['played']} segments played back"),
+            ("live LiDARs on one port (two multicast groups) that heard the other sensor or did not say",
+             len(multicast["problems"]), multicast["detail"]),
         ]
         ok = all(value == 0 for _, value, _ in checks)
         # Shown, never failed: the writer (or the whole machine) paused, not the transport.
@@ -825,6 +931,8 @@ class Soak:
                 lines.append(f"  resource: {json.dumps(r)}")
         for b in self.recordings["broken"]:
             lines.append(f"  recording: {b}")
+        for m in multicast["problems"]:
+            lines.append(f"  multicast: {m}")
         for v in self.violations[:20]:
             lines.append(f"  violation: {json.dumps(v)}")
         print("\n".join(lines), flush=True)
@@ -832,7 +940,7 @@ class Soak:
                   "checks": [{"check": w, "value": v, "detail": d} for w, v, d in checks],
                   "readers": kinds, "chaos": self.chaos, "resources": resources,
                   "failures": self.failures, "violations": self.violations, "deliveries": deliveries,
-                  "publish_gaps": self.publish_gaps, "recordings": self.recordings,
+                  "publish_gaps": self.publish_gaps, "recordings": self.recordings, "multicast": multicast,
                   "faults": sorted(self.faults), "judged": [c[0] for c in checks[:-1]],
                   # private memory over the run, for people judging a slope: [seconds, KiB], ≤ 120 a process
                   "memory": {name: [[round(t - self.t0, 1), kib] for t, kib in points[::max(1, len(points) // 120)]]

@@ -82,6 +82,20 @@ def test_a_stall_of_every_reader_while_the_writer_paused_is_a_writer_stall():
     assert classify_stalls(elsewhere, other) == 0
 
 
+def test_a_live_lidar_that_heard_the_other_sensor_or_said_nothing_is_found():
+    # What the two live drivers on one port printed when they ended (multicast_findings).
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from soak import multicast_findings
+    clean = {"frames": "120", "other_senders": "0", "malformed": "0", "wrong_model": "0"}
+    assert multicast_findings([("writer/s_lidar2", 0, clean), ("writer/s_lidar3", 0, clean)]) == []
+    # Killed by SIGKILL (or SIGTERM before its handler): no summary, nothing to judge.
+    assert multicast_findings([("writer/s_lidar2", -9, None), ("writer/s_lidar3", -15, None)]) == []
+    heard = multicast_findings([("writer/s_lidar2", 0, dict(clean, other_senders="14963", malformed="4501"))])
+    assert len(heard) == 1 and "other_senders=14963" in heard[0] and "malformed=4501" in heard[0], heard
+    silent = multicast_findings([("writer/s_lidar3", 0, None), ("writer/s_lidar3", 1, None)])
+    assert len(silent) == 2 and all("no summary" in p for p in silent), silent
+
+
 def test_memory_is_judged_by_its_slope_not_by_a_step():
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
     from soak import theil_sen

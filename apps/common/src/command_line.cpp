@@ -103,6 +103,16 @@ void CommandLine::add_text(std::string_view name, std::string& value, std::strin
   if (!group.empty()) option->group(std::string(group));
 }
 
+void CommandLine::add_number(std::string_view name, std::optional<double>& value,
+                             std::string_view help, std::string_view type_name,
+                             std::function<std::string(const std::string&)> problem,
+                             std::string_view group) {
+  auto* option = app_->add_option(std::string(name), value, std::string(help))
+                     ->type_name(std::string(type_name));
+  if (problem) option->check(validator(std::move(problem), std::string(type_name)));
+  if (!group.empty()) option->group(std::string(group));
+}
+
 void CommandLine::add_config_file(std::vector<std::string> path_options) {
   for (std::string& name : path_options_) path_options.push_back(std::move(name));
   path_options_.clear();

@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/apps/sensor_options.hpp"
 
-#include <CLI/CLI.hpp>
 #include <cmath>
 
 #include "sim/apps/camera_info_file.hpp"
@@ -27,19 +26,11 @@ std::string finite_problem(const std::string& text) {
 }  // namespace
 
 void add_sensor_options(CommandLine& cli, SensorOptions& options, SensorKind kind) {
-  CLI::App& app = cli.app();
-  const auto frame = validator([](const std::string& name) { return frame_id_problem(name); },
-                               "FRAME");
-  app.add_option("--frame-id", options.frame_id,
-                 "the sensor's frame [the stream name without '/']")
-      ->type_name("FRAME")
-      ->check(frame)
-      ->group("Sensor");
-  app.add_option("--parent-frame", options.parent_frame, "the frame the sensor is mounted in")
-      ->type_name("FRAME")
-      ->check(frame)
-      ->group("Sensor");
-  const auto finite = validator(finite_problem, "NUMBER");
+  const auto frame = [](const std::string& name) { return frame_id_problem(name); };
+  cli.add_text("--frame-id", options.frame_id, "the sensor's frame [the stream name without '/']",
+               "FRAME", frame, "Sensor");
+  cli.add_text("--parent-frame", options.parent_frame, "the frame the sensor is mounted in",
+               "FRAME", frame, "Sensor");
   struct Axis {
     const char* name;
     std::optional<double>* value;
@@ -57,17 +48,13 @@ void add_sensor_options(CommandLine& cli, SensorOptions& options, SensorKind kin
        "--x … --yaw makes the mounting known"},
   };
   for (const Axis& axis : axes) {
-    app.add_option(axis.name, *axis.value, axis.help)
-        ->type_name(axis.unit)
-        ->check(finite)
-        ->group("Sensor");
+    cli.add_number(axis.name, *axis.value, axis.help, axis.unit, finite_problem, "Sensor");
   }
   if (kind == SensorKind::camera) {
-    app.add_option("--camera-info", options.camera_info,
-                   "the camera's calibration: a camera_calibration_parsers YAML file (as ROS's "
-                   "cameracalibrator writes) or a file:// URL")
-        ->type_name("FILE")
-        ->group("Sensor");
+    cli.add_text("--camera-info", options.camera_info,
+                 "the camera's calibration: a camera_calibration_parsers YAML file (as ROS's "
+                 "cameracalibrator writes) or a file:// URL",
+                 "FILE", {}, "Sensor");
     cli.add_path_option("camera-info");
   }
 }

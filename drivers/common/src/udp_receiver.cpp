@@ -304,13 +304,16 @@ std::string address_text(const sockaddr_storage& address) {
 
 struct UdpReceiver::Impl {
   Impl(UdpListen l, std::size_t datagram_size, std::size_t batch_size)
-      : listen(std::move(l)), batch(batch_size, datagram_size) {}
+      : listen(std::move(l)), batch(batch_size, datagram_size) {
+    accepted.reserve(batch_size);
+  }
 
   UdpListen listen;
   std::optional<IpAddress> source;
   std::vector<Fd> sockets;
   int granted_buffer = 0;
   ReceiveBatch batch;
+  std::vector<Datagram> accepted;  // of a batch, from accepted senders: one handler call each batch
   ReceiveCounters counters;
   const ReceiverCallbacks* callbacks = nullptr;  // during run()
   std::int64_t last_arrival_ns = 0;              // kernel stamp of the last data packet
@@ -446,6 +449,7 @@ struct UdpReceiver::Impl {
       if (count == 0) return true;
       taken += count;
       const std::int64_t now = monotonic_ns();
+      accepted.clear();
       for (std::size_t i = 0; i < count; ++i) {
         ++counters.datagrams;
         if (source && !same_address(batch.sender(i), *source)) {
@@ -453,8 +457,10 @@ struct UdpReceiver::Impl {
           continue;
         }
         if (!source) count_sender(batch.sender(i));
-        if (!handler.on_datagram(batch.datagram(i, socket, now))) return false;
+        accepted.push_back(batch.datagram(i, socket, now));
       }
+      // One call into the family a batch, not one a datagram.
+      if (!accepted.empty() && !handler.on_datagrams(accepted)) return false;
       if (count < batch.size()) return true;
     }
   }

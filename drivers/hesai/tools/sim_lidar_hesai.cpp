@@ -4,7 +4,6 @@
 // detection, silence; LidarStream: decode straight into shared memory, the path sim_replay_pcap
 // takes too); this program is its command line, its messages and its exit code.
 #include <CLI/CLI.hpp>
-#include <arpa/inet.h>
 
 #include <chrono>
 #include <cstdio>
@@ -21,6 +20,7 @@
 #include "sim/hesai/live_receiver.hpp"
 #include "sim/hesai/ptc_client.hpp"
 #include "sim/hesai/ptc_clock.hpp"
+#include "sim/lidar/tcp_client.hpp"
 
 namespace {
 
@@ -54,9 +54,9 @@ void add_options(sim::apps::CommandLine& cli, Options& o) {
                "check it and cache it in the --calibration file [~/.cache/sim/hesai-<ip>.csv]; "
                "when the sensor does not deliver it, the cached file is used with a warning");
   app.add_option("--sensor-ip", o.sensor.sensor_ip,
-                 "the sensor's address for --calibration-from-sensor and its clock [--source, else "
-                 "192.168.1.201]")
-      ->type_name("IP");
+                 "the sensor's address or name for --calibration-from-sensor and its clock [--source, "
+                 "else 192.168.1.201]")
+      ->type_name("ADDR|NAME");
   app.add_option("--ptc-port", o.sensor.ptc_port, "the sensor's PTC port")->check(CLI::Range(1, 65535));
   app.add_option("--ptc-timeout", o.sensor.ptc_timeout,
                  "seconds the whole calibration download, or one reading of the sensor's clock, "
@@ -85,10 +85,8 @@ std::optional<int> fetch_calibration(const sim::apps::CommandLine& cli, Options&
   }
   sensor.port = static_cast<std::uint16_t>(o.sensor.ptc_port);
   sensor.timeout = std::chrono::milliseconds(static_cast<long>(o.sensor.ptc_timeout * 1000));
-  in_addr ignored{};
-  if (inet_pton(AF_INET, sensor.host.c_str(), &ignored) != 1) {
-    return cli.usage_error("--sensor-ip '" + sensor.host +
-                           "' is not an IPv4 address (e.g. 192.168.1.201)");
+  if (const std::string problem = sim::lidar::host_problem(sensor.host); !problem.empty()) {
+    return cli.usage_error("--sensor-ip " + problem);  // a name resolves when connecting
   }
   if (o.stream.calibration.empty()) {
     o.stream.calibration = sim::hesai::default_calibration_cache(sensor.host).string();

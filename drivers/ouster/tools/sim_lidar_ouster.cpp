@@ -4,6 +4,10 @@
 // batched receive, silence; LidarStream: decode straight into shared memory, the path
 // sim_replay_pcap takes too); this program is its command line, its messages and its exit code.
 #include <CLI/CLI.hpp>
+#include <sys/epoll.h>
+#include <sys/eventfd.h>
+#include <unistd.h>
+
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -19,7 +23,9 @@
 #include "sim/apps/live_lidar.hpp"
 #include "sim/apps/ouster_options.hpp"
 #include "sim/apps/stop_signal.hpp"
+#include "sim/clock.hpp"
 #include "sim/lidar/frame_publisher.hpp"
+#include "sim/lidar/tcp_client.hpp"
 #include "sim/ouster/live_receiver.hpp"
 #include "sim/ouster/metadata_client.hpp"
 #include "sim/ouster/time_client.hpp"
@@ -56,10 +62,10 @@ void add_options(sim::apps::CommandLine& cli, Options& o) {
                "fetch the metadata from the sensor's HTTP API at start, check it and cache it in "
                "the --calibration file [~/.cache/sim/ouster-<ip>.json]; when the sensor does not "
                "deliver it, the cached file is used with a warning");
-  app.add_option("--sensor-ip", o.sensor_ip, "the sensor's address for --metadata-from-sensor [--source]")
-      ->type_name("IP")
-      ->check(sim::apps::validator(
-          [](const std::string& ip) { return sim::lidar::address_problem(ip, sim::lidar::IpVersions::v4); }, "ADDR"));
+  app.add_option("--sensor-ip", o.sensor_ip,
+                 "the sensor's address or name (os-122.local) for --metadata-from-sensor [--source]")
+      ->type_name("ADDR|NAME")
+      ->check(sim::apps::validator(sim::lidar::host_problem, "ADDR|NAME"));  // a name resolves at connect
   app.add_option("--http-port", o.http_port, "the sensor's HTTP port")->check(CLI::Range(1, 65535));
   app.add_option("--http-timeout", o.http_timeout,
                  "seconds the metadata download, or one reading of the sensor's clock, may take")
@@ -156,9 +162,79 @@ sim::ClockStatus reported_clock(const sim::apps::ClockPoll* poll, const TaiCorre
   return clock;
 }
 
-int run(const sim::apps::CommandLine& cli, Options& o) {
-  const auto& stop = sim::apps::StopSignal::install();
-  sim::apps::LiveStatus status(tool, o.receive);
+// --metadata-from-sensor: a sensor reconfigured from its web page (another lidar_mode) or
+// restarted sends packets of a new initialization id, which the metadata in use refuses (the
+// stream says so once). When for reconfigure_after_ns every lidar packet was refused so and none
+// decoded, the session ends and the metadata is fetched again (review turn 4, L6).
+constexpr std::int64_t reconfigure_after_ns = 2'000'000'000;
+
+class ReconfigurationWatch {
+ public:
+  // About once a second, on the receive thread: true once the sensor has sent only packets of
+  // another initialization id for reconfigure_after_ns.
+  bool due(const sim::ouster::AssemblerCounters& c, std::int64_t now_ns) noexcept {
+    const std::uint64_t refused = c.rejected[static_cast<unsigned>(sim::ouster::PacketError::init_id_mismatch)];
+    const bool only_refused = refused > refused_ && c.packets == decoded_;
+    refused_ = refused;
+    decoded_ = c.packets;
+    if (!only_refused) {
+      since_ns_ = -1;
+      return false;
+    }
+    if (since_ns_ < 0) since_ns_ = now_ns;
+    return now_ns - since_ns_ >= reconfigure_after_ns;
+  }
+
+ private:
+  std::uint64_t refused_ = 0;
+  std::uint64_t decoded_ = 0;
+  std::int64_t since_ns_ = -1;
+};
+
+// What ends one session's receive loop: a stop request (SIGINT/SIGTERM), or new metadata being
+// needed. The receiver polls one descriptor, so it gets an epoll set of the stop eventfd and this
+// session's own; without one (epoll unavailable) only the stop request ends it.
+class SessionStop {
+ public:
+  explicit SessionStop(int stop_fd) : stop_fd_(stop_fd), own_(::eventfd(0, EFD_CLOEXEC)), set_(::epoll_create1(EPOLL_CLOEXEC)) {
+    for (const int fd : {stop_fd_, own_}) {
+      epoll_event e{};
+      e.events = EPOLLIN;
+      if (set_ >= 0 && (fd < 0 || ::epoll_ctl(set_, EPOLL_CTL_ADD, fd, &e) != 0)) close_set();
+    }
+  }
+  ~SessionStop() {
+    close_set();
+    if (own_ >= 0) ::close(own_);
+  }
+  SessionStop(const SessionStop&) = delete;
+  SessionStop& operator=(const SessionStop&) = delete;
+
+  int fd() const noexcept { return set_ >= 0 ? set_ : stop_fd_; }
+  // Ends the loop (receive thread); false when only a stop request can.
+  bool end_session() noexcept {
+    if (set_ < 0) return false;
+    const std::uint64_t one = 1;
+    ended_ = ::write(own_, &one, sizeof one) == sizeof one;
+    return ended_;
+  }
+  bool ended() const noexcept { return ended_; }
+
+ private:
+  void close_set() noexcept {
+    if (set_ >= 0) ::close(set_);
+    set_ = -1;
+  }
+  int stop_fd_;
+  int own_;
+  int set_;
+  bool ended_ = false;
+};
+
+// One session: the metadata (fetched again in each), the receiver and the stream, until a stop
+// (the exit code) or, with --metadata-from-sensor, a reconfigured sensor (nullopt: start anew).
+std::optional<int> run_session(const sim::apps::CommandLine& cli, Options& o, sim::apps::LiveStatus& status,
+                               const sim::apps::StopSignal& stop) {
   auto config = sim::apps::ouster_stream_config(o.stream);
   if (!config) return cli.fail(config.error());
   std::optional<sim::ouster::Metadata> metadata;
@@ -219,11 +295,26 @@ int run(const sim::apps::CommandLine& cli, Options& o) {
            sim::apps::receive_status(receiver->counters(), receiver->last_packet_ns(), silence_ns, true,
                                      final_line);
   };
-  receiver->run(*stream, stop.fd(),
-                sim::apps::with_clock_tick(status.callbacks(text), clock ? std::function<void()>(clock_tick) : nullptr,
-                                           std::chrono::seconds(1)));
+  SessionStop session(stop.fd());
+  ReconfigurationWatch watch;
+  const auto tick = [&] {
+    clock_tick();
+    if (o.metadata_from_sensor && watch.due(stream->counters(), sim::monotonic_ns())) session.end_session();
+  };
+  receiver->run(*stream, session.fd(), sim::apps::with_clock_tick(status.callbacks(text), tick, std::chrono::seconds(1)));
+  if (session.ended() && !stop.requested()) return std::nullopt;
   status.finish(stream->describe_counters(true), receiver->counters());
   return sim::apps::kExitOk;
+}
+
+int run(const sim::apps::CommandLine& cli, Options& o) {
+  const auto& stop = sim::apps::StopSignal::install();
+  sim::apps::LiveStatus status(tool, o.receive);
+  for (;;) {
+    if (auto code = run_session(cli, o, status, stop)) return *code;
+    status.line().note("the sensor has sent only lidar packets of another initialization id for 2 s (it was "
+                       "reconfigured or restarted): fetching its metadata again");
+  }
 }
 
 }  // namespace

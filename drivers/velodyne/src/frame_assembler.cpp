@@ -66,6 +66,15 @@ float unit_fraction(Model model, unsigned bank, unsigned unit) noexcept {
   return 0.0f;
 }
 
+// nebula decodes the VLP-32C, HDL-32E and HDL-64E with one decoder (its VLP-32 decoder), which
+// moves unit j of a block by j · 2.304/55.296 of the difference to the next block: each laser
+// one slot after the previous, where the VLP-32C fires its lasers in pairs (the manual's table,
+// unit_fraction) and the HDL-32E's and HDL-64E's have other slots. nebula's reference clouds
+// carry it: on its VLP-32C capture the two differ by up to 0.15° at unit 31.
+bool nebula_per_unit_slots(Model model) noexcept {
+  return model == Model::vlp32c || model == Model::hdl32e || model == Model::hdl64e;
+}
+
 std::uint32_t clamp_offset(std::int64_t ns) noexcept {
   if (ns < 0) return 0;
   if (ns > std::numeric_limits<std::uint32_t>::max()) return std::numeric_limits<std::uint32_t>::max();
@@ -122,6 +131,7 @@ FrameAssembler::FrameAssembler(Calibration calibration, AssemblerOptions options
   cut_centi_ = static_cast<std::uint16_t>(std::lround(options_.cut_azimuth_deg * 100) % full_turn);
   if (options_.azimuth_window) {
     windowed_ = true;
+    window_points_ = !options_.azimuth_window->block_azimuth_only;
     window_min_centi_ = static_cast<std::int32_t>(std::lround(options_.azimuth_window->min_deg * 100));
     window_max_centi_ = static_cast<std::int32_t>(std::lround(options_.azimuth_window->max_deg * 100));
   }
@@ -152,12 +162,16 @@ FrameAssembler::FrameAssembler(Calibration calibration, AssemblerOptions options
 
 void FrameAssembler::build_unit_geometry() noexcept {
   const bool two_sequences = info_->sequences_per_block == 2;
+  const bool nebula_slots =
+      options_.interpolation == AzimuthInterpolation::nebula && nebula_per_unit_slots(options_.model);
   for (unsigned bank = 0; bank < banks; ++bank) {
     BankGeometry& g = banks_[bank];
     g.cos_vert.fill(1.0f);
     g.max_intensity.fill(255.0);
     for (unsigned u = 0; u < units_per_block; ++u) {
-      g.fraction[u] = unit_fraction(options_.model, bank, u);
+      // nebula's per-unit slots: the unit's index here, the slot's share of the step in
+      // nebula_block_azimuths, so step · fraction is nebula's float expression to the bit.
+      g.fraction[u] = nebula_slots ? static_cast<float>(u) : unit_fraction(options_.model, bank, u);
       // VLP-16 and Puck: two sequences of 16 lasers per block; the rest one laser per unit.
       const unsigned laser = two_sequences ? u % 16 : bank * 32 + u;
       if (laser >= calibration_.lasers()) continue;  // a bank this model does not send
@@ -356,7 +370,14 @@ void FrameAssembler::nebula_block_azimuths(const Packet& packet,
   // return), carrying it forward; the differences it takes follow from that walk.
   const unsigned dual = packet.dual() ? 1 : 0;
   const unsigned stride = 1 + dual;
-  const unsigned zero_block = options_.model == Model::vls128 ? packet.blocks() - 1 : blocks_per_packet - dual - 1;
+  // The block that gets no interpolation: the packet's last (VLS-128), the last block
+  // (VLP-16; dual: the last pair's first), or, in nebula's VLP-32 decoder, the last block in
+  // single return and block 7 in dual, which the walk never reaches (10 and 11 keep the last
+  // difference).
+  const bool slots = nebula_per_unit_slots(options_.model);
+  const unsigned zero_block = options_.model == Model::vls128 ? packet.blocks() - 1
+                              : slots                         ? blocks_per_packet - 4 * dual - 1
+                                                              : blocks_per_packet - dual - 1;
   float last_diff = 0;
   std::uint16_t next = 0;
   for (unsigned b = 0; b < packet.blocks(); ++b) {
@@ -369,7 +390,12 @@ void FrameAssembler::nebula_block_azimuths(const Packet& packet,
     } else {
       diff = b == zero_block ? 0.0f : last_diff;
     }
-    out[b] = {az, diff};
+    // Per-unit slots: the step is one slot's share (nebula's `diff · 2.304 / 55.296`, in
+    // float), and the unit's fraction its index (build_unit_geometry). A jump of more than 1°
+    // between blocks is no rotation (a damaged packet): 31 slots of it could pass a whole
+    // turn, so such a block is not interpolated.
+    if (slots) out[b] = {az, diff <= max_plausible_step ? diff * 2.304f / 55.296f : 0.0f};
+    else out[b] = {az, diff};
   }
 }
 
@@ -437,7 +463,9 @@ PushResult FrameAssembler::push(std::span<const std::uint8_t> payload, std::int6
     last_packet_phase_ = first_phase;
     if (ends) packets_since_cut_ = 0;
     if (ends && current_.started) {
-      move_packet_tail_to_next();
+      // nebula's VLP-32 decoder keeps the whole wrap packet in the scan: its 90° test compares
+      // 2π + azimuth − phase without wrapping it, which no point passes for a phase up to 270°.
+      if (!nebula_per_unit_slots(options_.model)) move_packet_tail_to_next();
       complete(result);
     }
     return result;
@@ -492,6 +520,7 @@ bool FrameAssembler::block_context(const Packet& packet, unsigned block, const B
   if (dual && options_.returns == ReturnFilter::last && return_index != 0) return false;
   if (dual && options_.returns == ReturnFilter::strongest && return_index == 0) return false;
   if (windowed_ && options_.azimuth_window->block_azimuth_too && !in_window(azimuth.base)) return false;
+  if (windowed_ && !window_points_ && !in_window(packet.azimuth(block))) return false;
   // Both returns: the second is dropped where it repeats the first (the firing's only return).
   const bool compare = return_index == 1 && options_.returns == ReturnFilter::both && options_.drop_identical_returns;
   const unsigned bank = packet.laser(block, 0) / 32 % banks;
@@ -680,7 +709,7 @@ void FrameAssembler::decode_point_by_point(const BlockContext& block, std::int64
   for (unsigned u = 0; u < units_per_block; ++u) {
     const std::int32_t azimuth = block_trig_.azimuth[u];
     if (points.keep[u] == 0) continue;
-    if (windowed_ && !in_window(azimuth)) continue;
+    if (window_points_ && !in_window(azimuth)) continue;
     // Where the point lies on the unwrapped azimuth axis (0.01° since the first revolution).
     std::int64_t position;
     if (by_packet) {

@@ -7,10 +7,11 @@
 #include <span>
 #include <string>
 
-#include "replay_clock.hpp"
-#include "replay_loop.hpp"
 #include "hesai_replay.hpp"
+#include "replay_clock.hpp"
 #include "replay_common.hpp"
+#include "replay_loop.hpp"
+#include "sniff.hpp"
 #include "sim/apps/hesai_options.hpp"
 #include "sim/apps/sensor_options.hpp"
 #include "sim/clock.hpp"
@@ -29,29 +30,25 @@ struct Detected {
   unsigned returns = 1;
 };
 
-// Reads the capture up to its first Hesai packet (of `forced` when given). The error explains
-// what the capture holds instead.
-Expected<Detected> detect(const ReplayArgs& r, std::optional<hesai::Model> forced) {
-  auto reader = CaptureReader::open(r.file, r.capture_options());
-  if (!reader) return reader.error();
-  Datagram datagram;
+// The capture's first Hesai packet (of `forced` when given). The error explains what the
+// capture holds instead.
+Expected<Detected> detect(Sniff& sniff, const ReplayArgs& r, std::optional<hesai::Model> forced) {
+  std::optional<Detected> detected;
   std::optional<hesai::Model> other;
-  std::uint64_t seen = 0;
-  for (;;) {
-    const NextStatus status = reader->next(datagram);
-    if (status == NextStatus::error) return reader->error();
-    if (status == NextStatus::end) break;
-    ++seen;
+  auto found = sniff.find([&](const Datagram& datagram) {
     const auto model = hesai::detect_model(as_u8(datagram.payload));
-    if (!model) continue;
+    if (!model) return false;
     if (forced && *model != *forced) {
       other = model;
-      continue;
+      return false;
     }
-    const auto returns = hesai::returns_in(as_u8(datagram.payload), *model);
-    return Detected{*model, returns.value_or(1)};
-  }
-  const auto& stats = reader->stats();
+    detected = Detected{*model, hesai::returns_in(as_u8(datagram.payload), *model).value_or(1)};
+    return true;
+  });
+  if (!found) return found.error();
+  if (detected) return *detected;
+  const std::uint64_t seen = sniff.seen();
+  const auto& stats = sniff.stats();
   const std::string on_port = r.port ? " on UDP port " + std::to_string(*r.port) : "";
   if (seen == 0) {
     return Error{ErrorCode::invalid_argument,
@@ -75,6 +72,11 @@ Expected<Detected> detect(const ReplayArgs& r, std::optional<hesai::Model> force
                    "choose the sensor's port with --port"};
 }
 
+// Every datagram is a point-cloud packet: the live receiver listens on one port, and so does a
+// capture replayed with --port. The stream counts what is not one.
+enum class Route { data };
+Route route(const Datagram&) { return Route::data; }
+
 class HesaiTarget final : public ReplayTarget {
  public:
   HesaiTarget(hesai::LidarStream stream, bool restamp)
@@ -82,20 +84,11 @@ class HesaiTarget final : public ReplayTarget {
     stream_.clock().set_base(restamp ? timing::ClockBase::restamped : timing::ClockBase::replayed);
   }
 
-  bool push(std::span<const std::byte> payload, std::int64_t capture_ns) override {
-    if (restamp_ && !restamped_) {
-      // Shift the sensor's clock so the first packet's time is now; loops add to it.
-      hesai::Packet packet;
-      if (hesai::Packet::parse(as_u8(payload), stream_.model(), packet) ==
-          hesai::PacketError::none) {
-        stream_.set_stamp_offset(realtime_ns() - packet.time_ns());
-        restamped_ = true;
-      }
+  bool push(const Datagram& datagram) override {
+    switch (route(datagram)) {
+      case Route::data: return push_data(as_u8(datagram.payload), datagram.timestamp_ns);
     }
-    const std::int64_t now = realtime_ns();
-    const hesai::PushResult result = stream_.push(as_u8(payload), now);
-    clock_replayed_packet(stream_, result.packet_ns, capture_ns, now);
-    return result.frame.has_value();
+    return false;
   }
   void restart() override {
     stream_.reset();
@@ -115,6 +108,21 @@ class HesaiTarget final : public ReplayTarget {
   hesai::Model model() const { return stream_.model(); }
 
  private:
+  bool push_data(std::span<const std::uint8_t> payload, std::int64_t capture_ns) {
+    if (restamp_ && !restamped_) {
+      // Shift the sensor's clock so the first packet's time is now; loops add to it.
+      hesai::Packet packet;
+      if (hesai::Packet::parse(payload, stream_.model(), packet) == hesai::PacketError::none) {
+        stream_.set_stamp_offset(realtime_ns() - packet.time_ns());
+        restamped_ = true;
+      }
+    }
+    const std::int64_t now = realtime_ns();
+    const hesai::PushResult result = stream_.push(payload, now);
+    clock_replayed_packet(stream_, result.packet_ns, capture_ns, now);
+    return result.frame.has_value();
+  }
+
   hesai::LidarStream stream_;
   bool restamp_;
   bool restamped_ = false;
@@ -122,7 +130,12 @@ class HesaiTarget final : public ReplayTarget {
 
 }  // namespace
 
-int run_hesai_replay(int argc, char** argv) {
+Claim claim_hesai(const Request& request, const Sniff& sniff) {
+  if (hesai::parse_model(request.model)) return {Evidence::model};
+  return packets_claim(sniff.count([](auto bytes) { return hesai::detect_model(bytes).has_value(); }));
+}
+
+int run_hesai(const Request& request, Sniff& sniff) {
   apps::CommandLine cli(
       "sim_replay_pcap",
       "Replays a LiDAR capture (pcap or pcapng) into a SIM stream, paced by the capture's "
@@ -136,7 +149,7 @@ int run_hesai_replay(int argc, char** argv) {
   apps::HesaiStreamOptions s;
   add_replay_options(cli, r);
   apps::add_hesai_stream_options(cli, s);
-  if (auto code = cli.parse(argc, argv)) return *code;
+  if (auto code = cli.parse(request.argc, request.argv)) return *code;
   if (s.calibration.empty()) {
     return cli.usage_error(
         "no calibration file given; pass the recorded unit's angle-correction CSV with "
@@ -151,7 +164,7 @@ int run_hesai_replay(int argc, char** argv) {
   // Before the stream exists: a reader may see it and stop us at once.
   const auto& stop = apps::StopSignal::install();
 
-  auto detected = detect(r, apps::hesai_model(s));
+  auto detected = detect(sniff, r, apps::hesai_model(s));
   if (!detected) return cli.fail(std::string_view(detected.error().message));
   config.assembler.model = detected->model;
   config.returns = std::max(config.returns, detected->returns);

@@ -6,14 +6,14 @@
 #include <span>
 #include <string>
 
-#include "replay_clock.hpp"
-#include "replay_loop.hpp"
 #include "ouster_replay.hpp"
+#include "replay_clock.hpp"
 #include "replay_common.hpp"
+#include "replay_loop.hpp"
+#include "sniff.hpp"
 #include "sim/apps/ouster_options.hpp"
 #include "sim/apps/sensor_options.hpp"
 #include "sim/clock.hpp"
-#include "sim/hesai/model.hpp"
 #include "sim/ouster/lidar_stream.hpp"
 
 namespace sim::pcap {
@@ -23,49 +23,52 @@ std::span<const std::uint8_t> as_u8(std::span<const std::byte> bytes) {
   return {reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()};
 }
 
+// Which push a datagram goes to. Without --port and --filter, as the live receiver's sockets
+// (and ouster-sdk's pcap source) route them: the metadata's lidar port to the data push, its
+// IMU port to the IMU push, other ports nowhere. With them the user chose the datagrams, whose
+// ports may be anything: the 48-byte ones are the IMU's, the rest lidar packets. One port for
+// both: the size tells too.
+enum class Route { data, imu, none };
+
+class OusterRoute {
+ public:
+  OusterRoute(const ouster::Metadata& m, bool by_port)
+      : lidar_port_(m.udp_port_lidar), imu_port_(m.udp_port_imu), by_port_(by_port) {}
+
+  Route operator()(const Datagram& datagram) const {
+    const std::uint16_t port = datagram.destination.port;
+    if (by_port_ && port != lidar_port_ && port != imu_port_) return Route::none;
+    if (by_port_ && lidar_port_ != imu_port_) return port == imu_port_ ? Route::imu : Route::data;
+    return datagram.payload.size() == ouster::imu_packet_bytes ? Route::imu : Route::data;
+  }
+
+ private:
+  std::uint16_t lidar_port_;
+  std::uint16_t imu_port_;
+  bool by_port_;
+};
+
 class OusterTarget final : public ReplayTarget {
  public:
-  // by_port: datagrams are the sensor's by the metadata's ports, as ouster-sdk's pcap source
-  // dispatches them (without --port or --filter); otherwise the user chose them.
   OusterTarget(ouster::LidarStream stream, bool restamp, bool by_port)
-      : stream_(std::move(stream)), restamp_(restamp), by_port_(by_port) {
+      : stream_(std::move(stream)), route_(stream_.metadata(), by_port), restamp_(restamp) {
     stream_.clock().set_base(restamp ? timing::ClockBase::restamped : timing::ClockBase::replayed);
   }
 
   bool takes(const Datagram& datagram) override {
-    if (!by_port_) return true;
-    const auto& m = stream_.metadata();
-    const std::uint16_t port = datagram.destination.port;
-    imu_next_ = m.udp_port_imu != m.udp_port_lidar && port == m.udp_port_imu;
-    if (port == m.udp_port_lidar || port == m.udp_port_imu) return true;
+    if (route_(datagram) != Route::none) return true;
     ++other_port_;
     return false;
   }
 
-  bool push(std::span<const std::byte> payload, std::int64_t capture_ns) override {
-    const auto bytes = as_u8(payload);
-    // IMU packets: those to the metadata's IMU port, else the 48-byte ones; the rest is lidar.
-    const bool imu = by_port_ && stream_.metadata().udp_port_imu != stream_.metadata().udp_port_lidar
-                         ? imu_next_
-                         : bytes.size() == ouster::imu_packet_bytes;
-    if (imu) {
-      stream_.push_imu(bytes);
-      return false;
+  bool push(const Datagram& datagram) override {
+    const auto bytes = as_u8(datagram.payload);
+    switch (route_(datagram)) {
+      case Route::data: return push_data(bytes, datagram.timestamp_ns);
+      case Route::imu: stream_.push_imu(bytes); return false;
+      case Route::none: return false;
     }
-    if (restamp_ && !restamped_) {
-      // Shift the sensor's clock so the first packet's time is now; loops add to it.
-      ouster::LidarPacket packet;
-      const auto& m = stream_.metadata();
-      if (ouster::LidarPacket::parse(bytes, m.format, packet, m.init_id) == ouster::PacketError::none) {
-        stream_.set_stamp_offset(
-            saturating_sub_ns(realtime_ns(), static_cast<std::int64_t>(packet.column(0).timestamp_ns)));
-        restamped_ = true;
-      }
-    }
-    const std::int64_t now = realtime_ns();
-    const ouster::PushResult result = stream_.push(bytes, now);
-    clock_replayed_packet(stream_, result.packet_ns, capture_ns, now);
-    return result.frame.has_value();
+    return false;
   }
   void restart() override {
     stream_.reset();
@@ -86,10 +89,26 @@ class OusterTarget final : public ReplayTarget {
   std::uint64_t other_port() const { return other_port_; }
 
  private:
+  bool push_data(std::span<const std::uint8_t> bytes, std::int64_t capture_ns) {
+    if (restamp_ && !restamped_) {
+      // Shift the sensor's clock so the first packet's time is now; loops add to it.
+      ouster::LidarPacket packet;
+      const auto& m = stream_.metadata();
+      if (ouster::LidarPacket::parse(bytes, m.format, packet, m.init_id) == ouster::PacketError::none) {
+        stream_.set_stamp_offset(
+            saturating_sub_ns(realtime_ns(), static_cast<std::int64_t>(packet.column(0).timestamp_ns)));
+        restamped_ = true;
+      }
+    }
+    const std::int64_t now = realtime_ns();
+    const ouster::PushResult result = stream_.push(bytes, now);
+    clock_replayed_packet(stream_, result.packet_ns, capture_ns, now);
+    return result.frame.has_value();
+  }
+
   ouster::LidarStream stream_;
+  OusterRoute route_;
   bool restamp_;
-  bool by_port_;
-  bool imu_next_ = false;
   std::uint64_t other_port_ = 0;
   bool restamped_ = false;
 };
@@ -100,34 +119,13 @@ bool ends_with(std::string_view text, std::string_view end) {
 
 }  // namespace
 
-bool is_ouster_capture(int argc, char** argv) {
-  std::string capture;
-  for (int i = 1; i < argc; ++i) {
-    const std::string_view arg = argv[i];
-    // A metadata JSON names the family: Hesai calibrations are CSV.
-    if ((arg == "--calibration" || arg == "--metadata") && i + 1 < argc && ends_with(argv[i + 1], ".json")) {
-      return true;
-    }
-    if ((arg.rfind("--calibration=", 0) == 0 || arg.rfind("--metadata=", 0) == 0) && ends_with(arg, ".json")) {
-      return true;
-    }
-    if (arg.front() != '-' && (ends_with(arg, ".pcap") || ends_with(arg, ".pcapng"))) capture = arg;
-  }
-  if (capture.empty()) return false;
-  auto reader = CaptureReader::open(capture, detection_options(argc, argv));
-  if (!reader) return false;  // the Hesai replay explains the file
-  // The first datagrams tell: Ouster-sized lidar packets and not one Hesai packet.
-  Datagram datagram;
-  unsigned ouster = 0;
-  for (unsigned seen = 0; seen < 256 && reader->next(datagram) == NextStatus::datagram; ++seen) {
-    const auto bytes = as_u8(datagram.payload);
-    if (hesai::detect_model(bytes)) return false;
-    if (ouster::guess_format(bytes)) ++ouster;
-  }
-  return ouster > 0;
+Claim claim_ouster(const Request& request, const Sniff& sniff) {
+  // A metadata JSON names the family: Hesai calibrations are CSV, Velodyne's YAML or XML.
+  if (ends_with(request.calibration, ".json")) return {Evidence::calibration};
+  return packets_claim(sniff.count([](auto bytes) { return ouster::guess_format(bytes).has_value(); }));
 }
 
-int run_ouster_replay(int argc, char** argv) {
+int run_ouster(const Request& request, Sniff& sniff) {
   apps::CommandLine cli(
       "sim_replay_pcap",
       "Replays an Ouster capture (pcap or pcapng; IPv4 fragments are reassembled) into a SIM "
@@ -138,7 +136,7 @@ int run_ouster_replay(int argc, char** argv) {
   apps::OusterStreamOptions s;
   add_replay_options(cli, r);
   apps::add_ouster_stream_options(cli, s);
-  if (auto code = cli.parse(argc, argv)) return *code;
+  if (auto code = cli.parse(request.argc, request.argv)) return *code;
   if (s.calibration.empty()) {
     return cli.usage_error(
         r.file + " holds Ouster lidar packets, which cannot be decoded without the sensor's "
@@ -149,6 +147,8 @@ int run_ouster_replay(int argc, char** argv) {
   if (!config) return cli.fail(config.error());
   auto metadata = ouster::Metadata::load(s.calibration);
   if (!metadata) return cli.fail(std::string_view(metadata.error().message));
+  // The capture is read before the streams are created: a missing one leaves nothing behind.
+  if (const auto error = sniff.open_error()) return cli.fail(std::string_view(error->message));
   config->metadata_source = "file://" + std::filesystem::absolute(s.calibration).string();
   // The packets' times are the sensor's clock; an Ouster capture does not show its synchronisation.
   apps::describe_replayed_stamps(*config->sensor, r.restamp, apps::RecordedClock::sensor);

@@ -1,13 +1,14 @@
 // SPDX-License-Identifier: Apache-2.0
-// sim_replay_pcap's Ouster family: what replay_main.cpp calls.
+// sim_replay_pcap's Ouster family: a row of the table in families.cpp.
 #pragma once
+
+#include "family.hpp"
 
 namespace sim::pcap {
 
-int run_ouster_replay(int argc, char** argv);
-
-// Whether the capture named on the command line holds Ouster lidar packets and no Hesai ones
-// (Ouster packets carry no family mark: their sizes and column indices tell).
-bool is_ouster_capture(int argc, char** argv);
+// A metadata JSON (--calibration FILE.json), or Ouster lidar packets among the first datagrams
+// (they carry no family mark: their sizes and column indices tell).
+Claim claim_ouster(const Request& request, const Sniff& sniff);
+int run_ouster(const Request& request, Sniff& sniff);
 
 }  // namespace sim::pcap

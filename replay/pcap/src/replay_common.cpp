@@ -1,43 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "replay_common.hpp"
 
-#include <charconv>
 #include <cstdio>
 #include <string>
-#include <string_view>
-#include <system_error>
 
 namespace sim::pcap {
-
-CaptureOptions detection_options(int argc, char** argv) {
-  CaptureOptions options;
-  for (int i = 1; i < argc; ++i) {
-    const std::string_view arg = argv[i];
-    std::string_view value;
-    bool port = false;
-    if ((arg == "--port" || arg == "--filter") && i + 1 < argc) {
-      port = arg == "--port";
-      value = argv[i + 1];
-    } else if (arg.rfind("--port=", 0) == 0) {
-      port = true;
-      value = arg.substr(7);
-    } else if (arg.rfind("--filter=", 0) == 0) {
-      value = arg.substr(9);
-    } else {
-      continue;
-    }
-    if (!port) {
-      options.filter = std::string(value);
-      continue;
-    }
-    unsigned number = 0;
-    const auto [end, failure] = std::from_chars(value.data(), value.data() + value.size(), number);
-    if (failure == std::errc{} && end == value.data() + value.size() && number <= 65535) {
-      options.port = static_cast<std::uint16_t>(number);
-    }
-  }
-  return options;
-}
 
 int finish_replay(const apps::CommandLine& cli, const ReplayArgs& r, const ReplayResult& result,
                   const ReplayTarget& target, const std::string& decoded_as,

@@ -172,7 +172,7 @@ class Replayer {
       }
       if (!pacer_.wait(datagram.timestamp_ns, stop_)) break;
       const std::uint64_t decoded = target_.decoded_packets();
-      const bool completed = target_.push(datagram.payload, datagram.timestamp_ns);
+      const bool completed = target_.push(datagram);
       if (target_.decoded_packets() != decoded) count_sender(datagram.source);
       if (completed && result_.passes == 1) ends_.add(index, datagram.timestamp_ns);
       show_progress(reader, since_first);

@@ -6,7 +6,6 @@
 
 #include <cstdint>
 #include <optional>
-#include <span>
 #include <string>
 
 #include "sim/apps/command_line.hpp"
@@ -38,11 +37,12 @@ void add_replay_options(apps::CommandLine& cli, ReplayArgs& args);
 class ReplayTarget {
  public:
   virtual ~ReplayTarget() = default;
-  // Whether the datagram is one of the target's (e.g. to the ports its metadata names); the
-  // others are skipped and counted. Asked before push().
+  // Whether the family's route sends the datagram to one of its pushes (e.g. only to the ports
+  // its metadata names); the others are skipped and counted. Asked before push().
   virtual bool takes(const Datagram&) { return true; }
-  // Decodes one datagram; true when it completed a frame (a revolution, a scan).
-  virtual bool push(std::span<const std::byte> payload, std::int64_t capture_ns) = 0;
+  // The datagram into the push its route chooses, its capture time as its arrival; true when
+  // it completed a frame (a revolution, a scan).
+  virtual bool push(const Datagram& datagram) = 0;
   // The replay starts over (a loop): forget the frame in progress, as a fresh decoder would.
   virtual void restart() = 0;
   // Later datagrams were recorded `shift_ns` earlier than they are now replayed (loops):

@@ -9,10 +9,11 @@
 #include <span>
 #include <string>
 
-#include "replay_clock.hpp"
-#include "replay_loop.hpp"
 #include "velodyne_replay.hpp"
+#include "replay_clock.hpp"
 #include "replay_common.hpp"
+#include "replay_loop.hpp"
+#include "sniff.hpp"
 #include "sim/apps/sensor_options.hpp"
 #include "sim/apps/velodyne_options.hpp"
 #include "sim/clock.hpp"
@@ -25,11 +26,8 @@ std::span<const std::uint8_t> as_u8(std::span<const std::byte> bytes) {
   return {reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()};
 }
 
-bool is_capture_name(std::string_view arg) {
-  const auto ends = [&](std::string_view end) {
-    return arg.size() >= end.size() && arg.substr(arg.size() - end.size()) == end;
-  };
-  return !arg.empty() && arg.front() != '-' && (ends(".pcap") || ends(".pcapng"));
+bool ends_with(std::string_view text, std::string_view end) {
+  return text.size() >= end.size() && text.substr(text.size() - end.size()) == end;
 }
 
 struct Detected {
@@ -37,33 +35,31 @@ struct Detected {
   unsigned returns = 1;
 };
 
-// Reads the capture up to its first Velodyne data packet (of `forced` when given).
-Expected<Detected> detect(const ReplayArgs& r, std::optional<velodyne::Model> forced) {
-  auto reader = CaptureReader::open(r.file, r.capture_options());
-  if (!reader) return reader.error();
-  Datagram datagram;
+// The capture's first Velodyne data packet (of `forced` when given). The error explains what
+// the capture holds instead.
+Expected<Detected> detect(Sniff& sniff, const ReplayArgs& r, std::optional<velodyne::Model> forced) {
+  std::optional<Detected> detected;
   std::optional<velodyne::Model> other;
-  std::uint64_t seen = 0;
   std::uint64_t unnamed = 0;  // HDL-32E packets of firmware before 2.2.20
-  for (;;) {
-    const NextStatus status = reader->next(datagram);
-    if (status == NextStatus::error) return reader->error();
-    if (status == NextStatus::end) break;
-    ++seen;
+  auto found = sniff.find([&](const Datagram& datagram) {
     const auto bytes = as_u8(datagram.payload);
     if (velodyne::is_unnamed_hdl32e(bytes)) {
-      if (forced == velodyne::Model::hdl32e) return Detected{velodyne::Model::hdl32e, 1};
+      if (forced == velodyne::Model::hdl32e) detected = Detected{velodyne::Model::hdl32e, 1};
       ++unnamed;
-      continue;
+      return detected.has_value();
     }
     const auto model = velodyne::detect_model(bytes);
-    if (!model) continue;
+    if (!model) return false;
     if (forced && *model != *forced) {
       other = model;
-      continue;
+      return false;
     }
-    return Detected{*model, velodyne::returns_in(bytes, *model).value_or(1)};
-  }
+    detected = Detected{*model, velodyne::returns_in(bytes, *model).value_or(1)};
+    return true;
+  });
+  if (!found) return found.error();
+  if (detected) return *detected;
+  const std::uint64_t seen = sniff.seen();
   if (other) {
     return Error{ErrorCode::invalid_argument,
                  r.file + " holds " + std::string(velodyne::to_string(*other)) + " packets, not " +
@@ -81,28 +77,28 @@ Expected<Detected> detect(const ReplayArgs& r, std::optional<velodyne::Model> fo
                    "); check the file, or choose the sensor's port with --port"};
 }
 
+// Which push a datagram goes to. The live receiver routes by socket (the data port, the
+// position port); a capture replayed with --port or --filter may keep only one of them, so the
+// datagram's size tells: data packets are 1206 bytes, the rest (port 8308's GPRMC/PPS packets,
+// or a stray datagram the stream counts) goes to the position push.
+enum class Route { data, position };
+Route route(const Datagram& datagram) {
+  return datagram.payload.size() == velodyne::packet_size ? Route::data : Route::position;
+}
+
 class VelodyneTarget final : public ReplayTarget {
  public:
   VelodyneTarget(velodyne::LidarStream stream, bool restamp) : stream_(std::move(stream)), restamp_(restamp) {
     stream_.clock().set_base(restamp ? timing::ClockBase::restamped : timing::ClockBase::replayed);
   }
 
-  bool push(std::span<const std::byte> payload, std::int64_t capture_ns) override {
-    const auto bytes = as_u8(payload);
-    if (bytes.size() != velodyne::packet_size) {
-      stream_.push_position(bytes);  // port 8308's GPRMC/PPS packets (or a stray datagram)
-      return false;
+  bool push(const Datagram& datagram) override {
+    const auto bytes = as_u8(datagram.payload);
+    switch (route(datagram)) {
+      case Route::data: return push_data(bytes, datagram.timestamp_ns);
+      case Route::position: stream_.push_position(bytes); return false;
     }
-    if (restamp_ && !restamped_) {
-      // Shift the sensor's clock so the first packet's time is now; loops add to it.
-      stream_.set_stamp_offset(realtime_ns() - velodyne::packet_time_ns(velodyne::Packet::read_u32(
-                                                   bytes.data() + velodyne::timestamp_offset), capture_ns));
-      restamped_ = true;
-    }
-    const std::int64_t now = realtime_ns();
-    const velodyne::PushResult result = stream_.push(bytes, now, capture_ns);
-    clock_replayed_packet(stream_, result.packet_ns, capture_ns, now);
-    return result.frame.has_value();
+    return false;
   }
   void restart() override {
     stream_.reset();
@@ -120,6 +116,19 @@ class VelodyneTarget final : public ReplayTarget {
   velodyne::Model model() const { return stream_.model(); }
 
  private:
+  bool push_data(std::span<const std::uint8_t> bytes, std::int64_t capture_ns) {
+    if (restamp_ && !restamped_) {
+      // Shift the sensor's clock so the first packet's time is now; loops add to it.
+      stream_.set_stamp_offset(realtime_ns() - velodyne::packet_time_ns(velodyne::Packet::read_u32(
+                                                   bytes.data() + velodyne::timestamp_offset), capture_ns));
+      restamped_ = true;
+    }
+    const std::int64_t now = realtime_ns();
+    const velodyne::PushResult result = stream_.push(bytes, now, capture_ns);
+    clock_replayed_packet(stream_, result.packet_ns, capture_ns, now);
+    return result.frame.has_value();
+  }
+
   velodyne::LidarStream stream_;
   bool restamp_;
   bool restamped_ = false;
@@ -127,36 +136,19 @@ class VelodyneTarget final : public ReplayTarget {
 
 }  // namespace
 
-bool is_velodyne_replay(int argc, char** argv) {
-  std::string capture;
-  for (int i = 1; i < argc; ++i) {
-    const std::string_view arg = argv[i];
-    std::string_view value;
-    if (arg == "--model" && i + 1 < argc) value = argv[i + 1];
-    if (arg.rfind("--model=", 0) == 0) value = arg.substr(8);
-    if (!value.empty()) return velodyne::parse_model(value).has_value();
-    // Velodyne calibrations are ros-drivers YAML or db.xml (Hesai's are CSV, Ouster's JSON):
-    // then the Velodyne replay explains a capture it cannot decode, not the Hesai one.
-    if (arg == "--calibration" && i + 1 < argc) value = argv[i + 1];
-    if (arg.rfind("--calibration=", 0) == 0) value = arg.substr(14);
-    const auto ends = [&](std::string_view end) {
-      return value.size() >= end.size() && value.substr(value.size() - end.size()) == end;
-    };
-    if (ends(".yaml") || ends(".yml") || ends(".xml")) return true;
-    if (is_capture_name(arg)) capture = arg;
+Claim claim_velodyne(const Request& request, const Sniff& sniff) {
+  if (velodyne::parse_model(request.model)) return {Evidence::model};
+  // Velodyne calibrations are ros-drivers YAML or db.xml (Hesai's are CSV, Ouster's JSON):
+  // then the Velodyne replay explains a capture it cannot decode.
+  const std::string_view calibration = request.calibration;
+  if (ends_with(calibration, ".yaml") || ends_with(calibration, ".yml") || ends_with(calibration, ".xml")) {
+    return {Evidence::calibration};
   }
-  if (capture.empty()) return false;
-  auto reader = CaptureReader::open(capture, detection_options(argc, argv));
-  if (!reader) return false;  // the Hesai replay explains the file
-  Datagram datagram;
-  for (unsigned seen = 0; seen < 256 && reader->next(datagram) == NextStatus::datagram; ++seen) {
-    const auto bytes = as_u8(datagram.payload);
-    if (velodyne::detect_model(bytes) || velodyne::is_unnamed_hdl32e(bytes)) return true;
-  }
-  return false;
+  return packets_claim(sniff.count(
+      [](auto bytes) { return velodyne::detect_model(bytes).has_value() || velodyne::is_unnamed_hdl32e(bytes); }));
 }
 
-int run_velodyne_replay(int argc, char** argv) {
+int run_velodyne(const Request& request, Sniff& sniff) {
   apps::CommandLine cli(
       "sim_replay_pcap",
       "Replays a Velodyne capture (pcap or pcapng) into a SIM stream, paced by the capture's "
@@ -166,7 +158,7 @@ int run_velodyne_replay(int argc, char** argv) {
   apps::VelodyneStreamOptions s;
   add_replay_options(cli, r);
   apps::add_velodyne_stream_options(cli, s);
-  if (auto code = cli.parse(argc, argv)) return *code;
+  if (auto code = cli.parse(request.argc, request.argv)) return *code;
   if (s.calibration.empty()) {
     return cli.usage_error(
         "no calibration file given; pass the recorded sensor's YAML (nominal tables in "
@@ -181,7 +173,7 @@ int run_velodyne_replay(int argc, char** argv) {
   config->heartbeat_period = std::chrono::milliseconds(500);
   const auto& stop = apps::StopSignal::install();
 
-  auto detected = detect(r, apps::velodyne_model(s));
+  auto detected = detect(sniff, r, apps::velodyne_model(s));
   if (!detected) return cli.fail(std::string_view(detected.error().message));
   config->assembler.model = detected->model;
   config->returns = std::max(config->returns, detected->returns);

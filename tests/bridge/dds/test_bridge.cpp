@@ -22,7 +22,7 @@
 
 #include "bridge_test.hpp"
 #include "cyclone.hpp"
-#include "pcap_payloads.hpp"
+#include "lidar_test/pcd.hpp"
 #include "sim/lidar_point.hpp"
 #include "sim/reader.hpp"
 #include "sim/writer.hpp"
@@ -113,7 +113,7 @@ Process start_pandar64_replay(const std::string& stream) {
 
 TEST(Bridge, DeliversEveryPointOfTheRecordingAsPointCloud2InOrder) {
   SKIP_WITHOUT_NETWORK();
-  const auto reference = hesai_test::read_xyz_pcd(hesai_data / "pandar64_dual.reference.pcd");
+  const auto reference = lidar_test::read_xyz_pcd(hesai_data / "pandar64_dual.reference.pcd");
   ASSERT_EQ(reference.size(), 93'591u);
   StreamGuard stream(unique_name("lidar"));
   FrameLog sim_frames(stream.name);

@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,7 @@
 
 #include "sim/clock.hpp"
 #include "sim/lidar/frame_publisher.hpp"
+#include "sim/lidar/live_receiver.hpp"
 #include "sim/lidar/tcp_client.hpp"
 #include "sim/lidar/udp_receiver.hpp"
 #include "sim/reader.hpp"
@@ -114,6 +116,82 @@ UdpListen loopback() {
   listen.bind = "127.0.0.1";
   listen.receive_buffer = 1 << 20;
   return listen;
+}
+
+// A family as LiveReceiver<Route> sees it: a stream that keeps what each push took, and a route
+// with a data and a position socket whose oversized datagrams are refused.
+struct FakeResult {
+  std::optional<std::int64_t> packet_ns;
+};
+struct FakeStream {
+  FakeResult push(std::span<const std::uint8_t> payload, std::int64_t /*arrival_ns*/) noexcept {
+    data.push_back(payload[0]);
+    return {};
+  }
+  void reset() noexcept { ++resets; }
+  sim::timing::ClockReporter& clock() noexcept { return reporter; }
+  std::int64_t stamp_offset() const noexcept { return 0; }
+  std::optional<sim::ClockStatus> tick_clock(std::int64_t /*now*/, bool /*at_once*/ = false) { return std::nullopt; }
+
+  std::vector<std::uint8_t> data;      // each data push's first byte
+  std::vector<std::uint8_t> position;  // each position push's first byte
+  int resets = 0;
+  sim::timing::ClockReporter reporter;
+};
+struct FakeRoute {
+  using Stream = FakeStream;
+  static constexpr std::size_t datagram_size = 2048;
+  static constexpr std::size_t batch_size = 4;
+  static constexpr bool refuse_truncated = true;
+  std::vector<sim::lidar::RoutedPort> ports() const {
+    return {{sim::lidar::PacketKind::data, {0, "UDP", "--port"}},
+            {sim::lidar::PacketKind::position, {0, "the position", "--position-port"}}};
+  }
+  sim::lidar::PacketKind operator()(std::uint16_t /*port*/, std::span<const std::uint8_t> /*payload*/) const noexcept {
+    return sim::lidar::PacketKind::data;
+  }
+  static bool push_other(FakeStream& stream, sim::lidar::PacketKind kind, std::span<const std::uint8_t> payload,
+                         std::int64_t /*arrival_ns*/) noexcept {
+    if (kind == sim::lidar::PacketKind::position) stream.position.push_back(payload[0]);
+    return true;
+  }
+};
+
+TEST(LiveReceiver, EachSocketFeedsItsPushAndAnOversizedDatagramIsCountedNotPushed) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  auto receiver = sim::lidar::LiveReceiver<FakeRoute>::open(loopback(), FakeRoute{});
+  ASSERT_TRUE(receiver) << receiver.error().message;
+  ASSERT_NE(receiver->data_port(), 0);
+  ASSERT_NE(receiver->position_port(), 0);
+  EXPECT_NE(receiver->data_port(), receiver->position_port());
+  EXPECT_EQ(receiver->imu_port(), 0);
+
+  const Sender sensor("127.0.0.1");
+  for (std::uint8_t fill = 1; fill <= 6; ++fill) sensor.send(receiver->data_port(), 100, fill);  // more than a batch
+  sensor.send(receiver->position_port(), 512, 7);
+  sensor.send(receiver->data_port(), 3000, 9);  // larger than the buffer
+  sensor.send(receiver->position_port(), 512, 8);
+
+  FakeStream stream;
+  const int stop = ::eventfd(0, EFD_CLOEXEC);
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  sim::lidar::ReceiverCallbacks callbacks;
+  callbacks.tick_period = std::chrono::milliseconds(20);
+  callbacks.tick = [&] {
+    const bool all = stream.data.size() == 6 && stream.position.size() == 2 && receiver->counters().oversized == 1;
+    if (!all && std::chrono::steady_clock::now() < until) return;
+    const std::uint64_t one = 1;
+    EXPECT_EQ(::write(stop, &one, sizeof one), 8);
+  };
+  receiver->run(stream, stop, callbacks);
+  ::close(stop);
+
+  EXPECT_EQ(stream.data, (std::vector<std::uint8_t>{1, 2, 3, 4, 5, 6}));
+  EXPECT_EQ(stream.position, (std::vector<std::uint8_t>{7, 8}));
+  EXPECT_EQ(receiver->counters().oversized, 1U);
+  EXPECT_EQ(stream.resets, 0);
+  EXPECT_NE(receiver->last_packet_ns(), 0);
+  EXPECT_EQ(receiver->stream(), nullptr);  // outside run(stream, …)
 }
 
 TEST(UdpReceiver, DatagramsFromAnotherSenderAreCountedAndNotHandled) {
@@ -320,9 +398,45 @@ TEST(TcpConnection, ARefusedConnectionIsOneSentenceNamingTheSensorAndTheService)
   EXPECT_EQ(refused.error().message.rfind("sensor 127.0.0.1:" + std::to_string(port) + " refused the PTC connection (", 0),
             0u)
       << refused.error().message;
-  auto not_ipv4 = sim::lidar::TcpConnection::connect({"sensor.local", port, std::chrono::milliseconds(2000), "HTTP"});
-  ASSERT_FALSE(not_ipv4);
-  EXPECT_EQ(not_ipv4.error().code, sim::ErrorCode::invalid_argument);
+  // A name that never resolves (.invalid, RFC 6761): one sentence naming it and the option.
+  auto unknown = sim::lidar::TcpConnection::connect({"sensor.invalid", port, std::chrono::milliseconds(2000), "HTTP"});
+  ASSERT_FALSE(unknown);
+  EXPECT_NE(unknown.error().message.find("'sensor.invalid' (--sensor-ip)"), std::string::npos) << unknown.error().message;
+}
+
+TEST(TcpConnection, AHostIsAnAddressOrAHostNameAndNothingElse) {
+  for (const char* good : {"192.168.1.201", "fe80::1", "os-122.local", "localhost", "sensor"}) {
+    EXPECT_EQ(sim::lidar::host_problem(good), "") << good;
+  }
+  for (const char* bad : {"", "os 122", "-x", "a/b", "http://sensor"}) {
+    EXPECT_NE(sim::lidar::host_problem(bad), "") << bad;
+  }
+}
+
+// Ouster sensors are reached by name (os-<serial>.local) as often as by address: a name is
+// resolved (here from /etc/hosts) within the connection's timeout.
+TEST(TcpConnection, ASensorNameIsResolvedAndConnected) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  const int listener = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in local{};
+  local.sin_family = AF_INET;
+  local.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::bind(listener, reinterpret_cast<const sockaddr*>(&local), sizeof local), 0);
+  ASSERT_EQ(::listen(listener, 1), 0);
+  socklen_t length = sizeof local;
+  ::getsockname(listener, reinterpret_cast<sockaddr*>(&local), &length);
+  auto connection = sim::lidar::TcpConnection::connect(
+      {"localhost", ntohs(local.sin_port), std::chrono::milliseconds(20000), "HTTP"});
+  ASSERT_TRUE(connection) << connection.error().message;
+  const int accepted = ::accept(listener, nullptr, nullptr);
+  EXPECT_GE(accepted, 0);
+  const std::array<std::uint8_t, 4> request{'G', 'E', 'T', ' '};
+  EXPECT_EQ(connection->send_all(request), sim::lidar::TcpIo::done);
+  std::array<std::uint8_t, 4> got{};
+  EXPECT_EQ(::recv(accepted, got.data(), got.size(), MSG_WAITALL), 4);
+  EXPECT_EQ(got, request);
+  ::close(accepted);
+  ::close(listener);
 }
 
 TEST(TcpConnection, ASensorThatAcceptsButNeverAnswersEndsTheReadAtTheDeadline) {

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "packet_builder.hpp"
-#include "pcap_payloads.hpp"
+#include "hesai_test_data.hpp"
 #include "sim/hesai/hesai.hpp"
 
 using namespace sim::hesai;

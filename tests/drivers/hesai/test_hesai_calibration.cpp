@@ -6,7 +6,7 @@
 #include <cmath>
 #include <string>
 
-#include "pcap_payloads.hpp"
+#include "hesai_test_data.hpp"
 #include "sim/hesai/hesai.hpp"
 
 using namespace sim::hesai;

@@ -21,14 +21,14 @@
 #include <cstring>
 #include <fstream>
 #include <functional>
-#include <map>
 #include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "packet_builder.hpp"
-#include "pcap_payloads.hpp"
+#include "hesai_test_data.hpp"
+#include "lidar_test/golden.hpp"
 #include "sim/hesai/hesai.hpp"
 
 using namespace sim::hesai;
@@ -72,6 +72,13 @@ struct Scenario {
   double span_fraction = 1.0;   // of frame_capacity(model, 3)
   unsigned late_by_packets = 0;  // set_output this many packets after a frame completes
   bool flush = false;
+};
+
+// A row of the table: its name and how to make its packets, calibration and options (read
+// when the case runs, not when the table is made).
+struct GoldenCase {
+  std::string name;
+  std::function<Scenario()> make;
 };
 
 Calibration load_calibration(const char* file, Model model) {
@@ -142,75 +149,108 @@ Scenario synthetic(std::string name, Model model, unsigned returns, std::uint8_t
   return s;
 }
 
-std::vector<Scenario> scenarios() {
-  std::vector<Scenario> out;
-  auto p64 = [&](std::string name) {
-    return capture(std::move(name), "pandar64_dual.pcap", "pandar64.calibration.csv",
-                   Model::pandar64);
+Scenario p64(std::string name) {
+  return capture(std::move(name), "pandar64_dual.pcap", "pandar64.calibration.csv", Model::pandar64);
+}
+Scenario xt32(std::string name) {
+  return capture(std::move(name), "pandarxt32_dual.pcap", "pandarxt32.calibration.csv", Model::pandar_xt32);
+}
+Scenario qt128(std::string name) {
+  return capture(std::move(name), "pandarqt128_dual.pcap", "pandarqt128.calibration.csv", Model::pandar_qt128);
+}
+
+// Every case, in the order of golden_frames.txt.
+std::vector<GoldenCase> golden_cases() {
+  std::vector<GoldenCase> out;
+  auto add = [&out](std::string name, std::function<Scenario(std::string)> make) {
+    out.push_back({name, [name, make] { return make(name); }});
   };
-  out.push_back(p64("pandar64"));
-  out.push_back(p64("pandar64_block_cut"));
-  out.back().options.cut_by = CutBy::block_azimuth;
-  out.push_back(p64("pandar64_cut180_partial_flush"));
-  out.back().options.cut_azimuth_deg = 180.0;
-  out.back().options.emit_partial_frames = true;
-  out.back().flush = true;
-  out.push_back(p64("pandar64_filters"));
-  out.back().options.min_range_m = 1.5f;
-  out.back().options.max_range_m = 60.0f;
-  out.back().options.drop_identical_returns = false;
-  out.back().options.multi_return_distance_threshold_m = 0.5f;
-  out.back().options.drop_zero_distance = false;
-  out.push_back(p64("pandar64_firetime_compensation"));
-  {
+  add("pandar64", p64);
+  add("pandar64_block_cut", [](std::string name) {
+    Scenario s = p64(std::move(name));
+    s.options.cut_by = CutBy::block_azimuth;
+    return s;
+  });
+  add("pandar64_cut180_partial_flush", [](std::string name) {
+    Scenario s = p64(std::move(name));
+    s.options.cut_azimuth_deg = 180.0;
+    s.options.emit_partial_frames = true;
+    s.flush = true;
+    return s;
+  });
+  add("pandar64_filters", [](std::string name) {
+    Scenario s = p64(std::move(name));
+    s.options.min_range_m = 1.5f;
+    s.options.max_range_m = 60.0f;
+    s.options.drop_identical_returns = false;
+    s.options.multi_return_distance_threshold_m = 0.5f;
+    s.options.drop_zero_distance = false;
+    return s;
+  });
+  add("pandar64_firetime_compensation", [](std::string name) {
+    Scenario s = p64(std::move(name));
     auto f = FiretimeCorrection::load(data_path("pandar64.example-firetimes.csv"), Model::pandar64);
     if (!f) throw std::runtime_error(f.error().message);
-    out.back().options.firetimes = *f;
-    out.back().options.firetime_azimuth_compensation = true;
-  }
-  out.push_back(p64("pandar64_small_span"));
-  out.back().span_fraction = 0.3;  // about 80 % of a revolution's points
-  out.push_back(p64("pandar64_late_span"));
-  out.back().late_by_packets = 200;  // more than the carry-over holds
+    s.options.firetimes = *f;
+    s.options.firetime_azimuth_compensation = true;
+    return s;
+  });
+  add("pandar64_small_span", [](std::string name) {
+    Scenario s = p64(std::move(name));
+    s.span_fraction = 0.3;  // about 80 % of a revolution's points
+    return s;
+  });
+  add("pandar64_late_span", [](std::string name) {
+    Scenario s = p64(std::move(name));
+    s.late_by_packets = 200;  // more than the carry-over holds
+    return s;
+  });
 
-  auto xt32 = [&](std::string name) {
-    return capture(std::move(name), "pandarxt32_dual.pcap", "pandarxt32.calibration.csv",
-                   Model::pandar_xt32);
-  };
-  out.push_back(xt32("xt32"));
-  out.push_back(xt32("xt32_block_cut"));
-  out.back().options.cut_by = CutBy::block_azimuth;
+  add("xt32", xt32);
+  add("xt32_block_cut", [](std::string name) {
+    Scenario s = xt32(std::move(name));
+    s.options.cut_by = CutBy::block_azimuth;
+    return s;
+  });
 
-  auto qt128 = [&](std::string name) {
-    return capture(std::move(name), "pandarqt128_dual.pcap", "pandarqt128.calibration.csv",
-                   Model::pandar_qt128);
-  };
-  out.push_back(qt128("qt128"));
-  out.push_back(qt128("qt128_cut90_filters_flush"));
-  out.back().options.cut_azimuth_deg = 90.0;
-  out.back().options.min_range_m = 0.5f;
-  out.back().options.max_range_m = 20.0f;
-  out.back().options.multi_return_distance_threshold_m = 0.0f;
-  out.back().flush = true;
-  out.push_back(qt128("qt128_late_span_flush"));
-  out.back().late_by_packets = 200;
-  out.back().flush = true;
+  add("qt128", qt128);
+  add("qt128_cut90_filters_flush", [](std::string name) {
+    Scenario s = qt128(std::move(name));
+    s.options.cut_azimuth_deg = 90.0;
+    s.options.min_range_m = 0.5f;
+    s.options.max_range_m = 20.0f;
+    s.options.multi_return_distance_threshold_m = 0.0f;
+    s.flush = true;
+    return s;
+  });
+  add("qt128_late_span_flush", [](std::string name) {
+    Scenario s = qt128(std::move(name));
+    s.late_by_packets = 200;
+    s.flush = true;
+    return s;
+  });
 
-  out.push_back(capture("pandar40p_partial_flush", "pandar40p_last_20hz_raw.pcapng",
-                        "pandar40p.example-calibration.csv", Model::pandar40p));
-  out.back().options.emit_partial_frames = true;
-  out.back().flush = true;
+  add("pandar40p_partial_flush", [](std::string name) {
+    Scenario s = capture(std::move(name), "pandar40p_last_20hz_raw.pcapng", "pandar40p.example-calibration.csv",
+                         Model::pandar40p);
+    s.options.emit_partial_frames = true;
+    s.flush = true;
+    return s;
+  });
 
-  out.push_back(synthetic("xt16_single", Model::pandar_xt16, 1));
-  out.push_back(synthetic("xt16_dual", Model::pandar_xt16, 2));
-  out.push_back(synthetic("xt32m_triple", Model::pandar_xt32m, 3));
-  out.push_back(synthetic("xt32m_triple_no_duplicate_filters", Model::pandar_xt32m, 3));
-  out.back().options.drop_identical_returns = false;
-  out.back().options.multi_return_distance_threshold_m = 0.0f;
-  out.back().options.drop_zero_distance = false;
-  out.push_back(synthetic("qt64_dual", Model::pandar_qt64, 2));
-  out.push_back(synthetic("qt128_single", Model::pandar_qt128, 1));
-  out.push_back(synthetic("qt128_dual", Model::pandar_qt128, 2, 0));
+  add("xt16_single", [](std::string name) { return synthetic(std::move(name), Model::pandar_xt16, 1); });
+  add("xt16_dual", [](std::string name) { return synthetic(std::move(name), Model::pandar_xt16, 2); });
+  add("xt32m_triple", [](std::string name) { return synthetic(std::move(name), Model::pandar_xt32m, 3); });
+  add("xt32m_triple_no_duplicate_filters", [](std::string name) {
+    Scenario s = synthetic(std::move(name), Model::pandar_xt32m, 3);
+    s.options.drop_identical_returns = false;
+    s.options.multi_return_distance_threshold_m = 0.0f;
+    s.options.drop_zero_distance = false;
+    return s;
+  });
+  add("qt64_dual", [](std::string name) { return synthetic(std::move(name), Model::pandar_qt64, 2); });
+  add("qt128_single", [](std::string name) { return synthetic(std::move(name), Model::pandar_qt128, 1); });
+  add("qt128_dual", [](std::string name) { return synthetic(std::move(name), Model::pandar_qt128, 2, 0); });
   return out;
 }
 
@@ -278,38 +318,68 @@ std::vector<std::string> run(const Scenario& s) {
   return lines;
 }
 
-}  // namespace
-
-TEST(HesaiGolden, EveryFrameOfEveryCaptureIsByteIdenticalToTheRecordedDecoder) {
+// The recorded lines: every line of golden_frames.txt that is not a comment.
+std::vector<std::string> recorded_lines() {
   std::vector<std::string> lines;
-  std::map<std::string, std::size_t> frames_of;
-  for (const Scenario& s : scenarios()) {
-    const auto got = run(s);
-    frames_of[s.name] = got.size() - 1;
-    lines.insert(lines.end(), got.begin(), got.end());
+  std::istringstream text(hesai_test::read_text(data_path("golden_frames.txt")));
+  for (std::string line; std::getline(text, line);) {
+    if (!line.empty() && line[0] != '#') lines.push_back(line);
   }
-  if (const char* out = std::getenv("SIM_HESAI_WRITE_GOLDEN")) {
-    std::ofstream file(out);
-    file << "# FrameAssembler output digests (FNV-1a 64 of each frame's metadata and point bytes),\n"
-            "# written by test_hesai_golden with SIM_HESAI_WRITE_GOLDEN; see that test.\n";
-    for (const auto& l : lines) file << l << '\n';
-    ASSERT_TRUE(file.good()) << "cannot write " << out;
-    GTEST_SKIP() << "recorded " << lines.size() << " digests to " << out;
-  }
+  return lines;
+}
+
+std::string case_of(const std::string& line) { return line.substr(0, line.find(' ')); }
+
+class HesaiGolden : public ::testing::TestWithParam<GoldenCase> {};
+
+TEST_P(HesaiGolden, EveryFrameIsByteIdenticalToTheRecordedDecoder) {
 #if !defined(__x86_64__)
   GTEST_SKIP() << "the digests were recorded on x86-64 (IEEE single precision, no fma)";
 #endif
-  // Every scenario must produce frames, or the pin would hold for a decoder that drops all.
-  for (const auto& [name, frames] : frames_of) EXPECT_GE(frames, 1u) << name;
+  const GoldenCase& c = GetParam();
+  const std::vector<std::string> lines = run(c.make());
+  // Every case must produce frames, or the pin would hold for a decoder that drops all.
+  EXPECT_GE(lines.size() - 1, 1u) << "no frame";
 
   std::vector<std::string> expected;
-  std::istringstream text(hesai_test::read_text(data_path("golden_frames.txt")));
-  for (std::string line; std::getline(text, line);) {
-    if (!line.empty() && line[0] != '#') expected.push_back(line);
+  for (const auto& line : recorded_lines()) {
+    if (case_of(line) == c.name) expected.push_back(line);
   }
   ASSERT_EQ(lines.size(), expected.size()) << "a different number of frames than recorded";
   for (std::size_t i = 0; i < lines.size(); ++i) {
-    // The first difference says which scenario and frame moved; the rest follow from it.
-    ASSERT_EQ(lines[i], expected[i]) << "line " << i << " of golden_frames.txt";
+    // The first difference says which frame moved; the rest follow from it.
+    ASSERT_EQ(lines[i], expected[i]) << "line " << i << " of " << c.name << " in golden_frames.txt";
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(Recorded, HesaiGolden, ::testing::ValuesIn(golden_cases()), lidar_test::CaseName{});
+
+// The file pins the table and nothing else: no case is left out, none is only in the file.
+TEST(HesaiGoldenFile, HoldsTheTablesCasesInTheTablesOrder) {
+  std::vector<std::string> in_file;
+  for (const auto& line : recorded_lines()) {
+    if (in_file.empty() || in_file.back() != case_of(line)) in_file.push_back(case_of(line));
+  }
+  std::vector<std::string> in_table;
+  for (const GoldenCase& c : golden_cases()) in_table.push_back(c.name);
+  EXPECT_EQ(in_file, in_table);
+}
+
+TEST(HesaiGoldenFile, IsRecordedAgainOnlyWhenAsked) {
+  const char* out = std::getenv("SIM_HESAI_WRITE_GOLDEN");
+  if (out == nullptr) GTEST_SKIP() << "SIM_HESAI_WRITE_GOLDEN is not set: nothing to record";
+  std::ofstream file(out);
+  file << "# FrameAssembler output digests (FNV-1a 64 of each frame's metadata and point bytes),\n"
+          "# written by test_hesai_golden with SIM_HESAI_WRITE_GOLDEN; see that test.\n";
+  std::size_t written = 0;
+  for (const GoldenCase& c : golden_cases()) {
+    for (const auto& l : run(c.make())) {
+      file << l << '\n';
+      ++written;
+    }
+  }
+  ASSERT_TRUE(file.good()) << "cannot write " << out;
+  GTEST_SKIP() << "recorded " << written << " digests to " << out;
+}
+
+}  // namespace

@@ -13,7 +13,7 @@
 
 #include "../../../drivers/hesai/src/crc32_mpeg2.hpp"
 #include "packet_builder.hpp"
-#include "pcap_payloads.hpp"
+#include "hesai_test_data.hpp"
 #include "sim/hesai/hesai.hpp"
 
 using namespace sim::hesai;

@@ -1,19 +1,27 @@
 // SPDX-License-Identifier: Apache-2.0
-// Real recordings decoded and compared with reference clouds (nebula's decoder output), and
-// the raw-Ethernet Pandar40P capture cut into whole 20 Hz revolutions.
+// Real recordings decoded and compared with reference clouds (nebula's decoder output): one
+// table of golden cases (capture, calibration, model options, reference cloud, tolerance) and
+// one parameterised test over it, the shape every family's golden tests share
+// (tests/support/lidar_test/golden.hpp). Then the QT128 capture's packets one by one, and the
+// raw-Ethernet Pandar40P capture cut into whole 20 Hz revolutions.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <set>
+#include <string>
 #include <vector>
 
-#include "pcap_payloads.hpp"
+#include "hesai_test_data.hpp"
+#include "lidar_test/golden.hpp"
 #include "sim/hesai/hesai.hpp"
+
+namespace {
 
 using namespace sim::hesai;
 using hesai_test::data_path;
+using lidar_test::Tolerance;
 
 struct DecodedFrame {
   CompletedFrame info;
@@ -58,67 +66,65 @@ AssemblerOptions nebula_options(Model model, float min_range, float max_range) {
   return o;
 }
 
-void expect_matches_reference(Model model, const char* pcap, const char* calibration,
-                              const char* pcd, float min_range, float max_range) {
-  const auto packets = hesai_test::read_udp_payloads(data_path(pcap));
+// One golden case: a capture decoded with its calibration and options, against the reference
+// revolution, which is the whole decoded frame whose first point is the reference's first.
+struct GoldenCase {
+  std::string name;
+  const char* capture;
+  const char* calibration;
+  AssemblerOptions options;
+  const char* reference;
+  Tolerance tolerance;
+};
+
+// Every point within 1 mm on each axis.
+constexpr Tolerance every_point_within_1mm{Tolerance::Distance::largest_axis, 1e-3, 1.0};
+
+const GoldenCase golden_cases[] = {
+    {"Pandar64Dual", "pandar64_dual.pcap", "pandar64.calibration.csv",
+     nebula_options(Model::pandar64, 0.3f, 200.0f), "pandar64_dual.reference.pcd", every_point_within_1mm},
+    {"PandarXT32Dual", "pandarxt32_dual.pcap", "pandarxt32.calibration.csv",
+     nebula_options(Model::pandar_xt32, 0.05f, 120.0f), "pandarxt32_dual.reference.pcd", every_point_within_1mm},
+    // nebula's test configuration for this capture: range 0.3–300 m (wider than the sensor's own
+    // 0.05–50 m defaults).
+    {"PandarQT128Dual", "pandarqt128_dual.pcap", "pandarqt128.calibration.csv",
+     nebula_options(Model::pandar_qt128, 0.3f, 300.0f), "pandarqt128_dual.reference.pcd", every_point_within_1mm},
+};
+
+class HesaiReferenceCloud : public ::testing::TestWithParam<GoldenCase> {};
+
+TEST_P(HesaiReferenceCloud, DecodedRevolutionMatchesNebulasReferenceCloud) {
+  const GoldenCase& c = GetParam();
+  const auto packets = hesai_test::read_udp_payloads(data_path(c.capture));
   ASSERT_FALSE(packets.empty());
-  auto cal = Calibration::load(data_path(calibration), model);
+  auto cal = Calibration::load(data_path(c.calibration), c.options.model);
   ASSERT_TRUE(cal) << cal.error().message;
-  auto assembler = FrameAssembler::create(*cal, nebula_options(model, min_range, max_range));
+  auto assembler = FrameAssembler::create(*cal, c.options);
   ASSERT_TRUE(assembler) << assembler.error().message;
-  const auto frames = decode_all(*assembler, packets, frame_capacity(model, 2));
+  const auto frames = decode_all(*assembler, packets, frame_capacity(c.options.model, 2));
   ASSERT_GE(frames.size(), 1u);  // the QT128 capture holds one whole revolution
   EXPECT_EQ(assembler->counters().malformed, 0u);
   EXPECT_EQ(assembler->counters().lost_packets, 0u);
   EXPECT_EQ(assembler->counters().dropped_points, 0u);
 
-  const auto reference = hesai_test::read_xyz_pcd(data_path(pcd));
+  const auto reference = lidar_test::read_xyz_pcd(data_path(c.reference));
   ASSERT_FALSE(reference.empty());
-  // The reference revolution is the whole frame whose first point is the reference's first.
+  // The last whole revolution that starts with the reference's first point.
   const DecodedFrame* match = nullptr;
   for (const auto& f : frames) {
     if (!f.info.whole || f.points.empty()) continue;
-    const auto& p = f.points.front();
-    if (std::abs(p.x - reference[0].x) < 1e-3f && std::abs(p.y - reference[0].y) < 1e-3f &&
-        std::abs(p.z - reference[0].z) < 1e-3f) {
-      match = &f;
-    }
+    lidar_test::CloudComparison first(c.tolerance);
+    first.add(f.points.front(), reference.front());
+    if (first.holds()) match = &f;
   }
   ASSERT_NE(match, nullptr) << "no decoded revolution starts with the reference's first point";
   ASSERT_EQ(match->points.size(), reference.size());
-  float worst = 0;
-  std::size_t worst_index = 0;
-  for (std::size_t i = 0; i < reference.size(); ++i) {
-    const auto& p = match->points[i];
-    const float d = std::max({std::abs(p.x - reference[i].x), std::abs(p.y - reference[i].y),
-                              std::abs(p.z - reference[i].z)});
-    if (d > worst) {
-      worst = d;
-      worst_index = i;
-    }
-  }
-  EXPECT_LT(worst, 1e-3f) << "point " << worst_index << " is " << worst << " m off";
-  ::testing::Test::RecordProperty("largest_difference_m", std::to_string(worst));
+  const auto comparison = lidar_test::compare_clouds(match->points, reference, c.tolerance);
+  EXPECT_TRUE(comparison.holds()) << comparison.describe() << " (" << c.tolerance << ")";
+  RecordProperty("largest_difference_m", std::to_string(comparison.largest_m()));
 }
 
-TEST(HesaiReference, Pandar64DualMatchesNebulaReferenceCloud) {
-  expect_matches_reference(Model::pandar64, "pandar64_dual.pcap", "pandar64.calibration.csv",
-                           "pandar64_dual.reference.pcd", 0.3f, 200.0f);
-}
-
-TEST(HesaiReference, PandarXT32DualMatchesNebulaReferenceCloud) {
-  expect_matches_reference(Model::pandar_xt32, "pandarxt32_dual.pcap",
-                           "pandarxt32.calibration.csv", "pandarxt32_dual.reference.pcd", 0.05f,
-                           120.0f);
-}
-
-TEST(HesaiReference, PandarQT128DualMatchesNebulaReferenceCloud) {
-  // nebula's test configuration for this capture: range 0.3–300 m (wider than the sensor's own
-  // 0.05–50 m defaults).
-  expect_matches_reference(Model::pandar_qt128, "pandarqt128_dual.pcap",
-                           "pandarqt128.calibration.csv", "pandarqt128_dual.reference.pcd", 0.3f,
-                           300.0f);
-}
+INSTANTIATE_TEST_SUITE_P(Nebula, HesaiReferenceCloud, ::testing::ValuesIn(golden_cases), lidar_test::CaseName{});
 
 TEST(HesaiReference, EveryPandarQT128PacketPassesItsCrcsAndReportsItsSafetyState) {
   const auto packets = hesai_test::read_udp_payloads(data_path("pandarqt128_dual.pcap"));
@@ -230,3 +236,5 @@ TEST(HesaiReference, RawEthernetPandar40PGivesWholeRevolutionsAt20Hz) {
   EXPECT_LT(azimuth(whole.points.front()), 1.0);
   EXPECT_GT(azimuth(whole.points.back()), 359.0);
 }
+
+}  // namespace

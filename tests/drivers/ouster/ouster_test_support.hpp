@@ -8,7 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "pcap_payloads.hpp"  // tests/drivers/hesai: the test-only libpcap reader
+#include "lidar_test/pcap_payloads.hpp"
 #include "sim/ouster/metadata.hpp"
 
 namespace ouster_test {
@@ -16,7 +16,7 @@ namespace ouster_test {
 inline std::filesystem::path data_path(const std::string& name) {
   return std::filesystem::path(OUSTER_TEST_DATA) / name;
 }
-inline std::string read_text(const std::filesystem::path& path) { return hesai_test::read_text(path); }
+using lidar_test::read_text;
 
 struct Capture {
   sim::ouster::Metadata metadata;
@@ -30,7 +30,7 @@ inline Capture load_capture(const std::string& base) {
   auto metadata = sim::ouster::Metadata::load(data_path(base + ".json"));
   if (!metadata) throw std::runtime_error(metadata.error().message);
   c.metadata = std::move(metadata.value());
-  for (auto& p : hesai_test::read_udp_payloads(data_path(base + ".pcap"))) {
+  for (auto& p : lidar_test::read_udp_payloads(data_path(base + ".pcap"))) {
     if (p.dst_port == 7502) c.lidar.push_back(std::move(p.bytes));
     if (p.dst_port == 7503) c.imu.push_back(std::move(p.bytes));
   }

@@ -2,7 +2,9 @@
 // The Ouster decoder against real captures (data/, see data/NOTICE.md): every field of the first
 // frame of both captures equals ouster-sdk's decoding (its MD5 digests), and every point equals
 // the firmware manual's range-to-xyz formula, evaluated here independently in double precision
-// from the metadata JSON (read with nlohmann, not with the driver's parser).
+// from the metadata JSON (read with nlohmann, not with the driver's parser). One table of golden
+// cases (capture and metadata, options, reference, tolerance) and parameterised tests over it,
+// the shape every family's golden tests share (tests/support/lidar_test/golden.hpp).
 #include <gtest/gtest.h>
 #include <openssl/evp.h>
 
@@ -17,14 +19,36 @@
 
 #include <nlohmann/json.hpp>
 
+#include "lidar_test/golden.hpp"
 #include "ouster_test_support.hpp"
 #include "sim/ouster/ouster.hpp"
 
 namespace {
 
 using namespace sim::ouster;
+using lidar_test::Tolerance;
 using ouster_test::Capture;
 using ouster_test::load_capture;
+
+// One golden case: a capture with its metadata (<base>.pcap, <base>.json), decoded with the
+// default options, against ouster-sdk's digests of its first frame (<base>_digest.json, every
+// field exact) and against the firmware manual's formula (every point within the tolerance).
+struct GoldenCase {
+  std::string name;
+  std::string base;
+  std::size_t lidar_packets;
+  Tolerance formula_tolerance;
+};
+
+// Every point within 0.1 mm of the formula on each axis.
+constexpr Tolerance formula_tolerance{Tolerance::Distance::largest_axis, 1e-4, 1.0};
+
+const GoldenCase golden_cases[] = {
+    {"LegacyOs1", "OS-1-32-G_v2.1.1_1024x10", 64, formula_tolerance},
+    {"DualReturnOs0", "OS-0-32-U1_v2.2.0_1024x10", 64, formula_tolerance},
+};
+
+class OusterGoldenCase : public ::testing::TestWithParam<GoldenCase> {};
 
 template <typename T>
 std::string md5(const std::vector<T>& values) {
@@ -95,9 +119,10 @@ Images first_frame_images(const Capture& capture) {
   return im;
 }
 
-void expect_digests_match(const std::string& base) {
+TEST_P(OusterGoldenCase, EveryFieldOfTheFirstFrameEqualsOusterSdksDigest) {
+  const std::string& base = GetParam().base;
   const Capture capture = load_capture(base);
-  ASSERT_EQ(capture.lidar.size(), 64u);
+  ASSERT_EQ(capture.lidar.size(), GetParam().lidar_packets);
   const Images im = first_frame_images(capture);
   const auto digest = nlohmann::json::parse(ouster_test::read_text(ouster_test::data_path(base + "_digest.json")));
   const auto& scan = digest.at("scans").at(0);
@@ -115,14 +140,6 @@ void expect_digests_match(const std::string& base) {
     ++checked;
   }
   EXPECT_GE(checked, 9u);
-}
-
-TEST(OusterGolden, EveryFieldOfTheLegacyOs1CaptureEqualsOusterSdksDigest) {
-  expect_digests_match("OS-1-32-G_v2.1.1_1024x10");
-}
-
-TEST(OusterGolden, EveryFieldOfTheDualReturnOs0CaptureEqualsOusterSdksDigest) {
-  expect_digests_match("OS-0-32-U1_v2.2.0_1024x10");
 }
 
 // The published formula, from the JSON directly: x = (r − n)·cos(θe+θa)·cos φ + n·cos θe, …,
@@ -147,7 +164,9 @@ Expected formula(const nlohmann::json& meta, std::size_t u, std::size_t v, std::
   return {row(0) / 1000, row(1) / 1000, row(2) / 1000};
 }
 
-void expect_points_follow_formula(const std::string& base) {
+// Both returns where the profile has two; columns destaggered, with their column times.
+TEST_P(OusterGoldenCase, PointsAreTheFormulasInTheSensorFrameDestaggeredWithColumnTimes) {
+  const std::string& base = GetParam().base;
   const Capture capture = load_capture(base);
   const auto meta = nlohmann::json::parse(ouster_test::read_text(ouster_test::data_path(base + ".json")));
   const Images im = first_frame_images(capture);
@@ -169,7 +188,7 @@ void expect_points_follow_formula(const std::string& base) {
   ASSERT_EQ(frame->point_count, h * w * returns);
   EXPECT_EQ(frame->stamp_ns, static_cast<std::int64_t>(im.timestamp[0]));
   const auto& shift = meta.at("data_format").at("pixel_shift_by_row");
-  double worst = 0;
+  lidar_test::CloudComparison comparison(GetParam().formula_tolerance);
   std::size_t with_return = 0;
   for (unsigned ret = 0; ret < returns; ++ret) {
     for (std::size_t u = 0; u < h; ++u) {
@@ -189,22 +208,15 @@ void expect_points_follow_formula(const std::string& base) {
           continue;
         }
         ++with_return;
-        const Expected e = formula(meta, u, v, w, r);
-        worst = std::max({worst, std::fabs(p.x - e.x), std::fabs(p.y - e.y), std::fabs(p.z - e.z)});
+        comparison.add(p, formula(meta, u, v, w, r));
       }
     }
   }
   EXPECT_GT(with_return, h * w / 4) << "the captures see a scene";
-  EXPECT_LT(worst, 1e-4) << "metres, largest difference from the formula";
+  EXPECT_TRUE(comparison.holds()) << comparison.describe() << " (" << GetParam().formula_tolerance << ")";
 }
 
-TEST(OusterGolden, LegacyPointsAreTheFormulasInTheSensorFrameDestaggeredWithColumnTimes) {
-  expect_points_follow_formula("OS-1-32-G_v2.1.1_1024x10");
-}
-
-TEST(OusterGolden, DualReturnPointsAreTheFormulasForBothReturns) {
-  expect_points_follow_formula("OS-0-32-U1_v2.2.0_1024x10");
-}
+INSTANTIATE_TEST_SUITE_P(Recorded, OusterGoldenCase, ::testing::ValuesIn(golden_cases), lidar_test::CaseName{});
 
 TEST(OusterGolden, DenseCloudHoldsExactlyThePixelsWithAReturnInsideTheRangeLimits) {
   const Capture capture = load_capture("OS-0-32-U1_v2.2.0_1024x10");

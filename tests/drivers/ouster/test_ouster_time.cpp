@@ -16,9 +16,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include "fake_sensor_http.hpp"
+#include "lidar_test/fake_sensor_http.hpp"
 #include "ouster_test_support.hpp"
 #include "sim/apps/clock_poll.hpp"
+#include "sim/ouster/route.hpp"
 #include "sim/ouster/time_client.hpp"
 #include "sim/ouster/time_status.hpp"
 #include "sim/sim.hpp"
@@ -30,7 +31,7 @@ namespace {
 
 using namespace std::chrono_literals;
 using Json = nlohmann::json;
-using ouster_test::FakeSensorHttp;
+using lidar_test::FakeSensorHttp;
 using sim::ClockSource;
 using sim::ClockState;
 using sim::ClockStatus;
@@ -80,6 +81,26 @@ ClockStatus wait_for(const sim::apps::ClockPoll& poll, const std::function<bool(
     latest = poll.latest();
   }
   return latest;
+}
+
+// The route the live receiver and the replay share: as ouster-sdk's pcap source, the lidar
+// port to push, the IMU port to push_imu, other ports nowhere; without ports (by_port false)
+// or with one port for both, the 48-byte datagrams are the IMU's.
+TEST(OusterRoute, TheLidarPortGoesToPushTheImuPortToPushImuAndOtherPortsNowhere) {
+  using sim::lidar::PacketKind;
+  const std::vector<std::uint8_t> imu(sim::ouster::imu_packet_bytes, 0);
+  const std::vector<std::uint8_t> lidar(6464, 0);
+  const sim::ouster::Route route;
+  EXPECT_EQ(route(7502, lidar), PacketKind::data);
+  EXPECT_EQ(route(7503, imu), PacketKind::imu);
+  EXPECT_EQ(route(7503, lidar), PacketKind::imu);
+  EXPECT_EQ(route(9999, lidar), PacketKind::none);
+  const sim::ouster::Route by_size{.by_port = false};
+  EXPECT_EQ(by_size(9999, lidar), PacketKind::data);
+  EXPECT_EQ(by_size(9999, imu), PacketKind::imu);
+  const sim::ouster::Route one_port{.data_port = 7502, .imu_port = 7502};
+  EXPECT_EQ(one_port(7502, imu), PacketKind::imu);
+  EXPECT_EQ(one_port(7502, lidar), PacketKind::data);
 }
 
 }  // namespace

@@ -23,8 +23,8 @@
 #include <thread>
 #include <vector>
 
-#include "fake_sensor_http.hpp"
-#include "frames.hpp"  // tests/drivers/hesai/driver: hand-built frames and capture files
+#include "lidar_test/fake_sensor_http.hpp"
+#include "lidar_test/capture_frames.hpp"
 #include "ouster_test_support.hpp"
 #include "sim/sim.hpp"
 #include "sim_test/network.hpp"
@@ -279,7 +279,7 @@ TEST(OusterReplay, TwoAndThreeSensorsOnOnePortAreCountedAndWarnedOfOnce) {
   }
 }
 
-using ouster_test::FakeSensorHttp;
+using lidar_test::FakeSensorHttp;
 
 void send_to(std::uint16_t port, const std::vector<std::vector<std::uint8_t>>& payloads,
              const char* address = "127.0.0.1") {
@@ -357,6 +357,54 @@ TEST(OusterLive, MetadataComesFromTheSensorsHttpApiIsCachedAndTheFramesAndImuAre
   EXPECT_EQ(none.code, 1);
   EXPECT_NE(none.err.find("no cached metadata"), std::string::npos) << none.err;
   EXPECT_TRUE(one_sentence(none.err)) << none.err;
+}
+
+// A sensor reconfigured from its web page (or restarted) sends packets of a new initialization
+// id: with --metadata-from-sensor, once for 2 s every lidar packet was refused so, the driver
+// fetches the metadata again and publishes the sensor's frames (review turn 4, L6).
+TEST(OusterLive, AReconfiguredSensorsMetadataIsFetchedAgainAndItsFramesPublished) {
+  if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
+  const auto capture = ouster_test::load_capture(dual);
+  const std::string now = ouster_test::read_text(ouster_test::data_path(dual + ".json"));
+  std::string before = now;  // the metadata of the sensor before its reconfiguration
+  const std::size_t id = before.find("9599938");
+  ASSERT_NE(id, std::string::npos);
+  before.replace(id, 7, "9599937");
+  TempDir dir;
+  const std::string stream = unique_name("ouster_reconfigured");
+  StreamGuard guard(stream);
+  FakeSensorHttp sensor(before);
+  Process driver({live_tool, "--metadata-from-sensor", "--sensor-ip", "localhost", "--http-port",
+                  std::to_string(sensor.port()), "--calibration", (dir.path / "os0.json").string(), "--lidar-port",
+                  "0", "--imu-port", "0", "--no-imu", "--clock-poll-seconds", "0", "--stream", stream,
+                  "--status-interval", "0", "--summary"});
+  auto ports = listening(driver);
+  ASSERT_TRUE(ports) << driver.err();
+  sensor.set_route("/api/v1/sensor/metadata", 200, now);  // reconfigured: packets of 9599938
+  // The sensor sends; the driver refuses its packets until it has the new metadata.
+  std::optional<std::string> again;
+  const auto deadline = std::chrono::steady_clock::now() + 60s;
+  while (!again && std::chrono::steady_clock::now() < deadline) {
+    send_to(static_cast<std::uint16_t>(ports->lidar), capture.lidar);
+    again = driver.wait_for_line("listening on", 200ms);
+  }
+  ASSERT_TRUE(again) << driver.err();
+  EXPECT_EQ(sensor.requests_for("/api/v1/sensor/metadata"), 2);
+  ASSERT_EQ(std::sscanf(again->c_str(), "sim_lidar_ouster: listening on %*s lidar port %u imu port %u", &ports->lidar,
+                        &ports->imu),
+            2);
+  auto reader = sim::testing::wait_for_stream(stream);
+  ASSERT_TRUE(reader);
+  send_to(static_cast<std::uint16_t>(ports->lidar), capture.lidar);
+  std::vector<std::byte> buffer(reader->capacity());
+  sim::FrameInfo info;
+  EXPECT_EQ(reader->read_next(buffer, info, 30s), sim::ReadStatus::new_frame) << driver.err();
+  ::kill(driver.pid(), SIGTERM);
+  EXPECT_EQ(driver.wait(), 0) << driver.err();
+  EXPECT_NE(driver.err().find("another initialization id than the metadata's (9599937)"), std::string::npos)
+      << driver.err();
+  EXPECT_NE(driver.err().find("fetching its metadata again"), std::string::npos) << driver.err();
+  EXPECT_NE(driver.out().find("frames=1 packets=64 "), std::string::npos) << driver.out();
 }
 
 // The stream says which clock the sensor stamps with: the metadata's timestamp_mode (PTP here;

@@ -6,9 +6,6 @@
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <pty.h>
-#ifdef SIM_REPLAY_PCAP_PATH
-#include <pcap/pcap.h>
-#endif
 #include <sys/socket.h>
 #include <termios.h>
 #include <unistd.h>
@@ -22,6 +19,9 @@
 #include <fstream>
 #include <iterator>
 
+#ifdef SIM_REPLAY_PCAP_PATH
+#include "lidar_test/capture_frames.hpp"  // libpcap's writer, headers written byte by byte
+#endif
 #include "sim/clock.hpp"
 #include "sim/clock_status.hpp"
 #include "sim/reader.hpp"
@@ -517,38 +517,15 @@ TEST(UnitreeReplaySerial, BadInputIsReportedWithExitCodes) {
 // A capture of the L2's UDP stream as tcpdump would write it (raw IP link type): one datagram
 // per packet, 4 ms apart.
 void write_udp_capture(const std::string& path, const std::vector<Bytes>& payloads) {
-  pcap_t* dead = pcap_open_dead(DLT_RAW, 65535);
-  pcap_dumper_t* dumper = pcap_dump_open(dead, path.c_str());
-  ASSERT_NE(dumper, nullptr) << pcap_geterr(dead);
+  namespace capture = sim::pcap::testing;
+  std::vector<capture::Record> records;
   for (std::size_t i = 0; i < payloads.size(); ++i) {
-    const Bytes& payload = payloads[i];
-    std::vector<std::uint8_t> packet(28 + payload.size(), 0);
-    const auto total = static_cast<std::uint16_t>(packet.size());
-    packet[0] = 0x45;  // IPv4, 20-byte header
-    packet[2] = static_cast<std::uint8_t>(total >> 8);
-    packet[3] = static_cast<std::uint8_t>(total);
-    packet[8] = 64;   // TTL
-    packet[9] = 17;   // UDP
-    const std::uint8_t source[4] = {192, 168, 1, 62};
-    const std::uint8_t destination[4] = {192, 168, 1, 2};
-    std::memcpy(&packet[12], source, 4);
-    std::memcpy(&packet[16], destination, 4);
-    const auto udp_length = static_cast<std::uint16_t>(8 + payload.size());
-    packet[20] = 6201 >> 8;  // source port
-    packet[21] = 6201 & 0xFF;
-    packet[22] = 6201 >> 8;  // destination port
-    packet[23] = 6201 & 0xFF;
-    packet[24] = static_cast<std::uint8_t>(udp_length >> 8);
-    packet[25] = static_cast<std::uint8_t>(udp_length);
-    std::memcpy(&packet[28], payload.data(), payload.size());
-    pcap_pkthdr header{};
-    header.ts.tv_sec = 1'700'000'000;
-    header.ts.tv_usec = static_cast<suseconds_t>(i * 4000);
-    header.caplen = header.len = static_cast<bpf_u_int32>(packet.size());
-    pcap_dump(reinterpret_cast<u_char*>(dumper), &header, packet.data());
+    const auto* bytes = reinterpret_cast<const std::uint8_t*>(payloads[i].data());
+    const capture::Bytes datagram = capture::udp(6201, 6201, capture::Bytes(bytes, bytes + payloads[i].size()));
+    records.push_back({capture::ipv4({192, 168, 1, 62}, {192, 168, 1, 2}, datagram),
+                       1'700'000'000'000'000'000 + static_cast<std::int64_t>(i) * 4'000'000, 0});
   }
-  pcap_dump_close(dumper);
-  pcap_close(dead);
+  capture::write_capture(path, DLT_RAW, records);
 }
 
 TEST(UnitreeReplayPcap, PublishesTheScansOfAnL2CaptureAsTheLibraryDecodesThem) {

@@ -37,6 +37,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.interpolation = (flags & 8) ? AzimuthInterpolation::nebula : AzimuthInterpolation::firing_time;
   options.cut_by = (flags & 0x40) ? CutBy::packet : CutBy::point_azimuth;
   options.returns = static_cast<ReturnFilter>((flags >> 2) % 3);
+  // A wrapping window, on the points or (nebula's VLP-32 decoder) on the blocks only.
+  if ((flags & 0x80) != 0) options.azimuth_window = AssemblerOptions::AzimuthWindow{270, 90, false, (flags & 0x20) != 0};
   auto calibration = Calibration::from_lasers(lasers);
   if (!calibration) return 0;
   auto assembler = FrameAssembler::create(std::move(calibration.value()), options);

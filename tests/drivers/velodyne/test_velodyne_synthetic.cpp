@@ -423,6 +423,108 @@ TEST(VelodyneSynthetic, Vlp32cDualBlocksRepeatingTheirPairAddNoPointsAndTheNextB
   EXPECT_EQ(seconds, 2U * (1800U / 6U));  // pairs 1 and 3 of each of a revolution's 300 packets
 }
 
+// VLP-32C single return, 0.2° a sequence: the default decodes by the manual's firing table (the
+// lasers fire in pairs, 2.304 µs apart), the nebula mode by nebula's VLP-32 decoder (unit j one
+// 2.304 µs slot after unit j − 1, of the difference to the next block; the packet's last block
+// none). Expected points come from those two rules here, in double; a point must lie within
+// 0.005° (the 0.01° rounding) of its rule's azimuth, where the rules differ by up to 0.13°.
+struct Vlp32cExpectation {
+  double azimuth_centi;  // before rounding
+  unsigned seq;
+  unsigned laser;
+  std::int64_t time_ns;
+};
+
+std::vector<std::vector<std::uint8_t>> vlp32c_single_packets(unsigned packets, unsigned step) {
+  std::vector<std::vector<std::uint8_t>> out;
+  for (unsigned k = 0; k < packets; ++k) {
+    DataPacket p;
+    p.product_id = 0x28;
+    p.timestamp_us = static_cast<std::uint32_t>(std::llround(2'000'000 + k * 663.552));
+    for (unsigned b = 0; b < 12; ++b) {
+      const unsigned seq = k * 12 + b;
+      p.blocks[b].azimuth = static_cast<std::uint16_t>((30000 + seq * step) % 36000);
+      for (unsigned l = 0; l < 32; ++l) p.blocks[b].units[l] = {raw_distance(seq, l), 9};
+    }
+    out.push_back(p.bytes());
+  }
+  return out;
+}
+
+// The first whole revolution's points in order, as the rule `offset(block, laser)` (0.01°
+// past the block's azimuth, before rot_correction) puts them.
+template <typename Offset>
+std::vector<Vlp32cExpectation> vlp32c_expected(const Calibration& cal, unsigned packets, unsigned step, Offset offset) {
+  std::vector<Vlp32cExpectation> out;
+  for (unsigned seq = 0; seq < packets * 12; ++seq) {
+    for (unsigned l = 0; l < 32; ++l) {
+      const double az = 30000 + seq * step + offset(seq % 12, l) - cal[l].rot_correction * 18000 / M_PI;
+      const double rounded = std::floor(az + 0.5);  // the revolution the decoder files it in
+      if (rounded < 36000 || rounded >= 72000) continue;
+      const std::int64_t t = hour_start_ns + std::llround(2'000'000 + (seq / 12) * 663.552) * 1000 +
+                             std::int64_t{seq % 12} * 55'296 + std::int64_t{l / 2} * 2'304;
+      out.push_back({az, seq, l, t});
+    }
+  }
+  return out;
+}
+
+// The largest azimuth error (degrees) of the frame's points against the expectation, which
+// must list the same points in the same order; time offsets and distances must match too.
+double vlp32c_largest_error(const Calibration& cal, const std::vector<sim::LidarPoint>& frame,
+                            const std::vector<Vlp32cExpectation>& expected) {
+  EXPECT_EQ(frame.size(), expected.size());
+  double largest = 0;
+  for (std::size_t i = 0; i < frame.size() && i < expected.size(); ++i) {
+    const sim::LidarPoint& p = frame[i];
+    const Vlp32cExpectation& e = expected[i];
+    EXPECT_EQ(p.ring, cal.ring(e.laser)) << "point " << i;
+    EXPECT_EQ(p.time_offset_ns, static_cast<std::uint32_t>(e.time_ns - expected[0].time_ns)) << "point " << i;
+    const double az = std::atan2(-p.y, p.x) * 18000 / M_PI;
+    const double error = std::remainder(az - e.azimuth_centi, 36000.0) / 100.0;
+    largest = std::max(largest, std::abs(error));
+    EXPECT_NEAR(std::atan2(p.z, std::hypot(p.x, p.y)), cal[e.laser].vert_correction, 1e-5) << "point " << i;
+  }
+  return largest;
+}
+
+TEST(VelodyneSynthetic, Vlp32cLasersFireInPairsByDefaultAndOneAfterAnotherInTheNebulaMode) {
+  const Calibration cal = shipped("VLP32.yaml");
+  constexpr unsigned packets = 400;
+  constexpr unsigned step = 20;
+  const auto bytes = vlp32c_single_packets(packets, step);
+  const auto pairs = [](unsigned, unsigned l) { return step * ((l / 2) * 2.304 / 55.296); };
+  const auto slots = [](unsigned block, unsigned l) { return block == 11 ? 0.0 : step * (l * 2.304 / 55.296); };
+  const auto manual = vlp32c_expected(cal, packets, step, pairs);
+  const auto nebula = vlp32c_expected(cal, packets, step, slots);
+
+  AssemblerOptions o;
+  o.model = Model::vlp32c;
+  auto by_manual = FrameAssembler::create(cal, o);
+  ASSERT_TRUE(by_manual);
+  const Decoded m = run(*by_manual, bytes);
+  ASSERT_GE(m.frames.size(), 1U);
+  EXPECT_LE(vlp32c_largest_error(cal, m.frames[0], manual), 0.0051);
+
+  o.interpolation = AzimuthInterpolation::nebula;
+  auto as_nebula = FrameAssembler::create(cal, o);
+  ASSERT_TRUE(as_nebula);
+  const Decoded n = run(*as_nebula, bytes);
+  ASSERT_GE(n.frames.size(), 1U);
+  EXPECT_LE(vlp32c_largest_error(cal, n.frames[0], nebula), 0.0051);
+  // Within 0.005° of each rule, where the rules put most lasers more than 0.01° apart (laser 31:
+  // 16 slots, 0.13°): each mode follows its own rule and not the other's.
+  std::size_t apart = 0;
+  double farthest = 0;
+  for (const auto& e : manual) {
+    const double d = std::abs(slots(e.seq % 12, e.laser) - pairs(e.seq % 12, e.laser)) / 100;
+    apart += d > 0.0102 ? 1 : 0;
+    farthest = std::max(farthest, d);
+  }
+  EXPECT_GT(apart, manual.size() * 3 / 4);
+  EXPECT_NEAR(farthest, step * 16 * 2.304 / 55.296 / 100, 1e-9);
+}
+
 TEST(VelodyneSynthetic, TheCutAzimuthStartsEachFrameThere) {
   const Calibration cal = shipped("VLP16.yaml");
   std::vector<std::vector<std::uint8_t>> packets;

@@ -2,16 +2,12 @@
 #include "sim/hesai/lidar_stream.hpp"
 
 #include <cstdio>
-#include <sstream>
+#include <ostream>
 #include <utility>
 
 #include "sim/lidar/frame_publisher.hpp"
 
 namespace sim::hesai {
-
-struct LidarStream::Impl : lidar::PointPipeline<FrameAssembler, PublishCounters> {
-  using PointPipeline::PointPipeline;
-};
 
 namespace {
 
@@ -50,51 +46,14 @@ Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config) {
   auto writer = Writer::create(spec);
   if (!writer) return writer.error();
 
-  return LidarStream(std::make_unique<Impl>(std::move(writer.value()), std::move(assembler.value())));
+  return LidarStream(make_pipeline(std::move(writer.value()), std::move(assembler.value())));
 }
 
-LidarStream::LidarStream(std::unique_ptr<Impl> impl) noexcept : impl_(std::move(impl)) {}
-LidarStream::LidarStream(LidarStream&&) noexcept = default;
-LidarStream& LidarStream::operator=(LidarStream&&) noexcept = default;
-LidarStream::~LidarStream() = default;
-
-PushResult LidarStream::push(std::span<const std::uint8_t> payload,
-                             std::int64_t host_receive_ns) noexcept {
-  return impl_->push(payload, host_receive_ns);
-}
-
-std::optional<CompletedFrame> LidarStream::finish() noexcept {
-  if (!impl_->assembler.options().emit_partial_frames) {
-    impl_->assembler.reset();
-    return std::nullopt;
-  }
-  return impl_->finish();
-}
-
-void LidarStream::reset() noexcept { impl_->assembler.reset(); }
-void LidarStream::set_stamp_offset(std::int64_t offset_ns) noexcept { impl_->frames.set_stamp_offset(offset_ns); }
-std::int64_t LidarStream::stamp_offset() const noexcept { return impl_->frames.stamp_offset(); }
-
-Model LidarStream::model() const noexcept { return impl_->assembler.options().model; }
-const AssemblerCounters& LidarStream::counters() const noexcept { return impl_->assembler.counters(); }
-const PublishCounters& LidarStream::published() const noexcept { return impl_->published; }
-std::optional<std::int64_t> LidarStream::time_to_cut_ns() const noexcept {
-  return impl_->assembler.time_to_cut_ns();
-}
-std::uint64_t LidarStream::max_points() const noexcept { return impl_->frames.max_points(); }
-Writer& LidarStream::writer() noexcept { return impl_->frames.writer(); }
-timing::ClockReporter& LidarStream::clock() noexcept { return impl_->clock; }
-std::optional<ClockStatus> LidarStream::tick_clock(std::int64_t now_realtime_ns, bool at_once) {
-  return impl_->tick_clock(now_realtime_ns, at_once);
-}
-
-std::string LidarStream::describe_counters(bool machine) const {
-  const AssemblerCounters& c = impl_->assembler.counters();
-  const PublishCounters& p = impl_->published;
-  std::ostringstream out;
-  lidar::describe_frames(out, machine, p.frames, c.packets, c.lost_packets, c.malformed);
+void StreamFamily::describe(std::ostream& out, bool machine, const lidar::StreamPipeline<StreamFamily>& pipeline) {
+  const AssemblerCounters& c = pipeline.assembler.counters();
+  const PublishCounters& p = pipeline.published;
   out << (machine ? " wrong_model=" : " wrong-model ") << c.wrong_model;
-  const FrameAssembler& a = impl_->assembler;
+  const FrameAssembler& a = pipeline.assembler;
   const auto& safety = a.functional_safety();
   if (machine) {
     out << " out_of_order=" << c.out_of_order << " points=" << p.points
@@ -107,7 +66,7 @@ std::string LidarStream::describe_counters(bool machine) const {
       out << " safety=" << state << " fault_code=" << safety->fault_code;
     }
   } else {
-    out << " points/frame " << impl_->frames.last_points();
+    out << " points/frame " << pipeline.frames.last_points();
     if (c.dropped_points != 0) out << " dropped-points " << c.dropped_points;
     if (c.crc_errors != 0) out << " crc-errors " << c.crc_errors;
     if (a.motor_rpm() != 0) out << " rpm " << a.motor_rpm();
@@ -122,7 +81,6 @@ std::string LidarStream::describe_counters(bool machine) const {
       }
     }
   }
-  return out.str();
 }
 
 std::optional<unsigned> returns_in(std::span<const std::uint8_t> payload, Model model) noexcept {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <numbers>
 #include <string_view>
-#include <sstream>
+#include <ostream>
 #include <utility>
 
 #include "sim/clock.hpp"
@@ -45,13 +45,6 @@ void describe_live_clock(SensorInfo& info, const Metadata& metadata) {
                                         " (not known to this driver)";
   }
 }
-
-struct LidarStream::Impl : lidar::PointPipeline<FrameAssembler, PublishCounters> {
-  Impl(Writer w, std::optional<Writer> i, FrameAssembler a)
-      : PointPipeline(std::move(w), std::move(a)), imu(std::move(i)) {}
-
-  std::optional<Writer> imu;  // its own stream, one frame per IMU packet
-};
 
 namespace {
 
@@ -131,53 +124,31 @@ Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config, const
     if (!imu_writer) return imu_writer.error();
     imu.emplace(std::move(imu_writer.value()));
   }
-  return LidarStream(std::make_unique<Impl>(std::move(writer.value()), std::move(imu), std::move(assembler.value())));
-}
-
-LidarStream::LidarStream(std::unique_ptr<Impl> impl) noexcept : impl_(std::move(impl)) {}
-LidarStream::LidarStream(LidarStream&&) noexcept = default;
-LidarStream& LidarStream::operator=(LidarStream&&) noexcept = default;
-LidarStream::~LidarStream() = default;
-
-PushResult LidarStream::push(std::span<const std::uint8_t> payload,
-                                   std::int64_t host_receive_ns) noexcept {
-  return impl_->push(payload, host_receive_ns);
+  auto pipeline = make_pipeline(std::move(writer.value()), std::move(assembler.value()));
+  pipeline->state.imu = std::move(imu);
+  return LidarStream(std::move(pipeline));
 }
 
 bool LidarStream::push_imu(std::span<const std::uint8_t> payload) noexcept {
+  Pipeline& p = pipeline();
   const auto packet = parse_imu(payload);
   if (!packet) {
-    ++impl_->published.imu_malformed;
+    ++p.published.imu_malformed;
     return false;
   }
-  ++impl_->published.imu_samples;
-  if (impl_->imu) {
+  ++p.published.imu_samples;
+  if (p.state.imu) {
     ImuSample sample = to_sample(*packet);
-    sample.stamp_ns = saturating_add_ns(sample.stamp_ns, impl_->frames.stamp_offset());
-    sample.gyro_stamp_ns = saturating_add_ns(sample.gyro_stamp_ns, impl_->frames.stamp_offset());
-    (void)impl_->imu->write(std::span<const ImuSample>(&sample, 1), sample.stamp_ns);
+    sample.stamp_ns = saturating_add_ns(sample.stamp_ns, p.frames.stamp_offset());
+    sample.gyro_stamp_ns = saturating_add_ns(sample.gyro_stamp_ns, p.frames.stamp_offset());
+    (void)p.state.imu->write(std::span<const ImuSample>(&sample, 1), sample.stamp_ns);
   }
   return true;
 }
 
-std::optional<CompletedFrame> LidarStream::finish() noexcept {
-  return impl_->finish();
-}
-
-void LidarStream::reset() noexcept { impl_->assembler.reset(); }
-void LidarStream::set_stamp_offset(std::int64_t offset_ns) noexcept { impl_->frames.set_stamp_offset(offset_ns); }
-std::int64_t LidarStream::stamp_offset() const noexcept { return impl_->frames.stamp_offset(); }
-timing::ClockReporter& LidarStream::clock() noexcept { return impl_->clock; }
-std::optional<ClockStatus> LidarStream::tick_clock(std::int64_t now_realtime_ns, bool at_once) {
-  return impl_->tick_clock(now_realtime_ns, at_once);
-}
-const Metadata& LidarStream::metadata() const noexcept { return impl_->assembler.metadata(); }
-const AssemblerCounters& LidarStream::counters() const noexcept { return impl_->assembler.counters(); }
-const PublishCounters& LidarStream::published() const noexcept { return impl_->published; }
-
 std::string LidarStream::mismatch_problem() const {
-  const AssemblerCounters& c = impl_->assembler.counters();
-  const Metadata& m = impl_->assembler.metadata();
+  const AssemblerCounters& c = pipeline().assembler.counters();
+  const Metadata& m = pipeline().assembler.metadata();
   const auto rejected = [&](PacketError e) { return c.rejected[static_cast<unsigned>(e)]; };
   if (rejected(PacketError::wrong_size) != 0) return describe_mismatch(c.last_rejected_size, m.format);
   if (rejected(PacketError::bad_measurement_id) != 0) {
@@ -196,11 +167,9 @@ std::string LidarStream::mismatch_problem() const {
   return {};
 }
 
-std::string LidarStream::describe_counters(bool machine) const {
-  const AssemblerCounters& c = impl_->assembler.counters();
-  const PublishCounters& p = impl_->published;
-  std::ostringstream out;
-  lidar::describe_frames(out, machine, p.frames, c.packets, c.lost_packets, c.malformed);
+void StreamFamily::describe(std::ostream& out, bool machine, const lidar::StreamPipeline<StreamFamily>& pipeline) {
+  const AssemblerCounters& c = pipeline.assembler.counters();
+  const PublishCounters& p = pipeline.published;
   out << (machine ? " imu=" : " imu ") << p.imu_samples;
   if (machine) {
     out << " points=" << p.points << " partial_frames=" << p.partial_frames
@@ -214,11 +183,10 @@ std::string LidarStream::describe_counters(bool machine) const {
       out << " " << name << "=" << c.rejected[e];
     }
   } else {
-    out << " points/frame " << impl_->frames.last_points();
+    out << " points/frame " << pipeline.frames.last_points();
     if (p.imu_malformed != 0) out << " imu-malformed " << p.imu_malformed;
     if (c.invalid_columns != 0) out << " invalid-columns " << c.invalid_columns;
   }
-  return out.str();
 }
 
 }  // namespace sim::ouster

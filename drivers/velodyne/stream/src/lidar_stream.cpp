@@ -2,7 +2,7 @@
 #include "sim/velodyne/lidar_stream.hpp"
 
 #include <mutex>
-#include <sstream>
+#include <ostream>
 #include <utility>
 
 #include "sim/clock.hpp"
@@ -94,15 +94,6 @@ void describe_time_sync(SensorInfo& info, const TimeSync& sync, StampClock clock
 
 }  // namespace
 
-struct LidarStream::Impl : lidar::PointPipeline<FrameAssembler, PublishCounters> {
-  using PointPipeline::PointPipeline;
-  std::optional<SensorInfo> sensor;  // the description, re-set when the time sync changes
-  TimeSync sync;
-  ReportedClock reported;  // what the position packets last said of the clock
-  StampClock stamp_clock = StampClock::sensor_live;
-  std::string caller_time_sync;  // LidarStreamConfig::sensor's, which sensor_recorded extends
-};
-
 Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config) {
   const Model model = config.assembler.model;
   if (config.calibration.empty()) {
@@ -128,85 +119,53 @@ Expected<LidarStream> LidarStream::create(const LidarStreamConfig& config) {
   auto writer = Writer::create(spec);
   if (!writer) return writer.error();
 
-  auto impl = std::make_unique<Impl>(std::move(writer.value()), std::move(assembler.value()));
-  impl->sensor = sensor;
-  impl->stamp_clock = config.stamp_clock;
-  impl->reported.set(initial_clock(config.stamp_clock));
-  if (config.sensor) impl->caller_time_sync = config.sensor->time_sync;
-  return LidarStream(std::move(impl));
-}
-
-LidarStream::LidarStream(std::unique_ptr<Impl> impl) noexcept : impl_(std::move(impl)) {}
-LidarStream::LidarStream(LidarStream&&) noexcept = default;
-LidarStream& LidarStream::operator=(LidarStream&&) noexcept = default;
-LidarStream::~LidarStream() = default;
-
-PushResult LidarStream::push(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns,
-                             std::int64_t time_reference_ns) noexcept {
-  return impl_->push(payload, host_receive_ns, time_reference_ns);
+  auto pipeline = make_pipeline(std::move(writer.value()), std::move(assembler.value()));
+  StreamFamily::State& state = pipeline->state;
+  state.sensor = sensor;
+  state.stamp_clock = config.stamp_clock;
+  state.reported.set(initial_clock(config.stamp_clock));
+  if (config.sensor) state.caller_time_sync = config.sensor->time_sync;
+  return LidarStream(std::move(pipeline));
 }
 
 bool LidarStream::push_position(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns) noexcept {
+  Pipeline& p = pipeline();
+  StreamFamily::State& state = p.state;
   const auto report = parse_position_packet(payload, model());
   if (!report) {
-    ++impl_->published.position_malformed;
+    ++p.published.position_malformed;
     return false;
   }
-  ++impl_->published.position_packets;
+  ++p.published.position_packets;
   const std::int64_t arrival = host_receive_ns != 0 ? host_receive_ns : realtime_ns();
-  impl_->reported.set(stream_clock(clock_status_of(*report, arrival), impl_->stamp_clock));
+  state.reported.set(stream_clock(clock_status_of(*report, arrival), state.stamp_clock));
   TimeSync sync = time_sync_of(*report);
-  if (sync.text == impl_->sync.text && sync.base == impl_->sync.base) return true;
-  impl_->sync = std::move(sync);
-  if (impl_->sensor && impl_->stamp_clock != StampClock::restamped) {
+  if (sync.text == state.sync.text && sync.base == state.sync.base) return true;
+  state.sync = std::move(sync);
+  if (state.sensor && state.stamp_clock != StampClock::restamped) {
     // Position packets come about once a second; the description changes only with the state.
-    describe_time_sync(*impl_->sensor, impl_->sync, impl_->stamp_clock, impl_->caller_time_sync);
-    (void)impl_->frames.writer().set_sensor_info(*impl_->sensor);
+    describe_time_sync(*state.sensor, state.sync, state.stamp_clock, state.caller_time_sync);
+    (void)p.frames.writer().set_sensor_info(*state.sensor);
   }
   return true;
 }
 
-std::optional<CompletedFrame> LidarStream::finish() noexcept {
-  if (!impl_->assembler.options().emit_partial_frames) {
-    impl_->assembler.reset();
-    return std::nullopt;
-  }
-  return impl_->finish();
-}
-
-void LidarStream::reset() noexcept { impl_->assembler.reset(); }
-void LidarStream::set_stamp_offset(std::int64_t offset_ns) noexcept { impl_->frames.set_stamp_offset(offset_ns); }
-std::int64_t LidarStream::stamp_offset() const noexcept { return impl_->frames.stamp_offset(); }
-Model LidarStream::model() const noexcept { return impl_->assembler.options().model; }
-const AssemblerCounters& LidarStream::counters() const noexcept { return impl_->assembler.counters(); }
-const PublishCounters& LidarStream::published() const noexcept { return impl_->published; }
-const TimeSync& LidarStream::time_sync() const noexcept { return impl_->sync; }
-ReportedClock LidarStream::reported_clock() const { return impl_->reported; }
-Writer& LidarStream::writer() noexcept { return impl_->frames.writer(); }
-timing::ClockReporter& LidarStream::clock() noexcept { return impl_->clock; }
-std::optional<ClockStatus> LidarStream::tick_clock(std::int64_t now_realtime_ns, bool at_once) {
-  return impl_->tick_clock(now_realtime_ns, at_once);
-}
-
-std::string LidarStream::describe_counters(bool machine) const {
-  const AssemblerCounters& c = impl_->assembler.counters();
-  const PublishCounters& p = impl_->published;
-  std::ostringstream out;
-  lidar::describe_frames(out, machine, p.frames, c.packets, c.lost_packets, c.malformed);
+void StreamFamily::describe(std::ostream& out, bool machine, const lidar::StreamPipeline<StreamFamily>& pipeline) {
+  const AssemblerCounters& c = pipeline.assembler.counters();
+  const PublishCounters& p = pipeline.published;
   if (machine) {
-    std::string sync = impl_->sync.text;
+    std::string sync = pipeline.state.sync.text;
     for (char& ch : sync) ch = (ch == ' ' || ch == ',') ? '_' : ch;
     out << " wrong_model=" << c.wrong_model << " points=" << p.points
         << " partial_frames=" << p.partial_frames << " dropped_points=" << c.dropped_points
         << " publish_failures=" << p.failed << " position_packets=" << p.position_packets
         << " time_sync=" << sync;
   } else {
-    out << " wrong-model " << c.wrong_model << " points/frame " << impl_->frames.last_points();
+    out << " wrong-model " << c.wrong_model << " points/frame " << pipeline.frames.last_points();
     if (c.dropped_points != 0) out << " dropped-points " << c.dropped_points;
-    if (const auto mode = impl_->assembler.return_mode()) out << " " << to_string(*mode);
-    out << " time " << impl_->sync.text;
+    if (const auto mode = pipeline.assembler.return_mode()) out << " " << to_string(*mode);
+    out << " time " << pipeline.state.sync.text;
   }
-  return out.str();
 }
 
 std::optional<unsigned> returns_in(std::span<const std::uint8_t> payload, Model model) noexcept {

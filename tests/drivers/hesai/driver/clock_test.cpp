@@ -26,7 +26,7 @@
 #include <thread>
 #include <vector>
 
-#include "frames.hpp"
+#include "lidar_test/capture_frames.hpp"
 #include "sim/clock_status.hpp"
 #include "sim/hesai/hesai.hpp"
 #include "sim/hesai/lidar_stream.hpp"

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-// A small fake Hesai sensor for tests: a real TCP server on loopback (port 0) speaking PTC as
-// Hesai documents it. It serves the recorded QT128 calibration file and the unit's inventory, or
+// A small fake Hesai sensor for tests: PTC as Hesai documents it, on the shared accept loop of
+// the LiDAR test support (lidar_test/fake_tcp_server.hpp: a real TCP server on loopback, port 0). It serves the recorded QT128 calibration file and the unit's inventory, or
 // misbehaves the ways a network and a sensor can (refuses, closes halfway, answers garbage,
 // stalls, says no), and answers the clock questions (0x26 PTP config, 0x09 LiDAR status, 0x06
 // PTP diagnostics 1–4) from a FakeClock the test changes while it runs. The answers are encoded
@@ -8,9 +8,6 @@
 // the driver's code.
 #pragma once
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -27,7 +24,13 @@
 #include <thread>
 #include <vector>
 
+#include "lidar_test/fake_tcp_server.hpp"
+
 namespace hesai_test {
+
+using lidar_test::AfterAnswer;
+using lidar_test::closed_port;
+using lidar_test::send_all;
 
 inline std::string read_file(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -128,29 +131,13 @@ inline std::string clock_answer(const FakeClock& c, std::uint8_t command, std::u
 
 enum class Behaviour { serve, truncate, garbage, stall, silent, refuse_request };
 
-// One listening socket on 127.0.0.1, a thread answering each connection as told. Stalled
-// connections stay open until the server is destroyed.
+// A PTC server on the shared accept loop, answering each connection as told. Stalled
+// connections stay open until the sensor is destroyed.
 class FakeSensor {
  public:
   explicit FakeSensor(Behaviour behaviour, std::string file = qt128_calibration())
-      : behaviour_(behaviour), file_(std::move(file)), listener_(::socket(AF_INET, SOCK_STREAM, 0)) {
-    sockaddr_in address{};
-    address.sin_family = AF_INET;
-    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ::bind(listener_, reinterpret_cast<const sockaddr*>(&address), sizeof address);
-    ::listen(listener_, 8);
-    socklen_t length = sizeof address;
-    ::getsockname(listener_, reinterpret_cast<sockaddr*>(&address), &length);
-    port_ = ntohs(address.sin_port);
-    thread_ = std::thread([this] { serve(); });
-  }
-  ~FakeSensor() {
-    stop_ = true;
-    thread_.join();
-    for (int fd : held_) ::close(fd);
-    ::close(listener_);
-  }
-  std::uint16_t port() const { return port_; }
+      : behaviour_(behaviour), file_(std::move(file)) {}
+  std::uint16_t port() const { return server_.port(); }
   int requests() const { return requests_; }
   // What the sensor answers about its clock from now on.
   void set_clock(const FakeClock& clock) {
@@ -160,25 +147,6 @@ class FakeSensor {
   int clock_requests() const { return clock_requests_; }
 
  private:
-  void serve() {
-    while (!stop_) {
-      pollfd p{listener_, POLLIN, 0};
-      if (::poll(&p, 1, 20) <= 0) continue;
-      const int fd = ::accept(listener_, nullptr, nullptr);
-      if (fd < 0) continue;
-      answer(fd);
-    }
-  }
-
-  void send_all(int fd, const std::string& bytes) {
-    std::size_t sent = 0;
-    while (sent < bytes.size()) {
-      const ssize_t n = ::send(fd, bytes.data() + sent, bytes.size() - sent, MSG_NOSIGNAL);
-      if (n <= 0) return;
-      sent += static_cast<std::size_t>(n);
-    }
-  }
-
   static std::string header(std::uint8_t code, std::size_t size, char command = '\x05') {
     const auto n = static_cast<std::uint32_t>(size);
     return {'\x47', '\x74', command, static_cast<char>(code), static_cast<char>(n >> 24),
@@ -203,8 +171,7 @@ class FakeSensor {
   }
 
  private:
-
-  void answer(int fd) {
+  AfterAnswer answer(int fd) {
     // The request: 47 74 05 00 00 00 00 00.
     unsigned char request[8];
     std::size_t got = 0;
@@ -231,13 +198,11 @@ class FakeSensor {
         clock = clock_;
       }
       send_all(fd, clock_answer(clock, request[2], have > 0 ? payload[0] : 0));
-      ::close(fd);
-      return;
+      return AfterAnswer::close;
     }
     if (got == 8 && request[2] == 0x07) {  // the inventory, whatever the behaviour
       if (behaviour_ == Behaviour::serve) send_all(fd, header(0, 120, '\x07') + inventory());
-      ::close(fd);
-      return;
+      return AfterAnswer::close;
     }
     switch (behaviour_) {
       case Behaviour::serve:
@@ -251,16 +216,14 @@ class FakeSensor {
         break;
       case Behaviour::stall:
         send_all(fd, header(0, file_.size()) + file_.substr(0, 100));
-        held_.push_back(fd);  // open, silent, until the test ends
-        return;
+        return AfterAnswer::hold;  // open, silent, until the test ends
       case Behaviour::silent:
-        held_.push_back(fd);
-        return;
+        return AfterAnswer::hold;
       case Behaviour::refuse_request:
         send_all(fd, header(3, 0));
         break;
     }
-    ::close(fd);
+    return AfterAnswer::close;
   }
 
   static bool is_clock_command(std::uint8_t command) {
@@ -272,26 +235,8 @@ class FakeSensor {
   FakeClock clock_;
   std::atomic<int> clock_requests_{0};
   std::string file_;
-  int listener_;
-  std::uint16_t port_ = 0;
-  std::thread thread_;
-  std::atomic<bool> stop_{false};
   std::atomic<int> requests_{0};
-  std::vector<int> held_;  // only touched by the server thread until it is joined
+  lidar_test::FakeTcpServer server_{[this](int fd) { return answer(fd); }};  // last: it serves the members above
 };
-
-// A loopback port nothing listens on: bound once to learn a free number, then closed.
-inline std::uint16_t closed_port() {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ::bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address);
-  socklen_t length = sizeof address;
-  ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length);
-  ::close(fd);
-  return ntohs(address.sin_port);
-}
-
 
 }  // namespace hesai_test

@@ -114,12 +114,13 @@ TEST(PtcCalibration, EveryMisbehaviourIsOneSentenceAndNeverAHang) {
     ASSERT_FALSE(r) << words;
     expect_one_sentence(r.error().message, words);
   }
-  // Not an address: refused before any connection.
+  // A name that never resolves (.invalid, RFC 6761): one sentence, before any connection.
   sim::hesai::PtcEndpoint nonsense = endpoint(1);
-  nonsense.host = "lidar.local";
+  nonsense.host = "lidar.invalid";
   const auto r = sim::hesai::fetch_calibration_text(nonsense);
   ASSERT_FALSE(r);
-  EXPECT_NE(r.error().message.find("not an IPv4 address"), std::string::npos);
+  EXPECT_NE(r.error().message.find("'lidar.invalid' (--sensor-ip)"), std::string::npos) << r.error().message;
+  EXPECT_NE(r.error().message.find("resolve"), std::string::npos) << r.error().message;
 }
 
 TEST(PtcCalibration, FallsBackToTheCacheWithAWarningAndFailsWithoutOne) {
@@ -249,7 +250,9 @@ TEST(PtcCalibration, DriverFetchesAtStartAndFallsBackToItsCache) {
     EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << "one line: " << r.err;
   }
   auto bad_ip = driver_args(1);
-  bad_ip[3] = "sensor";
-  EXPECT_EQ(run(bad_ip).code, 2);
+  bad_ip[3] = "not a sensor";  // neither an address nor a host name: a usage error
+  const auto bad = run(bad_ip);
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("'not a sensor' is neither an address"), std::string::npos) << bad.err;
   (void)sim::destroy(stream, true);  // cleanup: a stream already gone is fine
 }

@@ -22,7 +22,8 @@
 #include <thread>
 #include <vector>
 
-#include "frames.hpp"
+#include "lidar_test/capture_frames.hpp"
+#include "lidar_test/streams.hpp"
 #include "sim/hesai/hesai.hpp"
 #include "sim/pcap/capture.hpp"
 #include "sim/sim.hpp"
@@ -61,12 +62,9 @@ struct StreamGuard {
   ~StreamGuard() { (void)sim::destroy(name, true); }
 };
 
-struct Frame {
-  std::vector<sim::LidarPoint> points;
-  std::int64_t stamp_ns = 0;
-  std::uint64_t seq = 0;
-  std::int64_t receive_ns = 0;  // host time of the frame's first packet
-};
+using Frame = lidar_test::ReceivedFrame;
+using lidar_test::open_when_created;
+using lidar_test::receive_frames;
 
 bool same_points(const std::vector<sim::LidarPoint>& a, const std::vector<sim::LidarPoint>& b) {
   return a.size() == b.size() &&
@@ -113,34 +111,6 @@ std::vector<Frame> decode_directly(const std::vector<Payload>& payloads, sim::he
   return frames;
 }
 
-sim::Expected<sim::Reader> open_when_created(const std::string& name) {
-  const auto deadline = std::chrono::steady_clock::now() + 30s;
-  for (;;) {
-    auto reader = sim::Reader::open(name);
-    if (reader || std::chrono::steady_clock::now() > deadline) return reader;
-    std::this_thread::sleep_for(1ms);
-  }
-}
-
-// Reads frames until `count` arrived (or a generous limit against hangs passed).
-std::vector<Frame> receive(sim::Reader& reader, std::size_t count) {
-  std::vector<std::byte> buffer(reader.capacity());
-  std::vector<Frame> frames;
-  const auto deadline = std::chrono::steady_clock::now() + 60s;
-  while (frames.size() < count && std::chrono::steady_clock::now() < deadline) {
-    sim::FrameInfo info;
-    if (reader.read_next(buffer, info, 100ms) != sim::ReadStatus::new_frame) continue;
-    Frame f;
-    f.points.resize(info.size / sizeof(sim::LidarPoint));
-    std::memcpy(f.points.data(), buffer.data(), f.points.size() * sizeof(sim::LidarPoint));
-    f.stamp_ns = info.stamp_ns;
-    f.seq = info.seq;
-    f.receive_ns = info.receive_ns;
-    frames.push_back(std::move(f));
-  }
-  return frames;
-}
-
 void expect_same_frames(const std::vector<Frame>& got, const std::vector<Frame>& expected,
                         std::uint64_t first_seq) {
   ASSERT_EQ(got.size(), expected.size());
@@ -168,7 +138,7 @@ TEST(ReplayTool, ReaderInAnotherProcessGetsEveryRevolutionInOrder) {
   auto reader = open_when_created(stream.name);
   ASSERT_TRUE(reader) << reader.error().message;
   EXPECT_EQ(reader->layout().points.type, sim::PointType::lidar_point);
-  const auto frames = receive(*reader, expected.size());
+  const auto frames = receive_frames(*reader, expected.size());
   ASSERT_EQ(replay.wait(), 0) << replay.err();
   expect_same_frames(frames, expected, 1);
   EXPECT_EQ(summary_value(replay.out(), "frames"), static_cast<long long>(expected.size()));
@@ -530,7 +500,7 @@ std::vector<Frame> send_revolution_by_revolution(UdpSender& sender, sim::Reader&
     sender.send_burst({payloads.begin() + static_cast<std::ptrdiff_t>(begin),
                        payloads.begin() + static_cast<std::ptrdiff_t>(i + 1)});
     begin = i + 1;
-    auto got = receive(reader, 1);
+    auto got = receive_frames(reader, 1);
     if (got.empty()) return frames;
     frames.push_back(std::move(got.front()));
   }
@@ -585,7 +555,7 @@ TEST(LiveDriver, SameFramesAsReplayOverUdpLoopback) {
   UdpSender sender(port);
   const std::int64_t first_send_ns = sim::realtime_ns();
   std::thread feed([&] { sender.send_paced(payloads, 2.0); });
-  const auto frames = receive(*reader, expected.size());
+  const auto frames = receive_frames(*reader, expected.size());
   feed.join();
   const std::int64_t last_send_ns = sim::realtime_ns();
   // Beside the sensor's stamp, each frame carries when this host received its first packet.
@@ -680,7 +650,7 @@ TEST(LiveDriver, PandarQT128ReplayAndLiveUdpGiveIdenticalFrames) {
                   "--rate", "0.5", "--summary"});
   auto replay_reader = open_when_created(replayed.name);
   ASSERT_TRUE(replay_reader) << replay_reader.error().message;
-  const auto from_replay = receive(*replay_reader, expected.size());
+  const auto from_replay = receive_frames(*replay_reader, expected.size());
   ASSERT_EQ(replay.wait(), 0) << replay.err();
   EXPECT_EQ(summary_value(replay.out(), "crc_errors"), 0);
 
@@ -694,7 +664,7 @@ TEST(LiveDriver, PandarQT128ReplayAndLiveUdpGiveIdenticalFrames) {
   sender.send_burst(payloads);
   auto live_reader = open_when_created(live.name);
   ASSERT_TRUE(live_reader) << live_reader.error().message;
-  const auto from_live = receive(*live_reader, expected.size());
+  const auto from_live = receive_frames(*live_reader, expected.size());
   driver.signal(SIGTERM);
   ASSERT_EQ(driver.wait(), 0) << driver.err();
   EXPECT_NE(driver.err().find("detected a PandarQT128"), std::string::npos) << driver.err();
@@ -741,7 +711,7 @@ TEST(LiveDriver, MulticastGroupGivesTheSameFramesAsReplay) {
                   p64_calibration, "--rate", "0.5", "--summary"});
   auto replay_reader = open_when_created(replayed.name);
   ASSERT_TRUE(replay_reader) << replay_reader.error().message;
-  const auto from_replay = receive(*replay_reader, expected.size());
+  const auto from_replay = receive_frames(*replay_reader, expected.size());
   ASSERT_EQ(replay.wait(), 0) << replay.err();
 
   StreamGuard live;
@@ -779,7 +749,7 @@ TEST(LiveDriver, SourceFilterIgnoresOtherSenders) {
   for (int i = 0; i < 600; ++i) stranger.send(payloads[static_cast<std::size_t>(i)].bytes);
   UdpSender sensor(port, 0x7f000002);    // 127.0.0.2: the sensor
   std::thread feed([&] { sensor.send_paced(payloads, 2.0); });
-  const auto frames = receive(*reader, expected.size());
+  const auto frames = receive_frames(*reader, expected.size());
   feed.join();
   driver.signal(SIGTERM);
   ASSERT_EQ(driver.wait(), 0) << driver.err();
@@ -806,7 +776,7 @@ TEST(LiveDriver, ConfigFileAndAutoDetectedModel) {
   std::thread feed([&] { sender.send_paced(payloads, 2.0); });
   auto reader = open_when_created(stream.name);
   ASSERT_TRUE(reader);
-  const auto frames = receive(*reader, 1);
+  const auto frames = receive_frames(*reader, 1);
   feed.join();
   driver.signal(SIGTERM);
   ASSERT_EQ(driver.wait(), 0) << driver.err();

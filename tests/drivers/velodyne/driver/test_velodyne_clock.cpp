@@ -211,6 +211,26 @@ TEST_F(VelodyneClock, EveryPpsStateReachesTheStreamsClockRecord) {
   feeder.join();
 }
 
+// The route the live receiver and the replay share: by port when the datagram names one of the
+// route's ports, by size when it names neither (a capture recorded on other ports).
+TEST(VelodyneRoute, DataPacketsGoToPushAndPositionPacketsToPushPositionByPortOrBySize) {
+  using sim::lidar::PacketKind;
+  const sim::velodyne::Route route;
+  const std::vector<std::uint8_t> data(sim::velodyne::packet_size, 0);
+  const std::vector<std::uint8_t> position(512, 0);
+  EXPECT_EQ(route(2368, data), PacketKind::data);
+  EXPECT_EQ(route(8308, position), PacketKind::position);
+  EXPECT_EQ(route(8308, data), PacketKind::position);  // the port tells first
+  EXPECT_EQ(route(9999, data), PacketKind::data);
+  EXPECT_EQ(route(9999, position), PacketKind::position);
+  const auto ports = route.ports();
+  ASSERT_EQ(ports.size(), 2U);
+  EXPECT_EQ(ports[0].kind, PacketKind::data);
+  EXPECT_EQ(ports[1].kind, PacketKind::position);
+  const sim::velodyne::Route data_only{.position_port = std::nullopt};
+  EXPECT_EQ(data_only.ports().size(), 1U);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {

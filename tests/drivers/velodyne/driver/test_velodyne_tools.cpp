@@ -20,8 +20,9 @@
 #include <vector>
 
 #include "../packet_builder.hpp"
-#include "frames.hpp"  // tests/drivers/hesai/driver: hand-built frames and capture files
-#include "pcap_payloads.hpp"
+#include "lidar_test/capture_frames.hpp"
+#include "lidar_test/pcap_payloads.hpp"
+#include "lidar_test/streams.hpp"
 #include "sim/sim.hpp"
 #include "sim/velodyne/velodyne.hpp"
 #include "sim_test/network.hpp"
@@ -57,7 +58,7 @@ std::string summary_text(const std::string& text, const std::string& key) {
 }
 
 // The frames the decoder makes of the capture, each packet's hour from its capture time.
-std::vector<std::vector<sim::LidarPoint>> decode_directly(const std::vector<hesai_test::UdpPayload>& payloads) {
+std::vector<std::vector<sim::LidarPoint>> decode_directly(const std::vector<lidar_test::UdpPayload>& payloads) {
   auto loaded = sim::velodyne::Calibration::load(calibration);
   EXPECT_TRUE(loaded);
   auto assembler = sim::velodyne::FrameAssembler::create(std::move(loaded.value()), {});
@@ -74,27 +75,13 @@ std::vector<std::vector<sim::LidarPoint>> decode_directly(const std::vector<hesa
   return frames;
 }
 
-sim::Expected<sim::Reader> open_when_created(const std::string& name) {
-  const auto deadline = std::chrono::steady_clock::now() + 30s;
-  for (;;) {
-    auto reader = sim::Reader::open(name);
-    if (reader || std::chrono::steady_clock::now() > deadline) return reader;
-    std::this_thread::sleep_for(1ms);
-  }
-}
+using lidar_test::open_when_created;
 
+// The points of the next `count` frames.
 std::vector<std::vector<sim::LidarPoint>> receive(sim::Reader& reader, std::size_t count) {
-  std::vector<std::byte> buffer(reader.capacity());
-  std::vector<std::vector<sim::LidarPoint>> frames;
-  const auto deadline = std::chrono::steady_clock::now() + 60s;
-  while (frames.size() < count && std::chrono::steady_clock::now() < deadline) {
-    sim::FrameInfo info;
-    if (reader.read_next(buffer, info, 100ms) != sim::ReadStatus::new_frame) continue;
-    std::vector<sim::LidarPoint> points(info.size / sizeof(sim::LidarPoint));
-    std::memcpy(points.data(), buffer.data(), info.size);
-    frames.push_back(std::move(points));
-  }
-  return frames;
+  std::vector<std::vector<sim::LidarPoint>> points;
+  for (auto& frame : lidar_test::receive_frames(reader, count)) points.push_back(std::move(frame.points));
+  return points;
 }
 
 bool same(const std::vector<sim::LidarPoint>& a, const std::vector<sim::LidarPoint>& b) {
@@ -113,7 +100,7 @@ void send_to(int port, const std::vector<std::uint8_t>& bytes) {
 
 // Sends the capture's payloads from the loopback address `from` to `to`:`port`, 200 µs apart
 // (a pace a loaded machine's receiver keeps up with; the kernel buffer would hold them anyway).
-void send_capture(const char* from, const char* to, int port, const std::vector<hesai_test::UdpPayload>& payloads) {
+void send_capture(const char* from, const char* to, int port, const std::vector<lidar_test::UdpPayload>& payloads) {
   const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
   sockaddr_in local{};
   local.sin_family = AF_INET;
@@ -189,7 +176,7 @@ struct CaptureWithPositionPacket {
     const auto frame = [](std::uint16_t port, const pt::Bytes& payload) {
       return pt::ethernet(0x0800, pt::ipv4({192, 168, 1, 201}, {255, 255, 255, 255}, pt::udp(port, port, payload)));
     };
-    const auto payloads = hesai_test::read_udp_payloads(capture);
+    const auto payloads = lidar_test::read_udp_payloads(capture);
     const auto gprmc = velodyne_test::nmea("GPRMC,123519,A,4807.038,N,01131.000,E,022.4,084.4,230326,003.1,W");
     std::vector<pt::Record> records{{frame(8308, velodyne_test::position_packet(0, 2, gprmc)),
                                      payloads.front().capture_ns - 1'000'000}};
@@ -216,7 +203,7 @@ std::optional<sim::SensorInfo> description_of(const std::string& stream) {
 
 TEST(VelodyneTools, TheLiveDriverJoinsAMulticastGroupAndPublishesWhatIsSentToIt) {
   if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
-  const auto payloads = hesai_test::read_udp_payloads(capture);
+  const auto payloads = lidar_test::read_udp_payloads(capture);
   const auto expected = decode_directly(payloads);
   // Bound to every address: only the group membership brings the group's datagrams in.
   LiveDriver live({"--port", "0", "--no-position", "--multicast", "239.201.201.203", "--status-interval", "0"});
@@ -233,7 +220,7 @@ TEST(VelodyneTools, TheLiveDriverJoinsAMulticastGroupAndPublishesWhatIsSentToIt)
 
 TEST(VelodyneTools, TheSourceFilterDropsPacketsOfAnotherSenderAndKeepsTheSensors) {
   if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
-  const auto payloads = hesai_test::read_udp_payloads(capture);
+  const auto payloads = lidar_test::read_udp_payloads(capture);
   const auto expected = decode_directly(payloads);
   LiveDriver live({"--bind", "127.0.0.1", "--port", "0", "--no-position", "--source", "127.0.0.2",
                    "--status-interval", "0.05"});
@@ -264,7 +251,7 @@ TEST(VelodyneTools, TheSourceFilterDropsPacketsOfAnotherSenderAndKeepsTheSensors
 }
 
 TEST(VelodyneTools, ReplayPublishesExactlyTheDecodersFrames) {
-  const auto payloads = hesai_test::read_udp_payloads(capture);
+  const auto payloads = lidar_test::read_udp_payloads(capture);
   const auto expected = decode_directly(payloads);
   ASSERT_EQ(expected.size(), 3U);
   StreamGuard stream;
@@ -280,7 +267,7 @@ TEST(VelodyneTools, ReplayPublishesExactlyTheDecodersFrames) {
 
 TEST(VelodyneTools, LiveDriverCountsBadDatagramsAndReportsThePositionPacketsTimeSync) {
   if (g_skip_reason) GTEST_SKIP() << *g_skip_reason;
-  const auto payloads = hesai_test::read_udp_payloads(capture);
+  const auto payloads = lidar_test::read_udp_payloads(capture);
   const auto expected = decode_directly(payloads);
   LiveDriver live({"--port", "0", "--position-port", "0", "--bind", "127.0.0.1", "--status-interval", "0",
                    "--frame-id", "velodyne_top"});
@@ -414,7 +401,7 @@ TEST(VelodyneTools, TheFamilyIsDetectedAmongTheDatagramsOfTheGivenPort) {
   namespace pt = sim::pcap::testing;
   const std::string path =
       (std::filesystem::temp_directory_path() / ("velodyne_noise_" + std::to_string(::getpid()) + ".pcap")).string();
-  const auto payloads = hesai_test::read_udp_payloads(capture);
+  const auto payloads = lidar_test::read_udp_payloads(capture);
   std::vector<pt::Record> records;
   const auto frame = [](std::uint16_t port, const pt::Bytes& payload) {
     return pt::ethernet(0x0800, pt::ipv4({192, 168, 1, 7}, {224, 0, 0, 251}, pt::udp(port, port, payload)));

@@ -72,6 +72,11 @@ class CommandLine {
                 std::string_view type_name,
                 std::function<std::string(const std::string&)> problem = {},
                 std::string_view group = {});
+  // A number that may be left out (nullopt: not given), checked like add_text's value.
+  void add_number(std::string_view name, std::optional<double>& value, std::string_view help,
+                  std::string_view type_name,
+                  std::function<std::string(const std::string&)> problem = {},
+                  std::string_view group = {});
   // --config FILE: YAML keys set the options of the same long name ("rt_priority" or
   // "rt-priority" for --rt-priority); a map becomes a list of "key=value" items; options given on
   // the command line override the file. The options named in `path_options` ("calibration")

@@ -5,8 +5,9 @@
 // was published. No allocation per frame.
 //
 //   auto writer = Writer::create(sim::lidar::point_stream_spec(config, max_points));
-//   struct LidarStream::Impl : lidar::PointPipeline<FrameAssembler, PublishCounters> {…};
-//   impl->push(payload, host_receive_ns);   // decodes; publishes the frame it completes
+//   lidar::PointPipeline<FrameAssembler, PublishCounters> pipeline(std::move(writer), assembler);
+//   pipeline.push(payload, host_receive_ns);   // decodes; publishes the frame it completes
+// (a family's LidarStream holds one through lidar::PointStream, point_stream.hpp)
 #pragma once
 
 #include <cstddef>
@@ -98,7 +99,7 @@ class FramePublisher {
 };
 
 // A family's FrameAssembler decoding straight into a FramePublisher's slot: what every
-// LidarStream::Impl holds. Lives on the heap and never moves (the publisher's loan points at
+// LidarStream holds (lidar::StreamPipeline, point_stream.hpp). Lives on the heap and never moves (the publisher's loan points at
 // its writer). `Counters` is the family's PublishCounters.
 template <class Assembler, class Counters = PublishCounters>
 struct PointPipeline {

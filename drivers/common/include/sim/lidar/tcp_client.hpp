@@ -24,7 +24,7 @@
 namespace sim::lidar {
 
 struct TcpPeer {
-  std::string host;                         // an IPv4 address
+  std::string host;                         // an IPv4/IPv6 address, or a name (os-122.local)
   std::uint16_t port = 0;
   std::chrono::milliseconds timeout{3000};  // for the whole exchange, from connect()
   std::string service = "TCP";              // names the connection in messages: "the PTC connection"
@@ -43,11 +43,17 @@ struct TcpRead {
   int error = 0;         // errno, with failed
 };
 
+// Empty when `host` can name a sensor for TcpPeer: an IPv4 or IPv6 address, or a name of
+// letters, digits, dots and dashes (resolved when connecting); else why not, as "'x' is …".
+std::string host_problem(const std::string& host);
+
 class TcpConnection {
  public:
-  // Connects to the peer before its deadline (now + timeout). Errors, one sentence naming the
-  // sensor: invalid_argument for a host that is not an IPv4 address, system_error when the
-  // sensor refuses the connection or does not accept it in time.
+  // Resolves the host and connects to its first address before the deadline (now + timeout):
+  // a name that does not resolve in time uses up the same timeout. Errors, one sentence naming
+  // the sensor: invalid_argument for a host that is neither an address nor a known name,
+  // system_error when the name does not resolve in time, or the sensor refuses the connection or
+  // does not accept it in time.
   static Expected<TcpConnection> connect(const TcpPeer& peer);
 
   TcpConnection(TcpConnection&& other) noexcept;

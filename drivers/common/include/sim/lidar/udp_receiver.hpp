@@ -93,12 +93,20 @@ struct Datagram {
   const sockaddr_storage* sender = nullptr;
 };
 
-// The family's side of the loop.
+// The family's side of the loop. A handler overrides on_datagrams (one call a batch: the
+// family's per-datagram work inline, as LiveReceiver<Route> does) or on_datagram.
 class DatagramHandler {
  public:
-  // One datagram from the accepted sender; false ends run() (e.g. the stream for a detected
-  // model could not be created).
-  virtual bool on_datagram(const Datagram& datagram) = 0;
+  // The datagrams of one recvmmsg batch from accepted senders, in arrival order; false ends
+  // run() (e.g. the stream for a detected model could not be created).
+  virtual bool on_datagrams(std::span<const Datagram> datagrams) {
+    for (const Datagram& d : datagrams) {
+      if (!on_datagram(d)) return false;
+    }
+    return true;
+  }
+  // One datagram from an accepted sender; false ends run().
+  virtual bool on_datagram(const Datagram& /*datagram*/) { return true; }
   // How long the loop may nap before it looks at the sockets again (packets wait in the socket
   // buffer meanwhile), in ns; 0: wake for each packet. Asked only after a wake-up that took
   // datagrams: a sensor that stopped is waited for, not polled.

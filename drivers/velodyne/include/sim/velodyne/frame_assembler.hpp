@@ -39,7 +39,9 @@ enum class AzimuthInterpolation : std::uint8_t {
   firing_time,
   // As nebula does it (its reference clouds): the difference to the next *block* even where
   // that block is the same sequence (VLS-128 banks, dual-return pairs), so most VLS-128 lasers
-  // and dual-return second blocks get no interpolation. For comparing with nebula only.
+  // and dual-return second blocks get no interpolation; VLP-32C, HDL-32E, HDL-64E: unit j at
+  // j · 2.304/55.296 of that difference (nebula's VLP-32 decoder; the VLP-32C manual fires
+  // the lasers in pairs). For comparing with nebula only.
   nebula,
 };
 
@@ -49,7 +51,7 @@ enum class CutBy : std::uint8_t {
   point_azimuth,
   // As nebula cuts (its reference clouds): whole packets, the frame ends with the packet whose
   // block azimuths wrap past the cut; only that packet's trailing points within 90° past the
-  // cut move to the next frame. Lasers with a large rot_correction (VLS-128: up to ±6°) then
+  // cut move to the next frame (VLP-32C, HDL-32E, HDL-64E: none, as nebula's VLP-32 decoder). Lasers with a large rot_correction (VLS-128: up to ±6°) then
   // spill across the cut. For comparing with nebula only.
   packet,
 };
@@ -81,6 +83,9 @@ struct AssemblerOptions {
     double max_deg = 360;
     // nebula also drops every point of a block whose own azimuth is outside the window.
     bool block_azimuth_too = false;
+    // nebula's VLP-32 decoder (its VLP-32C, HDL-32E and HDL-64E) tests only each block's
+    // azimuth as sent, never the points': their corrected azimuths may lie outside.
+    bool block_azimuth_only = false;
   };
   std::optional<AzimuthWindow> azimuth_window;
 };
@@ -271,6 +276,7 @@ class FrameAssembler {
   float max_range_m_ = 0;
   std::uint16_t cut_centi_ = 0;
   bool windowed_ = false;
+  bool window_points_ = false;  // each point's azimuth is tested (not block_azimuth_only)
   std::int32_t window_min_centi_ = 0;
   std::int32_t window_max_centi_ = 0;
   const CosSin* trig_table_ = nullptr;  // 36,000 entries: 0.00°…359.99° (shared by the process)

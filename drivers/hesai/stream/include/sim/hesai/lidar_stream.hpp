@@ -9,13 +9,15 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <iosfwd>
 #include <memory>
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 
 #include "sim/hesai/hesai.hpp"
-#include "sim/lidar/frame_publisher.hpp"
+#include "sim/lidar/point_stream.hpp"
 #include "sim/result.hpp"
 #include "sim/sensor_info.hpp"
 #include "sim/writer.hpp"
@@ -44,52 +46,32 @@ struct LidarStreamConfig {
 // partial_frames (did not start at the cut azimuth) and failed commits.
 using PublishCounters = lidar::PublishCounters;
 
-class LidarStream {
+class LidarStream;
+
+// What a Hesai stream is made of (see lidar::PointStream).
+struct StreamFamily {
+  using Assembler = FrameAssembler;
+  using Counters = PublishCounters;
+  struct State {};
+  static constexpr bool whole_at_finish = false;  // a revolution is whole when the next begins
+  // " wrong-model 0 points/frame 93591 …" (the safety state of a QT128, the motor's rpm).
+  static void describe(std::ostream& out, bool machine, const lidar::StreamPipeline<StreamFamily>& p);
+};
+
+// The common verbs (push, finish, reset, set_stamp_offset, counters, published, writer, clock,
+// tick_clock, describe_counters: lidar::PointStream) and the Hesai model.
+class LidarStream : public lidar::PointStream<StreamFamily> {
  public:
   // Loads the calibration (and firing times), checks them against the model, and creates the
   // SIM stream sized for the model. Every failure is one sentence naming the file or stream.
   static Expected<LidarStream> create(const LidarStreamConfig& config);
 
-  LidarStream(LidarStream&&) noexcept;
-  LidarStream& operator=(LidarStream&&) noexcept;
-  LidarStream(const LidarStream&) = delete;
-  LidarStream& operator=(const LidarStream&) = delete;
-  ~LidarStream();
-
-  // Decodes one UDP payload; publishes the revolution it completes, if any (returned).
-  PushResult push(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns) noexcept;
-  // End of input: publishes the revolution in progress when partial frames are enabled.
-  std::optional<CompletedFrame> finish() noexcept;
-  // Forgets the revolution in progress (a capture loops, a sensor was silent).
-  void reset() noexcept;
-  // Added to every published stamp from now on: a replay keeps stamps increasing across loops
-  // of its capture, or moves them to the present (--restamp). Zero (the default) publishes the
-  // sensor's own time, as the live driver does.
-  void set_stamp_offset(std::int64_t offset_ns) noexcept;
-  std::int64_t stamp_offset() const noexcept;
-
-  Model model() const noexcept;
-  const AssemblerCounters& counters() const noexcept;
-  const PublishCounters& published() const noexcept;
-  std::uint64_t max_points() const noexcept;
+  Model model() const noexcept { return pipeline().assembler.options().model; }
   // FrameAssembler::time_to_cut_ns: how long no packet can complete a revolution.
-  std::optional<std::int64_t> time_to_cut_ns() const noexcept;
-  Writer& writer() noexcept;
-  // The clock check: the caller adds each packet's sensor time (PushResult::packet_ns) with its
-  // arrival (live: the datagram's receive stamp; a replay: the record's capture time) and
-  // ticks it; it judges and writes the stream's clock about once a second (`at_once`: now).
-  timing::ClockReporter& clock() noexcept;
-  std::optional<ClockStatus> tick_clock(std::int64_t now_realtime_ns, bool at_once = false);
-
-  // "frames 12 packets 3600 lost 0 malformed 0 wrong-model 0 points/frame 93591", for status
-  // lines; `key=value` pairs with `machine` ("frames=12 packets=3600 …") for summaries.
-  std::string describe_counters(bool machine = false) const;
-
-  struct Impl;
+  std::optional<std::int64_t> time_to_cut_ns() const noexcept { return pipeline().assembler.time_to_cut_ns(); }
 
  private:
-  explicit LidarStream(std::unique_ptr<Impl> impl) noexcept;
-  std::unique_ptr<Impl> impl_;
+  explicit LidarStream(std::unique_ptr<Pipeline> pipeline) noexcept : PointStream(std::move(pipeline)) {}
 };
 
 // Number of returns announced by a payload of `model` (1–3), or nullopt when it is not one.

@@ -19,10 +19,12 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "sim/hesai/lidar_stream.hpp"
 #include "sim/hesai/model.hpp"
-#include "sim/timing/clock_reporter.hpp"
+#include "sim/hesai/route.hpp"
+#include "sim/lidar/live_receiver.hpp"
 #include "sim/lidar/udp_receiver.hpp"
 #include "sim/result.hpp"
 
@@ -41,47 +43,18 @@ using ReceiveCounters = lidar::ReceiveCounters;
 // note: the model detected, packets resumed after a silence; tick: a status line.
 using ReceiverCallbacks = lidar::ReceiverCallbacks;
 
-class LiveReceiver {
+// lidar::LiveReceiver<Route>: publish_to(config, model) (model nullopt: from the first packet),
+// run(stop_fd, callbacks), set_clock_sources, data_port(), local_address(), receive_buffer(),
+// counters(), stream() (nullptr while the model is not known), last_packet_ns().
+class LiveReceiver final : public lidar::LiveReceiver<Route> {
  public:
   // Opens, configures and binds the UDP socket (joining the multicast group when given). Creates
   // no stream: a busy port leaves nothing behind. Errors: invalid_argument for an address that
   // is not one, system_error for a port in use or a socket the system refuses.
   static Expected<LiveReceiver> open(const NetworkConfig& network);
 
-  LiveReceiver(LiveReceiver&&) noexcept;
-  LiveReceiver& operator=(LiveReceiver&&) noexcept;
-  LiveReceiver(const LiveReceiver&) = delete;
-  LiveReceiver& operator=(const LiveReceiver&) = delete;
-  ~LiveReceiver();
-
-  // Where packets go. With a model the stream is created now and its error returned (calibration,
-  // stream name, a live writer); without one it is created from the first packet that names the
-  // model (its number of returns raises config.returns), and run() returns that error.
-  Expected<void> publish_to(LidarStreamConfig config, std::optional<Model> model);
-
-  // Receives until `stop_fd` becomes readable (an eventfd that a signal handler writes; -1:
-  // never). Returns an error only when the stream could not be created for a detected model.
-  Expected<void> run(int stop_fd, const ReceiverCallbacks& callbacks = {});
-
-  // What the stream's clock check asks besides its packets: the sensor's own report and the
-  // host's clock (timing::ClockSources; each must return its last reading without waiting).
-  // Given to the stream when it is created; call before run().
-  void set_clock_sources(timing::ClockSources sources);
-
-  std::uint16_t data_port() const noexcept;        // the bound port
-  std::string local_address() const;              // "127.0.0.1:2368"
-  int receive_buffer() const noexcept;             // SO_RCVBUF the kernel granted, bytes
-  const ReceiveCounters& counters() const noexcept;
-  // The stream, once created (nullptr while the model is not known yet).
-  const LidarStream* stream() const noexcept;
-  // CLOCK_MONOTONIC when the last packet was taken; 0 before the first.
-  std::int64_t last_packet_ns() const noexcept;
-
-  struct Impl;
-
  private:
-  explicit LiveReceiver(std::unique_ptr<Impl> impl) noexcept;
-  std::unique_ptr<Impl> impl_;
+  explicit LiveReceiver(lidar::LiveReceiver<Route>&& opened) noexcept : lidar::LiveReceiver<Route>(std::move(opened)) {}
 };
 
 }  // namespace sim::hesai

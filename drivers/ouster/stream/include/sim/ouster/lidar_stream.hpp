@@ -7,12 +7,14 @@
 
 #include <chrono>
 #include <cstdint>
+#include <iosfwd>
 #include <memory>
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 
-#include "sim/lidar/frame_publisher.hpp"
+#include "sim/lidar/point_stream.hpp"
 #include "sim/ouster/ouster.hpp"
 #include "sim/result.hpp"
 #include "sim/sensor_info.hpp"
@@ -61,50 +63,38 @@ struct PublishCounters : lidar::PublishCounters {
   std::uint64_t imu_malformed = 0;   // IMU datagrams that were not 48-byte IMU packets
 };
 
-class LidarStream {
+class LidarStream;
+
+// What an Ouster stream is made of (see lidar::PointStream).
+struct StreamFamily {
+  using Assembler = FrameAssembler;
+  using Counters = PublishCounters;
+  struct State {
+    std::optional<Writer> imu;  // its own stream, one frame per IMU packet
+  };
+  static constexpr bool whole_at_finish = true;  // the column window may be complete at the end
+  // " imu 1200 points/frame 32768 …".
+  static void describe(std::ostream& out, bool machine, const lidar::StreamPipeline<StreamFamily>& p);
+};
+
+// The common verbs (push, finish, reset, set_stamp_offset, counters, published, writer, clock,
+// tick_clock, describe_counters: lidar::PointStream), the IMU packets and the metadata.
+class LidarStream : public lidar::PointStream<StreamFamily> {
  public:
   // Creates the SIM streams sized for the metadata (H × W × returns points). Every failure is
   // one sentence naming the stream.
   static Expected<LidarStream> create(const LidarStreamConfig& config, const Metadata& metadata);
 
-  LidarStream(LidarStream&&) noexcept;
-  LidarStream& operator=(LidarStream&&) noexcept;
-  LidarStream(const LidarStream&) = delete;
-  LidarStream& operator=(const LidarStream&) = delete;
-  ~LidarStream();
-
-  // One lidar payload; publishes the frame it completes, if any.
-  PushResult push(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns) noexcept;
   // One IMU payload; true when it was a sample (published when the IMU stream exists).
   bool push_imu(std::span<const std::uint8_t> payload) noexcept;
-  // End of input: the frame in progress, when partial frames are enabled or it is whole.
-  std::optional<CompletedFrame> finish() noexcept;
-  void reset() noexcept;
-  // Added to every published stamp (replay loops, --restamp); zero publishes the sensor's time.
-  void set_stamp_offset(std::int64_t offset_ns) noexcept;
-  std::int64_t stamp_offset() const noexcept;
 
-  // The clock check: the caller adds each packet's sensor time (PushResult::packet_ns) with its
-  // arrival (live: the datagram's receive stamp; a replay: the record's capture time) and
-  // ticks it; it judges and writes the stream's clock about once a second (`at_once`: now).
-  timing::ClockReporter& clock() noexcept;
-  std::optional<ClockStatus> tick_clock(std::int64_t now_realtime_ns, bool at_once = false);
-
-  const Metadata& metadata() const noexcept;
-  const AssemblerCounters& counters() const noexcept;
-  const PublishCounters& published() const noexcept;
+  const Metadata& metadata() const noexcept { return pipeline().assembler.metadata(); }
   // One sentence when lidar packets did not fit the metadata (beam count, columns, profile,
   // another sensor), for the user; empty while none did.
   std::string mismatch_problem() const;
-  // "frames 12 packets 768 lost 0 malformed 0 imu 1200 points/frame 32768"; key=value pairs
-  // with `machine`.
-  std::string describe_counters(bool machine = false) const;
-
-  struct Impl;
 
  private:
-  explicit LidarStream(std::unique_ptr<Impl> impl) noexcept;
-  std::unique_ptr<Impl> impl_;
+  explicit LidarStream(std::unique_ptr<Pipeline> pipeline) noexcept : PointStream(std::move(pipeline)) {}
 };
 
 }  // namespace sim::ouster

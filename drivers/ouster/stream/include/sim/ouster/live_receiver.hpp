@@ -16,9 +16,12 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 
+#include "sim/lidar/live_receiver.hpp"
 #include "sim/lidar/udp_receiver.hpp"
 #include "sim/ouster/lidar_stream.hpp"
+#include "sim/ouster/route.hpp"
 #include "sim/result.hpp"
 
 namespace sim::ouster {
@@ -37,30 +40,16 @@ using ReceiveCounters = lidar::ReceiveCounters;
 // note: a metadata mismatch, a resume; tick: every tick_period, for a status line.
 using ReceiverCallbacks = lidar::ReceiverCallbacks;
 
-class LiveReceiver {
+// lidar::LiveReceiver<Route>: run(stream, stop_fd, callbacks) into a stream made from the
+// metadata, data_port(), imu_port(), receive_buffer(), counters(), last_packet_ns()
+// (CLOCK_MONOTONIC of the last lidar packet; 0 before the first). A lidar packet that does not
+// fit the metadata is noted once (LidarStream::mismatch_problem).
+class LiveReceiver final : public lidar::LiveReceiver<Route> {
  public:
   static Expected<LiveReceiver> open(const NetworkConfig& network);
 
-  LiveReceiver(LiveReceiver&&) noexcept;
-  LiveReceiver& operator=(LiveReceiver&&) noexcept;
-  LiveReceiver(const LiveReceiver&) = delete;
-  LiveReceiver& operator=(const LiveReceiver&) = delete;
-  ~LiveReceiver();
-
-  // Receives into `stream` until `stop_fd` becomes readable (-1: never).
-  void run(LidarStream& stream, int stop_fd, const ReceiverCallbacks& callbacks = {});
-
-  std::uint16_t data_port() const noexcept;
-  std::uint16_t imu_port() const noexcept;
-  int receive_buffer() const noexcept;  // SO_RCVBUF granted
-  const ReceiveCounters& counters() const noexcept;
-  std::int64_t last_packet_ns() const noexcept;  // CLOCK_MONOTONIC; 0 before the first
-
-  struct Impl;
-
  private:
-  explicit LiveReceiver(std::unique_ptr<Impl> impl) noexcept;
-  std::unique_ptr<Impl> impl_;
+  explicit LiveReceiver(lidar::LiveReceiver<Route>&& opened) noexcept : lidar::LiveReceiver<Route>(std::move(opened)) {}
 };
 
 }  // namespace sim::ouster

@@ -10,13 +10,15 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <iosfwd>
 #include <memory>
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 
 #include "sim/clock_status.hpp"
-#include "sim/lidar/frame_publisher.hpp"
+#include "sim/lidar/point_stream.hpp"
 #include "sim/result.hpp"
 #include "sim/sensor_info.hpp"
 #include "sim/timing/reported_clock.hpp"
@@ -69,56 +71,52 @@ TimeSync time_sync_of(const PositionReport& report);
 // What the position packets last said of the sensor's clock, for the clock check on another thread.
 using timing::ReportedClock;
 
-class LidarStream {
+class LidarStream;
+
+// What a Velodyne stream is made of (see lidar::PointStream).
+struct StreamFamily {
+  using Assembler = FrameAssembler;
+  using Counters = PublishCounters;
+  // Beside the pipeline: what the position packets said, and how it reaches the description.
+  struct State {
+    std::optional<SensorInfo> sensor;  // the description, re-set when the time sync changes
+    TimeSync sync;
+    ReportedClock reported;  // what the position packets last said of the clock
+    StampClock stamp_clock = StampClock::sensor_live;
+    std::string caller_time_sync;  // LidarStreamConfig::sensor's, which sensor_recorded extends
+  };
+  static constexpr bool whole_at_finish = false;  // a revolution is whole when the next begins
+  // " wrong-model 0 points/frame 28800 … time PPS locked, GPRMC valid".
+  static void describe(std::ostream& out, bool machine, const lidar::StreamPipeline<StreamFamily>& p);
+};
+
+// The common verbs (push, finish, reset, set_stamp_offset, counters, published, writer, clock,
+// tick_clock, describe_counters: lidar::PointStream), the model and the position packets.
+// push(payload, host_receive_ns, time_reference_ns = 0): one data packet (port 2368);
+// `time_reference_ns` picks the hour of the packet's timestamp (0: host_receive_ns; a replay
+// passes the capture's time).
+class LidarStream : public lidar::PointStream<StreamFamily> {
  public:
   // Loads the calibration, checks it against the model, creates the SIM stream sized for the
   // model. Every failure is one sentence naming the file or stream.
   static Expected<LidarStream> create(const LidarStreamConfig& config);
 
-  LidarStream(LidarStream&&) noexcept;
-  LidarStream& operator=(LidarStream&&) noexcept;
-  LidarStream(const LidarStream&) = delete;
-  LidarStream& operator=(const LidarStream&) = delete;
-  ~LidarStream();
-
-  // One data packet (port 2368). `time_reference_ns` picks the hour of the packet's timestamp
-  // (0: host_receive_ns; a replay passes the capture's time).
-  PushResult push(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns,
-                  std::int64_t time_reference_ns = 0) noexcept;
   // One position packet (port 8308) that arrived at `host_receive_ns` (CLOCK_REALTIME; 0: now):
   // updates the time sync, and the stream's description when it changed (as
   // LidarStreamConfig::stamp_clock says), and the reported clock. False when the payload is no
   // position packet (counted).
   bool push_position(std::span<const std::uint8_t> payload, std::int64_t host_receive_ns = 0) noexcept;
-  std::optional<CompletedFrame> finish() noexcept;
-  void reset() noexcept;
-  void set_stamp_offset(std::int64_t offset_ns) noexcept;
-  std::int64_t stamp_offset() const noexcept;
 
-  Model model() const noexcept;
-  const AssemblerCounters& counters() const noexcept;
-  const PublishCounters& published() const noexcept;
-  const TimeSync& time_sync() const noexcept;
+  Model model() const noexcept { return pipeline().assembler.options().model; }
+  const TimeSync& time_sync() const noexcept { return pipeline().state.sync; }
   // What the position packets last said of the sensor's clock, readable from any thread (see
   // ReportedClock). Before the first one: source unknown, reported_ns 0. A replay with the
   // recorded stamps reports source replayed with the recorded state; a restamped one, source host
   // (its stamps are this host's arrival times).
-  ReportedClock reported_clock() const;
-  Writer& writer() noexcept;
-  // The clock check: the caller adds each packet's sensor time (PushResult::packet_ns) with its
-  // arrival (live: the datagram's receive stamp; a replay: the record's capture time) and
-  // ticks it; it judges and writes the stream's clock about once a second (`at_once`: now).
-  timing::ClockReporter& clock() noexcept;
-  std::optional<ClockStatus> tick_clock(std::int64_t now_realtime_ns, bool at_once = false);
-  // "frames 12 packets 9000 lost 0 malformed 0 wrong-model 0 points/frame 28800 time PPS locked…"
-  // for status lines; key=value pairs with `machine` for summaries.
-  std::string describe_counters(bool machine = false) const;
-
-  struct Impl;
+  ReportedClock reported_clock() const { return pipeline().state.reported; }
 
  private:
-  explicit LidarStream(std::unique_ptr<Impl> impl) noexcept;
-  std::unique_ptr<Impl> impl_;
+  explicit LidarStream(std::unique_ptr<Pipeline> pipeline) noexcept : PointStream(std::move(pipeline)) {}
 };
 
 // Returns announced by a data packet of `model` (1 or 2), or nullopt when it is not one.

@@ -16,11 +16,13 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 
-#include "sim/timing/clock_reporter.hpp"
+#include "sim/lidar/live_receiver.hpp"
 #include "sim/lidar/udp_receiver.hpp"
 #include "sim/result.hpp"
 #include "sim/velodyne/lidar_stream.hpp"
+#include "sim/velodyne/route.hpp"
 
 namespace sim::velodyne {
 
@@ -38,44 +40,20 @@ using ReceiveCounters = lidar::ReceiveCounters;
 // note: the model detected, packets resumed…; tick: every tick_period, for a status line.
 using ReceiverCallbacks = lidar::ReceiverCallbacks;
 
-class LiveReceiver {
+// lidar::LiveReceiver<Route>: publish_to(config, model) (model nullopt: from the first data
+// packet), run(stop_fd, callbacks), set_clock_sources, data_port(), position_port() (0 when not
+// listened to), local_address(), receive_buffer(), counters(), stream(), last_packet_ns()
+// (CLOCK_MONOTONIC of the last data packet) and reported_clock(): what the position packets last
+// said of the sensor's clock (LidarStream::reported_clock), valid before the stream exists and
+// from any thread; the stream's clock check is given it unless set_clock_sources gives another.
+class LiveReceiver final : public lidar::LiveReceiver<Route> {
  public:
   // Opens and binds the sockets (joining the multicast group); creates no stream. Errors:
   // invalid_argument for an address that is not one, system_error for a port in use.
   static Expected<LiveReceiver> open(const NetworkConfig& network);
 
-  LiveReceiver(LiveReceiver&&) noexcept;
-  LiveReceiver& operator=(LiveReceiver&&) noexcept;
-  LiveReceiver(const LiveReceiver&) = delete;
-  LiveReceiver& operator=(const LiveReceiver&) = delete;
-  ~LiveReceiver();
-
-  // With a model the stream is created now (its error returned); without, from the first data
-  // packet that names the model (run() returns the error then).
-  Expected<void> publish_to(LidarStreamConfig config, std::optional<Model> model);
-  Expected<void> run(int stop_fd, const ReceiverCallbacks& callbacks = {});
-
-  // What the stream's clock check asks besides its packets: the sensor's own report and the
-  // host's clock (timing::ClockSources; each must return its last reading without waiting).
-  // Given to the stream when it is created; call before run().
-  void set_clock_sources(timing::ClockSources sources);
-
-  std::uint16_t data_port() const noexcept;
-  std::uint16_t position_port() const noexcept;  // 0 when not listened to
-  std::string local_address() const;             // "127.0.0.1:2368"
-  int receive_buffer() const noexcept;
-  const ReceiveCounters& counters() const noexcept;
-  const LidarStream* stream() const noexcept;
-  // What the position packets last said of the sensor's clock (LidarStream::reported_clock),
-  // valid before the stream exists and from any thread: hand it to the clock reporter.
-  ReportedClock reported_clock() const;
-  std::int64_t last_packet_ns() const noexcept;  // CLOCK_MONOTONIC of the last data packet
-
-  struct Impl;
-
  private:
-  explicit LiveReceiver(std::unique_ptr<Impl> impl) noexcept;
-  std::unique_ptr<Impl> impl_;
+  explicit LiveReceiver(lidar::LiveReceiver<Route>&& opened) noexcept : lidar::LiveReceiver<Route>(std::move(opened)) {}
 };
 
 }  // namespace sim::velodyne

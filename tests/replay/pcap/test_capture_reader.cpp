@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "frames.hpp"
+#include "lidar_test/capture_frames.hpp"
 #include "sim/pcap/capture.hpp"
 
 namespace sim::pcap {

@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "sim/hesai/hesai.hpp"
-#include "sim/pcap/capture.hpp"
+#include "lidar_test/pcap_payloads.hpp"  // read_text
+#include "lidar_test/pcd.hpp"
 #include "sim/sim.hpp"
 #include "sim_test/process.hpp"
 
@@ -26,44 +26,9 @@ const fs::path data_dir = SIM_HESAI_TEST_DATA;
 const std::string capture = (data_dir / "pandar64_dual.pcap").string();
 const std::string calibration = (data_dir / "pandar64.calibration.csv").string();
 
-struct Pcd {
-  std::string fields;
-  std::size_t points = 0;
-  std::string data;  // "binary" or "ascii"
-  std::vector<float> values;
-};
-
-Pcd read_pcd(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  Pcd pcd;
-  std::string line;
-  while (std::getline(in, line)) {
-    std::istringstream words(line);
-    std::string key;
-    words >> key;
-    if (key == "FIELDS") pcd.fields = line.substr(7);
-    if (key == "POINTS") words >> pcd.points;
-    if (key == "DATA") {
-      words >> pcd.data;
-      break;
-    }
-  }
-  const std::size_t per_point = pcd.fields == "x y z intensity" ? 4 : 3;
-  pcd.values.resize(pcd.points * per_point);
-  if (pcd.data == "binary") {
-    in.read(reinterpret_cast<char*>(pcd.values.data()),
-            static_cast<std::streamsize>(pcd.values.size() * sizeof(float)));
-    if (!in) pcd.values.clear();
-  } else {
-    for (float& v : pcd.values) in >> v;
-  }
-  return pcd;
-}
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using lidar_test::read_pcd;
+using lidar_test::read_text;
+using Pcd = lidar_test::PointCloudFile;
 
 // The newest frame of the stream, read directly.
 std::vector<sim::LidarPoint> newest_frame(const std::string& stream, sim::FrameInfo& info) {

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "frames.hpp"  // tests/drivers/hesai/driver: hand-built frames and capture files
+#include "lidar_test/capture_frames.hpp"
 #include "ip_reassembly.hpp"
 #include "ouster_test_support.hpp"
 #include "sim/pcap/capture.hpp"

@@ -1,15 +1,14 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "pcap_payloads.hpp"
+#include "lidar_test/pcap_payloads.hpp"
 
 #include <pcap/pcap.h>
 
-#include <cstring>
 #include <fstream>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
 
-namespace hesai_test {
+namespace lidar_test {
 
 std::vector<UdpPayload> read_udp_payloads(const std::filesystem::path& path) {
   char errbuf[PCAP_ERRBUF_SIZE] = {};
@@ -49,10 +48,6 @@ std::vector<UdpPayload> read_udp_payloads(const std::filesystem::path& path) {
   return out;
 }
 
-std::filesystem::path data_path(const std::string& name) {
-  return std::filesystem::path(HESAI_TEST_DATA) / name;
-}
-
 std::string read_text(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error("cannot open " + path.string());
@@ -61,29 +56,4 @@ std::string read_text(const std::filesystem::path& path) {
   return s.str();
 }
 
-std::vector<Xyz> read_xyz_pcd(const std::filesystem::path& path) {
-  const std::string text = read_text(path);
-  std::istringstream in(text);
-  std::string line;
-  std::size_t points = 0;
-  std::size_t header_end = 0;
-  while (std::getline(in, line)) {
-    if (line.rfind("FIELDS", 0) == 0 && line != "FIELDS x y z") {
-      throw std::runtime_error("unexpected PCD fields: " + line);
-    }
-    if (line.rfind("POINTS ", 0) == 0) points = std::stoul(line.substr(7));
-    if (line.rfind("DATA ", 0) == 0) {
-      if (line != "DATA binary") throw std::runtime_error("PCD is not binary");
-      header_end = static_cast<std::size_t>(in.tellg());
-      break;
-    }
-  }
-  if (header_end == 0 || text.size() < header_end + points * sizeof(Xyz)) {
-    throw std::runtime_error("PCD truncated: " + path.string());
-  }
-  std::vector<Xyz> xyz(points);
-  std::memcpy(xyz.data(), text.data() + header_end, points * sizeof(Xyz));
-  return xyz;
-}
-
-}  // namespace hesai_test
+}  // namespace lidar_test
