@@ -9,7 +9,7 @@
 #include "sim/apps/camera_info_file.hpp"
 #include "sim/imaging/decoder.hpp"
 #include "sim/clock.hpp"
-#include "sim/lidar/clock_reporter.hpp"
+#include "sim/timing/clock_reporter.hpp"
 #include "sim/writer.hpp"
 
 namespace sim::camera {
@@ -73,7 +73,7 @@ struct AravisCapture::Impl {
   std::atomic<bool> lost{false};
   bool device_time = false;  // stamp with the camera's clock: asked for, or PTP is on
   ReportedClock reported;    // the camera's clock as last read (main thread), for any reader
-  std::optional<lidar::ClockReporter> clock_check;  // fed and ticked by the stream thread only
+  std::optional<timing::ClockReporter> clock_check;  // fed and ticked by the stream thread only
   std::chrono::steady_clock::time_point clock_read{};  // when it was read
   std::optional<std::uint64_t> last_frame_id;  // touched by the stream thread only
   std::atomic<std::uint64_t> published{0};
@@ -133,6 +133,7 @@ struct AravisCapture::Impl {
     const auto received = static_cast<std::int64_t>(arv_buffer_get_system_timestamp(buffer));
     const std::int64_t stamp =
         device_time ? static_cast<std::int64_t>(arv_buffer_get_timestamp(buffer)) : received;
+    clock_check->start(*writer);  // the stream's first record, before its first frame: once
     Loan loan = writer->loan();
     const imaging::DecodeResult decoded =
         decoder->decode({static_cast<const std::byte*>(data), size}, loan.bytes());
@@ -412,6 +413,7 @@ struct AravisCapture::Impl {
         return made.error();
       }
       writer.emplace(std::move(made.value()));
+      clock_check->new_stream();  // its first frame carries the clock record too
     } else if (*described && *described != sensor) {
       // The same stream after a reconnect: readers see what changed (the PTP state, a camera).
       if (auto set = writer->set_sensor_info(**described); !set) log("warning: " + set.error().message);

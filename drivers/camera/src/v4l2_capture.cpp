@@ -117,6 +117,7 @@ std::optional<Error> V4l2Capture::connect(bool first) {
     auto writer = Writer::create(spec);
     if (!writer) return writer.error();
     writer_.emplace(std::move(writer.value()));
+    clock_check_.new_stream();  // its first frame carries the clock record too
   } else if (*described && *described != sensor_) {
     // The same stream, another camera or mode behind it: readers see the new description.
     if (auto set = writer_->set_sensor_info(**described); !set) log("warning: " + set.error().message);
@@ -235,6 +236,7 @@ StepResult V4l2Capture::handle(const DeviceFrame& frame) {
   }
   stamp += config_.time_offset_ns;
   report_clock(clock, received);
+  clock_check_.start(*writer_);  // the stream's first record, before its first frame: once
 
   Loan loan = writer_->loan();
   const imaging::DecodeResult decoded = decoder_->decode(frame.bytes, loan.bytes());

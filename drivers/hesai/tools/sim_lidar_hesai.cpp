@@ -165,7 +165,7 @@ int run(const sim::apps::CommandLine& cli, Options& o) {
   const auto clock = poll_clock(o);
   // The stream's clock check: its packets against their arrival, with the host's clock and what
   // the sensor reports of its own.
-  sim::lidar::ClockSources sources = host_clock.sources();
+  sim::timing::ClockSources sources = host_clock.sources();
   if (clock) sources.reported = [&clock] { return clock->latest(); };
   receiver->set_clock_sources(std::move(sources));
   if (clock) {

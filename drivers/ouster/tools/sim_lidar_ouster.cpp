@@ -270,7 +270,7 @@ std::optional<int> run_session(const sim::apps::CommandLine& cli, Options& o, si
   }
   // The stream's clock check: its packets (as stamped, after the correction) against their
   // arrival, with the host's clock and what the sensor reports and the driver corrects.
-  sim::lidar::ClockSources sources = host_clock.sources();
+  sim::timing::ClockSources sources = host_clock.sources();
   sources.reported = [&clock, &tai] { return reported_clock(clock.get(), tai); };
   stream->clock().set_sources(std::move(sources));
   const auto clock_tick = [&] {

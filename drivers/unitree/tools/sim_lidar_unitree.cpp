@@ -89,7 +89,7 @@ int run(const sim::apps::CommandLine& cli, const Options& o) {
   watch_options.clock = o.host_clock;
   if (o.quiet) watch_options.log = [](const std::string&) {};
   sim::timing::HostClockWatch host_clock(watch_options);
-  sim::lidar::ClockSources clock_sources;
+  sim::timing::ClockSources clock_sources;
   clock_sources.host = [&host_clock] { return host_clock.latest(); };
   stream->clock().set_sources(std::move(clock_sources));
   receiver->publish_to(*stream, record.is_open() ? &record : nullptr);

@@ -77,7 +77,7 @@ class HesaiTarget final : public ReplayTarget {
  public:
   HesaiTarget(hesai::LidarStream stream, bool restamp)
       : stream_(std::move(stream)), restamp_(restamp) {
-    stream_.clock().set_base(restamp ? lidar::ClockBase::restamped : lidar::ClockBase::replayed);
+    stream_.clock().set_base(restamp ? timing::ClockBase::restamped : timing::ClockBase::replayed);
   }
 
   bool takes(const Datagram& datagram) override {

@@ -36,7 +36,7 @@ class OusterTarget final : public ReplayTarget {
  public:
   OusterTarget(ouster::LidarStream stream, bool restamp, bool by_port)
       : stream_(std::move(stream)), route_(route_of(stream_.metadata(), by_port)), restamp_(restamp) {
-    stream_.clock().set_base(restamp ? lidar::ClockBase::restamped : lidar::ClockBase::replayed);
+    stream_.clock().set_base(restamp ? timing::ClockBase::restamped : timing::ClockBase::replayed);
   }
 
   bool takes(const Datagram& datagram) override {

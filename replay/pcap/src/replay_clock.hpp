@@ -8,7 +8,7 @@
 #include <optional>
 
 #include "sim/clock.hpp"
-#include "sim/lidar/clock_reporter.hpp"
+#include "sim/timing/clock_reporter.hpp"
 
 namespace sim::pcap {
 
@@ -17,7 +17,7 @@ template <class Stream>
 void clock_replayed_packet(Stream& stream, const std::optional<std::int64_t>& sensor_ns,
                            std::int64_t capture_ns, std::int64_t now_ns) {
   if (sensor_ns) {
-    if (stream.clock().base() == lidar::ClockBase::restamped) {
+    if (stream.clock().base() == timing::ClockBase::restamped) {
       stream.clock().add(saturating_add_ns(*sensor_ns, stream.stamp_offset()), now_ns);
     } else {
       stream.clock().add(*sensor_ns, capture_ns);

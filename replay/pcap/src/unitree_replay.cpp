@@ -50,8 +50,8 @@ class UnitreeTarget final : public ReplayTarget {
  public:
   UnitreeTarget(unitree::LidarStream stream, bool restamp)
       : stream_(std::move(stream)), restamp_(restamp),
-        sensor_stamps_(unitree::stream_clock_base(stream_.options(), lidar::ClockBase::sensor) ==
-                       lidar::ClockBase::sensor) {}
+        sensor_stamps_(unitree::stream_clock_base(stream_.options(), timing::ClockBase::sensor) ==
+                       timing::ClockBase::sensor) {}
 
   bool push(const Datagram& datagram) override {
     const std::span<const std::uint8_t> bytes(reinterpret_cast<const std::uint8_t*>(datagram.payload.data()),
@@ -138,7 +138,7 @@ int run_unitree(const Request& request, Sniff& sniff) {
   // Scans are stamped with the capture's times, or the L2's own (see UnitreeTarget::push).
   apps::describe_replayed_stamps(*config->sensor, r.restamp,
                                  s.sensor_time ? apps::RecordedClock::sensor : apps::RecordedClock::capturing_host);
-  config->sensor_clock_base = r.restamp ? lidar::ClockBase::restamped : lidar::ClockBase::replayed;
+  config->sensor_clock_base = r.restamp ? timing::ClockBase::restamped : timing::ClockBase::replayed;
   const auto& stop = apps::StopSignal::install();
   if (auto code = cli.apply_placement(s.placement)) return *code;
 

@@ -81,7 +81,7 @@ Expected<Detected> detect(Sniff& sniff, const ReplayArgs& r, std::optional<velod
 class VelodyneTarget final : public ReplayTarget {
  public:
   VelodyneTarget(velodyne::LidarStream stream, bool restamp) : stream_(std::move(stream)), restamp_(restamp) {
-    stream_.clock().set_base(restamp ? lidar::ClockBase::restamped : lidar::ClockBase::replayed);
+    stream_.clock().set_base(restamp ? timing::ClockBase::restamped : timing::ClockBase::replayed);
   }
 
   bool takes(const Datagram& datagram) override {

@@ -466,7 +466,10 @@ TEST_F(AravisDriver, EachPtpStateOfTheCameraReachesTheClockAccessor) {
     auto c = reader->clock();
     return c && c->has_value() ? **c : sim::ClockStatus{};
   };
-  ASSERT_TRUE(clock_reaches(record, [](const sim::ClockStatus& c) { return c.state == sim::ClockState::locked; }))
+  // Judged (frames measured), not the record before the first judgement, which names the stamps only.
+  ASSERT_TRUE(clock_reaches(record, [](const sim::ClockStatus& c) {
+    return c.state == sim::ClockState::locked && c.packets_measured > 0;
+  }))
       << sim::summary(record());
   EXPECT_EQ(record().source, sim::ClockSource::ptp);
   EXPECT_EQ(record().grandmaster, "001122.fffe.334455");

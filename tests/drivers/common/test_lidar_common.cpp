@@ -129,14 +129,14 @@ struct FakeStream {
     return {};
   }
   void reset() noexcept { ++resets; }
-  sim::lidar::ClockReporter& clock() noexcept { return reporter; }
+  sim::timing::ClockReporter& clock() noexcept { return reporter; }
   std::int64_t stamp_offset() const noexcept { return 0; }
   std::optional<sim::ClockStatus> tick_clock(std::int64_t /*now*/, bool /*at_once*/ = false) { return std::nullopt; }
 
   std::vector<std::uint8_t> data;      // each data push's first byte
   std::vector<std::uint8_t> position;  // each position push's first byte
   int resets = 0;
-  sim::lidar::ClockReporter reporter;
+  sim::timing::ClockReporter reporter;
 };
 struct FakeRoute {
   using Stream = FakeStream;

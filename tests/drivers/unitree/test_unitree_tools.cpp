@@ -129,8 +129,9 @@ std::optional<sim::Reader> open_reader(const std::string& name) {
   return std::move(reader.value());
 }
 
-// The stream's clock record, once the writer has written one (about a second after its first
-// packet); nullopt when none came within the generous bound.
+// The stream's clock record, once the writer has judged one (about a second after its first
+// packet; the record before it only names the stamps' clock); nullopt when none came within the
+// generous bound.
 std::optional<sim::ClockStatus> wait_for_clock(const sim::Reader& reader) {
   const auto deadline = std::chrono::steady_clock::now() + kTimeout;
   while (std::chrono::steady_clock::now() < deadline) {
@@ -139,7 +140,7 @@ std::optional<sim::ClockStatus> wait_for_clock(const sim::Reader& reader) {
       ADD_FAILURE() << clock.error().message;
       return std::nullopt;
     }
-    if (*clock) return **clock;
+    if (*clock && (*clock)->packets_measured > 0) return **clock;
     std::this_thread::sleep_for(20ms);
   }
   return std::nullopt;

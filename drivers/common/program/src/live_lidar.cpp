@@ -74,10 +74,10 @@ timing::HostClockWatchOptions watch_options(const LiveReceiveOptions& o) {
 
 HostClockSource::HostClockSource(const LiveReceiveOptions& options)
     : watch_(watch_options(options)),
-      stamp_fallback_(options.stamp_fallback == "host" ? lidar::StampFallback::host : lidar::StampFallback::off) {}
+      stamp_fallback_(options.stamp_fallback == "host" ? timing::StampFallback::host : timing::StampFallback::off) {}
 
-lidar::ClockSources HostClockSource::sources() const {
-  lidar::ClockSources sources;
+timing::ClockSources HostClockSource::sources() const {
+  timing::ClockSources sources;
   sources.host = [this] { return watch_.latest(); };
   sources.stamp_fallback = stamp_fallback_;  // each switch on stderr, --quiet or not: it changes the stamps
   return sources;

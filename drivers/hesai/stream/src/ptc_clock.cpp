@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "sim/clock.hpp"
-#include "sim/lidar/clock_notes.hpp"
+#include "sim/timing/clock_notes.hpp"
 
 namespace sim::hesai {
 namespace {
@@ -75,7 +75,7 @@ Expected<ptc::ClockReplies> fetch_clock_replies(const PtcEndpoint& sensor, std::
 
 ClockStatus PtcClockReader::operator()() const {
   auto replies = fetch_clock_replies(sensor_, model_);
-  if (!replies) return lidar::clock_read_failed(replies.error().message);
+  if (!replies) return timing::clock_read_failed(replies.error().message);
   ClockStatus clock = ptc::clock_status(*replies);
   clock.reported_ns = realtime_ns();
   return clock;

@@ -2,7 +2,7 @@
 #include "sim/ouster/time_client.hpp"
 
 #include "sim/clock.hpp"
-#include "sim/lidar/clock_notes.hpp"
+#include "sim/timing/clock_notes.hpp"
 
 namespace sim::ouster {
 namespace {
@@ -33,7 +33,7 @@ Expected<ClockStatus> fetch_clock(const HttpEndpoint& sensor, std::string& path)
 
 ClockStatus HttpClockReader::operator()() {
   auto clock = fetch_clock(sensor_, path_);
-  if (!clock) return lidar::clock_read_failed(clock.error().message);
+  if (!clock) return timing::clock_read_failed(clock.error().message);
   clock->reported_ns = realtime_ns();
   return std::move(clock.value());
 }

@@ -13,9 +13,9 @@ std::string default_imu_stream(std::string_view points_stream) {
   return std::string(points_stream) + ".imu";
 }
 
-lidar::ClockBase stream_clock_base(const DecoderOptions& options, lidar::ClockBase sensor_base) noexcept {
+timing::ClockBase stream_clock_base(const DecoderOptions& options, timing::ClockBase sensor_base) noexcept {
   const bool sensor_stamps = options.model == Model::l2 && options.time_source == TimeSource::sensor;
-  return sensor_stamps ? sensor_base : lidar::ClockBase::restamped;
+  return sensor_stamps ? sensor_base : timing::ClockBase::restamped;
 }
 
 SensorInfo describe_sensor(SensorInfo info, const DecoderOptions& options) {
@@ -72,7 +72,7 @@ struct LidarStream::Impl final : ScanSink {
 
   PublishCounters published;  // before `frames`, which counts into it
   lidar::FramePublisher frames;
-  lidar::ClockReporter clock;
+  timing::ClockReporter clock;
   std::optional<Writer> imu_writer;  // its own stream, one frame per sample
   std::function<std::optional<std::int64_t>()> publish_gate;
   std::size_t frames_in_push = 0;
@@ -134,12 +134,12 @@ DecoderCounters LidarStream::counters() const noexcept { return impl_->decoder.c
 const PublishCounters& LidarStream::published() const noexcept { return impl_->published; }
 std::uint64_t LidarStream::max_points() const noexcept { return impl_->frames.max_points(); }
 Writer& LidarStream::writer() noexcept { return impl_->frames.writer(); }
-lidar::ClockReporter& LidarStream::clock() noexcept { return impl_->clock; }
+timing::ClockReporter& LidarStream::clock() noexcept { return impl_->clock; }
 
 std::optional<ClockStatus> LidarStream::tick_clock(std::int64_t now_realtime_ns, bool at_once) {
   std::optional<ClockStatus> clock = impl_->clock.tick(impl_->frames.writer(), now_realtime_ns, at_once);
   // The IMU samples come from the same clock: the same record.
-  if (clock && impl_->imu_writer) lidar::write_clock(*impl_->imu_writer, *clock);
+  if (clock && impl_->imu_writer) timing::write_clock(*impl_->imu_writer, *clock);
   return clock;
 }
 

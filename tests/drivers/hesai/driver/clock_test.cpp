@@ -29,6 +29,7 @@
 #include "lidar_test/capture_frames.hpp"
 #include "sim/clock_status.hpp"
 #include "sim/hesai/hesai.hpp"
+#include "sim/hesai/lidar_stream.hpp"
 #include "sim/ouster/frame_assembler.hpp"
 #include "sim/ouster/metadata.hpp"
 #include "sim/ouster/packet.hpp"
@@ -38,6 +39,7 @@
 #include "sim/pcap/capture.hpp"
 #include "sim/reader.hpp"
 #include "sim/clock.hpp"
+#include "sim/timing/clock_reporter.hpp"
 #include "sim_test/network.hpp"
 #include "sim_test/process.hpp"
 #include "sim_test/streams.hpp"
@@ -267,6 +269,56 @@ TEST(HesaiReplayClock, a_restamped_replay_is_judged_as_host_time) {
   // Stamps moved to the present, measured against the present: off by the pacing only.
   EXPECT_LT(std::abs(*clock.offset_to_host_ns), kS);
   EXPECT_FALSE(says(clock, "years")) << clock.problem;
+}
+
+// The recorded capture through the Hesai stream in this process, as sim_replay_pcap feeds it
+// (each packet's clock added and ticked), until its first frame: that frame's FrameInfo and the
+// stream's clock record then. `base`: replayed, or restamped (--restamp).
+struct FirstFrame {
+  sim::FrameInfo info;
+  ClockStatus clock;
+};
+FirstFrame first_replayed_frame(sim::timing::ClockBase base) {
+  sim::testing::StreamGuard stream(sim::testing::unique_name("hesai_first_frame"));
+  sim::hesai::LidarStreamConfig config;
+  config.stream = stream.name;
+  config.calibration = data_dir / "pandar64.calibration.csv";
+  config.assembler.model = sim::hesai::Model::pandar64;
+  auto lidar = sim::hesai::LidarStream::create(config);
+  EXPECT_TRUE(lidar) << lidar.error().message;
+  if (!lidar) return {};
+  lidar->clock().set_base(base);
+  auto reader = sim::Reader::open(stream.name);
+  EXPECT_TRUE(reader) << reader.error().message;
+  if (!reader) return {};
+  FirstFrame first;
+  for (const Packet& p : packets_of(data_dir / "pandar64_dual.pcap", sim::hesai::Model::pandar64)) {
+    const sim::hesai::PushResult result = lidar->push(p.bytes, p.capture_ns);
+    lidar->clock().add(result.packet_ns, p.capture_ns);
+    (void)lidar->tick_clock(p.capture_ns);
+    if (!result.frame) continue;
+    std::vector<std::byte> buffer(reader->capacity());
+    EXPECT_EQ(reader->read(buffer, first.info), sim::ReadStatus::new_frame);
+    auto clock = reader->clock();
+    EXPECT_TRUE(clock && *clock) << "the first frame was published with no clock record";
+    if (clock && *clock) first.clock = **clock;
+    return first;
+  }
+  ADD_FAILURE() << "the capture published no frame";
+  return first;
+}
+
+TEST(HesaiReplayClock, the_first_frame_of_a_replay_carries_its_stamp_clock_before_the_first_judgement) {
+  const FirstFrame replayed = first_replayed_frame(sim::timing::ClockBase::replayed);
+  EXPECT_EQ(replayed.info.stamp_clock, sim::StampClock::sensor);
+  EXPECT_EQ(replayed.clock.source, sim::ClockSource::replayed);
+  // The first frame comes before the first judgement (a quarter second of packets).
+  EXPECT_EQ(replayed.clock.verdict, ClockVerdict::unknown) << replayed.clock.problem;
+  EXPECT_TRUE(says(replayed.clock, "not judged yet")) << replayed.clock.problem;
+
+  const FirstFrame restamped = first_replayed_frame(sim::timing::ClockBase::restamped);
+  EXPECT_EQ(restamped.info.stamp_clock, sim::StampClock::host_arrival);
+  EXPECT_EQ(restamped.clock.source, sim::ClockSource::host);
 }
 
 struct Rewrite {

@@ -16,7 +16,7 @@
 #include "sim/camera/camera_clock.hpp"
 #include "sim/camera/clock_mapping.hpp"
 #include "sim/imaging/decoder.hpp"
-#include "sim/lidar/clock_reporter.hpp"
+#include "sim/timing/clock_reporter.hpp"
 #include "sim/camera/v4l2_device.hpp"
 #include "sim/camera/v4l2_io.hpp"
 #include "sim/result.hpp"
@@ -142,7 +142,7 @@ class V4l2Capture {
   CaptureStats stats_{};
   MonotonicToRealtime clock_;
   ReportedClock reported_;
-  lidar::ClockReporter clock_check_;
+  timing::ClockReporter clock_check_;
   std::optional<BufferClock> reported_for_;  // the buffers' clock of the last report
   std::int64_t reported_at_ = 0;             // CLOCK_REALTIME of the last report
   std::optional<std::uint32_t> last_sequence_;

@@ -19,8 +19,8 @@
 #include <utility>
 
 #include "sim/clock.hpp"
-#include "sim/lidar/clock_reporter.hpp"
 #include "sim/lidar/completed_frame.hpp"
+#include "sim/timing/clock_reporter.hpp"
 #include "sim/lidar_point.hpp"
 #include "sim/writer.hpp"
 
@@ -132,7 +132,7 @@ struct PointPipeline {
   Counters published;  // before `frames`, which counts into it
   FramePublisher frames;
   Assembler assembler;
-  ClockReporter clock;  // the caller adds each packet's sensor time with its arrival
+  timing::ClockReporter clock;  // the caller adds each packet's sensor time with its arrival
 
  private:
   // Every family's frame is a lidar::CompletedFrame, whatever it adds.

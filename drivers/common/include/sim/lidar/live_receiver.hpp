@@ -28,7 +28,7 @@
 #include <utility>
 #include <vector>
 
-#include "sim/lidar/clock_reporter.hpp"
+#include "sim/timing/clock_reporter.hpp"
 #include "sim/lidar/detected_stream.hpp"
 #include "sim/lidar/packet_route.hpp"
 #include "sim/lidar/udp_receiver.hpp"
@@ -151,7 +151,7 @@ class LiveReceiver {
   // What the stream's clock check asks besides its packets: the sensor's own report and the
   // host's clock (ClockSources; each must return its last reading without waiting). Given to
   // the stream at its first data packet; call before run().
-  void set_clock_sources(ClockSources sources) {
+  void set_clock_sources(timing::ClockSources sources) {
     clock_sources_ = std::move(sources);
     clock_sources_given_ = false;
   }
@@ -193,7 +193,7 @@ class LiveReceiver {
   // clock reports that unless the caller gave another report.
   void give_clock_sources(Stream& stream) {
     if constexpr (reports_clock) {
-      ClockSources sources = clock_sources_.value_or(ClockSources{});
+      timing::ClockSources sources = clock_sources_.value_or(timing::ClockSources{});
       if (!sources.reported) sources.reported = reported_;
       stream.clock().set_sources(std::move(sources));
     } else {
@@ -307,7 +307,7 @@ class LiveReceiver {
   detail::StreamSource<Route> source_;
   Stream* given_ = nullptr;  // during run(stream, …)
   std::int64_t last_packet_ns_ = 0;
-  std::optional<ClockSources> clock_sources_;
+  std::optional<timing::ClockSources> clock_sources_;
   bool clock_sources_given_ = false;
   timing::ReportedClock reported_;  // reports_clock: the stream's, copied after each report
   bool mismatch_noted_ = false;

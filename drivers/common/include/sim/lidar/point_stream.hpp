@@ -86,7 +86,7 @@ class PointStream {
   // The clock check: the caller adds each packet's sensor time (PushResult::packet_ns) with its
   // arrival (live: the datagram's receive stamp; a replay: the record's capture time) and
   // ticks it; it judges and writes the stream's clock about once a second (`at_once`: now).
-  ClockReporter& clock() noexcept { return pipeline_->clock; }
+  timing::ClockReporter& clock() noexcept { return pipeline_->clock; }
   std::optional<ClockStatus> tick_clock(std::int64_t now_realtime_ns, bool at_once = false) {
     return pipeline_->tick_clock(now_realtime_ns, at_once);
   }

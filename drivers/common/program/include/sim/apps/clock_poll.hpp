@@ -2,7 +2,7 @@
 // Asking a sensor about its clock, off the frame path: a family's reader (sim::hesai::
 // PtcClockReader, sim::ouster::HttpClockReader) called about once a second by
 // sim::timing::ClockPoller on its own thread, the latest answer kept for whoever reports it, and
-// sim::lidar::ClockNotes' sentences for the status line.
+// sim::timing::ClockNotes' sentences for the status line.
 //
 //   sim::apps::ClockPoll poll(sim::hesai::PtcClockReader(sensor, model), 1s);
 //   ClockStatus now = poll.latest();   // any thread, never waits; reported_ns 0 before a read
@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "sim/clock_status.hpp"
-#include "sim/lidar/clock_notes.hpp"
+#include "sim/timing/clock_notes.hpp"
 #include "sim/timing/clock_poller.hpp"
 
 namespace sim::apps {
@@ -40,7 +40,7 @@ class ClockPoll {
  private:
   struct Notes {
     std::mutex mutex;
-    lidar::ClockNotes notes;  // only the poller's thread updates it
+    timing::ClockNotes notes;  // only the poller's thread updates it
     std::vector<std::string> pending;
   };
   std::shared_ptr<Notes> notes_;

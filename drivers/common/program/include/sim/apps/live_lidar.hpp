@@ -20,7 +20,7 @@
 
 #include "sim/apps/command_line.hpp"
 #include "sim/apps/status_line.hpp"
-#include "sim/lidar/clock_reporter.hpp"
+#include "sim/timing/clock_reporter.hpp"
 #include "sim/lidar/udp_receiver.hpp"
 #include "sim/timing/host_clock.hpp"
 
@@ -36,7 +36,7 @@ struct LiveReceiveOptions {
   bool summary = false;
   bool quiet = false;
   timing::HostClockOptions host_clock{};  // --ptp4l-socket: the host's clock for the clock check
-  std::string stamp_fallback = "off";     // --stamp-fallback: "off" or "host" (lidar::StampFallback)
+  std::string stamp_fallback = "off";     // --stamp-fallback: "off" or "host" (timing::StampFallback)
 };
 
 // Adds --bind, the family's port options (`add_ports`), then --multicast, --source,
@@ -57,11 +57,11 @@ class HostClockSource {
  public:
   explicit HostClockSource(const LiveReceiveOptions& options);
   // sources.host: the watch's last reading (never waits); the --stamp-fallback asked for.
-  lidar::ClockSources sources() const;
+  timing::ClockSources sources() const;
 
  private:
   timing::HostClockWatch watch_;
-  lidar::StampFallback stamp_fallback_;
+  timing::StampFallback stamp_fallback_;
 };
 
 // Adds --clock-poll-seconds: how often the sensor's clock is asked about (its PTC or HTTP

@@ -27,7 +27,7 @@
 #include <string>
 #include <string_view>
 
-#include "sim/lidar/clock_reporter.hpp"
+#include "sim/timing/clock_reporter.hpp"
 #include "sim/lidar/frame_publisher.hpp"
 #include "sim/result.hpp"
 #include "sim/sensor_info.hpp"
@@ -48,7 +48,7 @@ struct LidarStreamConfig {
   std::optional<SensorInfo> sensor;
   // How the L2's own stamps are judged (TimeSource::sensor): live sensor, a replay's replayed or
   // restamped. Host stamps are judged as host time whatever this says (stream_clock_base()).
-  lidar::ClockBase sensor_clock_base = lidar::ClockBase::sensor;
+  timing::ClockBase sensor_clock_base = timing::ClockBase::sensor;
   // Asked before each scan is committed, by a replay whose recording has no times of its own
   // (sim_replay_serial waits for the scan's turn here): the stamp to publish the scan with, or
   // nullopt to drop it (the replay is stopping). Empty: every scan is published at once with its
@@ -69,7 +69,7 @@ std::string default_imu_stream(std::string_view points_stream);
 // How a stream's stamps are judged: `sensor_base` when they are the L2's own clock, otherwise
 // host time (ClockBase::restamped: source host, stamps host_arrival); the L1 sends no time, so
 // its stamps are always the host's.
-lidar::ClockBase stream_clock_base(const DecoderOptions& options, lidar::ClockBase sensor_base) noexcept;
+timing::ClockBase stream_clock_base(const DecoderOptions& options, timing::ClockBase sensor_base) noexcept;
 
 // `configured` (frame, parent, mounting from the command line) completed with what the decoder
 // knows: vendor Unitree and the model, per-point times after the scan's stamp, and the clock of
@@ -113,7 +113,7 @@ class LidarStream {
   // The clock check: every packet that carries a time is added by the stream itself, with the
   // host time of its chunk; tick_clock judges about once a second (`at_once`: now) and writes
   // the record to the point stream and the IMU stream (the same clock).
-  lidar::ClockReporter& clock() noexcept;
+  timing::ClockReporter& clock() noexcept;
   std::optional<ClockStatus> tick_clock(std::int64_t now_realtime_ns, bool at_once = false);
 
   // "frames 12 packets 216 lost 0 malformed 0 imu 250 points/frame 5400", and the problems seen

@@ -23,7 +23,7 @@
 
 #include "sim/clock_status.hpp"
 
-namespace sim::lidar {
+namespace sim::timing {
 
 // --stamp-fallback: what a live stream stamps its frames with while its sensor clock is untrusted.
 enum class StampFallback {
@@ -79,4 +79,4 @@ class StampSwitch {
   std::optional<std::int64_t> last_stamp_ns_;
 };
 
-}  // namespace sim::lidar
+}  // namespace sim::timing

@@ -9,14 +9,14 @@
 #include <optional>
 #include <string>
 
-#include "sim/lidar/stamp_switch.hpp"
+#include "sim/timing/stamp_switch.hpp"
 
 namespace {
 
 using sim::ClockVerdict;
-using sim::lidar::StampEvent;
-using sim::lidar::StampFallback;
-using sim::lidar::StampSwitch;
+using sim::timing::StampEvent;
+using sim::timing::StampFallback;
+using sim::timing::StampSwitch;
 
 constexpr std::int64_t kMs = 1'000'000;
 constexpr std::int64_t kS = 1'000'000'000;

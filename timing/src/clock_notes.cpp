@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "sim/lidar/clock_notes.hpp"
+#include "sim/timing/clock_notes.hpp"
 
 #include <algorithm>
 #include <cstdio>
@@ -7,7 +7,7 @@
 
 #include "sim/clock.hpp"
 
-namespace sim::lidar {
+namespace sim::timing {
 namespace {
 
 // The magnitude of a signed offset, without overflow at INT64_MIN.
@@ -118,4 +118,4 @@ std::vector<std::string> ClockNotes::update(const ClockStatus& status, std::int6
   return notes;
 }
 
-}  // namespace sim::lidar
+}  // namespace sim::timing

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "sim/lidar/clock_notes.hpp"
+#include "sim/timing/clock_notes.hpp"
 
 namespace {
 
@@ -39,7 +39,7 @@ bool has(const std::vector<std::string>& notes, const std::string& words) {
 }  // namespace
 
 TEST(ClockNotes, AChangeOfStateIsSaidOnceAndASteadyClockNotAgain) {
-  sim::lidar::ClockNotes notes;
+  sim::timing::ClockNotes notes;
   auto said = notes.update(report(ClockState::acquiring, 5000, "001747.fffe.700038"), 1 * kSecond);
   EXPECT_TRUE(has(said, "the sensor's clock: PTP, acquiring, grandmaster 001747.fffe.700038")) << said.size();
   EXPECT_TRUE(notes.update(report(ClockState::acquiring, 4000, "001747.fffe.700038"), 2 * kSecond).empty());
@@ -49,22 +49,22 @@ TEST(ClockNotes, AChangeOfStateIsSaidOnceAndASteadyClockNotAgain) {
 }
 
 TEST(ClockNotes, ALockedClockFarFromItsMasterIsAWarningRepeatedAtMostOnceAMinute) {
-  sim::lidar::ClockNotes notes;
+  sim::timing::ClockNotes notes;
   const auto far = report(ClockState::locked, 10 * kSecond, "001747.fffe.700038");
   EXPECT_TRUE(has(notes.update(far, 1 * kSecond), "warning: the sensor says its clock is locked, yet 10.0 s"));
   for (int s = 2; s < 60; ++s) EXPECT_TRUE(notes.update(far, s * kSecond).empty()) << s;
   EXPECT_TRUE(has(notes.update(far, 62 * kSecond), "locked, yet 10.0 s"));
   // The most negative offset there is: a size, not an overflow.
   const auto absurd = report(ClockState::locked, std::numeric_limits<std::int64_t>::min(), "001747.fffe.700038");
-  sim::lidar::ClockNotes fresh;
+  sim::timing::ClockNotes fresh;
   EXPECT_TRUE(has(fresh.update(absurd, kSecond), "locked, yet 2562047.8 h"));
   // Acquiring far off is what acquiring means: no warning.
-  sim::lidar::ClockNotes acquiring;
+  sim::timing::ClockNotes acquiring;
   EXPECT_FALSE(has(acquiring.update(report(ClockState::acquiring, 10 * kSecond, ""), kSecond), "warning"));
 }
 
 TEST(ClockNotes, AGrandmasterThatChangesEverySecondIsAWarningNotEachChange) {
-  sim::lidar::ClockNotes notes;
+  sim::timing::ClockNotes notes;
   const std::string a = "001747.fffe.700038", b = "aabbcc.fffe.010203";
   int warnings = 0;
   for (int s = 0; s < 120; ++s) {
@@ -76,8 +76,8 @@ TEST(ClockNotes, AGrandmasterThatChangesEverySecondIsAWarningNotEachChange) {
 }
 
 TEST(ClockNotes, AClockThatCannotBeReadIsSaidOnceAndItsReturnToo) {
-  sim::lidar::ClockNotes notes;
-  const ClockStatus failed = sim::lidar::clock_read_failed("sensor 10.0.0.1:9347 refused the PTC connection");
+  sim::timing::ClockNotes notes;
+  const ClockStatus failed = sim::timing::clock_read_failed("sensor 10.0.0.1:9347 refused the PTC connection");
   EXPECT_EQ(failed.reported_ns, 0);
   EXPECT_EQ(failed.source, ClockSource::unknown);
   EXPECT_TRUE(has(notes.update(failed, kSecond), "warning: cannot read the sensor's clock: sensor 10.0.0.1:9347"));
@@ -88,7 +88,7 @@ TEST(ClockNotes, AClockThatCannotBeReadIsSaidOnceAndItsReturnToo) {
 TEST(ClockNotes, AFailedReadsSentenceIsCutToTheRecordsLimitAtACharacterBoundary) {
   std::string long_text(ClockStatus::kMaxProblem - 1, 'a');
   long_text += "µµµ";  // a two-byte character across the limit
-  const ClockStatus c = sim::lidar::clock_read_failed(long_text);
+  const ClockStatus c = sim::timing::clock_read_failed(long_text);
   EXPECT_LE(c.problem.size(), ClockStatus::kMaxProblem);
   EXPECT_EQ(c.problem, std::string(ClockStatus::kMaxProblem - 1, 'a'));
 }

@@ -12,7 +12,7 @@
 
 #include "sim/clock_status.hpp"
 
-namespace sim::lidar {
+namespace sim::timing {
 
 // The report of a read that failed: source and state unknown, reported_ns 0, `why` (one
 // sentence, cut to ClockStatus::kMaxProblem bytes at a character boundary) as the problem.
@@ -49,4 +49,4 @@ class ClockNotes {
   std::int64_t changes_said_ns_ = 0;
 };
 
-}  // namespace sim::lidar
+}  // namespace sim::timing

@@ -18,11 +18,11 @@
 #include <string>
 
 #include "sim/clock_status.hpp"
-#include "sim/lidar/stamp_switch.hpp"
+#include "sim/timing/stamp_switch.hpp"
 #include "sim/timing/clock_check.hpp"
 #include "sim/writer.hpp"
 
-namespace sim::lidar {
+namespace sim::timing {
 
 // What a stream's stamps are and where its clock is judged against.
 enum class ClockBase {
@@ -45,7 +45,7 @@ class ClockReporter {
   static constexpr std::int64_t kPeriodNs = 1'000'000'000;   // judged about once a second
   static constexpr std::int64_t kFirstNs = 250'000'000;      // the first judgement: after 0.25 s
 
-  explicit ClockReporter(timing::ClockTolerance tolerance = {}) noexcept : check_(tolerance) {}
+  explicit ClockReporter(ClockTolerance tolerance = {}) noexcept : check_(tolerance) {}
 
   // One packet's sensor time and arrival (see ClockBase): constant time, no allocation.
   void add(std::int64_t sensor_ns, std::int64_t arrival_ns) noexcept { check_.add(sensor_ns, arrival_ns); }
@@ -64,7 +64,7 @@ class ClockReporter {
   ClockBase base() const noexcept { return base_; }
   // The sources and the stamp fallback (a switch already under way is kept when it is the same).
   void set_sources(ClockSources sources);
-  void set_tolerance(const timing::ClockTolerance& tolerance) noexcept;
+  void set_tolerance(const ClockTolerance& tolerance) noexcept;
 
   // When a second has passed since the last judgement (`now_realtime_ns`, the host's
   // CLOCK_REALTIME or a datagram's arrival stamp), judges the clock and writes it to the stream.
@@ -74,6 +74,18 @@ class ClockReporter {
   std::optional<ClockStatus> tick(Writer& writer, std::int64_t now_realtime_ns, bool at_once = false);
   // Judges now without writing (a test, a status line).
   ClockStatus judge(std::int64_t now_realtime_ns);
+  // The record before the first judgement: which clock the stamps are in is known from the start
+  // (the base, the sensor's report, --stamp-fallback); the verdict is unknown until judged.
+  ClockStatus unjudged() const;
+  static constexpr const char* kNotJudged = "not judged yet: waiting for the first second of packets";
+  // Writes the stream's first record, when none was written to it: the unjudged one (or the last
+  // judgement, for a stream created anew). frame_stamp and tick call it, so the first frame
+  // carries its FrameInfo::stamp_clock; a driver that commits frames itself calls it first.
+  void start(Writer& writer) {
+    if (!record_written_) write_first(writer);
+  }
+  // The stream was created anew (a camera back with another format): start writes again.
+  void new_stream() noexcept { record_written_ = false; }
   const std::optional<ClockStatus>& last() const noexcept { return last_; }
 
   // The stamp a frame is published with: `sensor_stamp_ns` (the sensor's, the stamp offset
@@ -81,14 +93,15 @@ class ClockReporter {
   // error (see StampSwitch). A switch rewrites the stream's clock record before the frame is
   // committed, so the frame's FrameInfo::stamp_clock names the clock of its stamp.
   std::int64_t frame_stamp(Writer& writer, std::int64_t sensor_stamp_ns, std::int64_t host_ns) {
+    start(writer);
     if (!stamps_.enabled()) return sensor_stamp_ns;
     return switch_stamp(writer, sensor_stamp_ns, host_ns);
   }
   const StampSwitch& stamps() const noexcept { return stamps_; }
-  const timing::ClockCheck& check() const noexcept { return check_; }
+  const ClockCheck& check() const noexcept { return check_; }
 
  private:
-  timing::ClockCheck check_;
+  ClockCheck check_;
   ClockBase base_ = ClockBase::sensor;
   ClockSources sources_;
   std::int64_t first_tick_ns_ = 0;  // the first tick that saw packets
@@ -99,9 +112,12 @@ class ClockReporter {
   bool record_written_ = false;
 
   std::int64_t switch_stamp(Writer& writer, std::int64_t sensor_stamp_ns, std::int64_t host_ns);
+  void write_first(Writer& writer);
+  // What the sources report, as the base makes it: the half of a record a judgement starts from.
+  ClockStatus reported() const;
 };
 
 // Writes `clock` to the stream (Writer::set_clock); false when the writer refused it.
 bool write_clock(Writer& writer, const ClockStatus& clock);
 
-}  // namespace sim::lidar
+}  // namespace sim::timing

@@ -1,15 +1,15 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "sim/lidar/clock_reporter.hpp"
+#include "sim/timing/clock_reporter.hpp"
 
 #include <cstdio>
 #include <utility>
 
 #include "sim/clock.hpp"
 
-namespace sim::lidar {
+namespace sim::timing {
 
-void ClockReporter::set_tolerance(const timing::ClockTolerance& tolerance) noexcept {
-  check_ = timing::ClockCheck(tolerance);
+void ClockReporter::set_tolerance(const ClockTolerance& tolerance) noexcept {
+  check_ = ClockCheck(tolerance);
   first_tick_ns_ = 0;
   last_judged_ns_ = 0;
   last_.reset();
@@ -28,13 +28,6 @@ void ClockReporter::set_sources(ClockSources sources) {
 std::int64_t ClockReporter::switch_stamp(Writer& writer, std::int64_t sensor_stamp_ns, std::int64_t host_ns) {
   const auto choice = stamps_.choose(sensor_stamp_ns, host_ns,
                                      judged_ ? std::optional(judged_->verdict) : std::nullopt);
-  if (!record_written_) {
-    // Before the first judgement: the record says at least which clock the frames are in.
-    ClockStatus unjudged;
-    unjudged.stamps = stamps_.on_host() ? StampClock::host_arrival : StampClock::sensor;
-    write_clock(writer, unjudged);
-    record_written_ = true;
-  }
   if (choice.event == StampEvent::none) return choice.stamp_ns;
   const std::string line = stamps_.explain(choice, judged_ ? &*judged_ : nullptr);
   if (sources_.log) {
@@ -56,7 +49,7 @@ void ClockReporter::add(const std::optional<std::int64_t>& sensor_ns, std::int64
   if (sensor_ns) check_.add(saturating_add_ns(*sensor_ns, stamp_offset_ns), arrival_ns);
 }
 
-ClockStatus ClockReporter::judge(std::int64_t now_realtime_ns) {
+ClockStatus ClockReporter::reported() const {
   ClockStatus reported = sources_.reported ? sources_.reported() : ClockStatus{};
   // A replay's stamps are the recording's, a restamped replay's this host's: no sensor report
   // describes them, whatever the sensor said when it was recorded.
@@ -70,8 +63,25 @@ ClockStatus ClockReporter::judge(std::int64_t now_realtime_ns) {
   } else if (reported.stamps == StampClock::unknown) {
     reported.stamps = StampClock::sensor;
   }
+  return reported;
+}
+
+ClockStatus ClockReporter::unjudged() const {
+  ClockStatus clock = reported();
+  clock.verdict = ClockVerdict::unknown;
+  clock.problem = kNotJudged;  // a sensor's own words wait for the judgement that weighs them
+  stamps_.describe(clock);
+  return clock;
+}
+
+void ClockReporter::write_first(Writer& writer) {
+  write_clock(writer, last_ ? *last_ : unjudged());
+  record_written_ = true;
+}
+
+ClockStatus ClockReporter::judge(std::int64_t now_realtime_ns) {
   const ClockStatus host = sources_.host ? sources_.host() : ClockStatus{};
-  ClockStatus clock = check_.judge(reported, host, now_realtime_ns);
+  ClockStatus clock = check_.judge(reported(), host, now_realtime_ns);
   judged_ = clock;
   stamps_.describe(clock);
   last_judged_ns_ = now_realtime_ns;
@@ -81,6 +91,7 @@ ClockStatus ClockReporter::judge(std::int64_t now_realtime_ns) {
 
 std::optional<ClockStatus> ClockReporter::tick(Writer& writer, std::int64_t now_realtime_ns,
                                                bool at_once) {
+  start(writer);
   if (check_.packets() == 0) return std::nullopt;
   if (first_tick_ns_ == 0) first_tick_ns_ = now_realtime_ns;
   const bool due = at_once || (last_ ? saturating_sub_ns(now_realtime_ns, last_judged_ns_) >= kPeriodNs ||
@@ -99,4 +110,4 @@ bool write_clock(Writer& writer, const ClockStatus& clock) {
   return writer.set_clock(clock).has_value();
 }
 
-}  // namespace sim::lidar
+}  // namespace sim::timing

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "sim/lidar/stamp_switch.hpp"
+#include "sim/timing/stamp_switch.hpp"
 
 #include "sim/clock.hpp"
 
-namespace sim::lidar {
+namespace sim::timing {
 namespace {
 
 constexpr char kMeanwhile[] = " Meanwhile frames are stamped with host arrival time (--stamp-fallback host).";
@@ -87,4 +87,4 @@ std::string StampSwitch::went_back() const {
   return "; warning: the stamps went back by " + human_duration(went_back_ns_) + " at this switch";
 }
 
-}  // namespace sim::lidar
+}  // namespace sim::timing
