@@ -365,21 +365,23 @@ TEST(HesaiGoldenFile, HoldsTheTablesCasesInTheTablesOrder) {
   EXPECT_EQ(in_file, in_table);
 }
 
-TEST(HesaiGoldenFile, IsRecordedAgainOnlyWhenAsked) {
-  const char* out = std::getenv("SIM_HESAI_WRITE_GOLDEN");
-  if (out == nullptr) GTEST_SKIP() << "SIM_HESAI_WRITE_GOLDEN is not set: nothing to record";
-  std::ofstream file(out);
-  file << "# FrameAssembler output digests (FNV-1a 64 of each frame's metadata and point bytes),\n"
-          "# written by test_hesai_golden with SIM_HESAI_WRITE_GOLDEN; see that test.\n";
-  std::size_t written = 0;
-  for (const GoldenCase& c : golden_cases()) {
-    for (const auto& l : run(c.make())) {
-      file << l << '\n';
-      ++written;
+// Re-recording is a step before the tests, not a test: with SIM_HESAI_WRITE_GOLDEN set, the file
+// is written before any test runs, and the tests then compare against what was just written.
+class RecordWhenAsked : public ::testing::Environment {
+ public:
+  void SetUp() override {
+    const char* out = std::getenv("SIM_HESAI_WRITE_GOLDEN");
+    if (out == nullptr) return;
+    std::ofstream file(out);
+    file << "# FrameAssembler output digests (FNV-1a 64 of each frame's metadata and point bytes),\n"
+            "# written by test_hesai_golden with SIM_HESAI_WRITE_GOLDEN; see that test.\n";
+    for (const GoldenCase& c : golden_cases()) {
+      for (const auto& l : run(c.make())) file << l << '\n';
     }
+    ASSERT_TRUE(file.good()) << "cannot write " << out;
   }
-  ASSERT_TRUE(file.good()) << "cannot write " << out;
-  GTEST_SKIP() << "recorded " << written << " digests to " << out;
-}
+};
+[[maybe_unused]] ::testing::Environment* const record_when_asked =
+    ::testing::AddGlobalTestEnvironment(new RecordWhenAsked);
 
 }  // namespace
