@@ -7,10 +7,13 @@
 #   SIM_STRESS_FRAMES=10000000 SIM_FUZZ_SECONDS=600 scripts/test.sh   longer stress and fuzzing
 #   SIM_TEST_STAGES="release" scripts/test.sh                        one stage only
 #   SIM_SOAK_SECONDS=3600 scripts/test.sh                            a longer soak (0: none)
-# Stages: release (GCC, full suite, incl. the install and Python tests, then the soak of the whole
-# vehicle: scripts/soak.sh), deb (the Debian packages
-# from the release tree, installed with apt-get, checked and removed: scripts/test-debs.sh),
-# asan, tsan. Warnings are errors here (SIM_WERROR=ON), as in the CMake presets.
+# Stages: release (GCC -O3: every library and program, the suites only a build without sanitizers
+# can run (the installed tree, the Python module, the benchmarks' smoke runs, the soak's fault
+# test; SIM_TEST_SET=release), then the soak of the whole vehicle: scripts/soak.sh), deb (the Debian
+# packages from the release tree, installed with apt-get, checked and removed: scripts/test-debs.sh),
+# asan (every other suite, under ASan+UBSan, and the fuzzers), tsan. Without the asan stage (the
+# quick loop) the release stage builds and runs every suite. Warnings are errors here
+# (SIM_WERROR=ON), as in the CMake presets.
 #
 # The quick loop (the release build and suite alone, no soak; docs/build-times.md):
 #   SIM_TEST_STAGES=release SIM_SOAK_SECONDS=0 scripts/test.sh       (scripts/quick.sh)
@@ -84,15 +87,20 @@ export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:strict_strin
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 export TSAN_OPTIONS=${TSAN_OPTIONS:-halt_on_error=1:second_deadlock_stack=1}
 mkdir -p "$root/build"
+# Each suite is compiled once: when the asan stage runs, it builds and runs every suite it can, and
+# the release tree only those it cannot (about half the release stage's compile time).
+release_tests=all
+[[ " $stages " == *" asan "* ]] && release_tests=release
 sanitizer_flags="-O1 -gline-tables-only -DNDEBUG"
 
 for s in $stages; do
   case $s in
     release)
-      stage "release build (GCC, -O3) and full suite"
+      stage "release build (GCC, -O3) and its suites (SIM_TEST_SET=$release_tests)"
       # -O3 as a user's plain Release build (GCC 12 warns there, not at -O2); /usr: the prefix
       # of the Debian packages the deb stage makes from this tree.
-      timed "release: configure" configure build/release -DCMAKE_BUILD_TYPE=Release -DCMAKE_INSTALL_PREFIX=/usr
+      timed "release: configure" configure build/release -DCMAKE_BUILD_TYPE=Release -DCMAKE_INSTALL_PREFIX=/usr \
+        -DSIM_TEST_SET="$release_tests"
       timed "release: build" cmake --build build/release -j"$jobs"
       seed_costs build/release release
       SIM_STRESS_FRAMES=$stress timed "release: test" ctest --test-dir build/release -j"$jobs" --output-on-failure \

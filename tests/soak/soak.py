@@ -49,7 +49,7 @@ PROGRESS_EVERY_S = 60  # how often a running soak prints one line of progress
 # A long-lived reader must get at least this share of the frames it waited for: frames / (frames +
 # frames it slept through). Readers take the newest frame, so frames skipped while a reader was
 # busy or kept from running (run delay) are by design; a transport that loses every other wake-up
-# delivers half.
+# delivers half (on a quiet machine: a loaded one's run delays excuse many single skipped frames).
 DELIVERY_FLOOR = 0.80
 # Private memory must be flat: the slope over the run (Theil-Sen, robust to a few steps) may
 # not exceed a steady growth of MEMORY_NOISE_KIB over the judged window or MEMORY_SLOPE_KIB_PER_H,
@@ -63,7 +63,7 @@ MEMORY_EVERY_S = 2.0
 MEMORY_JUDGED_FROM_S = {"sim_foxglove": 600}
 # The faults soak.py --fault can put in (tests/soak/README.md, "Faults"), and the check each
 # must turn red.
-FAULTS = ("torn", "lost_wakeups", "half_frames", "leak", "stale_region", "broken_recording")
+FAULTS = ("torn", "lost_wakeups", "sleeps_through", "leak", "stale_region", "broken_recording")
 
 _libc = ctypes.CDLL(None, use_errno=True)
 
@@ -324,7 +324,7 @@ class Soak:
         """SIM_SOAK_FAULT for the soak's processes: which stream each fault hits."""
         cam, lid = self.cameras, self.lidars
         spec = {"lost_wakeups": f"lost_wakeups={lid[0]}+{cam[1]}",  # a LiDAR and a replayed camera
-                "half_frames": f"half_frames={cam[4]}",
+                "sleeps_through": f"sleeps_through={cam[4]}",
                 "leak": "leak=256",                                     # KiB a second, read_block
                 "stale_region": f"stale_region={cam[5]}"}
         return ",".join(spec[f] for f in sorted(self.faults) if f in spec)
