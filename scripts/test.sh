@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds, and runs every test: the release suite, the whole suite under
-# AddressSanitizer + UndefinedBehaviorSanitizer with every fuzz target run for a bounded time,
-# and the concurrency suites under ThreadSanitizer.
+# Installs what is missing, builds, and runs every test: every suite under AddressSanitizer +
+# UndefinedBehaviorSanitizer with every fuzz target run for a bounded time, the suites that need a
+# plain optimised build (and the soak) in the release tree, and the concurrency suites under
+# ThreadSanitizer.
 #
 #   scripts/test.sh                  everything (what CI runs)
 #   SIM_STRESS_FRAMES=10000000 SIM_FUZZ_SECONDS=600 scripts/test.sh   longer stress and fuzzing
@@ -27,7 +28,9 @@ jobs=${SIM_JOBS:-2}
 stages=${SIM_TEST_STAGES:-"release deb asan tsan"}
 stress=${SIM_STRESS_FRAMES:-1000000}
 sanitizer_stress=${SIM_SANITIZER_STRESS_FRAMES:-200000}
-fuzz_seconds=${SIM_FUZZ_SECONDS:-10}
+# 5 s per fuzz target in CI (28 targets, ~2 s of start-up each): a smoke run of every parser from
+# its seeds on; long fuzzing: SIM_FUZZ_SECONDS=600, or one target run by hand for hours.
+fuzz_seconds=${SIM_FUZZ_SECONDS:-5}
 soak_seconds=${SIM_SOAK_SECONDS:-120}
 read -r -a ctest_args <<<"${SIM_CTEST_ARGS:-}"  # scripts/quick.sh -R name: some suites only
 

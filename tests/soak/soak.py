@@ -63,7 +63,7 @@ MEMORY_EVERY_S = 2.0
 MEMORY_JUDGED_FROM_S = {"sim_foxglove": 600}
 # The faults soak.py --fault can put in (tests/soak/README.md, "Faults"), and the check each
 # must turn red.
-FAULTS = ("torn", "lost_wakeups", "sleeps_through", "leak", "stale_region", "broken_recording")
+FAULTS = ("torn", "lost_wakeups", "half_frames", "leak", "stale_region", "broken_recording")
 
 _libc = ctypes.CDLL(None, use_errno=True)
 
@@ -324,7 +324,7 @@ class Soak:
         """SIM_SOAK_FAULT for the soak's processes: which stream each fault hits."""
         cam, lid = self.cameras, self.lidars
         spec = {"lost_wakeups": f"lost_wakeups={lid[0]}+{cam[1]}",  # a LiDAR and a replayed camera
-                "sleeps_through": f"sleeps_through={cam[4]}",
+                "half_frames": f"half_frames={cam[4]}",
                 "leak": "leak=256",                                     # KiB a second, read_block
                 "stale_region": f"stale_region={cam[5]}"}
         return ",".join(spec[f] for f in sorted(self.faults) if f in spec)

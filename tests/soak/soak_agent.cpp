@@ -350,15 +350,16 @@ std::chrono::milliseconds oversleep() {
 
 // The faults of a reader, as a transport that loses wake-ups would look to it (soak.py --fault):
 // "lost_wakeups": never woken, it finds frames only when it looks again once per 100 ms region
-// check slice; "sleeps_through": after every other wake-up it sleeps through three more frames.
-// Three, not one: the soak excuses skipped frames that the run delays and steal of the wait
-// cover, and on a loaded machine (CI) those covered one frame's period in about half the waits,
-// so a reader that lost single wake-ups passed the floor; three periods are rarely covered.
+// check slice; "half_frames": after every third wake-up it sleeps through the next three frames,
+// so it gets half of them. Three at a time, not every other one: the soak excuses skipped frames
+// that the run delays and steal of the wait cover, and on a loaded machine (CI) those covered a
+// single frame's period in about half the waits, so a reader that lost every other wake-up passed
+// the floor; three periods at once are rarely covered.
 struct ReaderFaults {
   bool never_woken = false;
-  bool sleeps_through = false;
+  bool half_frames = false;
 };
-inline constexpr std::int64_t kFramesSleptThrough = 3;
+inline constexpr std::uint64_t kFramesSleptThrough = 3;
 
 sim::ReadStatus faulty_wait(sim::Reader& reader, const ReaderFaults& faults, std::uint64_t& woken,
                             std::int64_t period_ns) {
@@ -370,15 +371,16 @@ sim::ReadStatus faulty_wait(sim::Reader& reader, const ReaderFaults& faults, std
     return reader.wait(0ms);
   }
   const auto status = reader.wait(1s);
-  if (faults.sleeps_through && status == sim::ReadStatus::new_frame && ++woken % 2 == 0) {
-    std::this_thread::sleep_for(std::chrono::nanoseconds(kFramesSleptThrough * period_ns + period_ns / 4));
+  if (faults.half_frames && status == sim::ReadStatus::new_frame && ++woken % kFramesSleptThrough == 0) {
+    const auto periods = static_cast<std::int64_t>(kFramesSleptThrough);
+    std::this_thread::sleep_for(std::chrono::nanoseconds(periods * period_ns + period_ns / 4));
   }
   return status;
 }
 
 void read_stream(StreamCheck& check, sim::WaitMode mode, bool borrow) {
   static const auto inject = oversleep();
-  const ReaderFaults faults{fault_on("lost_wakeups", check.name()), fault_on("sleeps_through", check.name())};
+  const ReaderFaults faults{fault_on("lost_wakeups", check.name()), fault_on("half_frames", check.name())};
   std::uint64_t woken = 0;
   std::vector<std::byte> buffer;
   WaitClock clock;

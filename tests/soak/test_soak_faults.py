@@ -6,8 +6,8 @@ cameras) with every fault at once, each on its own streams or process (soak.py f
     torn              the soak writer of cam3 tears every 97th frame       -> torn frames
     lost_wakeups      readers of lidar0 and cam1 are never woken            -> missed (lidar0),
                       (they find frames at their 100 ms region checks)         frames below the floor (cam1)
-    sleeps_through    readers of cam4 sleep through 3 frames every other    -> frames below the floor (cam4)
-                      wake-up
+    half_frames       readers of cam4 sleep through 3 frames after every    -> frames below the floor (cam4)
+                      third wake-up: half the frames
     leak              read_block leaks 256 KiB a second                     -> its memory slope
     stale_region      cam5's writer leaves a region of another name         -> the region set, left behind
     broken_recording  every sim_record segment is cut in half before play   -> recordings that do not play
@@ -57,7 +57,7 @@ def verdicts(code, result, streams):
         ("lost_wakeups (LiDAR: late)", any(x["what"] == "missed" and x["stream"].endswith("_lidar0") for x in v),
          check_value(result, "blocked reader missed")),
         ("lost_wakeups (replayed camera: frames lost)", ("read_block", "cam1") in short, sorted(short)),
-        ("sleeps_through", ("read_block", "cam4") in short and ("read_borrow", "cam4") in short, sorted(short)),
+        ("half_frames", ("read_block", "cam4") in short and ("read_borrow", "cam4") in short, sorted(short)),
         ("leak", bool(memory) and not memory[0]["ok"], memory),
         ("stale_region (region set)", bool(regions) and not regions[0]["ok"], regions),
         ("stale_region (left behind)", check_value(result, "our /dev/shm regions left behind") > 0,
