@@ -3,7 +3,6 @@
 // `sim_lidar_unitree --record` wrote, or any capture of the serial line) into SIM through the
 // same LidarStream as the live driver. A byte recording holds no times of its own, so scans are
 // published no faster than --rate-hz and stamped with the host time they are published.
-#include <CLI/CLI.hpp>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -31,12 +30,11 @@ struct Options {
 };
 
 void add_options(sim::apps::CommandLine& cli, Options& o) {
-  auto& app = cli.app();
-  app.add_option("file", o.path, "the recording")->required();
+  cli.add_option("file", o.path, "the recording").required();
   sim::apps::add_unitree_stream_options(cli, o.stream, sim::apps::SensorTimeOption::not_offered);
-  app.add_option("--rate-hz", o.rate_hz, "scans per second to publish (0: as fast as possible)")
-      ->check(CLI::Range(0.0, 1000.0));
-  app.add_flag("-q,--quiet", o.quiet, "no progress line and no summary");
+  cli.add_option("--rate-hz", o.rate_hz, "scans per second to publish (0: as fast as possible)")
+      .in_range(0.0, 1000.0);
+  cli.add_flag("-q,--quiet", o.quiet, "no progress line and no summary");
 }
 
 // Publishes scans no faster than a scan rate, as the sensor would, on the shared absolute

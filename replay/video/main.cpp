@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // sim_replay_video: replays a video file or a folder of images into a SIM image stream at the
 // recorded rate, through the decoder the live camera drivers use.
-#include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
 #include <opencv2/core.hpp>
@@ -37,21 +36,20 @@ struct Options {
 };
 
 void add_options(apps::CommandLine& cli, Options& o) {
-  auto& app = cli.app();
-  app.add_option("source", o.path, "video file, or folder of images played in name order")
-      ->required();
+  cli.add_option("source", o.path, "video file, or folder of images played in name order")
+      .required();
   cli.add_stream("--stream", o.stream, "SIM stream name");
-  app.add_option("--fps", o.fps, "frame rate (0: the file's own, 30 for a folder)")
-      ->check(CLI::Range(0.0, 10000.0));
-  app.add_option("--rate", o.rate, "speed factor: 2 plays twice as fast")
-      ->check(CLI::Range(0.001, 1000.0));
-  app.add_flag("--loop", o.loop, "start again at the end, until stopped");
-  app.add_option("--output", o.output_text, "published format: bgr8, rgb8 or mono8")
-      ->check(CLI::IsMember({"bgr8", "rgb8", "mono8"}));
-  app.add_flag("--checksum", o.checksum, "publish an XXH3 checksum with every frame");
+  cli.add_option("--fps", o.fps, "frame rate (0: the file's own, 30 for a folder)")
+      .in_range(0.0, 10000.0);
+  cli.add_option("--rate", o.rate, "speed factor: 2 plays twice as fast")
+      .in_range(0.001, 1000.0);
+  cli.add_flag("--loop", o.loop, "start again at the end, until stopped");
+  cli.add_option("--output", o.output_text, "published format: bgr8, rgb8 or mono8")
+      .one_of({"bgr8", "rgb8", "mono8"});
+  cli.add_flag("--checksum", o.checksum, "publish an XXH3 checksum with every frame");
   apps::add_sensor_options(cli, o.sensor, apps::SensorKind::camera);
   cli.add_placement(o.placement);
-  app.add_flag("-q,--quiet", o.quiet, "no progress line and no summary");
+  cli.add_flag("-q,--quiet", o.quiet, "no progress line and no summary");
 }
 
 // The sensor the options describe, stamped as a replay is: with this host's clock.
@@ -172,8 +170,9 @@ Counts publish_all(Replay& r, cv::Mat& frame, std::int64_t receive_ns) {
     ++(*published ? counts.published : counts.skipped);
     ++index;
     ++in_pass;
+    // append(), not "/" + std::to_string(…): GCC 12 -O3 -Wrestrict false positive (GCC bug 105651).
     r.status.update(apps::fields(
-        {{"frame", std::to_string(in_pass) + (total > 0 ? "/" + std::to_string(total) : "")},
+        {{"frame", std::to_string(in_pass) + (total > 0 ? std::string("/").append(std::to_string(total)) : "")},
          {"pass", std::to_string(pass)},
          {"published", std::to_string(counts.published)}}));
 

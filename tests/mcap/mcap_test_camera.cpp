@@ -4,40 +4,43 @@
 // stamp given by its index (test_frames.hpp). With --wait-for-reader it creates the stream, says
 // "ready" and writes only once a reader waits on it (sim_record has opened it). --noise writes
 // random pixels instead, the worst case for compression (tests/mcap/keep_up.sh).
-#include <CLI/CLI.hpp>
-
+#include <chrono>
+#include <cstdint>
 #include <cstdio>
+#include <optional>
+#include <string>
 #include <thread>
 
+#include "sim/apps/command_line.hpp"
 #include "sim/clock.hpp"
 #include "sim/reader.hpp"
 #include "sim/writer.hpp"
 #include "test_frames.hpp"
 
 int main(int argc, char** argv) {
-  CLI::App app{"Test camera: deterministic BGR frames into a SIM stream."};
+  sim::apps::CommandLine cli("mcap_test_camera", "Test camera: deterministic BGR frames into a SIM stream.");
   std::string stream;
   std::uint32_t width = 64, height = 48;
   std::uint64_t frames = 10;
   double fps = 30;
   bool wait_for_reader = false;
   bool noise = false;
-  app.add_option("--stream", stream)->required();
-  app.add_option("--width", width);
-  app.add_option("--height", height);
-  app.add_option("--frames", frames, "0: until killed");
-  app.add_option("--fps", fps)->check(CLI::PositiveNumber);
-  app.add_flag("--wait-for-reader", wait_for_reader);
-  app.add_flag("--noise", noise, "random pixels (incompressible) instead of the test pattern");
+  cli.add_option("--stream", stream, "SIM stream to write").required();
+  cli.add_option("--width", width, "frame width");
+  cli.add_option("--height", height, "frame height");
+  cli.add_option("--frames", frames, "0: until killed");
+  cli.add_option("--fps", fps, "frames per second").positive();
+  cli.add_flag("--wait-for-reader", wait_for_reader, "write only once a reader waits");
+  cli.add_flag("--noise", noise, "random pixels (incompressible) instead of the test pattern");
   bool calibrated = false;
-  app.add_flag("--calibrated", calibrated,
+  cli.add_flag("--calibrated", calibrated,
                "describe the sensor: frame test_camera_optical on base_link, the calibration of "
                "test_frames.hpp (test_calibration)");
   bool clock = false;
-  app.add_flag("--clock", clock,
+  cli.add_flag("--clock", clock,
                "report a clock: test_camera_clock(false) from the start, test_camera_clock(true) "
                "from the middle frame on (test_frames.hpp)");
-  CLI11_PARSE(app, argc, argv);
+  if (auto code = cli.parse(argc, argv)) return *code;
 
   const auto layout = sim::ImageLayout::packed(width, height, sim::PixelFormat::bgr8);
   std::optional<sim::SensorInfo> sensor;

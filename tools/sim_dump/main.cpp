@@ -2,7 +2,6 @@
 // sim_dump: writes frames of a SIM stream to files, one frame file plus a JSON sidecar of its
 // metadata per frame: LiDAR streams as PCD (through PCL), image streams as PNG (through OpenCV),
 // raw streams as .bin.
-#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -32,20 +31,19 @@ struct Options {
 };
 
 void add_options(sim::apps::CommandLine& cli, Options& o) {
-  auto& app = cli.app();
-  cli.add_stream("stream", o.stream, "stream name, e.g. /lidar_top (see sim_ls)")->required();
-  app.add_option("--count,-n", o.count, "frames to write; 0 until stopped with Ctrl-C")
-      ->check(CLI::NonNegativeNumber);
-  app.add_option("--out,-o", o.out_dir, "folder for the files (created if missing)")
-      ->type_name("DIR");
-  app.add_flag("--ascii", o.sink.ascii, "PCD in ASCII instead of binary");
-  app.add_flag("--xyz", o.sink.xyz_only,
+  cli.add_stream("stream", o.stream, "stream name, e.g. /lidar_top (see sim_ls)").required();
+  cli.add_option("--count,-n", o.count, "frames to write; 0 until stopped with Ctrl-C")
+      .non_negative();
+  cli.add_option("--out,-o", o.out_dir, "folder for the files (created if missing)")
+      .type_name("DIR");
+  cli.add_flag("--ascii", o.sink.ascii, "PCD in ASCII instead of binary");
+  cli.add_flag("--xyz", o.sink.xyz_only,
                "PCD with x y z only (pcl::PointXYZ) instead of x y z intensity");
-  app.add_flag("--current", o.include_current,
+  cli.add_flag("--current", o.include_current,
                "start with the newest frame already published instead of waiting for the next");
-  app.add_option("--timeout", o.timeout_s, "give up when no new frame arrives for this many seconds")
-      ->check(CLI::PositiveNumber);
-  app.add_flag("-q,--quiet", o.quiet, "no progress line and no summary");
+  cli.add_option("--timeout", o.timeout_s, "give up when no new frame arrives for this many seconds")
+      .positive();
+  cli.add_flag("-q,--quiet", o.quiet, "no progress line and no summary");
   cli.add_trust(o.reader.trust);
 }
 
@@ -147,8 +145,9 @@ int dump_frames(const sim::apps::CommandLine& cli, const Options& o, sim::Reader
     const auto& described = sensor.for_frame(reader, info.sensor_generation, status_line);
     if (auto problem = write_sidecars(o, stem, file_name, info, described)) return cli.fail(*problem);
     ++written;
+    // append(), not "/" + std::to_string(…): GCC 12 -O3 -Wrestrict false positive (GCC bug 105651).
     status_line.update(sim::apps::fields(
-        {{"frames", std::to_string(written) + (wanted != 0 ? "/" + std::to_string(wanted) : "")},
+        {{"frames", std::to_string(written) + (wanted != 0 ? std::string("/").append(std::to_string(wanted)) : "")},
          {"last seq", std::to_string(info.seq)}}));
   }
   status_line.finish(std::to_string(written) + " frames written to " + o.out_dir);

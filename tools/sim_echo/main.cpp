@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // sim_echo: prints the frames of a stream (one readable line each, or JSON with --json), or with
 // --stats their rate, interval spread, latency, delay, bandwidth and skips.
-#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <optional>
 #include <string>
@@ -109,20 +108,19 @@ void print_stats(const Options& o, const char* label, const sim::echo::FrameStat
 }
 
 void add_options(sim::apps::CommandLine& cli, Options& o) {
-  auto& app = cli.app();
-  cli.add_stream("stream", o.stream, "stream name, like /lidar_top")->required();
-  app.add_option("--count,-n", o.count, "exit after this many frames (0: until stopped)");
-  app.add_flag("--json", o.json, "JSON lines for scripts instead of readable lines");
-  app.add_flag("--stats", o.stats, "print statistics every --interval instead of frames");
-  app.add_option("--interval", o.interval_s, "seconds between --stats lines")
-      ->check(CLI::PositiveNumber);
-  app.add_option("--timeout", o.timeout_s,
+  cli.add_stream("stream", o.stream, "stream name, like /lidar_top").required();
+  cli.add_option("--count,-n", o.count, "exit after this many frames (0: until stopped)");
+  cli.add_flag("--json", o.json, "JSON lines for scripts instead of readable lines");
+  cli.add_flag("--stats", o.stats, "print statistics every --interval instead of frames");
+  cli.add_option("--interval", o.interval_s, "seconds between --stats lines")
+      .positive();
+  cli.add_option("--timeout", o.timeout_s,
                  "fail (exit 1) when no frame arrives for this many seconds (0: never)")
-      ->check(CLI::NonNegativeNumber);
-  app.add_option("--duration", o.duration_s, "stop after this many seconds (0: never)")
-      ->check(CLI::NonNegativeNumber);
-  app.add_flag("--wait-for-stream", o.wait_for_stream, "wait until the stream exists");
-  app.add_flag("--poll", o.poll, "busy-poll instead of sleeping until each frame (uses a core)");
+      .non_negative();
+  cli.add_option("--duration", o.duration_s, "stop after this many seconds (0: never)")
+      .non_negative();
+  cli.add_flag("--wait-for-stream", o.wait_for_stream, "wait until the stream exists");
+  cli.add_flag("--poll", o.poll, "busy-poll instead of sleeping until each frame (uses a core)");
   cli.add_placement(o.placement);
   cli.add_trust(o.reader.trust);
 }

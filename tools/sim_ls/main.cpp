@@ -3,7 +3,6 @@
 // keeps a live view of them all (rate, bandwidth, age, latency, skips, sleeping readers, writer),
 // refreshed in place; --clocks puts the host's clock and every stream's side by side and says which
 // streams can be paired by stamp.
-#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <algorithm>
 #include <map>
@@ -247,20 +246,19 @@ int main(int argc, char** argv) {
       "writer, checksum and clock. --watch keeps a live view: rate, bandwidth, age, latency (publish to "
       "read), skipped frames, sleeping readers and writer of each stream, refreshed in place "
       "until stopped.");
-  auto& app = cli.app();
-  app.add_flag("--json", o.json, "one JSON object per stream (per refresh with --watch)");
-  auto* watch = app.add_flag("--watch,-w", o.watch, "live view, refreshed every --interval until stopped");
-  app.add_flag("--clocks", o.clocks,
+  cli.add_flag("--json", o.json, "one JSON object per stream (per refresh with --watch)");
+  const auto watch = cli.add_flag("--watch,-w", o.watch, "live view, refreshed every --interval until stopped");
+  cli.add_flag("--clocks", o.clocks,
                "the host's clock and every stream's side by side, and which streams can be paired by "
                "stamp within --tolerance; exit 1 when any stream's clock is in error")
-      ->excludes(watch);
-  app.add_option("--tolerance", o.tolerance_ms, "--clocks: the largest stamp difference of a pair, ms")
-      ->check(CLI::Range(0.0, 3.6e6));
+      .excludes(watch);
+  cli.add_option("--tolerance", o.tolerance_ms, "--clocks: the largest stamp difference of a pair, ms")
+      .in_range(0.0, 3.6e6);
   sim::apps::add_host_clock_options(cli, o.host_clock);
-  app.add_option("--interval", o.interval_s, "seconds between --watch refreshes")
-      ->check(CLI::Range(0.05, 3600.0));
-  app.add_option("--window", o.window_s, "seconds over which a single listing measures rates")
-      ->check(CLI::Range(0.0, 60.0));
+  cli.add_option("--interval", o.interval_s, "seconds between --watch refreshes")
+      .in_range(0.05, 3600.0);
+  cli.add_option("--window", o.window_s, "seconds over which a single listing measures rates")
+      .in_range(0.0, 60.0);
   cli.add_streams("streams", o.streams, "only these streams (default: every stream)");
   if (auto code = cli.parse(argc, argv)) return *code;
   const auto& stop = sim::apps::StopSignal::install();

@@ -6,11 +6,12 @@
 // The steps, each a function below: read the command line; open the file; make one player per
 // playable channel; bound the streams; create them; play the messages (paced, looped); report;
 // remove the streams it made.
-#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -66,38 +67,32 @@ void say(sim::apps::StatusLine& status, const std::string& sentence) {
 
 // The command line; returns an exit code when the program must end now (--help, usage error).
 std::optional<int> parse_command_line(sim::apps::CommandLine& cli, int argc, char** argv, PlayOptions& o) {
-  CLI::App& app = cli.app();
   std::vector<std::string> remaps;
-  app.add_option("file", o.file, "the MCAP file")->required()->type_name("FILE");
-  auto* rate_option = app.add_option("--rate", o.rate, "speed factor: 2 plays twice as fast")
-                          ->check(CLI::PositiveNumber)
-                          ->capture_default_str();
-  app.add_flag("--max-rate", o.max_rate, "as fast as possible, no pacing")->excludes(rate_option);
-  app.add_flag("--loop", o.loop, "start over at the end until stopped");
-  app.add_option("--start", o.start_s, "skip the first S seconds of the recording")
-      ->check(CLI::Range(0.0, 1e9))
-      ->type_name("S");
-  app.add_option("--remap", remaps, "play topic /a into stream /b (repeatable)")->type_name("/a=/b");
-  app.add_flag("--wait-for-readers", o.wait_readers,
+  cli.add_option("file", o.file, "the MCAP file").required().type_name("FILE");
+  const auto rate_option = cli.add_option("--rate", o.rate, "speed factor: 2 plays twice as fast").positive();
+  cli.add_flag("--max-rate", o.max_rate, "as fast as possible, no pacing").excludes(rate_option);
+  cli.add_flag("--loop", o.loop, "start over at the end until stopped");
+  cli.add_option("--start", o.start_s, "skip the first S seconds of the recording")
+      .in_range(0.0, 1e9)
+      .type_name("S");
+  cli.add_option("--remap", remaps, "play topic /a into stream /b (repeatable)").type_name("/a=/b");
+  cli.add_flag("--wait-for-readers", o.wait_readers,
                "create the streams, then wait until a reader waits on each before playing");
-  app.add_option("--max-capacity", o.max_capacity_mib,
+  cli.add_option("--max-capacity", o.max_capacity_mib,
                  "MiB per frame a stream may take at most (a recording cannot reserve more shared memory)")
-      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 20))
-      ->capture_default_str()
-      ->type_name("MIB");
-  app.add_option("--max-streams", o.max_streams,
+      .in_range(std::uint64_t{1}, std::uint64_t{1} << 20)
+      .type_name("MIB");
+  cli.add_option("--max-streams", o.max_streams,
                  "streams a recording may make at most (a file naming more is refused)")
-      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{100000}))
-      ->capture_default_str()
-      ->type_name("N");
-  app.add_option("--max-shm", o.max_shm_mib,
+      .in_range(std::uint64_t{1}, std::uint64_t{100000})
+      .type_name("N");
+  cli.add_option("--max-shm", o.max_shm_mib,
                  "MiB of shared memory all streams may take together (never more than /dev/shm has free)")
-      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 30))
-      ->capture_default_str()
-      ->type_name("MIB");
-  app.add_flag("--keep-streams", o.keep_streams,
+      .in_range(std::uint64_t{1}, std::uint64_t{1} << 30)
+      .type_name("MIB");
+  cli.add_flag("--keep-streams", o.keep_streams,
                "leave the streams in /dev/shm when playback ends (by default they are removed)");
-  app.add_flag("--quiet", o.quiet, "no progress line and no summary");
+  cli.add_flag("--quiet", o.quiet, "no progress line and no summary");
   cli.add_config_file();
   if (auto code = cli.parse(argc, argv)) return code;
   for (const auto& r : remaps) {

@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // sim_record: records SIM streams into an MCAP file (ROS 2 profile) that Foxglove, rosbag2 and
 // the mcap CLI read, and that sim_play replays into SIM exactly as recorded.
-#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
@@ -15,6 +14,7 @@
 #include "sim/apps/status_line.hpp"
 #include "sim/apps/stop_signal.hpp"
 #include "sim/clock.hpp"
+#include "sim/names.hpp"
 #include "sim/reader.hpp"
 #include "sim/ros2/message.hpp"
 
@@ -80,25 +80,22 @@ struct RecordOptions {
 
 // The command line; returns an exit code when the program must end now (--help, usage error).
 std::optional<int> parse_command_line(sim::apps::CommandLine& cli, int argc, char** argv, RecordOptions& o) {
-  CLI::App& app = cli.app();
-  app.add_option("-o,--output", o.output, "the MCAP file to write")->required()->type_name("FILE");
-  app.add_option("streams", o.streams, "streams to record, like /lidar_top /camera_front")
-      ->check(sim::apps::stream_name_validator());
-  app.add_flag("--all", o.all, "record every image and point stream that exists now");
-  app.add_option("--duration", o.duration_s, "stop after this many seconds [until Ctrl-C]")
-      ->check(CLI::PositiveNumber)
-      ->type_name("S");
-  app.add_option("--compression", o.compression, "chunk compression: zstd, lz4 or none")
-      ->check(CLI::IsMember({"zstd", "lz4", "none"}))
-      ->capture_default_str();
-  app.add_option("--chunk-size", o.chunk_kib, "KiB of messages per chunk")
-      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 20))
-      ->capture_default_str()
-      ->type_name("KIB");
-  app.add_flag("--wait-for-streams", o.wait_for_streams,
+  cli.add_option("-o,--output", o.output, "the MCAP file to write").required().type_name("FILE");
+  cli.add_option("streams", o.streams, "streams to record, like /lidar_top /camera_front")
+      .check([](const std::string& name) { return sim::stream_name_problem(name); });
+  cli.add_flag("--all", o.all, "record every image and point stream that exists now");
+  cli.add_option("--duration", o.duration_s, "stop after this many seconds [until Ctrl-C]")
+      .positive()
+      .type_name("S");
+  cli.add_option("--compression", o.compression, "chunk compression: zstd, lz4 or none")
+      .one_of({"zstd", "lz4", "none"});
+  cli.add_option("--chunk-size", o.chunk_kib, "KiB of messages per chunk")
+      .in_range(std::uint64_t{1}, std::uint64_t{1} << 20)
+      .type_name("KIB");
+  cli.add_flag("--wait-for-streams", o.wait_for_streams,
                "wait until every named stream exists, then record");
-  app.add_flag("--json", o.json, "print the final counters as one JSON object");
-  app.add_flag("--quiet", o.quiet, "no progress line");
+  cli.add_flag("--json", o.json, "print the final counters as one JSON object");
+  cli.add_flag("--quiet", o.quiet, "no progress line");
   cli.add_trust(o.trust);
   cli.add_config_file();
   if (auto code = cli.parse(argc, argv)) return code;

@@ -2,7 +2,6 @@
 // sim_foxglove: SIM streams live in Foxglove / Lichtblick (Foxglove WebSocket protocol) and in a
 // browser (the built-in page), from one port. The work is in the sim_foxglove library; options,
 // stop signals and exit codes are the programs' shared ones (apps/common).
-#include <CLI/CLI.hpp>
 #include <poll.h>
 
 #include <cstdio>
@@ -12,6 +11,7 @@
 #include "sim/apps/command_line.hpp"
 #include "sim/apps/stop_signal.hpp"
 #include "sim/foxglove/server.hpp"
+#include "sim/names.hpp"
 
 namespace {
 
@@ -39,42 +39,36 @@ int main(int argc, char** argv) {
       "Serve SIM streams to Foxglove or Lichtblick over the Foxglove WebSocket protocol "
       "(ws://HOST:PORT) and as a live page in a browser (http://HOST:PORT/). Images go out as "
       "sensor_msgs/msg/Image (or CompressedImage), LiDAR frames as PointCloud2, in CDR.");
-  CLI::App& app = cli.app();
   sim::foxglove::ServerOptions options;
   std::string compress = "none";
   bool json = false;
-  app.add_option("streams", options.streams,
+  cli.add_option("streams", options.streams,
                  "only these streams (default: every stream, and new ones as they appear)")
-      ->check(sim::apps::stream_name_validator());
-  app.add_option("--port", options.port, "TCP port of the WebSocket and the page; 0 picks a free one")
-      ->capture_default_str();
-  app.add_option("--bind", options.bind,
-                 "address to listen on; 0.0.0.0 opens it to the network (no authentication)")
-      ->capture_default_str();
-  app.add_option("--max-rate", options.max_rate_hz,
+      .check([](const std::string& name) { return sim::stream_name_problem(name); });
+  cli.add_option("--port", options.port, "TCP port of the WebSocket and the page; 0 picks a free one");
+  cli.add_option("--bind", options.bind,
+                 "address to listen on; 0.0.0.0 opens it to the network (no authentication)");
+  cli.add_option("--max-rate", options.max_rate_hz,
                  "at most this many messages per second per channel and client (0: every frame; "
                  "else at least 0.000001)")
-      ->check(CLI::Validator(
+      .check(
           [](const std::string& text) -> std::string {
             const double rate = std::strtod(text.c_str(), nullptr);
             return rate == 0 || rate >= sim::foxglove::kMinRateHz
                        ? std::string()
                        : "--max-rate takes 0 (every frame) or a rate of at least 0.000001 Hz";
           },
-          "RATE"))
-      ->capture_default_str();
-  app.add_option("--max-connections", options.max_connections,
+          "RATE");
+  cli.add_option("--max-connections", options.max_connections,
                  "page and Foxglove connections served at once; more get HTTP 503")
-      ->check(CLI::Range(1u, 100000u))
-      ->capture_default_str();
-  app.add_option("--allow-origin", options.allowed_origins,
+      .in_range(1u, 100000u);
+  cli.add_option("--allow-origin", options.allowed_origins,
                  "a web origin (https://host[:port]) whose pages may open the WebSocket, beside this "
                  "server's page and Foxglove's web app; its host is also accepted by the page. "
                  "* allows any (not safe)");
-  app.add_option("--compress", compress,
-                 "images as JPEG sensor_msgs/msg/CompressedImage: none, jpeg or jpeg:QUALITY (1-100)")
-      ->capture_default_str();
-  app.add_flag("--json", json, "print the listening line as JSON");
+  cli.add_option("--compress", compress,
+                 "images as JPEG sensor_msgs/msg/CompressedImage: none, jpeg or jpeg:QUALITY (1-100)");
+  cli.add_flag("--json", json, "print the listening line as JSON");
   cli.add_trust(options.trust);
   cli.add_config_file();
   if (auto code = cli.parse(argc, argv)) return *code;

@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <unistd.h>
 
+#include <cstdint>
 #include <cstdio>
 
 #include "sim/apps/yaml_config.hpp"
@@ -62,6 +63,64 @@ CLI::Validator validator(std::function<std::string(const std::string&)> problem,
                         "", std::move(type_name));
 }
 
+Option& Option::required() {
+  option_->required();
+  return *this;
+}
+
+Option& Option::type_name(std::string_view name) {
+  option_->type_name(std::string(name));
+  return *this;
+}
+
+template <class T>
+Option& Option::in_range(T low, T high) {
+  option_->check(CLI::Range(low, high));
+  return *this;
+}
+
+template Option& Option::in_range<int>(int, int);
+template Option& Option::in_range<unsigned>(unsigned, unsigned);
+template Option& Option::in_range<std::uint64_t>(std::uint64_t, std::uint64_t);
+template Option& Option::in_range<double>(double, double);
+
+Option& Option::positive() {
+  option_->check(CLI::PositiveNumber);
+  return *this;
+}
+
+Option& Option::non_negative() {
+  option_->check(CLI::NonNegativeNumber);
+  return *this;
+}
+
+Option& Option::one_of(std::vector<std::string> words) {
+  option_->check(CLI::IsMember(std::move(words)));
+  return *this;
+}
+
+Option& Option::check(Problem problem, std::string_view shown) {
+  option_->check(CLI::Validator(
+      [problem = std::move(problem)](std::string& value) { return problem(value); },
+      std::string(shown)));
+  return *this;
+}
+
+Option& Option::excludes(const Option& other) {
+  option_->excludes(other.option_);
+  return *this;
+}
+
+Option& Option::expected(int count) {
+  option_->expected(count);
+  return *this;
+}
+
+Option& Option::each(std::function<void(const std::string&)> seen) {
+  option_->each([seen = std::move(seen)](const std::string& value) { seen(value); });
+  return *this;
+}
+
 CommandLine::CommandLine(std::string tool, std::string description)
     : tool_(std::move(tool)), app_(std::make_unique<CLI::App>(std::move(description), tool_)) {
   // One style of --help: every option shows its default the same way, "--count INT=5".
@@ -73,24 +132,58 @@ CommandLine::CommandLine(std::string tool, std::string description)
 
 CommandLine::~CommandLine() = default;
 
-CLI::Option* CommandLine::add_stream(std::string_view name, std::string& value,
-                                     std::string_view help) {
-  return app_->add_option(std::string(name), value, std::string(help))
-      ->type_name("NAME")
-      ->check(stream_name_validator());
+Option CommandLine::add_stream(std::string_view name, std::string& value,
+                               std::string_view help) {
+  return Option(app_->add_option(std::string(name), value, std::string(help))
+                    ->type_name("NAME")
+                    ->check(stream_name_validator()));
 }
 
-CLI::Option* CommandLine::add_streams(std::string_view name, std::vector<std::string>& values,
-                                      std::string_view help) {
-  return app_->add_option(std::string(name), values, std::string(help))
-      ->type_name("NAME")
-      ->check(stream_name_validator());
+Option CommandLine::add_streams(std::string_view name, std::vector<std::string>& values,
+                                std::string_view help) {
+  return Option(app_->add_option(std::string(name), values, std::string(help))
+                    ->type_name("NAME")
+                    ->check(stream_name_validator()));
 }
 
-void CommandLine::add_flag(std::string_view name, bool& value, std::string_view help,
-                           std::string_view group) {
+template <class T>
+Option CommandLine::add_option(std::string_view name, T& value, std::string_view help) {
+  return Option(app_->add_option(std::string(name), value, std::string(help)));
+}
+
+// The value types the programs use (a new one: a line here).
+template Option CommandLine::add_option(std::string_view, std::string&, std::string_view);
+template Option CommandLine::add_option(std::string_view, int&, std::string_view);
+template Option CommandLine::add_option(std::string_view, unsigned&, std::string_view);
+template Option CommandLine::add_option(std::string_view, std::uint16_t&, std::string_view);
+template Option CommandLine::add_option(std::string_view, std::int64_t&, std::string_view);
+template Option CommandLine::add_option(std::string_view, std::uint64_t&, std::string_view);
+template Option CommandLine::add_option(std::string_view, float&, std::string_view);
+template Option CommandLine::add_option(std::string_view, double&, std::string_view);
+template Option CommandLine::add_option(std::string_view, std::optional<int>&, std::string_view);
+template Option CommandLine::add_option(std::string_view, std::optional<std::uint16_t>&,
+                                        std::string_view);
+template Option CommandLine::add_option(std::string_view, std::optional<double>&,
+                                        std::string_view);
+template Option CommandLine::add_option(std::string_view, std::vector<std::string>&,
+                                        std::string_view);
+template Option CommandLine::add_option(std::string_view, std::vector<int>&, std::string_view);
+
+template <class T>
+Option CommandLine::add_option_function(std::string_view name, std::function<void(const T&)> set,
+                                        std::string_view help) {
+  return Option(app_->add_option_function<T>(std::string(name), set, std::string(help)));
+}
+
+template Option CommandLine::add_option_function(std::string_view,
+                                                 std::function<void(const float&)>,
+                                                 std::string_view);
+
+Option CommandLine::add_flag(std::string_view name, bool& value, std::string_view help,
+                             std::string_view group) {
   auto* option = app_->add_flag(std::string(name), value, std::string(help));
   if (!group.empty()) option->group(std::string(group));
+  return Option(option);
 }
 
 void CommandLine::add_text(std::string_view name, std::string& value, std::string_view help,
@@ -190,6 +283,12 @@ std::optional<int> CommandLine::parse(int argc, char** argv) {
     *trust_ = *trust;
   }
   return std::nullopt;
+}
+
+std::vector<Option> CommandLine::parse_order() const {
+  std::vector<Option> order;
+  for (CLI::Option* option : app_->parse_order()) order.emplace_back(option);
+  return order;
 }
 
 int CommandLine::fail(std::string_view message) const {

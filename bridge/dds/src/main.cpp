@@ -3,7 +3,6 @@
 // from DDS into local SIM streams (--subscribe), on Fast DDS over UDP. A thin program: the
 // options become one Outbound or Inbound per topic, each with its own thread; this thread only
 // reports. See docs/bridge.md.
-#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -127,52 +126,51 @@ struct Options {
   bool quiet = false;
   double status_period = 1.0;
   Trust trust;
-  const CLI::Option* subscribe = nullptr;  // for pairing each plain --as with its --subscribe
-  const CLI::Option* as = nullptr;
+  std::optional<apps::Option> subscribe;  // for pairing each plain --as with its --subscribe
+  std::optional<apps::Option> as;
 };
 
 void add_options(apps::CommandLine& cli, Options& o) {
-  CLI::App& app = cli.app();
   RawOptions& raw = o.raw;
-  app.add_option("--publish", raw.publish, "SIM stream to publish as the ROS 2 topic of the same name (repeatable)")
-      ->type_name("STREAM");
-  o.subscribe = app.add_option("--subscribe", raw.subscribe,
+  cli.add_option("--publish", raw.publish, "SIM stream to publish as the ROS 2 topic of the same name (repeatable)")
+      .type_name("STREAM");
+  o.subscribe = cli.add_option("--subscribe", raw.subscribe,
                                "ROS 2 topic to write into a SIM stream (repeatable)")
-                    ->type_name("TOPIC");
-  o.as = app.add_option("--as", raw.as,
+                    .type_name("TOPIC");
+  o.as = cli.add_option("--as", raw.as,
                         "SIM stream for the --subscribe before it [the topic's name], or "
                         "TOPIC=STREAM")
-             ->type_name("STREAM");
-  app.add_option("--domain", o.domain, "DDS domain id (ROS_DOMAIN_ID)")->check(CLI::Range(0, 232));
-  app.add_option("--frame-id", raw.frame_id, "header.frame_id of a published stream [its name without '/']")
-      ->type_name("STREAM=ID");
-  app.add_option("--max-rate", raw.max_rate, "send at most this many frames a second of a stream")
-      ->type_name("STREAM=HZ");
-  app.add_option("--compress", raw.compress,
+             .type_name("STREAM");
+  cli.add_option("--domain", o.domain, "DDS domain id (ROS_DOMAIN_ID)").in_range(0, 232);
+  cli.add_option("--frame-id", raw.frame_id, "header.frame_id of a published stream [its name without '/']")
+      .type_name("STREAM=ID");
+  cli.add_option("--max-rate", raw.max_rate, "send at most this many frames a second of a stream")
+      .type_name("STREAM=HZ");
+  cli.add_option("--compress", raw.compress,
                  "also publish a stream as sensor_msgs/msg/CompressedImage on <topic>/compressed "
                  "(JPEG quality 1-100) [90]")
-      ->type_name("STREAM=jpeg[:Q]");
-  app.add_flag("--reliable", raw.reliable,
+      .type_name("STREAM=jpeg[:Q]");
+  cli.add_flag("--reliable", raw.reliable,
                "publish with reliable QoS instead of ROS 2's sensor-data profile (best effort); "
                "for subscribers with the default QoS");
-  app.add_flag("--reliable-subscribe", raw.reliable_subscribe,
+  cli.add_flag("--reliable-subscribe", raw.reliable_subscribe,
                "subscribe with reliable QoS (then best-effort publishers, most drivers, do not "
                "match) [best effort: matches both]");
-  app.add_flag("--json", o.json, "print every topic's counters as one JSON line per status period on stdout");
-  app.add_option("--status-period", o.status_period, "seconds between status reports")
-      ->check(CLI::Range(0.05, 3600.0));
-  app.add_flag("-q,--quiet", o.quiet, "no status line and no summary");
+  cli.add_flag("--json", o.json, "print every topic's counters as one JSON line per status period on stdout");
+  cli.add_option("--status-period", o.status_period, "seconds between status reports")
+      .in_range(0.05, 3600.0);
+  cli.add_flag("-q,--quiet", o.quiet, "no status line and no summary");
   cli.add_trust(o.trust);
   cli.add_config_file();
 }
 
 // Pairs each plain --as with the --subscribe given before it (RawOptions::as_after).
-void pair_as_with_subscribes(const CLI::App& app, Options& o) {
+void pair_as_with_subscribes(const apps::CommandLine& cli, Options& o) {
   std::vector<std::size_t> after;
   std::size_t subscribes_seen = 0;
-  for (const CLI::Option* option : app.parse_order()) {
-    if (option == o.subscribe) ++subscribes_seen;
-    if (option == o.as) after.push_back(subscribes_seen);
+  for (const apps::Option& option : cli.parse_order()) {
+    if (o.subscribe && option == *o.subscribe) ++subscribes_seen;
+    if (o.as && option == *o.as) after.push_back(subscribes_seen);
   }
   // The parse order lists one entry per value; keep only those of plain --as values.
   std::size_t k = 0;
@@ -251,7 +249,7 @@ int main(int argc, char** argv) {
   Options options;
   add_options(cli, options);
   if (auto code = cli.parse(argc, argv)) return *code;
-  pair_as_with_subscribes(cli.app(), options);
+  pair_as_with_subscribes(cli, options);
   auto plan = plan_bridge(options.raw);
   if (!plan) return cli.fail(plan.error());
 

@@ -1,8 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "camera_options.hpp"
 
-#include <CLI/CLI.hpp>
-
 #include "sim/apps/host_clock_options.hpp"
 #include "sim/imaging/image_format.hpp"
 
@@ -32,14 +30,13 @@ std::optional<std::string> describe(const apps::SensorOptions& options, const st
 }
 
 void add_clock_options(apps::CommandLine& cli, ClockToleranceOptions& o) {
-  auto& app = cli.app();
-  app.add_option("--clock-offset-ok-ms", o.offset_ok_ms,
+  cli.add_option("--clock-offset-ok-ms", o.offset_ok_ms,
                  "how far a frame's stamp may lie from its arrival before the clock check warns: the "
                  "exposure, readout and transfer time")
-      ->check(CLI::Range(0.0, 999.0));
-  app.add_option("--clock-spread-warn-ms", o.spread_warn_ms,
+      .in_range(0.0, 999.0);
+  cli.add_option("--clock-spread-warn-ms", o.spread_warn_ms,
                  "how much that may vary from frame to frame before the clock check warns")
-      ->check(CLI::Range(0.0, 999.0));
+      .in_range(0.0, 999.0);
   apps::add_host_clock_options(cli, o.host);
 }
 
@@ -57,34 +54,33 @@ std::optional<std::string> finish_clock_options(ClockToleranceOptions& o) {
 }  // namespace
 
 void add_v4l2_options(apps::CommandLine& cli, V4l2Options& o) {
-  auto& app = cli.app();
   cli.add_config_file();
-  app.add_option("device", o.config.device, "video device node");
+  cli.add_option("device", o.config.device, "video device node");
   cli.add_stream("--stream", o.config.stream, "SIM stream name");
-  app.add_option("--format", o.format, "device format: auto, YUYV, UYVY, MJPG, GREY, Y16, ...");
-  app.add_option("--width", o.config.format.width, "frame width (0: the device's current one)");
-  app.add_option("--height", o.config.format.height, "frame height (0: the device's current one)");
-  app.add_option("--fps", o.config.format.fps, "frame rate to request (0: the device's current one)")
-      ->check(CLI::Range(0.0, 1000.0));
-  app.add_option("--output", o.output, "published format: bgr8, rgb8, mono8 or raw")
-      ->check(CLI::IsMember({"bgr8", "rgb8", "mono8", "raw"}));
-  app.add_option("--ctrl,--controls", o.controls,
+  cli.add_option("--format", o.format, "device format: auto, YUYV, UYVY, MJPG, GREY, Y16, ...");
+  cli.add_option("--width", o.config.format.width, "frame width (0: the device's current one)");
+  cli.add_option("--height", o.config.format.height, "frame height (0: the device's current one)");
+  cli.add_option("--fps", o.config.format.fps, "frame rate to request (0: the device's current one)")
+      .in_range(0.0, 1000.0);
+  cli.add_option("--output", o.output, "published format: bgr8, rgb8, mono8 or raw")
+      .one_of({"bgr8", "rgb8", "mono8", "raw"});
+  cli.add_option("--ctrl,--controls", o.controls,
                  "V4L2 control as name=value, repeatable (see --list-controls)");
-  app.add_option("--buffers", o.config.buffers, "number of mmap buffers")->check(CLI::Range(2, 32));
-  app.add_option("--timestamps", o.timestamps, "frame stamps: device or receive")
-      ->check(CLI::IsMember({"device", "receive"}));
-  app.add_option("--time-offset-ns", o.config.time_offset_ns, "added to every frame stamp");
-  app.add_option("--frame-timeout-ms", o.frame_timeout_ms,
+  cli.add_option("--buffers", o.config.buffers, "number of mmap buffers").in_range(2, 32);
+  cli.add_option("--timestamps", o.timestamps, "frame stamps: device or receive")
+      .one_of({"device", "receive"});
+  cli.add_option("--time-offset-ns", o.config.time_offset_ns, "added to every frame stamp");
+  cli.add_option("--frame-timeout-ms", o.frame_timeout_ms,
                  "restart the stream after this long without a frame");
-  app.add_option("--retry-period-ms", o.retry_period_ms,
+  cli.add_option("--retry-period-ms", o.retry_period_ms,
                  "between attempts to reopen a lost device");
-  app.add_flag("--checksum", o.config.checksum, "publish an XXH3 checksum with every frame");
+  cli.add_flag("--checksum", o.config.checksum, "publish an XXH3 checksum with every frame");
   add_clock_options(cli, o.clock);
-  app.add_flag("--list-formats", o.list_formats, "list the device's formats, sizes and rates");
-  app.add_flag("--list-controls", o.list_controls, "list the device's controls");
+  cli.add_flag("--list-formats", o.list_formats, "list the device's formats, sizes and rates");
+  cli.add_flag("--list-controls", o.list_controls, "list the device's controls");
   apps::add_sensor_options(cli, o.sensor, apps::SensorKind::camera);
   cli.add_placement(o.placement);
-  app.add_flag("-q,--quiet", o.quiet, "no status line and no summary");
+  cli.add_flag("-q,--quiet", o.quiet, "no status line and no summary");
 }
 
 std::optional<std::string> finish_v4l2_options(V4l2Options& o) {
@@ -110,40 +106,39 @@ std::optional<std::string> finish_v4l2_options(V4l2Options& o) {
 }
 
 void add_aravis_options(apps::CommandLine& cli, AravisOptions& o) {
-  auto& app = cli.app();
   cli.add_config_file();
-  app.add_option("device", o.config.device_id,
+  cli.add_option("device", o.config.device_id,
                  "camera id, serial number or IP (empty: the first camera)");
   cli.add_stream("--stream", o.config.stream, "SIM stream name");
-  app.add_option("--pixel-format", o.config.pixel_format,
+  cli.add_option("--pixel-format", o.config.pixel_format,
                  "GenICam pixel format (Mono8, BayerRG8, ...; empty: the camera's)");
-  app.add_option("--output", o.output, "published format: bgr8, rgb8, mono8 or raw")
-      ->check(CLI::IsMember({"bgr8", "rgb8", "mono8", "raw"}));
-  app.add_option("--fps", o.config.fps, "acquisition frame rate (0: the camera's)")
-      ->check(CLI::Range(0.0, 10000.0));
-  app.add_option("--exposure,--exposure-us", o.config.exposure_us,
+  cli.add_option("--output", o.output, "published format: bgr8, rgb8, mono8 or raw")
+      .one_of({"bgr8", "rgb8", "mono8", "raw"});
+  cli.add_option("--fps", o.config.fps, "acquisition frame rate (0: the camera's)")
+      .in_range(0.0, 10000.0);
+  cli.add_option("--exposure,--exposure-us", o.config.exposure_us,
                  "exposure time in microseconds (0: the camera's)")
-      ->check(CLI::NonNegativeNumber);
-  app.add_option("--gain", o.config.gain, "gain in camera units (negative: the camera's)");
-  app.add_option("--roi", o.roi, "region of interest: X Y WIDTH HEIGHT")->expected(4);
-  app.add_option("--packet-size", o.config.packet_size,
+      .non_negative();
+  cli.add_option("--gain", o.config.gain, "gain in camera units (negative: the camera's)");
+  cli.add_option("--roi", o.roi, "region of interest: X Y WIDTH HEIGHT").expected(4);
+  cli.add_option("--packet-size", o.config.packet_size,
                  "GigE packet size in bytes (0: Aravis negotiates)")
-      ->check(CLI::Range(0, 16000));
-  app.add_flag("--packet-socket,!--no-packet-socket", o.config.packet_socket,
+      .in_range(0, 16000);
+  cli.add_flag("--packet-socket,!--no-packet-socket", o.config.packet_socket,
                "receive through AF_PACKET (needs CAP_NET_RAW); --no-packet-socket: a plain UDP "
                "socket that drops more");
-  app.add_option("--feature,--features", o.features,
+  cli.add_option("--feature,--features", o.features,
                  "any GenICam feature as Name=value, repeatable, applied in order");
-  app.add_option("--buffers", o.config.buffers, "buffers in the pool")->check(CLI::Range(2, 64));
-  app.add_flag("--device-timestamps", o.config.device_timestamps,
+  cli.add_option("--buffers", o.config.buffers, "buffers in the pool").in_range(2, 64);
+  cli.add_flag("--device-timestamps", o.config.device_timestamps,
                "stamp frames with the camera's clock (enable PTP on the camera)");
-  app.add_option("--retry-period-ms", o.retry_period_ms, "between attempts to find a lost camera");
+  cli.add_option("--retry-period-ms", o.retry_period_ms, "between attempts to find a lost camera");
   add_clock_options(cli, o.clock);
-  app.add_flag("--checksum", o.config.checksum, "publish an XXH3 checksum with every frame");
-  app.add_flag("--list", o.list, "list the cameras Aravis finds and exit");
+  cli.add_flag("--checksum", o.config.checksum, "publish an XXH3 checksum with every frame");
+  cli.add_flag("--list", o.list, "list the cameras Aravis finds and exit");
   apps::add_sensor_options(cli, o.sensor, apps::SensorKind::camera);
   cli.add_placement(o.placement);
-  app.add_flag("-q,--quiet", o.quiet, "no status line and no summary");
+  cli.add_flag("-q,--quiet", o.quiet, "no status line and no summary");
 }
 
 std::optional<std::string> finish_aravis_options(AravisOptions& o) {

@@ -3,8 +3,6 @@
 // The work is the stream library's (sim/hesai/live_receiver.hpp: socket, batched receive, model
 // detection, silence; LidarStream: decode straight into shared memory, the path sim_replay_pcap
 // takes too); this program is its command line, its messages and its exit code.
-#include <CLI/CLI.hpp>
-
 #include <chrono>
 #include <cstdio>
 #include <memory>
@@ -42,26 +40,25 @@ struct Options {
 };
 
 void add_options(sim::apps::CommandLine& cli, Options& o) {
-  CLI::App& app = cli.app();
   // Relative file names in a config file are taken relative to the file's folder.
   cli.add_config_file({"calibration", "firetimes"});
   sim::apps::add_hesai_stream_options(cli, o.stream);
-  sim::apps::add_receive_options(cli, o.receive, sim::lidar::IpVersions::v4_and_v6, [&o](CLI::App& a) {
-    a.add_option("--port", o.port, "UDP port the sensor sends to; 0 picks a free one")->check(CLI::Range(0, 65535));
+  sim::apps::add_receive_options(cli, o.receive, sim::lidar::IpVersions::v4_and_v6, [&o](sim::apps::CommandLine& ports) {
+    ports.add_option("--port", o.port, "UDP port the sensor sends to; 0 picks a free one").in_range(0, 65535);
   });
-  app.add_flag("--calibration-from-sensor", o.sensor.calibration_from_sensor,
+  cli.add_flag("--calibration-from-sensor", o.sensor.calibration_from_sensor,
                "fetch the unit's angle-correction file from the sensor over PTC (TCP) at start, "
                "check it and cache it in the --calibration file [~/.cache/sim/hesai-<ip>.csv]; "
                "when the sensor does not deliver it, the cached file is used with a warning");
-  app.add_option("--sensor-ip", o.sensor.sensor_ip,
+  cli.add_option("--sensor-ip", o.sensor.sensor_ip,
                  "the sensor's address or name for --calibration-from-sensor and its clock [--source, "
                  "else 192.168.1.201]")
-      ->type_name("ADDR|NAME");
-  app.add_option("--ptc-port", o.sensor.ptc_port, "the sensor's PTC port")->check(CLI::Range(1, 65535));
-  app.add_option("--ptc-timeout", o.sensor.ptc_timeout,
+      .type_name("ADDR|NAME");
+  cli.add_option("--ptc-port", o.sensor.ptc_port, "the sensor's PTC port").in_range(1, 65535);
+  cli.add_option("--ptc-timeout", o.sensor.ptc_timeout,
                  "seconds the whole calibration download, or one reading of the sensor's clock, "
                  "may take")
-      ->check(CLI::Range(0.01, 60.0));
+      .in_range(0.01, 60.0);
   sim::apps::add_clock_poll_option(cli, o.sensor.clock_poll_seconds);
   sim::apps::add_output_options(
       cli, o.receive, "print one line of counters on exit: summary frames=… packets=… lost=… malformed=…");

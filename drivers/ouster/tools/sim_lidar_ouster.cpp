@@ -3,7 +3,6 @@
 // frame per rotation. The work is the stream library's (sim/ouster/live_receiver.hpp: sockets,
 // batched receive, silence; LidarStream: decode straight into shared memory, the path
 // sim_replay_pcap takes too); this program is its command line, its messages and its exit code.
-#include <CLI/CLI.hpp>
 #include <sys/epoll.h>
 #include <sys/eventfd.h>
 #include <unistd.h>
@@ -48,47 +47,44 @@ struct Options {
 };
 
 void add_options(sim::apps::CommandLine& cli, Options& o) {
-  CLI::App& app = cli.app();
   cli.add_config_file({"calibration"});
   sim::apps::add_ouster_stream_options(cli, o.stream);
-  sim::apps::add_receive_options(cli, o.receive, sim::lidar::IpVersions::v4, [&o](CLI::App& a) {
-    a.add_option("--lidar-port,--port", o.lidar_port,
-                 "UDP port of the lidar packets [the metadata's, 7502]; 0 picks a free one")
-        ->check(CLI::Range(0, 65535));
-    a.add_option("--imu-port", o.imu_port, "UDP port of the IMU packets [the metadata's, 7503]; 0 picks a free one")
-        ->check(CLI::Range(0, 65535));
+  sim::apps::add_receive_options(cli, o.receive, sim::lidar::IpVersions::v4, [&o](sim::apps::CommandLine& ports) {
+    ports.add_option("--lidar-port,--port", o.lidar_port,
+                     "UDP port of the lidar packets [the metadata's, 7502]; 0 picks a free one")
+        .in_range(0, 65535);
+    ports.add_option("--imu-port", o.imu_port, "UDP port of the IMU packets [the metadata's, 7503]; 0 picks a free one")
+        .in_range(0, 65535);
   });
-  app.add_flag("--metadata-from-sensor", o.metadata_from_sensor,
+  cli.add_flag("--metadata-from-sensor", o.metadata_from_sensor,
                "fetch the metadata from the sensor's HTTP API at start, check it and cache it in "
                "the --calibration file [~/.cache/sim/ouster-<ip>.json]; when the sensor does not "
                "deliver it, the cached file is used with a warning");
-  app.add_option("--sensor-ip", o.sensor_ip,
+  cli.add_option("--sensor-ip", o.sensor_ip,
                  "the sensor's address or name (os-122.local) for --metadata-from-sensor [--source]")
-      ->type_name("ADDR|NAME")
-      ->check(sim::apps::validator(sim::lidar::host_problem, "ADDR|NAME"));  // a name resolves at connect
-  app.add_option("--http-port", o.http_port, "the sensor's HTTP port")->check(CLI::Range(1, 65535));
-  app.add_option("--http-timeout", o.http_timeout,
+      .type_name("ADDR|NAME")
+      .check(sim::lidar::host_problem);  // a name resolves at connect
+  cli.add_option("--http-port", o.http_port, "the sensor's HTTP port").in_range(1, 65535);
+  cli.add_option("--http-timeout", o.http_timeout,
                  "seconds the metadata download, or one reading of the sensor's clock, may take")
-      ->check(CLI::Range(0.01, 60.0));
+      .in_range(0.01, 60.0);
   sim::apps::add_clock_poll_option(cli, o.clock_poll_seconds);
-  app.add_option("--tai-correction", o.tai_correction,
+  cli.add_option("--tai-correction", o.tai_correction,
                  "subtract TAI - UTC from the sensor's stamps (a PTP master serving TAI): 'auto' "
                  "takes the sensor's current_utc_offset while it reports the PTP timescale with a "
                  "valid offset (needs the clock asked about), or give the seconds (37); the "
                  "stream's clock record says it was done")
-      ->type_name("auto|SECONDS")
-      ->check(sim::apps::validator(
-          [](const std::string& v) -> std::string {
-            if (v == "auto") return {};
-            try {
-              std::size_t used = 0;
-              const double seconds = std::stod(v, &used);
-              if (used == v.size() && seconds >= -1000 && seconds <= 1000) return {};
-            } catch (...) {
-            }
-            return "'" + v + "' is neither auto nor seconds between -1000 and 1000 (37 for TAI today)";
-          },
-          "auto|SECONDS"));
+      .type_name("auto|SECONDS")
+      .check([](const std::string& v) -> std::string {
+        if (v == "auto") return {};
+        try {
+          std::size_t used = 0;
+          const double seconds = std::stod(v, &used);
+          if (used == v.size() && seconds >= -1000 && seconds <= 1000) return {};
+        } catch (...) {
+        }
+        return "'" + v + "' is neither auto nor seconds between -1000 and 1000 (37 for TAI today)";
+      });
   sim::apps::add_output_options(cli, o.receive, "print one line of counters on exit: summary frames=… packets=…");
 }
 

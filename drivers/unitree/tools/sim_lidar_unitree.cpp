@@ -3,8 +3,8 @@
 // (sim/unitree/live_receiver.hpp: the UDP socket or the serial port; LidarStream: decode straight
 // into shared memory, the path the replays take too); this program is its command line, its
 // messages and its exit code.
-#include <CLI/CLI.hpp>
 #include <cstdio>
+#include <exception>
 #include <fstream>
 #include <string>
 #include <utility>
@@ -33,22 +33,21 @@ struct Options {
 };
 
 void add_options(sim::apps::CommandLine& cli, Options& o) {
-  auto& app = cli.app();
   sim::apps::add_unitree_stream_options(cli, o.stream);
-  auto* udp_port = app.add_option("--udp-port,--bind-port", o.source.network.data_port,
-                                  "local UDP port the lidar sends to (0: any free port, printed on stdout)");
-  udp_port->each([&o](const std::string&) { o.udp_port_given = true; });
-  app.add_option("--bind-address", o.source.network.bind, "local address to listen on");
-  app.add_option("--lidar-ip", o.source.network.source,
+  cli.add_option("--udp-port,--bind-port", o.source.network.data_port,
+                 "local UDP port the lidar sends to (0: any free port, printed on stdout)")
+      .each([&o](const std::string&) { o.udp_port_given = true; });
+  cli.add_option("--bind-address", o.source.network.bind, "local address to listen on");
+  cli.add_option("--lidar-ip", o.source.network.source,
                  "accept datagrams only from this address (L2 factory default 192.168.1.62)");
-  app.add_option("--serial", o.source.serial_device, "serial device instead of UDP");
-  app.add_option("--baud", o.source.baud, "serial baud rate (0: 2000000 for L1, 4000000 for L2)");
-  app.add_option("--record", o.record_path,
+  cli.add_option("--serial", o.source.serial_device, "serial device instead of UDP");
+  cli.add_option("--baud", o.source.baud, "serial baud rate (0: 2000000 for L1, 4000000 for L2)");
+  cli.add_option("--record", o.record_path,
                  "also write every byte received, as received, to FILE (replay it with sim_replay_serial)");
   sim::apps::add_host_clock_options(cli, o.host_clock);
-  app.add_flag("--summary", o.summary,
+  cli.add_flag("--summary", o.summary,
                "print one line of counters on exit: summary frames=… packets=… lost=… malformed=… imu=…");
-  app.add_flag("-q,--quiet", o.quiet, "no status line");
+  cli.add_flag("-q,--quiet", o.quiet, "no status line");
 }
 
 // --record FILE, opened (truncated) when given.

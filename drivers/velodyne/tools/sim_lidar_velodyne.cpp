@@ -4,7 +4,6 @@
 // stream library's (sim/velodyne/live_receiver.hpp: sockets, batched receive, model detection,
 // silence; LidarStream: decode straight into shared memory, the path sim_replay_pcap takes
 // too); this program is its command line, its messages and its exit code.
-#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
 #include <optional>
@@ -31,12 +30,12 @@ struct Options {
 void add_options(sim::apps::CommandLine& cli, Options& o) {
   cli.add_config_file({"calibration"});
   sim::apps::add_velodyne_stream_options(cli, o.stream);
-  sim::apps::add_receive_options(cli, o.receive, sim::lidar::IpVersions::v4, [&o](CLI::App& app) {
-    app.add_option("--port", o.port, "UDP port of the data packets; 0 picks a free one")->check(CLI::Range(0, 65535));
-    app.add_option("--position-port", o.position_port,
-                   "UDP port of the position packets (GPRMC, PPS); 0 picks a free one")
-        ->check(CLI::Range(0, 65535));
-    app.add_flag("--no-position", o.no_position, "do not listen for position packets");
+  sim::apps::add_receive_options(cli, o.receive, sim::lidar::IpVersions::v4, [&o](sim::apps::CommandLine& ports) {
+    ports.add_option("--port", o.port, "UDP port of the data packets; 0 picks a free one").in_range(0, 65535);
+    ports.add_option("--position-port", o.position_port,
+                     "UDP port of the position packets (GPRMC, PPS); 0 picks a free one")
+        .in_range(0, 65535);
+    ports.add_flag("--no-position", o.no_position, "do not listen for position packets");
   });
   sim::apps::add_output_options(cli, o.receive,
                                 "print one line of counters on exit: summary frames=… packets=… lost=…");

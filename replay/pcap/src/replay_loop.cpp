@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "replay_loop.hpp"
 
-#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
 #include <optional>
@@ -20,33 +19,31 @@ CaptureOptions ReplayArgs::capture_options() const {
 }
 
 void add_replay_options(apps::CommandLine& cli, ReplayArgs& r) {
-  auto& app = cli.app();
-  app.add_option("file", r.file, "capture file (.pcap or .pcapng; Ethernet, VLAN, SLL, raw IP)")
-      ->required()
-      ->type_name("FILE");
-  app.add_option("--port", r.port, "replay only UDP datagrams to or from this port (empty: all)")
-      ->type_name("N");
-  app.add_option("--filter", r.filter,
+  cli.add_option("file", r.file, "capture file (.pcap or .pcapng; Ethernet, VLAN, SLL, raw IP)")
+      .required()
+      .type_name("FILE");
+  cli.add_option("--port", r.port, "replay only UDP datagrams to or from this port (empty: all)")
+      .type_name("N");
+  cli.add_option("--filter", r.filter,
                  "extra BPF filter in tcpdump syntax, e.g. \"src host 192.168.1.201\"")
-      ->type_name("EXPR");
-  auto* rate = app.add_option("--rate", r.rate, "speed factor: 2 replays twice as fast")
-                   ->check(CLI::PositiveNumber);
-  app.add_flag("--max-rate", r.max_rate, "as fast as possible, no pacing")->excludes(rate);
-  app.add_flag("--loop", r.loop,
+      .type_name("EXPR");
+  const auto rate = cli.add_option("--rate", r.rate, "speed factor: 2 replays twice as fast").positive();
+  cli.add_flag("--max-rate", r.max_rate, "as fast as possible, no pacing").excludes(rate);
+  cli.add_flag("--loop", r.loop,
                "start over at the end of the capture until stopped; every pass publishes the "
                "capture's whole revolutions (or scans), one sensor period apart across the wrap");
-  app.add_option("--start", r.start_s, "skip the first S seconds of the capture")
-      ->check(CLI::NonNegativeNumber)
-      ->type_name("S");
-  app.add_option("--duration", r.duration_s, "replay only D seconds of the capture (0: to the end)")
-      ->check(CLI::NonNegativeNumber)
-      ->type_name("D");
-  app.add_flag("--restamp", r.restamp,
+  cli.add_option("--start", r.start_s, "skip the first S seconds of the capture")
+      .non_negative()
+      .type_name("S");
+  cli.add_option("--duration", r.duration_s, "replay only D seconds of the capture (0: to the end)")
+      .non_negative()
+      .type_name("D");
+  cli.add_flag("--restamp", r.restamp,
                "publish stamps of the present (sensor time shifted to the replay's start) "
                "instead of the capture's; the stream then says its time base is this host's clock");
-  app.add_flag("--summary", r.summary,
+  cli.add_flag("--summary", r.summary,
                "print one line of counters at the end: summary frames=... packets=... lost=...");
-  app.add_flag("-q,--quiet", r.quiet, "no progress line");
+  cli.add_flag("-q,--quiet", r.quiet, "no progress line");
 }
 
 namespace {

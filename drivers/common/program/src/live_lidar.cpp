@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/apps/live_lidar.hpp"
 
-#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
 #include <string_view>
@@ -13,44 +12,42 @@
 namespace sim::apps {
 
 void add_receive_options(CommandLine& cli, LiveReceiveOptions& o, lidar::IpVersions versions,
-                         const std::function<void(CLI::App&)>& add_ports) {
-  CLI::App& app = cli.app();
-  const auto address = validator(
-      [versions](const std::string& text) { return lidar::address_problem(text, versions); }, "ADDR");
-  app.add_option("--bind", o.bind,
+                         const std::function<void(CommandLine&)>& add_ports) {
+  const Option::Problem address = [versions](const std::string& text) {
+    return lidar::address_problem(text, versions);
+  };
+  cli.add_option("--bind", o.bind,
                  versions == lidar::IpVersions::v4 ? "local IPv4 address to receive on"
                                                    : "local address to receive on")
-      ->type_name("ADDR")
-      ->check(address);
-  add_ports(app);
-  app.add_option("--multicast,--multicast-group", o.multicast_group, "join this multicast group")
-      ->type_name("GROUP")
-      ->check(validator(
-          [versions](const std::string& text) { return lidar::multicast_group_problem(text, versions); },
-          "GROUP"));
-  app.add_option("--source", o.source, "accept packets only from this sender address")
-      ->type_name("ADDR")
-      ->check(address);
-  app.add_option("--receive-buffer", o.receive_buffer, "SO_RCVBUF to ask for per socket, bytes")
-      ->check(CLI::Range(65536, 1 << 30));
-  app.add_option("--status-interval", o.status_interval,
+      .type_name("ADDR")
+      .check(address);
+  add_ports(cli);
+  cli.add_option("--multicast,--multicast-group", o.multicast_group, "join this multicast group")
+      .type_name("GROUP")
+      .check([versions](const std::string& text) { return lidar::multicast_group_problem(text, versions); });
+  cli.add_option("--source", o.source, "accept packets only from this sender address")
+      .type_name("ADDR")
+      .check(address);
+  cli.add_option("--receive-buffer", o.receive_buffer, "SO_RCVBUF to ask for per socket, bytes")
+      .in_range(65536, 1 << 30);
+  cli.add_option("--status-interval", o.status_interval,
                  "seconds between status lines; 0 for none [1 on a terminal, 10 otherwise]")
-      ->type_name("S")
-      ->check(CLI::NonNegativeNumber);
-  app.add_option("--silence-timeout", o.silence_timeout,
+      .type_name("S")
+      .non_negative();
+  cli.add_option("--silence-timeout", o.silence_timeout,
                  "a gap this long (s) means the sensor stopped: the next packet starts a new frame")
-      ->check(CLI::PositiveNumber);
+      .positive();
   add_host_clock_options(cli, o.host_clock);
-  app.add_option("--stamp-fallback", o.stamp_fallback,
+  cli.add_option("--stamp-fallback", o.stamp_fallback,
                  "host: while the sensor's clock is judged in error (or not judged yet), stamp frames "
                  "with their arrival on this host instead, and say so in the clock record and each "
                  "frame; back to the sensor's stamps when it is not")
-      ->check(CLI::IsMember({"off", "host"}));
+      .one_of({"off", "host"});
 }
 
 void add_output_options(CommandLine& cli, LiveReceiveOptions& o, const std::string& summary_help) {
-  cli.app().add_flag("--summary", o.summary, summary_help);
-  cli.app().add_flag("-q,--quiet", o.quiet, "no status line and no final line");
+  cli.add_flag("--summary", o.summary, summary_help);
+  cli.add_flag("-q,--quiet", o.quiet, "no status line and no final line");
 }
 
 void set_listen(lidar::UdpListen& listen, const LiveReceiveOptions& o) {
@@ -132,12 +129,11 @@ lidar::ReceiverCallbacks LiveStatus::callbacks(Text text) {
 }
 
 void add_clock_poll_option(CommandLine& cli, double& seconds) {
-  cli.app()
-      .add_option("--clock-poll-seconds", seconds,
-                  "how often to ask the sensor about its clock (source, lock, offset from master, "
-                  "grandmaster) off the frame path, when its address is known (--sensor-ip or "
-                  "--source); 0: never")
-      ->check(CLI::Range(0.0, 3600.0));
+  cli.add_option("--clock-poll-seconds", seconds,
+                 "how often to ask the sensor about its clock (source, lock, offset from master, "
+                 "grandmaster) off the frame path, when its address is known (--sensor-ip or "
+                 "--source); 0: never")
+      .in_range(0.0, 3600.0);
 }
 
 lidar::ReceiverCallbacks with_clock_tick(lidar::ReceiverCallbacks callbacks, std::function<void()> clock_tick,

@@ -1,8 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/apps/hesai_options.hpp"
 
-#include <CLI/CLI.hpp>
-
 namespace sim::apps {
 namespace {
 
@@ -15,46 +13,45 @@ std::string model_problem(const std::string& name) {
 }  // namespace
 
 void add_hesai_stream_options(CommandLine& cli, HesaiStreamOptions& o) {
-  CLI::App& app = cli.app();
   cli.add_stream("--stream", o.stream, "SIM stream to publish");
-  app.add_option("--model", o.model,
+  cli.add_option("--model", o.model,
                  "sensor model (" + std::string(hesai::model_names()) +
                      "), or auto to detect it from the first packet")
-      ->type_name("MODEL")
-      ->check(validator(model_problem, "MODEL"));
-  app.add_option("--calibration", o.calibration, "the unit's angle-correction CSV (required)")
-      ->type_name("FILE");
-  app.add_option("--firetimes", o.firetimes,
+      .type_name("MODEL")
+      .check(model_problem);
+  cli.add_option("--calibration", o.calibration, "the unit's angle-correction CSV (required)")
+      .type_name("FILE");
+  cli.add_option("--firetimes", o.firetimes,
                  "optional firing-time CSV (replaces the built-in firing times)")
-      ->type_name("FILE");
-  app.add_option("--cut-azimuth", o.cut_azimuth,
+      .type_name("FILE");
+  cli.add_option("--cut-azimuth", o.cut_azimuth,
                  "azimuth in degrees where one revolution ends and the next begins")
-      ->check(CLI::Range(0.0, 359.99));
-  app.add_option_function<float>("--min-range", [&o](float v) { o.min_range = v; },
+      .in_range(0.0, 359.99);
+  cli.add_option_function<float>("--min-range", [&o](float v) { o.min_range = v; },
                                  "drop points closer than this, metres [the model's limit]")
-      ->type_name("FLOAT")
-      ->check(CLI::NonNegativeNumber);
-  app.add_option_function<float>("--max-range", [&o](float v) { o.max_range = v; },
+      .type_name("FLOAT")
+      .non_negative();
+  cli.add_option_function<float>("--max-range", [&o](float v) { o.max_range = v; },
                                  "drop points farther than this, metres [the model's limit]")
-      ->type_name("FLOAT")
-      ->check(CLI::PositiveNumber);
-  app.add_flag("--keep-zero-distance", o.keep_zero_distance,
+      .type_name("FLOAT")
+      .positive();
+  cli.add_flag("--keep-zero-distance", o.keep_zero_distance,
                "keep firings without a return (as points at the origin)");
-  app.add_flag("--keep-identical-returns", o.keep_identical_returns,
+  cli.add_flag("--keep-identical-returns", o.keep_identical_returns,
                "multi-return: keep returns identical to the group's last one");
-  app.add_option("--dual-return-threshold", o.dual_return_threshold,
+  cli.add_option("--dual-return-threshold", o.dual_return_threshold,
                  "multi-return: drop a non-last return this close to another, metres; 0 keeps all")
-      ->check(CLI::NonNegativeNumber);
-  app.add_flag("--partial-frames", o.partial_frames,
+      .non_negative();
+  cli.add_flag("--partial-frames", o.partial_frames,
                "also publish revolutions that did not start at the cut azimuth (start, gaps, end)");
-  app.add_flag("--firetime-azimuth-compensation", o.firetime_azimuth_compensation,
+  cli.add_flag("--firetime-azimuth-compensation", o.firetime_azimuth_compensation,
                "with --firetimes: correct each point's azimuth for its firing time (Hesai SDK 2 "
                "style)");
-  app.add_option("--returns", o.returns,
+  cli.add_option("--returns", o.returns,
                  "returns per firing the stream is sized for (raised to what the packets announce)")
-      ->check(CLI::Range(1U, 3U));
-  app.add_option("--min-rpm", o.min_rpm, "lowest motor speed the stream is sized for, rpm")
-      ->check(CLI::Range(300U, 1200U));
+      .in_range(1U, 3U);
+  cli.add_option("--min-rpm", o.min_rpm, "lowest motor speed the stream is sized for, rpm")
+      .in_range(300U, 1200U);
   add_lidar_writer_options(cli, o);
 }
 

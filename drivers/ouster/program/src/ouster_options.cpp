@@ -1,8 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/apps/ouster_options.hpp"
 
-#include <CLI/CLI.hpp>
-
 namespace sim::apps {
 namespace {
 
@@ -17,27 +15,26 @@ std::optional<ouster::IntensityField> parse_intensity(const std::string& name) {
 }  // namespace
 
 void add_ouster_stream_options(CommandLine& cli, OusterStreamOptions& o) {
-  CLI::App& app = cli.app();
   cli.add_stream("--stream", o.stream, "SIM stream to publish the points on");
   cli.add_stream("--imu-stream", o.imu_stream, "SIM stream for the IMU samples [<stream>.imu]");
-  app.add_flag("--no-imu", o.no_imu, "publish no IMU stream");
-  app.add_option("--calibration,--metadata", o.calibration,
+  cli.add_flag("--no-imu", o.no_imu, "publish no IMU stream");
+  cli.add_option("--calibration,--metadata", o.calibration,
                  "the sensor's metadata JSON (what http://SENSOR/api/v1/sensor/metadata returns)")
-      ->type_name("FILE.json");
-  app.add_option("--layout", o.layout,
+      .type_name("FILE.json");
+  cli.add_option("--layout", o.layout,
                  "organized: H x W points per return, destaggered, no return at the origin; "
                  "dense: only points with a return")
-      ->check(CLI::IsMember({"organized", "dense"}));
-  app.add_option("--intensity", o.intensity,
+      .one_of({"organized", "dense"});
+  cli.add_option("--intensity", o.intensity,
                  "the channel in each point's intensity: signal, reflectivity, near-ir, or auto "
                  "(signal, reflectivity for the RNG15 profiles)")
-      ->check(CLI::IsMember({"auto", "signal", "reflectivity", "near-ir"}));
-  app.add_flag("--first-return-only", o.first_return_only, "dual-return profiles: drop the second return");
-  app.add_option("--min-range", o.min_range, "returns closer than this (m) count as none")
-      ->check(CLI::NonNegativeNumber);
-  app.add_option("--max-range", o.max_range, "returns farther than this (m) count as none; 0: no limit")
-      ->check(CLI::NonNegativeNumber);
-  app.add_flag("--partial-frames", o.partial_frames,
+      .one_of({"auto", "signal", "reflectivity", "near-ir"});
+  cli.add_flag("--first-return-only", o.first_return_only, "dual-return profiles: drop the second return");
+  cli.add_option("--min-range", o.min_range, "returns closer than this (m) count as none")
+      .non_negative();
+  cli.add_option("--max-range", o.max_range, "returns farther than this (m) count as none; 0: no limit")
+      .non_negative();
+  cli.add_flag("--partial-frames", o.partial_frames,
                "also publish frames that did not start at the first column (start, gaps)");
   add_lidar_writer_options(cli, o);
 }

@@ -1,29 +1,26 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/apps/unitree_options.hpp"
 
-#include <CLI/CLI.hpp>
-
 #include <chrono>
 
 namespace sim::apps {
 
 void add_unitree_stream_options(CommandLine& cli, UnitreeStreamOptions& o, SensorTimeOption sensor_time) {
-  CLI::App& app = cli.app();
-  app.add_option("--model", o.model, "L1 or L2 (also unitree-l1, unitree-l2)")
-      ->required()
-      ->check(validator([](const std::string& text) { return unitree::model_problem(text); }, "MODEL"));
-  cli.add_stream("--stream", o.stream, "SIM point stream, e.g. /lidar_top")->required();
+  cli.add_option("--model", o.model, "L1 or L2 (also unitree-l1, unitree-l2)")
+      .required()
+      .check([](const std::string& text) { return unitree::model_problem(text); });
+  cli.add_stream("--stream", o.stream, "SIM point stream, e.g. /lidar_top").required();
   cli.add_stream("--imu-stream", o.imu_stream, "SIM IMU stream (empty: <stream>.imu)");
-  app.add_flag("--no-imu", o.no_imu, "do not publish IMU samples");
-  app.add_option("--scan-packets", o.scan_packets, "packets per published scan (the SDKs' cloud_scan_num)")
-      ->check(CLI::Range(1U, 1000U));
+  cli.add_flag("--no-imu", o.no_imu, "do not publish IMU samples");
+  cli.add_option("--scan-packets", o.scan_packets, "packets per published scan (the SDKs' cloud_scan_num)")
+      .in_range(1U, 1000U);
   if (sensor_time == SensorTimeOption::offered) {
-    app.add_flag("--sensor-time", o.sensor_time,
+    cli.add_flag("--sensor-time", o.sensor_time,
                  "stamp frames with the L2's own clock (its packets' times) instead of the time "
                  "the bytes arrived");
   }
-  app.add_option("--range-min", o.range_min, "drop points nearer than this (m)");
-  app.add_option("--range-max", o.range_max, "drop points farther than this (m)");
+  cli.add_option("--range-min", o.range_min, "drop points nearer than this (m)");
+  cli.add_option("--range-max", o.range_max, "drop points farther than this (m)");
   add_lidar_writer_options(cli, o);
 }
 

@@ -1,8 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/apps/velodyne_options.hpp"
 
-#include <CLI/CLI.hpp>
-
 namespace sim::apps {
 namespace {
 
@@ -14,43 +12,42 @@ std::string model_problem(const std::string& name) {
 }  // namespace
 
 void add_velodyne_stream_options(CommandLine& cli, VelodyneStreamOptions& o) {
-  CLI::App& app = cli.app();
   cli.add_stream("--stream", o.stream, "SIM stream to publish");
-  app.add_option("--model", o.model,
+  cli.add_option("--model", o.model,
                  "sensor model (" + std::string(velodyne::model_names()) +
                      "), or auto to detect it from the first packet")
-      ->type_name("MODEL")
-      ->check(validator(model_problem, "MODEL"));
-  app.add_option("--calibration", o.calibration,
+      .type_name("MODEL")
+      .check(model_problem);
+  cli.add_option("--calibration", o.calibration,
                  "the sensor's calibration: ros-drivers/velodyne YAML (nominal tables in "
                  "/usr/share/sim/velodyne) or an HDL-64E's db.xml (required)")
-      ->type_name("FILE");
-  app.add_option("--cut-azimuth", o.cut_azimuth, "azimuth in degrees where one revolution ends and the next begins")
-      ->check(CLI::Range(0.0, 359.99));
-  app.add_option_function<float>("--min-range", [&o](float v) { o.min_range = v; },
+      .type_name("FILE");
+  cli.add_option("--cut-azimuth", o.cut_azimuth, "azimuth in degrees where one revolution ends and the next begins")
+      .in_range(0.0, 359.99);
+  cli.add_option_function<float>("--min-range", [&o](float v) { o.min_range = v; },
                                  "drop points closer than this, metres [0.3]")
-      ->type_name("FLOAT")
-      ->check(CLI::NonNegativeNumber);
-  app.add_option_function<float>("--max-range", [&o](float v) { o.max_range = v; },
+      .type_name("FLOAT")
+      .non_negative();
+  cli.add_option_function<float>("--max-range", [&o](float v) { o.max_range = v; },
                                  "drop points farther than this, metres [300]")
-      ->type_name("FLOAT")
-      ->check(CLI::PositiveNumber);
-  app.add_option("--returns", o.returns,
+      .type_name("FLOAT")
+      .positive();
+  cli.add_option("--returns", o.returns,
                  "dual-return packets: both, last (even blocks) or strongest (odd blocks)")
-      ->check(CLI::IsMember({"both", "last", "strongest"}));
-  app.add_flag("--keep-identical-returns", o.keep_identical_returns,
+      .one_of({"both", "last", "strongest"});
+  cli.add_flag("--keep-identical-returns", o.keep_identical_returns,
                "dual return: keep the second block's point where it repeats the first");
-  app.add_option("--interpolation", o.interpolation,
+  cli.add_option("--interpolation", o.interpolation,
                  "azimuth between blocks: firing-time (the manuals' tables) or nebula (as nebula's "
                  "reference clouds)")
-      ->check(CLI::IsMember({"firing-time", "nebula"}));
-  app.add_option("--cut-by", o.cut_by,
+      .one_of({"firing-time", "nebula"});
+  cli.add_option("--cut-by", o.cut_by,
                  "point: each point by its own azimuth; packet: whole packets as nebula cuts")
-      ->check(CLI::IsMember({"point", "packet"}));
-  app.add_flag("--partial-frames", o.partial_frames,
+      .one_of({"point", "packet"});
+  cli.add_flag("--partial-frames", o.partial_frames,
                "also publish revolutions that did not start at the cut azimuth (start, gaps, end)");
-  app.add_option("--min-rpm", o.min_rpm, "lowest motor speed the stream is sized for, rpm")
-      ->check(CLI::Range(300U, 1200U));
+  cli.add_option("--min-rpm", o.min_rpm, "lowest motor speed the stream is sized for, rpm")
+      .in_range(300U, 1200U);
   add_lidar_writer_options(cli, o);
 }
 

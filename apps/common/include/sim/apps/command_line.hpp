@@ -8,10 +8,13 @@
 //
 // CLI11 stays out of this header (and every other header): CLI11 2.x is header-only, and each
 // translation unit that includes <CLI/CLI.hpp> compiles its validators, formatter and parser again
-// (docs/build-times.md). A .cpp that adds its options through app() includes <CLI/CLI.hpp> itself;
-// scripts/check-cli11-headers.py (ctest cli11_stays_out_of_headers) keeps it so.
+// (docs/build-times.md). Programs add their options through add_option() and the verbs of
+// Option, which keep CLI11 in command_line.cpp alone; a .cpp that still adds options through
+// app() includes <CLI/CLI.hpp> itself. scripts/check-cli11-headers.py (ctest
+// cli11_stays_out_of_headers) keeps CLI11 out of the headers.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -46,6 +49,49 @@ CLI::Validator validator(std::function<std::string(const std::string&)> problem,
 
 class YamlConfig;
 
+// An option a CommandLine added, refined without CLI11 in the caller. Each verb returns the
+// option, so they chain:
+//   cli.add_option("--port", port, "UDP port; 0 picks a free one").in_range(0, 65535);
+// The checks are CLI11's own: --help and the usage errors say what they said when programs called
+// CLI11 themselves.
+class Option {
+ public:
+  // What is wrong with a value (a sentence), empty when nothing.
+  using Problem = std::function<std::string(const std::string&)>;
+
+  explicit Option(CLI::Option* option) noexcept : option_(option) {}
+
+  // The option must be given (on the command line or in the config file).
+  Option& required();
+  // How --help names the value: "FILE" in "--calibration FILE".
+  Option& type_name(std::string_view name);
+  // A number from `low` to `high`, both included (CLI::Range). --help shows the type of the bounds
+  // ("UINT in [1 - 1000]"), so T is the bounds' type: int, unsigned, std::uint64_t or double.
+  template <class T>
+  Option& in_range(T low, T high);
+  // A number above 0 (CLI::PositiveNumber); 0 or above (CLI::NonNegativeNumber).
+  Option& positive();
+  Option& non_negative();
+  // One of these words (CLI::IsMember; --help shows "{a,b}").
+  Option& one_of(std::vector<std::string> words);
+  // A value `problem` finds nothing wrong with; `shown`, when not empty, follows the type in
+  // --help ("FLOAT:RATE").
+  Option& check(Problem problem, std::string_view shown = {});
+  // Given together with `other`: a usage error (either way round).
+  Option& excludes(const Option& other);
+  // Exactly `count` values (a list: --roi X Y WIDTH HEIGHT).
+  Option& expected(int count);
+  // `seen` gets each value given (on the command line or in the config file) while parse()
+  // checks the values.
+  Option& each(std::function<void(const std::string&)> seen);
+
+  // The same option (CommandLine::parse_order).
+  bool operator==(const Option&) const = default;
+
+ private:
+  CLI::Option* option_;
+};
+
 class CommandLine {
  public:
   // `tool` prefixes every message ("sim_echo"); `description` is the first paragraph of --help.
@@ -54,20 +100,32 @@ class CommandLine {
   CommandLine(const CommandLine&) = delete;  // options point into it
   CommandLine& operator=(const CommandLine&) = delete;
 
-  // The parser, to add a program's own options (the caller includes <CLI/CLI.hpp>).
+  // The parser, for what add_option() and Option do not offer (the caller includes
+  // <CLI/CLI.hpp>, about 10 CPU-seconds more to compile).
   CLI::App& app() noexcept { return *app_; }
   const std::string& tool() const noexcept { return tool_; }
 
   // A stream name option ("--stream") or positional ("stream"), checked by the core's rules.
-  CLI::Option* add_stream(std::string_view name, std::string& value, std::string_view help);
+  Option add_stream(std::string_view name, std::string& value, std::string_view help);
   // Several stream names (a positional list), each checked the same way.
-  CLI::Option* add_streams(std::string_view name, std::vector<std::string>& values,
-                           std::string_view help);
+  Option add_streams(std::string_view name, std::vector<std::string>& values,
+                     std::string_view help);
+  // An option ("--count,-n") or a positional ("file") that sets `value`; --help shows the value's
+  // type and default ("--count INT=5"). command_line.cpp instantiates it for the types programs
+  // use: std::string, int, unsigned, std::uint16_t, std::int64_t, std::uint64_t, float, double,
+  // std::optional of int, std::uint16_t and double, and std::vector of std::string and int.
+  template <class T>
+  Option add_option(std::string_view name, T& value, std::string_view help);
+  // An option that calls `set` with its value when given, and shows no default in --help (the
+  // help text says what not giving it means). Instantiated for float.
+  template <class T>
+  Option add_option_function(std::string_view name, std::function<void(const T&)> set,
+                             std::string_view help);
   // Options that need no CLI11 in the caller (a translation unit that includes <CLI/CLI.hpp>
   // costs about 10 CPU-seconds at -O3): a flag, and a text value that `problem` checks (it returns
   // what is wrong, empty when nothing), shown as `type_name`. An empty `group`: the default one.
-  void add_flag(std::string_view name, bool& value, std::string_view help,
-                std::string_view group = {});
+  Option add_flag(std::string_view name, bool& value, std::string_view help,
+                  std::string_view group = {});
   void add_text(std::string_view name, std::string& value, std::string_view help,
                 std::string_view type_name,
                 std::function<std::string(const std::string&)> problem = {},
@@ -95,6 +153,9 @@ class CommandLine {
   // Parses; an exit code when the program should end now (--help: 0; a bad argument: 2 after one
   // sentence on stderr), nothing when it should run.
   [[nodiscard]] std::optional<int> parse(int argc, char** argv);
+  // After parse(): the options given on the command line (not in the config file), in the order
+  // given, one entry per value: for options whose meaning depends on their order.
+  std::vector<Option> parse_order() const;
 
   // Prints "tool: message" and returns kExitFailure (run-time failure) or kExitUsage.
   int fail(std::string_view message) const;

@@ -3,7 +3,7 @@
 // share on the command line, so each is only its family's options and messages:
 //
 //   LiveReceiveOptions receive;  receive.receive_buffer = 16 << 20;      // the family's default
-//   add_receive_options(cli, receive, IpVersions::v4, [&](CLI::App& app) { …its --port… });
+//   add_receive_options(cli, receive, IpVersions::v4, [&](CommandLine& ports) { …its --port… });
 //   … the family's own options …
 //   add_output_options(cli, receive, "print one line of counters on exit: …");
 //   set_network(network, receive);                                       // its NetworkConfig
@@ -43,7 +43,7 @@ struct LiveReceiveOptions {
 // --receive-buffer, --status-interval, --silence-timeout, --ptp4l-socket and --stamp-fallback;
 // addresses are checked as `versions`.
 void add_receive_options(CommandLine& cli, LiveReceiveOptions& options, lidar::IpVersions versions,
-                         const std::function<void(CLI::App&)>& add_ports);
+                         const std::function<void(CommandLine&)>& add_ports);
 // Adds --summary (with `summary_help`) and -q,--quiet: the last options of each live program.
 void add_output_options(CommandLine& cli, LiveReceiveOptions& options, const std::string& summary_help);
 
