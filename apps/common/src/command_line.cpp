@@ -4,8 +4,10 @@
 #include <CLI/CLI.hpp>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 
 #include "sim/apps/yaml_config.hpp"
 #include "sim/names.hpp"
@@ -84,13 +86,32 @@ template Option& Option::in_range<unsigned>(unsigned, unsigned);
 template Option& Option::in_range<std::uint64_t>(std::uint64_t, std::uint64_t);
 template Option& Option::in_range<double>(double, double);
 
+namespace {
+
+// CLI11 2.1's PositiveNumber and NonNegativeNumber are ranges up to the largest double and print
+// it in full (309 digits) when they refuse a value; these say the same in a sentence. The
+// description ("POSITIVE") follows the type in --help, as CLI11's did.
+CLI::Validator number_above(bool zero_allowed) {
+  return CLI::Validator(
+      [zero_allowed](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        const bool number = !text.empty() && end == text.c_str() + text.size() && std::isfinite(value);
+        if (number && (zero_allowed ? value >= 0 : value > 0)) return {};
+        return "Value " + text + (zero_allowed ? " is not 0 or more" : " is not above 0");
+      },
+      zero_allowed ? "NONNEGATIVE" : "POSITIVE");
+}
+
+}  // namespace
+
 Option& Option::positive() {
-  option_->check(CLI::PositiveNumber);
+  option_->check(number_above(false));
   return *this;
 }
 
 Option& Option::non_negative() {
-  option_->check(CLI::NonNegativeNumber);
+  option_->check(number_above(true));
   return *this;
 }
 
