@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <optional>
 #include <string>
 
@@ -20,11 +21,8 @@ namespace sim::testing {
 
 enum class Multicast { off, on };
 
-// Moves the calling process into a new network namespace and brings its loopback up; with
-// Multicast::on, 224.0.0.0/4 is routed through loopback too (DDS discovery needs it). Call it
-// first thing in main(), before any thread exists: unshare() moves only the calling thread, and
-// children inherit its namespace. Returns why it could not (tests skip with that sentence).
-inline std::optional<std::string> enter_private_network(Multicast multicast) {
+// The namespace and loopback of enter_private_network(); why not, when it cannot.
+inline std::optional<std::string> enter_private_network_or_say_why(Multicast multicast) {
   if (unshare(CLONE_NEWNET) != 0) {
     return "cannot create a network namespace (needs root or CAP_SYS_ADMIN)";
   }
@@ -54,6 +52,22 @@ inline std::optional<std::string> enter_private_network(Multicast multicast) {
     if (ioctl(fd, SIOCADDRT, &route) != 0) failure = "cannot route multicast through loopback";
   }
   close(fd);
+  return failure;
+}
+
+// Moves the calling process into a new network namespace and brings its loopback up; with
+// Multicast::on, 224.0.0.0/4 is routed through loopback too (DDS discovery needs it). Call it
+// first thing in main(), before any thread exists: unshare() moves only the calling thread, and
+// children inherit its namespace. Returns why it could not (tests skip with that sentence), except
+// where a skip would hide them: with SIM_REQUIRE_PRIVATE_NETWORK set (scripts/test.sh sets it when
+// it runs as root, as CI does) the program ends with that sentence and exit code 1.
+inline std::optional<std::string> enter_private_network(Multicast multicast) {
+  std::optional<std::string> failure = enter_private_network_or_say_why(multicast);
+  if (failure && std::getenv("SIM_REQUIRE_PRIVATE_NETWORK") != nullptr) {
+    std::fprintf(stderr, "%s; SIM_REQUIRE_PRIVATE_NETWORK is set, so this is a failure, not a skip\n",
+                 failure->c_str());
+    std::exit(1);
+  }
   return failure;
 }
 
