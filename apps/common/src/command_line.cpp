@@ -207,24 +207,33 @@ Option CommandLine::add_flag(std::string_view name, bool& value, std::string_vie
   return Option(option);
 }
 
+namespace {
+
+// add_text and add_number: one option whose text `problem` checks, shown as `type_name`.
+template <class T>
+void add_checked(CLI::App& app, std::string_view name, T& value, std::string_view help,
+                 std::string_view type_name, std::function<std::string(const std::string&)> problem,
+                 std::string_view group) {
+  auto* option =
+      app.add_option(std::string(name), value, std::string(help))->type_name(std::string(type_name));
+  if (problem) option->check(validator(std::move(problem), std::string(type_name)));
+  if (!group.empty()) option->group(std::string(group));
+}
+
+}  // namespace
+
 void CommandLine::add_text(std::string_view name, std::string& value, std::string_view help,
                            std::string_view type_name,
                            std::function<std::string(const std::string&)> problem,
                            std::string_view group) {
-  auto* option = app_->add_option(std::string(name), value, std::string(help))
-                     ->type_name(std::string(type_name));
-  if (problem) option->check(validator(std::move(problem), std::string(type_name)));
-  if (!group.empty()) option->group(std::string(group));
+  add_checked(*app_, name, value, help, type_name, std::move(problem), group);
 }
 
 void CommandLine::add_number(std::string_view name, std::optional<double>& value,
                              std::string_view help, std::string_view type_name,
                              std::function<std::string(const std::string&)> problem,
                              std::string_view group) {
-  auto* option = app_->add_option(std::string(name), value, std::string(help))
-                     ->type_name(std::string(type_name));
-  if (problem) option->check(validator(std::move(problem), std::string(type_name)));
-  if (!group.empty()) option->group(std::string(group));
+  add_checked(*app_, name, value, help, type_name, std::move(problem), group);
 }
 
 void CommandLine::add_config_file(std::vector<std::string> path_options) {
