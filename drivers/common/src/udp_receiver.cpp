@@ -378,13 +378,13 @@ struct UdpReceiver::Impl {
                       "another " + port.option + ".");
       }
       return failed("cannot bind to " + listen.bind + ":" + number + ": " + std::strerror(error) +
-                    "; check --bind and " + port.option + ".");
+                    "; check " + listen.bind_option + " and " + port.option + ".");
     }
     if (group && !join_group(fd.get(), *group, local_ip)) {
       const std::string where = is_unspecified(local_ip) ? "" : " on the interface of " + listen.bind;
       return failed("cannot join multicast group " + listen.multicast_group + where + ": " +
                     std::strerror(errno) + "; check that an interface with a multicast route exists" +
-                    (where.empty() ? "." : " and that --bind is an address of this host."));
+                    (where.empty() ? "." : " and that " + listen.bind_option + " is an address of this host."));
     }
     return fd;
   }
@@ -437,7 +437,7 @@ struct UdpReceiver::Impl {
     if (c != nullptr && c->note) {
       c->note("warning: datagrams from " + address_text(sender) + " arrive besides those from " +
               address_text(first) + ": two sensors on one port are decoded as one; give each its own "
-              "port (or multicast group) and driver, or choose one with --source");
+              "port (or multicast group) and driver, or choose one with " + listen.source_option);
     }
   }
 
