@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// UdpReceiver: the UDP side every live LiDAR receiver shares (Hesai, Velodyne, Ouster). The
-// family's receiver keeps what it knows (which packet is which, the model, the stream) and
-// hands each datagram's handling to this loop:
+// UdpReceiver: the UDP side every live LiDAR receiver shares (Hesai, Velodyne, Ouster,
+// Unitree). The family's receiver keeps what it knows (which packet is which, the model, the
+// stream) and hands each datagram's handling to this loop:
 //
 //   auto udp = sim::lidar::UdpReceiver::open(listen, ports, 9000);  // sockets, nothing else
 //   if (!udp) -> udp.error().message (invalid_argument: a bad address; system_error: a port in use)
