@@ -528,6 +528,35 @@ TEST(UnitreeDriver, ASecondSenderWithoutLidarIpIsCountedAndSaidOnce) {
   EXPECT_NE(err.find("choose one with --lidar-ip."), std::string::npos) << err;
 }
 
+// A lidar that falls silent mid-scan and starts again: the half scan from before the silence is
+// not mixed into the first scan after it (as for every family; the gap is measured between the
+// kernel's arrival stamps, and the test's own pause is the only one near the 0.5 s timeout).
+TEST(UnitreeDriver, AScanCutByASilenceIsDroppedNotMixedIntoTheNextOne) {
+  SKIP_WITHOUT_PRIVATE_NETWORK();
+  StreamGuard guard;
+  const std::string stream = unique_name("silence");
+  guard.names = {stream, stream + ".imu"};
+  Process driver({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", "0", "--bind-address",
+                  "127.0.0.1", "--stream", stream, "--scan-packets", "3", "--summary", "-q"});
+  const unsigned port = listening_port(driver);
+  ASSERT_NE(port, 0U);
+  auto points = open_reader(stream);
+  ASSERT_TRUE(points);
+  UdpSender lidar(static_cast<std::uint16_t>(port));
+  const std::vector<Bytes> cut = scan_packets(0);
+  lidar.send(cut[0]);
+  lidar.send(cut[1]);
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  const std::vector<Bytes> packets = scan_packets(10);
+  for (const Bytes& packet : packets) lidar.send(packet);
+  const auto expected = expected_scans(sim::unitree::Model::l2, 3, concat({packets[0], packets[1], packets[2]}));
+  ASSERT_EQ(expected.size(), 1U);
+  expect_frame(*points, expected[0], 1);
+  driver.signal(SIGTERM);
+  EXPECT_EQ(driver.wait(kTimeout), 0) << driver.err();
+  EXPECT_NE(driver.unread().find("summary frames=1 packets=5 "), std::string::npos) << driver.unread();
+}
+
 // Waits until `path` holds exactly `bytes`; false after the generous bound.
 bool file_comes_to_hold(const std::string& path, const Bytes& bytes) {
   const auto deadline = std::chrono::steady_clock::now() + kTimeout;

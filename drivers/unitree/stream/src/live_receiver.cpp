@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "sim/clock.hpp"
+#include "sim/lidar/unique_fd.hpp"
 
 namespace sim::unitree {
 namespace {
@@ -54,25 +55,6 @@ std::optional<speed_t> speed_of(unsigned baud) {
   return rate->speed;
 }
 
-class Fd {
- public:
-  explicit Fd(int fd) noexcept : fd_(fd) {}
-  Fd(Fd&& o) noexcept : fd_(std::exchange(o.fd_, -1)) {}
-  Fd& operator=(Fd&& o) noexcept {
-    std::swap(fd_, o.fd_);
-    return *this;
-  }
-  Fd(const Fd&) = delete;
-  Fd& operator=(const Fd&) = delete;
-  ~Fd() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  int get() const noexcept { return fd_; }
-
- private:
-  int fd_ = -1;
-};
-
 // Where the bytes go.
 struct Sink {
   LidarStream* stream = nullptr;
@@ -97,14 +79,18 @@ struct Sink {
   }
 };
 
-// Each datagram's payload, whatever it holds, with the kernel's stamp of its arrival.
+// Each datagram's payload, whatever it holds, with the kernel's stamp of its arrival. After a
+// silence the scan in progress and any partial packet are stale, as for every family: the
+// stream starts over with the fresh bytes (the note says the packets resumed).
 struct DatagramSink final : lidar::DatagramHandler {
-  explicit DatagramSink(const Sink& s) noexcept : sink(s) {}
+  DatagramSink(const Sink& s, lidar::UdpReceiver& u) noexcept : sink(s), udp(u) {}
   bool on_datagram(const lidar::Datagram& datagram) override {
+    if (udp.resumed_after_silence(datagram.arrival_ns)) sink.stream->reset();
     sink.bytes(datagram.payload, datagram.arrival_ns);
     return true;
   }
   const Sink& sink;
+  lidar::UdpReceiver& udp;
 };
 
 Expected<lidar::UdpReceiver> open_udp(const NetworkConfig& network) {
@@ -129,7 +115,7 @@ class SerialPort {
                                                 " baud (" + std::strerror(error) +
                                                 "); check the device path and that you may use it (group dialout)"};
     };
-    Fd fd(::open(device.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC));
+    lidar::UniqueFd fd(::open(device.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC));
     if (fd.get() < 0) return cannot_open(errno);
     termios t{};
     if (::tcgetattr(fd.get(), &t) != 0) return cannot_open(errno);  // not a terminal
@@ -169,7 +155,7 @@ class SerialPort {
   const std::string& device() const noexcept { return device_; }
 
  private:
-  SerialPort(Fd fd, std::string device) : fd_(std::move(fd)), device_(std::move(device)), buffer_(serial_read_size) {}
+  SerialPort(lidar::UniqueFd fd, std::string device) : fd_(std::move(fd)), device_(std::move(device)), buffer_(serial_read_size) {}
 
   // Everything the port holds now. An unplugged adapter or a closed other side reads as an
   // error (EIO) or the end of the file.
@@ -192,7 +178,7 @@ class SerialPort {
     return Error{ErrorCode::system_error, "serial port " + device_ + " failed (" + why + "); check the cable and restart"};
   }
 
-  Fd fd_;
+  lidar::UniqueFd fd_;
   std::string device_;
   std::vector<std::uint8_t> buffer_;  // one read, allocated once
 };
@@ -251,7 +237,7 @@ Expected<void> LiveReceiver::run(int stop_fd, const std::function<void()>& tick,
   if (r.serial) {
     ran = r.serial->run(stop_fd, r.sink, tick);
   } else {
-    DatagramSink handler(r.sink);
+    DatagramSink handler(r.sink, *r.udp);
     lidar::ReceiverCallbacks callbacks;
     callbacks.note = note;
     callbacks.tick_period = std::chrono::nanoseconds(tick_ns);
