@@ -127,10 +127,16 @@ struct StreamState {
   std::atomic<std::uint64_t> skipped{0};  // the reader's count of frames it never saw
   std::atomic<std::uint64_t> lapped{0};   // overwritten while being serialized
   std::atomic<std::uint64_t> unrecordable{0};
+  // The stream's newest frame when the recording opened it, and the frames published after that
+  // but replaced before the first read (the reader counts gaps only from a frame it has read).
+  std::uint64_t seq_at_open = 0;
+  bool read_once = false;
+  std::atomic<std::uint64_t> replaced_before_first_read{0};
 
   StreamState(std::string n, Reader r) : name(std::move(n)), reader(std::move(r)) {
     frame_id = default_frame_id();
     hardware_id = name;
+    seq_at_open = reader.status().latest_seq;
   }
   std::string default_frame_id() const {
     return name.substr(name.find_first_not_of('/') == std::string::npos ? 0 : 1);
@@ -246,6 +252,12 @@ struct Recorder::Impl {
     s.skipped.store(s.reader.stats().skipped, std::memory_order_relaxed);
     if (frame.status() != ReadStatus::new_frame) return true;
     const FrameInfo& info = frame.info();
+    if (!s.read_once) {
+      s.read_once = true;
+      if (info.seq > s.seq_at_open + 1) {
+        s.replaced_before_first_read.store(info.seq - s.seq_at_open - 1, std::memory_order_relaxed);
+      }
+    }
     if (info.sensor_generation != s.sensor_generation) sensor_changed(s, index, info.sensor_generation);
     if (info.publish_ns < start_monotonic_ns) return true;  // published before recording began
 
@@ -476,7 +488,8 @@ struct Recorder::Impl {
           c.bytes += stored.bytes;
         }
       }
-      c.missed = s->skipped.load(std::memory_order_relaxed) + s->lapped.load(std::memory_order_relaxed);
+      c.missed = s->skipped.load(std::memory_order_relaxed) + s->lapped.load(std::memory_order_relaxed) +
+                 s->replaced_before_first_read.load(std::memory_order_relaxed);
       c.unrecordable = s->unrecordable.load(std::memory_order_relaxed);
       p.streams.push_back(std::move(c));
     }
@@ -522,6 +535,11 @@ Expected<Recorder> Recorder::start(const RecorderOptions& options) {
     return Error{ErrorCode::invalid_argument, "no stream to record; name streams or pass --all"};
   }
   auto impl = std::make_unique<Impl>(options);
+  // The recording begins before any stream is opened: a writer that waits for its first reader
+  // (a camera with --wait-for-reader) publishes as soon as one opens, and that frame belongs in
+  // the recording.
+  impl->start_monotonic_ns = monotonic_ns();
+  impl->realtime_minus_monotonic_ns = realtime_ns() - impl->start_monotonic_ns;
   for (const auto& name : options.streams) {
     auto reader = Reader::open(name, {.trust = options.trust});
     if (!reader) return reader.error();
@@ -535,8 +553,6 @@ Expected<Recorder> Recorder::start(const RecorderOptions& options) {
   if (!writer) return writer.error();
   impl->writer.emplace(std::move(*writer));
 
-  impl->start_monotonic_ns = monotonic_ns();
-  impl->realtime_minus_monotonic_ns = realtime_ns() - impl->start_monotonic_ns;
   Impl* self = impl.get();
   self->writer_thread = std::thread([self] { self->run_writer(); });
   for (std::size_t i = 0; i < self->streams.size(); ++i) {
