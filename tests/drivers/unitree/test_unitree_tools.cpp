@@ -59,10 +59,8 @@ std::string temp_path(const char* what) {
 
 Bytes read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  std::vector<char> c((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  Bytes b(c.size());
-  std::memcpy(b.data(), c.data(), c.size());
-  return b;
+  const std::vector<char> c((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return Bytes(c.begin(), c.end());  // no memcpy: an empty file's data() is null
 }
 
 void write_file(const std::string& path, std::span<const std::uint8_t> bytes) {
