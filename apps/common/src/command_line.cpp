@@ -142,6 +142,16 @@ Option& Option::each(std::function<void(const std::string&)> seen) {
   return *this;
 }
 
+Option& Option::delimiter(char separator) {
+  option_->delimiter(separator);
+  return *this;
+}
+
+Option& Option::hidden() {
+  option_->group("");  // CLI11's way: an option in the empty group is not shown
+  return *this;
+}
+
 CommandLine::CommandLine(std::string tool, std::string description)
     : tool_(std::move(tool)), app_(std::make_unique<CLI::App>(std::move(description), tool_)) {
   // One style of --help: every option shows its default the same way, "--count INT=5".
