@@ -400,8 +400,9 @@ TEST(CommandLineOption, AHiddenOptionIsParsedButLeftOutOfHelp) {
 
   CommandLine refused("sim_test", "test");
   build(refused, role, runs);
-  EXPECT_EQ(parse_capturing(refused, {"sim_test", "--role", "judge"}).code,
-            std::optional<int>(kExitUsage));
+  const Parsed parsed = parse_capturing(refused, {"sim_test", "--role", "judge"});
+  EXPECT_EQ(parsed.code, std::optional<int>(kExitUsage));
+  EXPECT_EQ(parsed.message, "sim_test: judge not in {writer,reader}; see sim_test --help\n");
 
   CommandLine help_cli("sim_test", "test");
   build(help_cli, role, runs);

@@ -24,6 +24,8 @@ std::string as_sentence(std::string text) {
   for (char& c : text) {
     if (c == '\n') c = ' ';
   }
+  // CLI11 names no option that --help does not show (Option::hidden): ": x not in {a,b}".
+  if (text.rfind(": ", 0) == 0) text.erase(0, 2);
   return text;
 }
 
