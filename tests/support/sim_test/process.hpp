@@ -11,6 +11,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <array>
+#include <atomic>
 #include <chrono>
 #include <optional>
 #include <stdexcept>
@@ -24,6 +26,46 @@ namespace sim::testing {
 // Limits against hangs, not timing checks: a test that reaches one has failed anyway.
 inline constexpr std::chrono::milliseconds line_timeout{30'000};
 inline constexpr std::chrono::milliseconds exit_timeout{120'000};
+
+namespace detail {
+
+// The children alive now. A test that aborts (a sanitizer's report, a failed assert, terminate)
+// never runs ~Process, and its drivers would go on listening with their streams open: the abort
+// takes them along. Only SIGABRT: the sanitizers report segmentation faults with handlers of
+// their own, which must stay.
+inline std::array<std::atomic<pid_t>, 64> children{};
+
+inline void kill_children_then_abort(int) {
+  for (auto& child : children) {
+    const pid_t pid = child.load();
+    if (pid > 0) ::kill(pid, SIGKILL);
+  }
+  ::raise(SIGABRT);  // SA_RESETHAND: now the default action
+}
+
+inline void remember_child(pid_t pid) {
+  static const bool handler_installed = [] {
+    struct sigaction action {};
+    action.sa_handler = kill_children_then_abort;
+    action.sa_flags = static_cast<int>(SA_RESETHAND);
+    sigemptyset(&action.sa_mask);
+    return ::sigaction(SIGABRT, &action, nullptr) == 0;
+  }();
+  static_cast<void>(handler_installed);
+  for (auto& child : children) {
+    pid_t none = 0;
+    if (child.compare_exchange_strong(none, pid)) return;
+  }
+}
+
+inline void forget_child(pid_t pid) {
+  for (auto& child : children) {
+    pid_t expected = pid;
+    if (child.compare_exchange_strong(expected, 0)) return;
+  }
+}
+
+}  // namespace detail
 
 class Process {
  public:
@@ -53,6 +95,7 @@ class Process {
       pid_ = -1;
       throw std::runtime_error("cannot start " + argv.at(0));
     }
+    detail::remember_child(pid_);
   }
   Process(const Process&) = delete;
   Process& operator=(const Process&) = delete;
@@ -60,6 +103,7 @@ class Process {
     if (pid_ > 0 && !exit_code_) {
       ::kill(pid_, SIGKILL);
       ::waitpid(pid_, nullptr, 0);
+      detail::forget_child(pid_);
     }
     ::close(out_);
     ::close(err_);
@@ -104,6 +148,7 @@ class Process {
     }
     int status = 0;
     ::waitpid(pid_, &status, 0);
+    detail::forget_child(pid_);
     unread_ = out_buffer_;
     out_text_ += out_buffer_;
     out_buffer_.clear();
