@@ -1,21 +1,22 @@
 // SPDX-License-Identifier: Apache-2.0
 // The listener and the HTTP side: every connection starts as HTTP; a WebSocket upgrade asking
 // for foxglove.websocket.v1 becomes a WebSocket session (ws_session.cpp), any other GET is
-// answered from the page API. Only Beast's HTTP side is compiled here: <boost/beast/websocket.hpp>
-// stays in ws_session.cpp, and every answer is one response type (below), so Beast's HTTP write
-// operation is instantiated once (docs/build-times.md).
+// answered from the page API. Only Beast's HTTP reading is compiled here: <boost/beast/websocket.hpp>
+// stays in ws_session.cpp, and answers are written as bytes (send, below): Beast's composed
+// operations are most of what these files cost to compile (docs/build-times.md).
 #include "sim/foxglove/server.hpp"
 
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/post.hpp>
 #include <boost/asio/steady_timer.hpp>
 #include <boost/asio/strand.hpp>
+#include <boost/asio/write.hpp>
+#include <boost/beast/core/buffers_to_string.hpp>
 #include <boost/beast/core/flat_buffer.hpp>
 #include <boost/beast/core/tcp_stream.hpp>
-#include <boost/beast/http/buffer_body.hpp>
+#include <boost/beast/http/empty_body.hpp>
 #include <boost/beast/http/read.hpp>
 #include <boost/beast/http/string_body.hpp>
-#include <boost/beast/http/write.hpp>
 #include <boost/beast/websocket/rfc6455.hpp>
 #include <sys/resource.h>
 #include <unistd.h>
@@ -306,15 +307,14 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     return server_.frames.projection(camera, lidar, *pose, *camera_sensor->calibration);
   }
 
-  // Every answer is one response type whose body points into the text or picture the answer
-  // holds until its write completes: one type, so Beast's HTTP write operation (the bulk of this
-  // file's compile) is instantiated once. Content-Length is what prepare_payload() would set.
+  // An answer: its header, and the body it holds until the write completes (text or a picture).
   struct Answer {
     Answer(http::status status, unsigned version, const char* type) : response(status, version) {
       response.set(http::field::server, "sim_foxglove");
       response.set(http::field::content_type, type);
     }
-    http::response<http::buffer_body> response;
+    http::response<http::empty_body> response;  // the header (the body is below)
+    std::string head;                             // the header as sent
     std::string text;
     Jpeg picture;
   };
@@ -350,20 +350,24 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   }
 
   // `body`: `size` bytes the answer holds; a HEAD answer has their length and not them.
+  // Why not http::async_write: Beast's serializer and its write operations were most of this
+  // file's compile (docs/build-times.md). The bytes are the same: the serializer sends the header
+  // its fields writer formats, then a Content-Length body as it is.
   void send(const std::shared_ptr<Answer>& answer, const void* body, std::size_t size, bool head,
             bool keep_alive) {
-    http::response<http::buffer_body>& response = answer->response;
-    response.content_length(size);
-    response.body().data = head ? nullptr : const_cast<void*>(body);
-    response.body().size = head ? 0 : size;
-    response.body().more = false;
+    answer->response.content_length(size);  // what prepare_payload() sets for these answers
+    const http::response_header<>& header = answer->response.base();
+    http::fields::writer formatted(header, header.version(), header.result_int());
+    answer->head = beast::buffers_to_string(formatted.get());
+    const std::array<net::const_buffer, 2> bytes{net::buffer(answer->head),
+                                                 net::const_buffer(body, head ? 0 : size)};
     stream_.expires_after(30s);
-    http::async_write(stream_, response,
-                      [self = shared_from_this(), answer, keep_alive](beast::error_code ec,
-                                                                      std::size_t) {
-                        if (ec || !keep_alive) return self->shut();
-                        self->read();
-                      });
+    net::async_write(stream_, bytes,
+                     [self = shared_from_this(), answer, keep_alive](beast::error_code ec,
+                                                                     std::size_t) {
+                       if (ec || !keep_alive) return self->shut();
+                       self->read();
+                     });
   }
 
   void shut() {
