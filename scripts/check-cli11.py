@@ -6,8 +6,8 @@ CLI11 2.x (Debian's) is header-only: every translation unit that includes <CLI/C
 its validators, formatter and parser again, about 10 CPU-seconds each at -O3 and more under the
 sanitizers (docs/build-times.md). Programs add their options through CommandLine::add_option and
 the verbs of sim::apps::Option (sim/apps/command_line.hpp), which forward-declares CLI::App, so
-only command_line.cpp compiles CLI11. The benchmarks (bench/) parse their own command lines and
-are left out. Exit code 1, with each offending file and line, when another file includes CLI11.
+only command_line.cpp compiles CLI11: no program does, the benchmarks (bench/) included. Exit
+code 1, with each offending file and line, when another file includes CLI11.
 
   scripts/check-cli11.py [ROOT]     default: the repository this script is in
 """
@@ -19,14 +19,12 @@ ROOT = sys.argv[1] if len(sys.argv) > 1 else os.path.dirname(os.path.dirname(os.
 SOURCES = (".hpp", ".h", ".hh", ".ipp", ".inl", ".cpp", ".cc", ".cxx", ".c")
 CLI11 = re.compile(r'^\s*#\s*include\s*[<"]CLI/', re.M)
 ALLOWED = {os.path.join("apps", "common", "src", "command_line.cpp")}
-LEFT_OUT = ("bench",)  # top-level folders not checked
 
 
 def sources(root):
     for dirpath, dirnames, filenames in os.walk(root):
-        top = os.path.relpath(dirpath, root) == "."
         dirnames[:] = sorted(d for d in dirnames if not d.startswith(".") and not d.startswith("build")
-                             and d != "node_modules" and not (top and d in LEFT_OUT))
+                             and d != "node_modules")
         for name in sorted(filenames):
             if name.endswith(SOURCES):
                 yield os.path.join(dirpath, name)

@@ -17,8 +17,6 @@
 #include <dirent.h>
 #include <unistd.h>
 
-#include <CLI/CLI.hpp>
-
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -36,6 +34,7 @@
 #include "cyclone.hpp"
 #include "dds_session.hpp"
 #include "ros_message_type.hpp"
+#include "sim/apps/command_line.hpp"
 #include "sim/clock.hpp"
 #include "sim/ros2/encode.hpp"
 #include "sim/writer.hpp"
@@ -412,17 +411,22 @@ void print_summary(const std::map<std::string, Samples>& samples, const Settings
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"SIM → sim_dds_bridge → Cyclone DDS against a plain Fast DDS publisher, same run.",
-               "bench_bridge"};
+  sim::apps::CommandLine cli(
+      "bench_bridge",
+      "SIM → sim_dds_bridge → Cyclone DDS against a plain Fast DDS publisher, same run.");
   Settings settings;
-  app.add_option("--seconds", settings.seconds, "seconds per case and path")->check(CLI::PositiveNumber);
-  app.add_option("--runs", settings.runs, "repeat every case this many times; with 2 or more, a summary "
+  cli.add_option("--seconds", settings.seconds, "seconds per case and path").positive();
+  cli.add_option("--runs", settings.runs, "repeat every case this many times; with 2 or more, a summary "
                                           "gives the bridge/plain CPU ratio with its 95 % interval")
-      ->check(CLI::Range(1, 100));
-  app.add_flag("--reliable", settings.reliable, "reliable QoS instead of best effort");
-  app.add_option("--case", settings.only, "run only this case");
-  app.add_option("--plain-publisher", settings.plain_name, "(internal) be the plain publisher of this topic");
-  CLI11_PARSE(app, argc, argv);
+      .in_range(1, 100);
+  cli.add_flag("--reliable", settings.reliable, "reliable QoS instead of best effort");
+  std::vector<std::string> case_names;
+  for (const Case& c : paper_cases()) case_names.push_back(c.name);
+  cli.add_option("--case", settings.only, "run only this case").one_of(std::move(case_names));
+  // The copy of itself bench_bridge starts as the plain publisher; not in --help.
+  cli.add_option("--plain-publisher", settings.plain_name, "be the plain publisher of this topic")
+      .hidden();
+  if (const auto code = cli.parse(argc, argv)) return *code;
 
   if (!settings.plain_name.empty()) {
     for (const Case& c : paper_cases()) {

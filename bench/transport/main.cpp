@@ -15,7 +15,6 @@
 #include <time.h>
 #include <unistd.h>
 
-#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
 #include <cinttypes>
@@ -33,6 +32,7 @@
 #include <vector>
 
 #include "process.hpp"
+#include "sim/apps/command_line.hpp"
 #include "sim/clock.hpp"
 #include "sim/os.hpp"
 #include "sim/reader.hpp"
@@ -1140,58 +1140,55 @@ struct Arguments {
   bool list = false;
 };
 
-void add_options(CLI::App& app, Arguments& a) {
+void add_options(sim::apps::CommandLine& cli, Arguments& a) {
   Options& o = a.o;
-  app.add_option("--transports", a.transports,
-                 "comma list of sim-poll,sim-block,sim-zero,iceoryx,fastdds,cyclone")
-      ->capture_default_str();
-  app.add_option("--payloads", a.payloads, "comma list of payload sizes in bytes")->capture_default_str();
-  app.add_option("--readers", a.readers, "comma list of reader counts (one process each)")
-      ->capture_default_str();
-  app.add_option("--rate", o.rate, "frames per second the writer publishes (0: as fast as it can)")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
-  app.add_flag("--max-rate", o.max_rate, "publish as fast as the writer can instead of --rate");
-  app.add_option("--jitter", o.jitter, "draw each publish period from period x (1 ± this), e.g. 0.1 "
+  cli.add_option("--transports", a.transports,
+                 "comma list of sim-poll,sim-block,sim-zero,iceoryx,fastdds,cyclone");
+  cli.add_option("--payloads", a.payloads, "comma list of payload sizes in bytes");
+  cli.add_option("--readers", a.readers, "comma list of reader counts (one process each)");
+  cli.add_option("--rate", o.rate, "frames per second the writer publishes (0: as fast as it can)")
+      .non_negative();
+  cli.add_flag("--max-rate", o.max_rate, "publish as fast as the writer can instead of --rate");
+  cli.add_option("--jitter", o.jitter, "draw each publish period from period x (1 ± this), e.g. 0.1 "
                                        "for ±10 %: an irregular sensor")
-      ->check(CLI::Range(0.0, 0.9));
-  app.add_option("--pause", o.pause_s, "the writer falls silent for this many seconds halfway "
+      .in_range(0.0, 0.9);
+  cli.add_option("--pause", o.pause_s, "the writer falls silent for this many seconds halfway "
                                        "through each run, then resumes: readers must stay correct "
                                        "and cheap across it (reader CPU includes the pause)")
-      ->check(CLI::Range(0.0, 60.0));
-  app.add_option("--vehicle", o.vehicle_s, "instead of the payload grid: the many-stream vehicle "
+      .in_range(0.0, 60.0);
+  cli.add_option("--vehicle", o.vehicle_s, "instead of the payload grid: the many-stream vehicle "
                                           "workload for this many seconds (7 camera streams of "
                                           "1920x1200x3 B at 30 Hz + one 1,382,400 B LiDAR stream "
                                           "at 10 Hz, a reader each), per transport")
-      ->check(CLI::Range(0.0, 3600.0));
-  app.add_option("--idle-cost", o.idle_s, "instead of latency: the CPU the readers (first --readers "
+      .in_range(0.0, 3600.0);
+  cli.add_option("--idle-cost", o.idle_s, "instead of latency: the CPU the readers (first --readers "
                                           "value) use over this many seconds while the writer "
                                           "publishes nothing, per transport")
-      ->check(CLI::Range(0.0, 3600.0));
-  app.add_option("--frames", o.frames, "frames per run, warm-up included")->capture_default_str();
-  app.add_option("--warmup", o.warmup, "first frames of each run left out of the statistics")
-      ->capture_default_str();
-  app.add_option("--runs", o.runs, "runs per configuration")->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  app.add_option("--csv", o.csv, "write one row per transport x payload x readers x run here "
+      .in_range(0.0, 3600.0);
+  cli.add_option("--frames", o.frames, "frames per run, warm-up included");
+  cli.add_option("--warmup", o.warmup, "first frames of each run left out of the statistics");
+  cli.add_option("--runs", o.runs, "runs per configuration").positive();
+  cli.add_option("--csv", o.csv, "write one row per transport x payload x readers x run here "
                                  "(and the extra columns next to it, as *_extra.csv)");
-  app.add_flag("--quick", o.quick, "smoke test: 60 frames (10 warm-up), 1 run");
-  app.add_option("--cpu", a.cpus, "comma list of CPUs: the writer pins to the first, readers to the rest");
-  app.add_option("--rt-priority", o.rt_priority, "run writer and readers under SCHED_FIFO at this "
-                                                  "priority (1-99, needs root)")->check(CLI::Range(0, 99));
-  app.add_flag("--no-floor", o.no_floor, "do not measure the memcpy floor");
-  app.add_flag("--list-transports", a.list, "print the transports this build has, one a line, and exit");
-  app.add_flag("--skip-missing", o.skip_missing, "leave out transports this build does not have "
+  cli.add_flag("--quick", o.quick, "smoke test: 60 frames (10 warm-up), 1 run");
+  cli.add_option("--cpu", a.cpus, "comma list of CPUs: the writer pins to the first, readers to the rest");
+  cli.add_option("--rt-priority", o.rt_priority, "run writer and readers under SCHED_FIFO at this "
+                                                  "priority (1-99, needs root)")
+      .in_range(0, 99);
+  cli.add_flag("--no-floor", o.no_floor, "do not measure the memcpy floor");
+  cli.add_flag("--list-transports", a.list, "print the transports this build has, one a line, and exit");
+  cli.add_flag("--skip-missing", o.skip_missing, "leave out transports this build does not have "
                                                   "instead of failing");
   // The roles sim_bench starts itself in; hidden from --help.
   RoleOptions& role = a.role;
-  app.add_option("--role", role.role)->group("")->check(CLI::IsMember({"writer", "reader"}));
-  app.add_option("--role-transport", role.transport)->group("");
-  app.add_option("--role-topic", role.topic)->group("");
-  app.add_option("--role-payload", role.payload)->group("");
-  app.add_option("--role-readers", role.readers)->group("");
-  app.add_option("--role-index", role.index)->group("");
-  app.add_option("--role-domain", role.domain)->group("");
-  app.add_option("--role-cpu", role.cpu)->group("");
+  cli.add_option("--role", role.role, "").hidden().one_of({"writer", "reader"});
+  cli.add_option("--role-transport", role.transport, "").hidden();
+  cli.add_option("--role-topic", role.topic, "").hidden();
+  cli.add_option("--role-payload", role.payload, "").hidden();
+  cli.add_option("--role-readers", role.readers, "").hidden();
+  cli.add_option("--role-index", role.index, "").hidden();
+  cli.add_option("--role-domain", role.domain, "").hidden();
+  cli.add_option("--role-cpu", role.cpu, "").hidden();
 }
 
 // This process as the writer or a reader of one run, with the run's settings.
@@ -1254,11 +1251,13 @@ bool complete_options(Arguments& a) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"sim_bench: SIM against iceoryx, Fast DDS, Cyclone DDS and the memcpy floor, one "
-               "writer and N reader processes per configuration (issue 5)."};
+  sim::apps::CommandLine cli(
+      "sim_bench",
+      "sim_bench: SIM against iceoryx, Fast DDS, Cyclone DDS and the memcpy floor, one writer and "
+      "N reader processes per configuration (issue 5).");
   Arguments arguments;
-  add_options(app, arguments);
-  CLI11_PARSE(app, argc, argv);
+  add_options(cli, arguments);
+  if (const auto code = cli.parse(argc, argv)) return *code;
   if (!arguments.role.role.empty()) return run_role(arguments.role, arguments.o);
   if (arguments.list) {
     list_transports();

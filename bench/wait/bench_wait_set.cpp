@@ -20,8 +20,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <CLI/CLI.hpp>
-
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -33,6 +31,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/apps/command_line.hpp"
 #include "sim/clock.hpp"
 #include "sim/reader.hpp"
 #include "sim/wait_set.hpp"
@@ -430,25 +429,22 @@ std::string summarize_ways(const std::vector<Way>& ways,
 
 int main(int argc, char** argv) {
   Config config;
-  CLI::App app{"bench_wait_set: the cost of waiting on several SIM streams at once (WaitSet with "
-               "futex_waitv, its round-robin fallback, StreamNotifier in epoll) against one "
-               "blocking Reader::wait with the same number of wake-ups.\nExit codes: 0 measured, "
-               "1 a run failed, 2 usage error.", "bench_wait_set"};
-  app.add_option("--streams", config.streams, "streams the reader waits on")->check(CLI::Range(2u, 128u))->capture_default_str();
-  app.add_option("--rate", config.rate_hz, "frames per second on each stream")->check(CLI::Range(1.0, 2000.0))->capture_default_str();
-  app.add_option("--frames", config.frames, "frames per stream and run")->check(CLI::Range(10u, 100000u))->capture_default_str();
-  app.add_option("--runs", config.runs, "runs (each runs every way once, in turn)")->check(CLI::Range(1u, 100u))->capture_default_str();
-  app.add_option("--ways", config.ways, "futex_waitv, round_robin, notifier, reader_wait [all]")->delimiter(',');
-  app.add_option("--json", config.json, "also write the results here as JSON")->type_name("FILE");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
+  sim::apps::CommandLine cli(
+      "bench_wait_set",
+      "bench_wait_set: the cost of waiting on several SIM streams at once (WaitSet with "
+      "futex_waitv, its round-robin fallback, StreamNotifier in epoll) against one blocking "
+      "Reader::wait with the same number of wake-ups.");
+  cli.add_option("--streams", config.streams, "streams the reader waits on").in_range(2u, 128u);
+  cli.add_option("--rate", config.rate_hz, "frames per second on each stream").in_range(1.0, 2000.0);
+  cli.add_option("--frames", config.frames, "frames per stream and run").in_range(10u, 100000u);
+  cli.add_option("--runs", config.runs, "runs (each runs every way once, in turn)").in_range(1u, 100u);
+  cli.add_option("--ways", config.ways, "futex_waitv, round_robin, notifier, reader_wait [all]")
+      .delimiter(',');
+  cli.add_option("--json", config.json, "also write the results here as JSON").type_name("FILE");
+  if (const auto code = cli.parse(argc, argv)) return *code;
   const auto ways = chosen_ways(config.ways);
   if (!ways) {
-    std::fprintf(stderr, "bench_wait_set: --ways takes futex_waitv, round_robin, notifier and reader_wait.\n");
-    return 2;
+    return cli.usage_error("--ways takes futex_waitv, round_robin, notifier and reader_wait, each once");
   }
   const auto results = measure(*ways, config);
   if (!results) return 1;
@@ -456,9 +452,7 @@ int main(int argc, char** argv) {
   if (!config.json.empty()) {
     std::FILE* out = std::fopen(config.json.c_str(), "w");
     if (out == nullptr || std::fputs(json.c_str(), out) < 0 || std::fclose(out) != 0) {
-      std::fprintf(stderr, "bench_wait_set: cannot write %s; check the folder exists and is writable.\n",
-                   config.json.c_str());
-      return 1;
+      return cli.fail("cannot write " + config.json + "; check the folder exists and is writable");
     }
   }
   return 0;

@@ -366,6 +366,51 @@ TEST(CommandLineOption, TheParseOrderListsTheOptionsAsGivenOneEntryPerValue) {
   EXPECT_FALSE(order[0] == as_option);
 }
 
+// bench_wait_set's --ways futex_waitv,notifier.
+TEST(CommandLineOption, ADelimiterSplitsOneValueIntoSeveralAndChecksEachPiece) {
+  const auto build = [](CommandLine& cli, std::vector<std::string>& ways) {
+    cli.add_option("--ways", ways, "which").delimiter(',').one_of({"a", "b", "c"});
+  };
+  std::vector<std::string> ways;
+  CommandLine cli("sim_test", "test");
+  build(cli, ways);
+  ASSERT_FALSE(parse(cli, {"sim_test", "--ways", "a,b", "--ways", "c"}).has_value());
+  EXPECT_EQ(ways, (std::vector<std::string>{"a", "b", "c"}));
+
+  std::vector<std::string> refused_ways;
+  CommandLine refused("sim_test", "test");
+  build(refused, refused_ways);
+  const Parsed parsed = parse_capturing(refused, {"sim_test", "--ways", "a,x"});
+  EXPECT_EQ(parsed.code, std::optional<int>(kExitUsage));
+  EXPECT_EQ(parsed.message, "sim_test: --ways: x not in {a,b,c}; see sim_test --help\n");
+}
+
+// sim_bench's --role, which it passes to the copies of itself it starts.
+TEST(CommandLineOption, AHiddenOptionIsParsedButLeftOutOfHelp) {
+  const auto build = [](CommandLine& cli, std::string& role, int& runs) {
+    cli.add_option("--role", role, "").hidden().one_of({"writer", "reader"});
+    cli.add_option("--runs", runs, "runs");
+  };
+  std::string role;
+  int runs = 5;
+  CommandLine cli("sim_test", "test");
+  build(cli, role, runs);
+  ASSERT_FALSE(parse(cli, {"sim_test", "--role", "reader"}).has_value());
+  EXPECT_EQ(role, "reader");
+
+  CommandLine refused("sim_test", "test");
+  build(refused, role, runs);
+  const Parsed parsed = parse_capturing(refused, {"sim_test", "--role", "judge"});
+  EXPECT_EQ(parsed.code, std::optional<int>(kExitUsage));
+  EXPECT_EQ(parsed.message, "sim_test: judge not in {writer,reader}; see sim_test --help\n");
+
+  CommandLine help_cli("sim_test", "test");
+  build(help_cli, role, runs);
+  const std::string help = help_of(help_cli);
+  EXPECT_EQ(help.find("--role"), std::string::npos) << help;
+  EXPECT_NE(help.find("--runs"), std::string::npos) << help;
+}
+
 TEST(CommandLine, AnImpossibleRealtimePriorityIsRefusedBeforeRunning) {
   CommandLine cli("sim_test", "test");
   sim::ThreadPlacement placement;

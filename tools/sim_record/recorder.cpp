@@ -127,10 +127,16 @@ struct StreamState {
   std::atomic<std::uint64_t> skipped{0};  // the reader's count of frames it never saw
   std::atomic<std::uint64_t> lapped{0};   // overwritten while being serialized
   std::atomic<std::uint64_t> unrecordable{0};
+  // The stream's newest frame when the recording opened it, and the frames published after that
+  // but replaced before the first read (the reader counts gaps only from a frame it has read).
+  std::uint64_t seq_at_open = 0;
+  bool read_once = false;
+  std::atomic<std::uint64_t> replaced_before_first_read{0};
 
   StreamState(std::string n, Reader r) : name(std::move(n)), reader(std::move(r)) {
     frame_id = default_frame_id();
     hardware_id = name;
+    seq_at_open = reader.status().latest_seq;
   }
   std::string default_frame_id() const {
     return name.substr(name.find_first_not_of('/') == std::string::npos ? 0 : 1);
@@ -232,51 +238,70 @@ struct Recorder::Impl {
         std::this_thread::sleep_for(std::chrono::milliseconds(100));
         continue;
       }
-      Borrow frame = s.reader.borrow();
-      s.skipped.store(s.reader.stats().skipped, std::memory_order_relaxed);
-      if (frame.status() != ReadStatus::new_frame) continue;
-      const FrameInfo& info = frame.info();
-      if (info.sensor_generation != s.sensor_generation) sensor_changed(s, index, info.sensor_generation);
-      if (info.publish_ns < start_monotonic_ns) continue;  // published before recording began
-
-      auto plan = ros2::plan_frame(info, s.frame_id);
-      if (!plan) {
-        s.unrecordable.fetch_add(1, std::memory_order_relaxed);
-        note("a frame of " + s.name + " has no ROS 2 message: " + plan.error().message);
-        continue;
-      }
-      // The one copy: straight from the borrowed slot into the message.
-      std::vector<std::byte> data = queue.buffer(plan->size());
-      const bool written = plan->write(frame.bytes().first(info.size), data) == plan->size();
-      if (!frame.still_valid() || !written) {  // lapped by the writer while we copied
-        s.lapped.fetch_add(1, std::memory_order_relaxed);
-        queue.recycle(std::move(data));
-        continue;
-      }
-      const auto log_time = static_cast<std::uint64_t>(info.publish_ns + realtime_minus_monotonic_ns);
-      // A new clock record goes first, with the frame's log time: a player restores it before
-      // the frame it came with.
-      if (info.clock_generation != s.clock_generation &&
-          !clock_changed(s, index, info.clock_generation, log_time)) {
-        break;
-      }
-      // The calibration goes first, with the image's stamp and the same log time: a player
-      // restores it before the image it belongs to.
-      if (!s.camera_info.empty() && !push_camera_info(s, index, info, log_time)) break;
-      Pending item;
-      item.stream = index;
-      item.type = plan->type();
-      item.layout = info.layout;
-      item.capacity = s.reader.capacity();
-      item.header.sequence = static_cast<std::uint32_t>(info.seq);
-      item.header.log_time = log_time;
-      item.header.publish_time = static_cast<std::uint64_t>(std::max<std::int64_t>(info.stamp_ns, 0));
-      item.data = std::move(data);
-      const std::size_t size = item.data.size();
-      if (!queue.push(std::move(item), stop_streams)) break;
-      s.frames.fetch_add(1, std::memory_order_relaxed);
-      s.bytes.fetch_add(size, std::memory_order_relaxed);
+      if (!record_newest(s, index)) return;
     }
+    // Stopping: the newest frame published before the stop and not taken yet is recorded too, so
+    // a recording ends with the last frame its streams had when the user stopped it.
+    record_newest(s, index);
+  }
+
+  // Records the stream's newest frame if it is new. False when the recording cannot go on (the
+  // clock record or the calibration could not be queued, or the queue refused during a stop).
+  bool record_newest(StreamState& s, std::size_t index) {
+    Borrow frame = s.reader.borrow();
+    s.skipped.store(s.reader.stats().skipped, std::memory_order_relaxed);
+    if (frame.status() != ReadStatus::new_frame) return true;
+    const FrameInfo& info = frame.info();
+    if (!s.read_once) {
+      s.read_once = true;
+      if (info.seq > s.seq_at_open + 1) {
+        s.replaced_before_first_read.store(info.seq - s.seq_at_open - 1, std::memory_order_relaxed);
+      }
+    }
+    if (info.sensor_generation != s.sensor_generation) sensor_changed(s, index, info.sensor_generation);
+    if (info.publish_ns < start_monotonic_ns) return true;  // published before recording began
+
+    auto plan = ros2::plan_frame(info, s.frame_id);
+    if (!plan) {
+      s.unrecordable.fetch_add(1, std::memory_order_relaxed);
+      note("a frame of " + s.name + " has no ROS 2 message: " + plan.error().message);
+      return true;
+    }
+    // The one copy: straight from the borrowed slot into the message.
+    std::vector<std::byte> data = queue.buffer(plan->size());
+    const bool written = plan->write(frame.bytes().first(info.size), data) == plan->size();
+    if (!frame.still_valid() || !written) {  // lapped by the writer while we copied
+      s.lapped.fetch_add(1, std::memory_order_relaxed);
+      queue.recycle(std::move(data));
+      return true;
+    }
+    const auto log_time = static_cast<std::uint64_t>(info.publish_ns + realtime_minus_monotonic_ns);
+    // A new clock record goes first, with the frame's log time: a player restores it before
+    // the frame it came with.
+    if (info.clock_generation != s.clock_generation &&
+        !clock_changed(s, index, info.clock_generation, log_time)) {
+      return false;
+    }
+    // The calibration goes first, with the image's stamp and the same log time: a player
+    // restores it before the image it belongs to.
+    if (!s.camera_info.empty() && !push_camera_info(s, index, info, log_time)) return false;
+    Pending item;
+    item.stream = index;
+    item.type = plan->type();
+    item.layout = info.layout;
+    item.capacity = s.reader.capacity();
+    item.header.sequence = static_cast<std::uint32_t>(info.seq);
+    item.header.log_time = log_time;
+    item.header.publish_time = static_cast<std::uint64_t>(std::max<std::int64_t>(info.stamp_ns, 0));
+    item.data = std::move(data);
+    const std::size_t size = item.data.size();
+    if (!queue.push(std::move(item), stop_streams)) {
+      s.lapped.fetch_add(1, std::memory_order_relaxed);  // taken but not recorded: missed
+      return false;
+    }
+    s.frames.fetch_add(1, std::memory_order_relaxed);
+    s.bytes.fetch_add(size, std::memory_order_relaxed);
+    return true;
   }
 
   // A new sensor description (or the first look): the frame id of the messages, the CameraInfo
@@ -463,7 +488,8 @@ struct Recorder::Impl {
           c.bytes += stored.bytes;
         }
       }
-      c.missed = s->skipped.load(std::memory_order_relaxed) + s->lapped.load(std::memory_order_relaxed);
+      c.missed = s->skipped.load(std::memory_order_relaxed) + s->lapped.load(std::memory_order_relaxed) +
+                 s->replaced_before_first_read.load(std::memory_order_relaxed);
       c.unrecordable = s->unrecordable.load(std::memory_order_relaxed);
       p.streams.push_back(std::move(c));
     }
@@ -509,6 +535,11 @@ Expected<Recorder> Recorder::start(const RecorderOptions& options) {
     return Error{ErrorCode::invalid_argument, "no stream to record; name streams or pass --all"};
   }
   auto impl = std::make_unique<Impl>(options);
+  // The recording begins before any stream is opened: a writer that waits for its first reader
+  // (a camera with --wait-for-reader) publishes as soon as one opens, and that frame belongs in
+  // the recording.
+  impl->start_monotonic_ns = monotonic_ns();
+  impl->realtime_minus_monotonic_ns = realtime_ns() - impl->start_monotonic_ns;
   for (const auto& name : options.streams) {
     auto reader = Reader::open(name, {.trust = options.trust});
     if (!reader) return reader.error();
@@ -522,8 +553,6 @@ Expected<Recorder> Recorder::start(const RecorderOptions& options) {
   if (!writer) return writer.error();
   impl->writer.emplace(std::move(*writer));
 
-  impl->start_monotonic_ns = monotonic_ns();
-  impl->realtime_minus_monotonic_ns = realtime_ns() - impl->start_monotonic_ns;
   Impl* self = impl.get();
   self->writer_thread = std::thread([self] { self->run_writer(); });
   for (std::size_t i = 0; i < self->streams.size(); ++i) {

@@ -24,6 +24,8 @@ std::string as_sentence(std::string text) {
   for (char& c : text) {
     if (c == '\n') c = ' ';
   }
+  // CLI11 names no option that --help does not show (Option::hidden): ": x not in {a,b}".
+  if (text.rfind(": ", 0) == 0) text.erase(0, 2);
   return text;
 }
 
@@ -139,6 +141,16 @@ Option& Option::expected(int count) {
 
 Option& Option::each(std::function<void(const std::string&)> seen) {
   option_->each([seen = std::move(seen)](const std::string& value) { seen(value); });
+  return *this;
+}
+
+Option& Option::delimiter(char separator) {
+  option_->delimiter(separator);
+  return *this;
+}
+
+Option& Option::hidden() {
+  option_->group("");  // CLI11's way: an option in the empty group is not shown
   return *this;
 }
 

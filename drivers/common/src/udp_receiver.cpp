@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "sim/clock.hpp"
+#include "sim/lidar/unique_fd.hpp"
 
 namespace sim::lidar {
 namespace {
@@ -182,25 +183,6 @@ timespec as_timespec(std::int64_t ns) {
   return {static_cast<time_t>(ns / 1'000'000'000), static_cast<long>(ns % 1'000'000'000)};
 }
 
-class Fd {
- public:
-  explicit Fd(int fd) noexcept : fd_(fd) {}
-  Fd(Fd&& o) noexcept : fd_(std::exchange(o.fd_, -1)) {}
-  Fd& operator=(Fd&& o) noexcept {
-    std::swap(fd_, o.fd_);
-    return *this;
-  }
-  Fd(const Fd&) = delete;
-  Fd& operator=(const Fd&) = delete;
-  ~Fd() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  int get() const noexcept { return fd_; }
-
- private:
-  int fd_ = -1;
-};
-
 // Room for one recvmmsg, allocated once: payloads, sender addresses and the kernel's stamps.
 class ReceiveBatch {
  public:
@@ -310,7 +292,7 @@ struct UdpReceiver::Impl {
 
   UdpListen listen;
   std::optional<IpAddress> source;
-  std::vector<Fd> sockets;
+  std::vector<UniqueFd> sockets;
   int granted_buffer = 0;
   ReceiveBatch batch;
   std::vector<Datagram> accepted;  // of a batch, from accepted senders: one handler call each batch
@@ -349,8 +331,8 @@ struct UdpReceiver::Impl {
   }
 
   // A bound socket with arrival stamps, the receive buffer asked for and the group joined.
-  Expected<Fd> open_socket(const IpAddress& local_ip, const UdpPort& port, const std::optional<IpAddress>& group) {
-    Fd fd(::socket(local_ip.family, SOCK_DGRAM | SOCK_CLOEXEC, 0));
+  Expected<UniqueFd> open_socket(const IpAddress& local_ip, const UdpPort& port, const std::optional<IpAddress>& group) {
+    UniqueFd fd(::socket(local_ip.family, SOCK_DGRAM | SOCK_CLOEXEC, 0));
     if (fd.get() < 0) return failed(std::string("cannot open a UDP socket: ") + std::strerror(errno) + ".");
     const int on = 1;
     // Several receivers of one multicast group must share the port; a unicast port must not be
@@ -378,13 +360,13 @@ struct UdpReceiver::Impl {
                       "another " + port.option + ".");
       }
       return failed("cannot bind to " + listen.bind + ":" + number + ": " + std::strerror(error) +
-                    "; check --bind and " + port.option + ".");
+                    "; check " + listen.bind_option + " and " + port.option + ".");
     }
     if (group && !join_group(fd.get(), *group, local_ip)) {
       const std::string where = is_unspecified(local_ip) ? "" : " on the interface of " + listen.bind;
       return failed("cannot join multicast group " + listen.multicast_group + where + ": " +
                     std::strerror(errno) + "; check that an interface with a multicast route exists" +
-                    (where.empty() ? "." : " and that --bind is an address of this host."));
+                    (where.empty() ? "." : " and that " + listen.bind_option + " is an address of this host."));
     }
     return fd;
   }
@@ -437,7 +419,7 @@ struct UdpReceiver::Impl {
     if (c != nullptr && c->note) {
       c->note("warning: datagrams from " + address_text(sender) + " arrive besides those from " +
               address_text(first) + ": two sensors on one port are decoded as one; give each its own "
-              "port (or multicast group) and driver, or choose one with --source");
+              "port (or multicast group) and driver, or choose one with " + listen.source_option);
     }
   }
 

@@ -1,16 +1,18 @@
 // SPDX-License-Identifier: Apache-2.0
 // sim_lidar_unitree: a Unitree L1 or L2 LiDAR into SIM. The work is the stream library's
-// (sim/unitree/live_receiver.hpp: the UDP socket or the serial port; LidarStream: decode straight
+// (sim/unitree/live_receiver.hpp: lidar::UdpReceiver or the serial port; LidarStream: decode straight
 // into shared memory, the path the replays take too); this program is its command line, its
 // messages and its exit code.
 #include <cstdio>
 #include <exception>
 #include <fstream>
 #include <string>
+#include <string_view>
 #include <utility>
 
 #include "sim/apps/command_line.hpp"
 #include "sim/apps/host_clock_options.hpp"
+#include "sim/apps/live_lidar.hpp"
 #include "sim/apps/status_line.hpp"
 #include "sim/apps/stop_signal.hpp"
 #include "sim/apps/unitree_options.hpp"
@@ -37,9 +39,13 @@ void add_options(sim::apps::CommandLine& cli, Options& o) {
   cli.add_option("--udp-port,--bind-port", o.source.network.data_port,
                  "local UDP port the lidar sends to (0: any free port, printed on stdout)")
       .each([&o](const std::string&) { o.udp_port_given = true; });
-  cli.add_option("--bind-address", o.source.network.bind, "local address to listen on");
+  const auto address = [](const std::string& text) {
+    return sim::lidar::address_problem(text, sim::lidar::IpVersions::v4_and_v6);
+  };
+  cli.add_option("--bind-address", o.source.network.bind, "local address to listen on").check(address);
   cli.add_option("--lidar-ip", o.source.network.source,
-                 "accept datagrams only from this address (L2 factory default 192.168.1.62)");
+                 "accept datagrams only from this address (L2 factory default 192.168.1.62)")
+      .check(address);
   cli.add_option("--serial", o.source.serial_device, "serial device instead of UDP");
   cli.add_option("--baud", o.source.baud, "serial baud rate (0: 2000000 for L1, 4000000 for L2)");
   cli.add_option("--record", o.record_path,
@@ -102,7 +108,8 @@ int run(const sim::apps::CommandLine& cli, const Options& o) {
     if (receiver->other_senders() > 0) line += " other-senders " + std::to_string(receiver->other_senders());
     return line;
   };
-  const auto ran = receiver->run(stop.fd(), [&] { status.update(status_text()); });
+  const auto ran = receiver->run(
+      stop.fd(), [&] { status.update(status_text()); }, [&](std::string_view note) { status.note(sim::apps::sentence(std::string(note))); });
   stream->finish();
   status.finish(status_text());
   if (o.summary) {

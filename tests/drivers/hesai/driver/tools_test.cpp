@@ -715,9 +715,12 @@ TEST(LiveDriver, MulticastGroupGivesTheSameFramesAsReplay) {
   ASSERT_EQ(replay.wait(), 0) << replay.err();
 
   StreamGuard live;
+  // The test waits for each revolution's frame before it sends the next, as long as the machine
+  // makes it (seconds under ASan on a loaded host): no such pause may read as a silence of the
+  // sensor, which would drop the next revolution as one begun mid-way.
   Process driver({live_tool, "--model", "Pandar64", "--port", "0", "--bind", "0.0.0.0",
                   "--multicast-group", "239.255.42.1", "--stream", live.name, "--calibration",
-                  p64_calibration, "--status-interval", "0", "--summary"});
+                  p64_calibration, "--status-interval", "0", "--silence-timeout", "120", "--summary"});
   const int port = listening_port(driver);
   ASSERT_GT(port, 0) << driver.err();
   auto reader = open_when_created(live.name);

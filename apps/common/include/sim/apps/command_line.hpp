@@ -84,6 +84,12 @@ class Option {
   // `seen` gets each value given (on the command line or in the config file) while parse()
   // checks the values.
   Option& each(std::function<void(const std::string&)> seen);
+  // A list option also takes several values in one word, split at `separator`
+  // ("--ways a,b" as "--ways a --ways b"); each piece is checked on its own.
+  Option& delimiter(char separator);
+  // Parsed as any other but left out of --help: for the arguments a program passes to the copies
+  // of itself it starts (sim_bench's --role).
+  Option& hidden();
 
   // The same option (CommandLine::parse_order).
   bool operator==(const Option&) const = default;

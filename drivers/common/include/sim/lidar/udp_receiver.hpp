@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// UdpReceiver: the UDP side every live LiDAR receiver shares (Hesai, Velodyne, Ouster). The
-// family's receiver keeps what it knows (which packet is which, the model, the stream) and
-// hands each datagram's handling to this loop:
+// UdpReceiver: the UDP side every live LiDAR receiver shares (Hesai, Velodyne, Ouster,
+// Unitree). The family's receiver keeps what it knows (which packet is which, the model, the
+// stream) and hands each datagram's handling to this loop:
 //
 //   auto udp = sim::lidar::UdpReceiver::open(listen, ports, 9000);  // sockets, nothing else
 //   if (!udp) -> udp.error().message (invalid_argument: a bad address; system_error: a port in use)
@@ -47,6 +47,10 @@ struct UdpListen {
   IpVersions versions = IpVersions::v4;
   // A gap this long between the sensor's datagrams means it stopped (see resumed_after_silence).
   std::chrono::nanoseconds silence_timeout = std::chrono::milliseconds(500);
+  // How the program names `bind` and `source` in its messages (sim_lidar_unitree: --bind-address,
+  // --lidar-ip).
+  std::string bind_option = "--bind";
+  std::string source_option = "--source";
 };
 
 // One socket of a receiver, and how messages name it: "UDP port 2368 on 0.0.0.0 is already in
