@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 // The listener and the HTTP side: every connection starts as HTTP; a WebSocket upgrade asking
 // for foxglove.websocket.v1 becomes a WebSocket session (ws_session.cpp), any other GET is
-// answered from the page API. Only Beast's HTTP reading is compiled here: <boost/beast/websocket.hpp>
-// stays in ws_session.cpp, and answers are written as bytes (send, below): Beast's composed
-// operations are most of what these files cost to compile (docs/build-times.md).
+// answered from the page API. Only Beast's HTTP reading is compiled here:
+// <boost/beast/websocket.hpp> stays in ws_session.cpp, and answers are written as bytes (send,
+// below): Beast's composed operations are most of what these files cost to compile
+// (docs/build-times.md).
 #include "sim/foxglove/server.hpp"
 
 #include <boost/asio/ip/tcp.hpp>
@@ -21,6 +22,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
 #include <cstdio>
 #include <random>
