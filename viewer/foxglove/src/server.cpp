@@ -1,16 +1,28 @@
 // SPDX-License-Identifier: Apache-2.0
 // The listener and the HTTP side: every connection starts as HTTP; a WebSocket upgrade asking
-// for foxglove.websocket.v1 becomes a WsSession, any other GET is answered from the page API.
+// for foxglove.websocket.v1 becomes a WebSocket session (ws_session.cpp), any other GET is
+// answered from the page API. Only Beast's HTTP reading is compiled here:
+// <boost/beast/websocket.hpp> stays in ws_session.cpp, and answers are written as bytes (send,
+// below): Beast's composed operations are most of what these files cost to compile
+// (docs/build-times.md).
 #include "sim/foxglove/server.hpp"
 
 #include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/steady_timer.hpp>
 #include <boost/asio/strand.hpp>
-#include <boost/beast/core.hpp>
-#include <boost/beast/http.hpp>
-#include <boost/beast/websocket.hpp>
+#include <boost/asio/write.hpp>
+#include <boost/beast/core/buffers_to_string.hpp>
+#include <boost/beast/core/flat_buffer.hpp>
+#include <boost/beast/core/tcp_stream.hpp>
+#include <boost/beast/http/empty_body.hpp>
+#include <boost/beast/http/read.hpp>
+#include <boost/beast/http/string_body.hpp>
+#include <boost/beast/websocket/rfc6455.hpp>
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
 #include <cstdio>
 #include <random>
@@ -198,9 +210,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     if (auto problem = server_.access.origin_problem(origin, host); !problem.empty()) {
       return reply_error(http::status::forbidden, std::move(problem), request.version(), false);
     }
-    std::make_shared<WsSession>(std::move(stream_), server_.hub, server_.session, *subprotocol,
-                                std::move(connection_))
-        ->start(std::move(request));
+    start_ws_session(stream_.release_socket(), std::move(request), server_.hub, server_.session,
+                     *subprotocol, std::move(connection_));
   }
 
   void respond(const http::request<http::string_body>& request) {
@@ -298,59 +309,67 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     return server_.frames.projection(camera, lidar, *pose, *camera_sensor->calibration);
   }
 
+  // An answer: its header, and the body it holds until the write completes (text or a picture).
+  struct Answer {
+    Answer(http::status status, unsigned version, const char* type) : response(status, version) {
+      response.set(http::field::server, "sim_foxglove");
+      response.set(http::field::content_type, type);
+    }
+    http::response<http::empty_body> response;  // the header (the body is below)
+    std::string head;                             // the header as sent
+    std::string text;
+    Jpeg picture;
+  };
+
   void reply(const char* type, std::string body, unsigned version, bool keep_alive,
              bool head = false) {
-    auto response = std::make_shared<http::response<http::string_body>>(http::status::ok, version);
-    response->set(http::field::server, "sim_foxglove");
-    response->set(http::field::content_type, type);
-    response->set(http::field::cache_control, "no-store");
-    response->keep_alive(keep_alive);
-    response->body() = std::move(body);
-    response->prepare_payload();
-    if (head) response->body().clear();
-    send(response, keep_alive);
+    auto answer = std::make_shared<Answer>(http::status::ok, version, type);
+    answer->response.set(http::field::cache_control, "no-store");
+    answer->response.keep_alive(keep_alive);
+    answer->text = std::move(body);
+    send(answer, answer->text.data(), answer->text.size(), head, keep_alive);
   }
 
   void reply_bytes(const char* type, const Picture& picture, unsigned version, bool keep_alive,
                    bool head) {
-    const Jpeg& bytes = picture.jpeg;
-    auto response =
-        std::make_shared<http::response<http::buffer_body>>(http::status::ok, version);
-    response->set(http::field::server, "sim_foxglove");
-    response->set(http::field::content_type, type);
-    response->set(http::field::cache_control, "no-store");
-    response->keep_alive(keep_alive);
-    response->set("X-Sim-View", picture.caption);
-    response->content_length(bytes->size());
-    response->body().data = head ? nullptr : const_cast<std::byte*>(bytes->data());
-    response->body().size = head ? 0 : bytes->size();
-    response->body().more = false;
-    held_ = bytes;  // the body points into it until the write completes
-    send(response, keep_alive);
+    auto answer = std::make_shared<Answer>(http::status::ok, version, type);
+    answer->response.set(http::field::cache_control, "no-store");
+    answer->response.keep_alive(keep_alive);
+    answer->response.set("X-Sim-View", picture.caption);
+    answer->picture = picture.jpeg;
+    send(answer, answer->picture->data(), answer->picture->size(), head, keep_alive);
   }
 
   void reply_error(http::status status, std::string sentence, unsigned version, bool keep_alive,
                    unsigned retry_after_s = 0) {
-    auto response = std::make_shared<http::response<http::string_body>>(status, version);
-    response->set(http::field::server, "sim_foxglove");
-    response->set(http::field::content_type, "text/plain; charset=utf-8");
-    if (retry_after_s > 0) response->set(http::field::retry_after, std::to_string(retry_after_s));
-    response->keep_alive(keep_alive);
-    response->body() = std::move(sentence) + "\n";
-    response->prepare_payload();
-    send(response, keep_alive);
+    auto answer = std::make_shared<Answer>(status, version, "text/plain; charset=utf-8");
+    if (retry_after_s > 0) {
+      answer->response.set(http::field::retry_after, std::to_string(retry_after_s));
+    }
+    answer->response.keep_alive(keep_alive);
+    answer->text = std::move(sentence) + "\n";
+    send(answer, answer->text.data(), answer->text.size(), false, keep_alive);
   }
 
-  template <typename Response>
-  void send(const std::shared_ptr<Response>& response, bool keep_alive) {
+  // `body`: `size` bytes the answer holds; a HEAD answer has their length and not them.
+  // Why not http::async_write: Beast's serializer and its write operations were most of this
+  // file's compile (docs/build-times.md). The bytes are the same: the serializer sends the header
+  // its fields writer formats, then a Content-Length body as it is.
+  void send(const std::shared_ptr<Answer>& answer, const void* body, std::size_t size, bool head,
+            bool keep_alive) {
+    answer->response.content_length(size);  // what prepare_payload() sets for these answers
+    const http::response_header<>& header = answer->response.base();
+    http::fields::writer formatted(header, header.version(), header.result_int());
+    answer->head = beast::buffers_to_string(formatted.get());
+    const std::array<net::const_buffer, 2> bytes{net::buffer(answer->head),
+                                                 net::const_buffer(body, head ? 0 : size)};
     stream_.expires_after(30s);
-    http::async_write(stream_, *response,
-                      [self = shared_from_this(), response, keep_alive](beast::error_code ec,
-                                                                        std::size_t) {
-                        self->held_.reset();
-                        if (ec || !keep_alive) return self->shut();
-                        self->read();
-                      });
+    net::async_write(stream_, bytes,
+                     [self = shared_from_this(), answer, keep_alive](beast::error_code ec,
+                                                                     std::size_t) {
+                       if (ec || !keep_alive) return self->shut();
+                       self->read();
+                     });
   }
 
   void shut() {
@@ -363,7 +382,6 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   Server::Impl& server_;
   beast::flat_buffer buffer_;
   std::optional<http::request_parser<http::string_body>> parser_;
-  Jpeg held_;
   std::shared_ptr<void> connection_;  // counted while this session (or its WebSocket) lives
   const bool refuse_;
 };

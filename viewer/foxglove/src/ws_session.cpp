@@ -1,7 +1,25 @@
 // SPDX-License-Identifier: Apache-2.0
+// The one translation unit that instantiates Beast's WebSocket stream. What its compile costs is
+// the code of Beast's composed operations, instantiated once per distinct stream, buffer and
+// handler type (docs/build-times.md), so: the next layer is a plain socket (the WebSocket layer
+// keeps its own timeouts; a beast::tcp_stream adds its timed operations to every read and write),
+// permessage-deflate is compiled out (deflateSupported = false; it was never enabled, so the
+// handshake and the frames are the same), and every write goes through one call (one buffer
+// type, one handler type).
 #include "ws_session.hpp"
 
+#include <array>
+#include <atomic>
 #include <boost/asio/post.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <boost/beast/core/flat_buffer.hpp>
+#include <boost/beast/websocket/stream.hpp>
+#include <deque>
+#include <map>
+#include <mutex>
+
+#include "hub.hpp"
+#include "sim/foxglove/protocol.hpp"
 
 namespace sim::foxglove {
 
@@ -9,9 +27,74 @@ namespace beast = boost::beast;
 namespace websocket = beast::websocket;
 namespace http = beast::http;
 namespace net = boost::asio;
+using tcp = net::ip::tcp;
 using namespace std::chrono_literals;
 
 namespace {
+
+class WsSession final : public Client, public std::enable_shared_from_this<WsSession> {
+ public:
+  WsSession(tcp::socket&& socket, Hub& hub, const SessionOptions& options,
+            std::string_view subprotocol, std::shared_ptr<void> connection);
+  ~WsSession() override;
+
+  // Completes the WebSocket handshake for `request`.
+  void start(http::request<http::string_body> request);
+
+  void offer(std::shared_ptr<const Message> message) override;
+  void send_text(std::string text) override;
+  void drop_channel(std::uint32_t channel_id) override;
+
+ private:
+  struct Slot {
+    std::uint32_t subscription_id = 0;
+    std::shared_ptr<const Message> pending;
+    std::chrono::steady_clock::time_point next_due{};
+  };
+
+  void on_accept(beast::error_code ec);
+  void read();
+  void on_read(beast::error_code ec, std::size_t bytes);
+  void handle(std::string_view text);
+  void subscribe(const SubscribeRequest& request);
+  void unsubscribe(const UnsubscribeRequest& request);
+  void kick();
+  void write_next();
+  void write(bool text, const std::array<net::const_buffer, 2>& buffers,
+             std::chrono::steady_clock::time_point now);
+  void on_write(beast::error_code ec);
+  void watch();
+  void close();
+
+  websocket::stream<tcp::socket, /*deflateSupported=*/false> ws_;
+  Hub& hub_;
+  const SessionOptions options_;
+  const std::string subprotocol_;
+  const std::shared_ptr<void> connection_;
+  beast::flat_buffer read_buffer_;
+  net::steady_timer rate_timer_;
+  net::steady_timer watchdog_;
+
+  // Shared with the pump threads and the hub.
+  std::mutex mutex_;
+  std::map<std::uint32_t, Slot> slots_;  // by channel id
+  std::deque<std::string> texts_;
+  bool text_overflow_ = false;
+  std::atomic<bool> kick_pending_{false};
+
+  // Only on the session's strand.
+  std::map<std::uint32_t, std::uint32_t> subscriptions_;  // subscription id -> channel id
+  bool open_ = false;
+  bool closed_ = false;
+  bool writing_ = false;
+  bool rate_timer_armed_ = false;
+  std::chrono::steady_clock::time_point write_started_{};
+  std::uint32_t next_channel_turn_ = 0;  // round robin among channels
+  std::string current_text_;
+  std::shared_ptr<const Message> current_message_;
+  std::array<std::byte, kMessageHeaderSize> current_header_{};
+};
+
 
 // Client messages are small JSON requests; anything bigger is refused by the WebSocket layer.
 constexpr std::size_t kMaxClientMessage = 64 * 1024;
@@ -39,11 +122,9 @@ void add_problem(std::string& status, const std::vector<std::uint32_t>& ids, con
   status += std::string(what) + ": " + id_list(ids) + "; " + what_to_do + ".";
 }
 
-}  // namespace
-
-WsSession::WsSession(beast::tcp_stream&& stream, Hub& hub, const SessionOptions& options,
+WsSession::WsSession(tcp::socket&& socket, Hub& hub, const SessionOptions& options,
                      std::string_view subprotocol, std::shared_ptr<void> connection)
-    : ws_(std::move(stream)),
+    : ws_(std::move(socket)),
       hub_(hub),
       options_(options),
       subprotocol_(subprotocol),
@@ -54,7 +135,6 @@ WsSession::WsSession(beast::tcp_stream&& stream, Hub& hub, const SessionOptions&
 WsSession::~WsSession() = default;
 
 void WsSession::start(http::request<http::string_body> request) {
-  beast::get_lowest_layer(ws_).expires_never();  // the WebSocket layer keeps its own timeouts
   websocket::stream_base::timeout timeouts =
       websocket::stream_base::timeout::suggested(beast::role_type::server);
   timeouts.handshake_timeout = 10s;
@@ -223,14 +303,7 @@ void WsSession::write_next() {
     current_text_ = std::move(texts_.front());
     texts_.pop_front();
     lock.unlock();
-    writing_ = true;
-    write_started_ = now;
-    ws_.text(true);
-    ws_.async_write(net::buffer(current_text_), [self = shared_from_this()](
-                                                    beast::error_code ec, std::size_t) {
-      self->on_write(ec);
-    });
-    return;
+    return write(true, {net::buffer(current_text_), net::const_buffer()}, now);
   }
   // The next due message, taking channels in turn so a fast stream cannot starve a slow one.
   Slot* chosen = nullptr;
@@ -271,12 +344,19 @@ void WsSession::write_next() {
   }
   next_channel_turn_ = chosen_channel;
   lock.unlock();
+  write(false,
+        {net::buffer(current_header_),
+         net::buffer(current_message_->payload.data(), current_message_->payload.size())},
+        now);
+}
+
+// A text message (its second buffer empty) or a binary one (header, payload): one message, one
+// frame. The only async_write of the session, so Beast's write operation is instantiated once.
+void WsSession::write(bool text, const std::array<net::const_buffer, 2>& buffers,
+                      std::chrono::steady_clock::time_point now) {
   writing_ = true;
   write_started_ = now;
-  ws_.binary(true);
-  const std::array<net::const_buffer, 2> buffers{
-      net::buffer(current_header_),
-      net::buffer(current_message_->payload.data(), current_message_->payload.size())};
+  ws_.text(text);
   ws_.async_write(buffers, [self = shared_from_this()](beast::error_code ec, std::size_t) {
     self->on_write(ec);
   });
@@ -318,8 +398,17 @@ void WsSession::close() {
   // Closing the socket ends every pending operation; no close handshake with a client that
   // may not be reading.
   beast::error_code ignored;
-  beast::get_lowest_layer(ws_).socket().shutdown(net::ip::tcp::socket::shutdown_both, ignored);
-  beast::get_lowest_layer(ws_).socket().close(ignored);
+  ws_.next_layer().shutdown(tcp::socket::shutdown_both, ignored);
+  ws_.next_layer().close(ignored);
+}
+
+}  // namespace
+
+void start_ws_session(tcp::socket socket, http::request<http::string_body> request, Hub& hub,
+                      const SessionOptions& options, std::string_view subprotocol,
+                      std::shared_ptr<void> connection) {
+  std::make_shared<WsSession>(std::move(socket), hub, options, subprotocol, std::move(connection))
+      ->start(std::move(request));
 }
 
 }  // namespace sim::foxglove
