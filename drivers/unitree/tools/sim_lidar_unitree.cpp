@@ -108,8 +108,9 @@ int run(const sim::apps::CommandLine& cli, const Options& o) {
     if (receiver->other_senders() > 0) line += " other-senders " + std::to_string(receiver->other_senders());
     return line;
   };
-  const auto ran = receiver->run(
-      stop.fd(), [&] { status.update(status_text()); }, [&](std::string_view note) { status.note(sim::apps::sentence(std::string(note))); });
+  const auto tick = [&] { status.update(status_text()); };
+  const auto note = [&](std::string_view sentence) { status.note(sim::apps::sentence(std::string(sentence))); };
+  const auto ran = receiver->run(stop.fd(), tick, note);
   stream->finish();
   status.finish(status_text());
   if (o.summary) {
