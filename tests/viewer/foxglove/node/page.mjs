@@ -31,6 +31,28 @@ const video = h.startVideo(camera, h.writeImageFolder());
 await h.startSensorWriter(calibrated, mountedLidar);
 const server = await h.startFoxglove([], [lidar, camera, calibrated, mountedLidar]);
 
+// Waits (30 s) for `fn(arg)` to hold in `page`; when it does not, fails with what the page
+// showed and what the server listed. This wait ("writer gone") timed out now and then in loaded
+// ctest runs, never alone: the details say which side was late.
+async function waitOrExplain(page, fn, arg, what) {
+  try {
+    await page.waitForFunction(fn, { timeout: 30_000 }, arg);
+  } catch (e) {
+    const views = await page.$$eval(".view", (all) => all.map((v) =>
+      `${v.dataset.stream} [${v.dataset.key}] "${v.querySelector(".stale-mark")?.textContent ?? ""}"`))
+      .catch((f) => [String(f)]);
+    const banner = await page.$eval("#banner", (b) => `${b.className} ${b.textContent}`).catch((f) => String(f));
+    let listed;
+    try {
+      const response = await fetch(`http://127.0.0.1:${server.port}/api/streams`, { signal: AbortSignal.timeout(10_000) });
+      listed = await response.text();
+    } catch (f) {
+      listed = String(f);
+    }
+    throw new Error(`${what}: ${e.message}\nviews: ${views.join("; ")}\nbanner: ${banner}\n/api/streams: ${listed}`);
+  }
+}
+
 const profile = fs.mkdtempSync(path.join(os.tmpdir(), "sim_foxglove_chromium_"));
 const browser = await puppeteer.launch({
   executablePath: chromium,
@@ -170,9 +192,9 @@ try {
 
   // A writer that died: its picture is marked stale, not passed off as live.
   video.kill("SIGKILL");
-  await page.waitForFunction((n) => /writer gone/.test(
+  await waitOrExplain(page, (n) => /writer gone/.test(
     document.querySelector(`.view[data-stream="${n}"] .stale-mark`)?.textContent || ""),
-    { timeout: 30_000 }, camera);
+    camera, "the dead writer's view was not marked 'writer gone'");
   // A stream whose name is taken by another kind gets a new view (the LiDAR becomes a camera).
   spawnSync(h.bin.rm, ["--force", lidar], { stdio: "ignore" });
   h.startVideo(lidar, h.writeImageFolder());
