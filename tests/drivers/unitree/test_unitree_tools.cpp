@@ -467,59 +467,76 @@ std::vector<Bytes> scan_packets(std::uint32_t first) {
   return packets;
 }
 
-TEST(UnitreeDriver, DatagramsFromAnotherAddressThanTheLidarIpAreDroppedAndCounted) {
-  SKIP_WITHOUT_PRIVATE_NETWORK();
-  StreamGuard guard;
-  const std::string stream = unique_name("filtered");
-  guard.names = {stream, stream + ".imu"};
-  Process driver({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", "0", "--bind-address",
-                  "127.0.0.1", "--lidar-ip", "127.0.0.1", "--stream", stream, "--scan-packets", "3",
-                  "--summary", "-q"});
-  const unsigned port = listening_port(driver);
-  ASSERT_NE(port, 0U);
-  auto points = open_reader(stream);
-  ASSERT_TRUE(points);
-  // A whole scan from another sender first: were it taken, it would be the first frame.
-  UdpSender stranger(static_cast<std::uint16_t>(port), "127.0.0.2");
-  for (const Bytes& packet : scan_packets(10)) stranger.send(packet);
-  UdpSender lidar(static_cast<std::uint16_t>(port));
-  const std::vector<Bytes> packets = scan_packets(0);
-  for (const Bytes& packet : packets) lidar.send(packet);
+// sim_lidar_unitree for an L2 with 3-packet scans on a free loopback UDP port (`extra`: more
+// options), with a reader of its points; its streams are removed at the end.
+struct L2OverLoopback {
+  explicit L2OverLoopback(const char* what, const std::vector<std::string>& extra = {})
+      : stream(unique_name(what)), driver(command(stream, extra)) {
+    guard.names = {stream, stream + ".imu"};
+    port = static_cast<std::uint16_t>(listening_port(driver));
+    if (port != 0) points = open_reader(stream);
+  }
+  static std::vector<std::string> command(const std::string& stream, const std::vector<std::string>& extra) {
+    std::vector<std::string> argv{SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", "0", "--bind-address",
+                                  "127.0.0.1", "--stream", stream, "--scan-packets", "3", "--summary", "-q"};
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    return argv;
+  }
+  // Stops the driver (exit 0 expected) and returns its summary and the rest of its stdout.
+  std::string stop() {
+    driver.signal(SIGTERM);
+    EXPECT_EQ(driver.wait(kTimeout), 0) << driver.err();
+    return driver.unread();
+  }
+
+  StreamGuard guard;  // first: removes the streams after the driver is gone
+  std::string stream;
+  Process driver;
+  std::uint16_t port = 0;
+  std::optional<sim::Reader> points;
+};
+
+// The one scan of `packets` (3 L2 packets) is the stream's first frame.
+void expect_only_scan(sim::Reader& points, const std::vector<Bytes>& packets) {
   const auto expected = expected_scans(sim::unitree::Model::l2, 3, concat({packets[0], packets[1], packets[2]}));
   ASSERT_EQ(expected.size(), 1U);
-  expect_frame(*points, expected[0], 1);
-  driver.signal(SIGTERM);
-  EXPECT_EQ(driver.wait(kTimeout), 0) << driver.err();
-  EXPECT_NE(driver.unread().find("summary frames=1 packets=3 "), std::string::npos) << driver.unread();
-  EXPECT_NE(driver.unread().find(" other_senders=3\n"), std::string::npos) << driver.unread();
+  expect_frame(points, expected[0], 1);
+}
+
+TEST(UnitreeDriver, DatagramsFromAnotherAddressThanTheLidarIpAreDroppedAndCounted) {
+  SKIP_WITHOUT_PRIVATE_NETWORK();
+  L2OverLoopback d("filtered", {"--lidar-ip", "127.0.0.1"});
+  ASSERT_NE(d.port, 0U);
+  ASSERT_TRUE(d.points);
+  // A whole scan from another sender first: were it taken, it would be the first frame.
+  UdpSender stranger(d.port, "127.0.0.2");
+  for (const Bytes& packet : scan_packets(10)) stranger.send(packet);
+  UdpSender lidar(d.port);
+  const std::vector<Bytes> packets = scan_packets(0);
+  for (const Bytes& packet : packets) lidar.send(packet);
+  expect_only_scan(*d.points, packets);
+  const std::string out = d.stop();
+  EXPECT_NE(out.find("summary frames=1 packets=3 "), std::string::npos) << out;
+  EXPECT_NE(out.find(" other_senders=3\n"), std::string::npos) << out;
 }
 
 // Without --lidar-ip every sender is decoded; a second one is two sensors on one port, said
 // once with the option that chooses one.
 TEST(UnitreeDriver, ASecondSenderWithoutLidarIpIsCountedAndSaidOnce) {
   SKIP_WITHOUT_PRIVATE_NETWORK();
-  StreamGuard guard;
-  const std::string stream = unique_name("twosenders");
-  guard.names = {stream, stream + ".imu"};
-  Process driver({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", "0", "--bind-address",
-                  "127.0.0.1", "--stream", stream, "--scan-packets", "3", "--summary", "-q"});
-  const unsigned port = listening_port(driver);
-  ASSERT_NE(port, 0U);
-  auto points = open_reader(stream);
-  ASSERT_TRUE(points);
-  UdpSender first(static_cast<std::uint16_t>(port));
-  UdpSender second(static_cast<std::uint16_t>(port), "127.0.0.2");
+  L2OverLoopback d("twosenders");
+  ASSERT_NE(d.port, 0U);
+  ASSERT_TRUE(d.points);
+  UdpSender first(d.port);
+  UdpSender second(d.port, "127.0.0.2");
   const std::vector<Bytes> packets = scan_packets(0);
   first.send(packets[0]);
   second.send(packets[1]);
   second.send(packets[2]);
-  const auto expected = expected_scans(sim::unitree::Model::l2, 3, concat({packets[0], packets[1], packets[2]}));
-  ASSERT_EQ(expected.size(), 1U);
-  expect_frame(*points, expected[0], 1);
-  driver.signal(SIGTERM);
-  EXPECT_EQ(driver.wait(kTimeout), 0) << driver.err();
-  EXPECT_NE(driver.unread().find(" other_senders=2\n"), std::string::npos) << driver.unread();
-  const std::string& err = driver.err();
+  expect_only_scan(*d.points, packets);
+  const std::string out = d.stop();
+  EXPECT_NE(out.find(" other_senders=2\n"), std::string::npos) << out;
+  const std::string& err = d.driver.err();
   const auto said = err.find("datagrams from 127.0.0.2 arrive besides those from 127.0.0.1");
   ASSERT_NE(said, std::string::npos) << err;
   EXPECT_EQ(err.find("datagrams from", said + 1), std::string::npos) << "said once: " << err;
@@ -531,28 +548,19 @@ TEST(UnitreeDriver, ASecondSenderWithoutLidarIpIsCountedAndSaidOnce) {
 // kernel's arrival stamps, and the test's own pause is the only one near the 0.5 s timeout).
 TEST(UnitreeDriver, AScanCutByASilenceIsDroppedNotMixedIntoTheNextOne) {
   SKIP_WITHOUT_PRIVATE_NETWORK();
-  StreamGuard guard;
-  const std::string stream = unique_name("silence");
-  guard.names = {stream, stream + ".imu"};
-  Process driver({SIM_LIDAR_UNITREE_PATH, "--model", "L2", "--udp-port", "0", "--bind-address",
-                  "127.0.0.1", "--stream", stream, "--scan-packets", "3", "--summary", "-q"});
-  const unsigned port = listening_port(driver);
-  ASSERT_NE(port, 0U);
-  auto points = open_reader(stream);
-  ASSERT_TRUE(points);
-  UdpSender lidar(static_cast<std::uint16_t>(port));
+  L2OverLoopback d("silence");
+  ASSERT_NE(d.port, 0U);
+  ASSERT_TRUE(d.points);
+  UdpSender lidar(d.port);
   const std::vector<Bytes> cut = scan_packets(0);
   lidar.send(cut[0]);
   lidar.send(cut[1]);
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));
   const std::vector<Bytes> packets = scan_packets(10);
   for (const Bytes& packet : packets) lidar.send(packet);
-  const auto expected = expected_scans(sim::unitree::Model::l2, 3, concat({packets[0], packets[1], packets[2]}));
-  ASSERT_EQ(expected.size(), 1U);
-  expect_frame(*points, expected[0], 1);
-  driver.signal(SIGTERM);
-  EXPECT_EQ(driver.wait(kTimeout), 0) << driver.err();
-  EXPECT_NE(driver.unread().find("summary frames=1 packets=5 "), std::string::npos) << driver.unread();
+  expect_only_scan(*d.points, packets);
+  const std::string out = d.stop();
+  EXPECT_NE(out.find("summary frames=1 packets=5 "), std::string::npos) << out;
 }
 
 // Waits until `path` holds exactly `bytes`; false after the generous bound.
