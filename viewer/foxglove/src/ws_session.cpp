@@ -95,7 +95,6 @@ class WsSession final : public Client, public std::enable_shared_from_this<WsSes
   std::array<std::byte, kMessageHeaderSize> current_header_{};
 };
 
-
 // Client messages are small JSON requests; anything bigger is refused by the WebSocket layer.
 constexpr std::size_t kMaxClientMessage = 64 * 1024;
 // Status and advertise messages waiting for a client that does not read; more closes it.
